@@ -1,0 +1,39 @@
+// pliant — configuration shared by every backend.
+//
+// PLIANT_HD marks a function callable from host and device code: physics is written once
+// (header-only, over structure-of-arrays data) and launched by the CPU (OpenMP) and CUDA backends.
+#pragma once
+
+#include <cstdint>
+
+#if defined(__CUDACC__)
+#define PLIANT_HD __host__ __device__ __forceinline__
+#else
+#define PLIANT_HD inline __attribute__((always_inline))
+#endif
+
+namespace pliant {
+
+using index_t = std::int32_t;
+
+/// Lanes per element block of the AoSoA layout. 16 float32 lanes fill one AVX-512 register and
+/// a 64-byte cache line; on CUDA, half a warp reads one contiguous 64-byte segment per field.
+inline constexpr int kLanes = 16;
+
+/// Reinterpret the bits of a float as an int and back (host: __builtin_bit_cast, device: intrinsics).
+PLIANT_HD std::int32_t float_bits(float x) {
+#if defined(__CUDA_ARCH__)
+    return __float_as_int(x);
+#else
+    return __builtin_bit_cast(std::int32_t, x);
+#endif
+}
+PLIANT_HD float bits_float(std::int32_t i) {
+#if defined(__CUDA_ARCH__)
+    return __int_as_float(i);
+#else
+    return __builtin_bit_cast(float, i);
+#endif
+}
+
+}  // namespace pliant

@@ -1,0 +1,242 @@
+// pliant — Total Lagrangian Explicit Dynamics on linear tetrahedra: the per-element and per-node
+// kernels, header-only, host and device. Backends only launch these functions.
+//
+// Data layout (structure of arrays, AoSoA for elements): element slot (b, l) is lane l of block b;
+// element field k of width K is stored at [(b*K + k)*kLanes + l]. A CUDA thread i takes
+// b = i / kLanes, l = i % kLanes; a CPU SIMD loop runs l = 0..kLanes−1 for one b.
+//   elem_nodes  int32  K=4   node indices, positively oriented
+//   elem_grad   T      K=9   reference shape-function gradients ∇X N_a [1/m] of corners 0..2,
+//                            row a*3 + i; corner 3 is −(∇N_0 + ∇N_1 + ∇N_2)
+//   elem_vol    T      K=1   reference volume V0 [m³]
+//   f_elem      T      K=12  element nodal forces [N], component corner*3 + dim
+// Node fields are SoA over padded node count P: u[d*P + n] is component d of node n [m].
+#pragma once
+
+#include <cmath>
+
+#include "materials.hpp"
+
+namespace pliant {
+
+template <class T>
+struct ElementData {
+    const index_t* nodes;
+    const T* grad;
+    const T* vol;
+};
+
+PLIANT_HD index_t aosoa(index_t b, int l, int field, int width) {
+    return (b * width + field) * kLanes + l;
+}
+
+/// Deformation gradient F = I + Σ_a u_a ⊗ ∇X N_a of element slot (b, l), with ∇N_3 = −Σ_{a<3} ∇N_a so
+/// that F = I + Σ_{a<3} (u_a − u_3) ⊗ ∇N_a (Miller et al. 2007, CNME 23:121, eq. 4).
+/// u: displacements [m], SoA (3, P).
+template <class T>
+PLIANT_HD Mat3<T> deformation_gradient(index_t b, int l, const ElementData<T>& el, const T* u,
+                                       index_t P) {
+    index_t n[4];
+    for (int a = 0; a < 4; ++a) n[a] = el.nodes[aosoa(b, l, a, 4)];
+    Mat3<T> F = identity3<T>();
+    for (int i = 0; i < 3; ++i) {
+        const T* ui = u + i * P;
+        const T u3 = ui[n[3]];
+        for (int a = 0; a < 3; ++a) {
+            const T du = ui[n[a]] - u3;
+            for (int j = 0; j < 3; ++j) F.a[3 * i + j] += du * el.grad[aosoa(b, l, 3 * a + j, 9)];
+        }
+    }
+    return F;
+}
+
+/// Kernel 1, one element per lane: element nodal forces f_a = V0 · F S ∇X N_a
+/// (Miller et al. 2007, CNME 23:121, eq. 12; Taylor et al. 2008, IEEE TMI 27(5), eq. 6).
+/// Inputs: material, element data, displacements u [m] SoA (3, P).
+/// Outputs: f_out [N] AoSoA K=12; J_out (det F, K=1) for the instability check.
+template <class T, class Material>
+PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                              const T* u, index_t P, T* f_out, T* J_out) {
+    const Mat3<T> F = deformation_gradient(b, l, el, u, P);
+    const Mat3<T> Pk = mat.pk1(F);
+    const T V0 = el.vol[aosoa(b, l, 0, 1)];
+    T g[9];
+    for (int k = 0; k < 9; ++k) g[k] = el.grad[aosoa(b, l, k, 9)];
+    for (int i = 0; i < 3; ++i) {
+        T f3 = T(0);
+        for (int a = 0; a < 3; ++a) {
+            const T fa = V0 * (Pk.a[3 * i] * g[3 * a] + Pk.a[3 * i + 1] * g[3 * a + 1] +
+                               Pk.a[3 * i + 2] * g[3 * a + 2]);
+            f_out[aosoa(b, l, 3 * a + i, 12)] = fa;
+            f3 -= fa;
+        }
+        f_out[aosoa(b, l, 9 + i, 12)] = f3;
+    }
+    J_out[aosoa(b, l, 0, 1)] = det(F);
+}
+
+/// Time-integration coefficients of central differences with mass-proportional damping α [1/s]:
+/// u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻, γ1 = 2Δt²/(αΔt + 2), γ2 = 4/(αΔt + 2), γ3 = 1 − γ2
+/// (Taylor et al. 2008, IEEE TMI 27(5), eq. 9; Joldes et al. 2009, CMAME 198:3313, eq. 7).
+template <class T>
+struct Integrator {
+    T g1, g2, g3;
+};
+template <class T>
+PLIANT_HD Integrator<T> central_difference(double dt, double alpha) {
+    const double d = alpha * dt + 2.0;
+    const double g2 = 4.0 / d;
+    return {T(2.0 * dt * dt / d), T(g2), T(1.0 - g2)};
+}
+
+/// Load-curve kinds; a curve maps time t [s] to a dimensionless factor.
+enum class CurveKind : int { Constant = 0, Step = 1, Ramp = 2, SmoothRamp = 3, Table = 4 };
+
+struct LoadCurve {
+    CurveKind kind;
+    double t0, t1;           // Step: jumps at t0; Ramp/SmoothRamp: 0 at t0 → 1 at t1
+    index_t table_begin, table_count;  // Table: piecewise linear in (times, values), held at the ends
+};
+
+/// Factor of curve c at time t: Ramp is linear; SmoothRamp is 10τ³ − 15τ⁴ + 6τ⁵ (NiftySim's
+/// POLY345, zero velocity and acceleration at both ends); Table interpolates linearly.
+PLIANT_HD double curve_value(const LoadCurve& c, double t, const double* table_t,
+                             const double* table_v) {
+    switch (c.kind) {
+        case CurveKind::Constant: return 1.0;
+        case CurveKind::Step: return t >= c.t0 ? 1.0 : 0.0;
+        case CurveKind::Ramp:
+        case CurveKind::SmoothRamp: {
+            double tau = (t - c.t0) / (c.t1 - c.t0);
+            tau = tau < 0.0 ? 0.0 : (tau > 1.0 ? 1.0 : tau);
+            if (c.kind == CurveKind::Ramp) return tau;
+            return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+        }
+        default: {
+            const double* ts = table_t + c.table_begin;
+            const double* vs = table_v + c.table_begin;
+            const index_t n = c.table_count;
+            if (t <= ts[0]) return vs[0];
+            if (t >= ts[n - 1]) return vs[n - 1];
+            index_t k = 0;
+            while (ts[k + 1] < t) ++k;
+            const double w = (t - ts[k]) / (ts[k + 1] - ts[k]);
+            return vs[k] + w * (vs[k + 1] - vs[k]);
+        }
+    }
+}
+
+/// Node data for kernel 2: the node → (element, corner) incidence in CSR form. inc_offsets has
+/// N + 1 entries; inc_index holds, per incidence, the AoSoA offset of its x force component in f_elem
+/// (y and z follow at +kLanes and +2 kLanes). Loads: load_patterns[k][d*P + n] [N] scaled by the
+/// value of curve k.
+template <class T>
+struct NodeData {
+    const index_t* inc_offsets;
+    const index_t* inc_index;
+    const T* inv_mass;  // 1/m_a [1/kg], m_a = Σ ρ V0 / 4 over incident elements
+    const T* load_patterns;
+    int n_patterns;
+};
+
+/// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
+/// bitwise reproducible), then u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻ (central differences).
+/// Inputs: node data, element forces, load-pattern factors, u and u⁻ [m] SoA (3, P).
+/// Outputs: u_out [m]; f_node_out [N] (internal force per node, may be null).
+template <class T>
+PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem,
+                           const T* pattern_factors, const Integrator<T>& it, const T* u,
+                           const T* u_prev, index_t P, T* u_out, T* f_node_out) {
+    T f[3] = {T(0), T(0), T(0)};
+    const index_t end = nd.inc_offsets[n + 1];
+    for (index_t k = nd.inc_offsets[n]; k < end; ++k) {
+        const index_t o = nd.inc_index[k];
+        f[0] += f_elem[o];
+        f[1] += f_elem[o + kLanes];
+        f[2] += f_elem[o + 2 * kLanes];
+    }
+    const T w = it.g1 * nd.inv_mass[n];
+    for (int d = 0; d < 3; ++d) {
+        const index_t i = d * P + n;
+        T r = T(0);
+        for (int k = 0; k < nd.n_patterns; ++k) r += pattern_factors[k] * nd.load_patterns[k * 3 * P + i];
+        u_out[i] = w * (r - f[d]) + it.g2 * u[i] + it.g3 * u_prev[i];
+        if (f_node_out) f_node_out[i] = f[d];
+    }
+}
+
+/// Kinematic constraint i: u[dof_i] = value_i · curve factor (fixed nodes have value 0).
+/// dof is d*P + n in the SoA node layout.
+template <class T>
+PLIANT_HD void apply_constraint(index_t i, const index_t* dof, const T* value,
+                                const index_t* curve, const T* curve_factors, T* u_out) {
+    u_out[dof[i]] = value[i] * curve_factors[curve[i]];
+}
+
+/// Stress and strain measures of one element, for output (not on the stepping path).
+template <class T>
+struct ElementMeasures {
+    T J, energy;           // det F; strain-energy density W [Pa]
+    Sym3<T> S, sigma, E;   // 2nd Piola–Kirchhoff [Pa]; Cauchy σ = J⁻¹ F S Fᵀ [Pa]; Green–Lagrange E
+};
+
+/// σ = J⁻¹ P Fᵀ, E = ½(C − I), W(F) of element slot (b, l) (Bonet & Wood, 2nd ed., eqs. 5.31, 3.15).
+template <class T, class Material>
+PLIANT_HD ElementMeasures<T> element_measures(index_t b, int l, const Material& mat,
+                                              const ElementData<T>& el, const T* u, index_t P) {
+    const Mat3<T> F = deformation_gradient(b, l, el, u, P);
+    ElementMeasures<T> m;
+    m.J = det(F);
+    m.energy = mat.energy(F);
+    m.S = mat.pk2(F);
+    const Mat3<T> Pk = mat.pk1(F);
+    const T iJ = T(1) / m.J;
+    const T* p = Pk.a;
+    const T* f = F.a;
+    m.sigma = {iJ * (p[0] * f[0] + p[1] * f[1] + p[2] * f[2]),
+               iJ * (p[3] * f[3] + p[4] * f[4] + p[5] * f[5]),
+               iJ * (p[6] * f[6] + p[7] * f[7] + p[8] * f[8]),
+               iJ * (p[0] * f[3] + p[1] * f[4] + p[2] * f[5]),
+               iJ * (p[3] * f[6] + p[4] * f[7] + p[5] * f[8]),
+               iJ * (p[0] * f[6] + p[1] * f[7] + p[2] * f[8])};
+    m.E = add_identity(T(-0.5), scale(T(0.5), right_cauchy_green(F)));
+    return m;
+}
+
+/// Reference geometry of a tetrahedron X [m], shape (4, 3): shape-function gradients
+/// grad_out (4, 3) [1/m] (rows of the inverse Jacobian), volume V0 [m³] (negative when inverted)
+/// and smallest altitude h_min = 3 V0 / max face area [m] (characteristic length for the stable
+/// time step, Belytschko, Liu & Moran 2000, §6.3). Computed in double precision.
+PLIANT_HD void tet_reference(const double X[4][3], double grad_out[4][3], double& vol_out,
+                             double& altitude_out) {
+    double A[3][3];
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) A[r][c] = X[c + 1][r] - X[0][r];  // columns X_a − X_0
+    const double d = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+                     A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+                     A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    vol_out = d / 6.0;
+    // Rows of A⁻¹ are ∇ξ, ∇η, ∇ζ = ∇N_1, ∇N_2, ∇N_3.
+    const double inv = d != 0.0 ? 1.0 / d : 0.0;
+    double B[3][3];
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+            const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+            B[r][c] = (A[r1][c1] * A[r2][c2] - A[r1][c2] * A[r2][c1]) * inv;
+        }
+    for (int j = 0; j < 3; ++j) {
+        grad_out[1][j] = B[0][j];
+        grad_out[2][j] = B[1][j];
+        grad_out[3][j] = B[2][j];
+        grad_out[0][j] = -(B[0][j] + B[1][j] + B[2][j]);
+    }
+    // Face opposite corner a has area 3|V|·|∇N_a|, so the altitude from corner a is 1/|∇N_a|.
+    double gmax = 0.0;
+    for (int a = 0; a < 4; ++a) {
+        const double g = grad_out[a][0] * grad_out[a][0] + grad_out[a][1] * grad_out[a][1] +
+                         grad_out[a][2] * grad_out[a][2];
+        gmax = g > gmax ? g : gmax;
+    }
+    altitude_out = gmax > 0.0 ? 1.0 / std::sqrt(gmax) : 0.0;
+}
+
+}  // namespace pliant

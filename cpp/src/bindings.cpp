@@ -1,0 +1,211 @@
+// pliant — Python bindings (nanobind) of the CPU backend: module pliant._core.
+// Arrays cross the boundary as NumPy arrays in the engine's node/element order; pliant.tled maps
+// them to and from the user's numbering.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
+
+#include <omp.h>
+
+#include <memory>
+#include <vector>
+
+#include "cpu_solver.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace pliant;
+
+namespace {
+
+template <class T>
+using In = nb::ndarray<const T, nb::c_contig, nb::device::cpu>;
+
+template <class T>
+nb::ndarray<nb::numpy, T> to_numpy(std::vector<T>&& v, std::initializer_list<size_t> shape) {
+    auto* p = new std::vector<T>(std::move(v));
+    nb::capsule owner(p, [](void* q) noexcept { delete static_cast<std::vector<T>*>(q); });
+    return nb::ndarray<nb::numpy, T>(p->data(), shape, owner);
+}
+
+nb::dict report(const RunReport& r) {
+    nb::dict d;
+    d["steps"] = r.steps;
+    d["t"] = r.t;
+    d["status"] = r.status;
+    d["where"] = r.where;
+    d["value"] = r.value;
+    d["residual"] = r.residual;
+    d["damping"] = r.damping;
+    return d;
+}
+
+template <class T>
+struct Engine {
+    Model<T> model;
+    CpuSolver<T> solver;
+    Engine(const ModelInput& in, int threads) : model(in), solver(model, threads) {}
+};
+
+template <class T>
+struct PyState {
+    State<T> s;
+    index_t n_nodes;
+};
+
+// Node field (3, P) in the engine's padded SoA layout ↔ (N, 3) array.
+template <class T>
+std::vector<T> gather_nodes(const std::vector<T>& soa, index_t n, index_t P) {
+    std::vector<T> out(3 * static_cast<std::size_t>(n));
+    for (index_t i = 0; i < n; ++i)
+        for (int d = 0; d < 3; ++d) out[3 * i + d] = soa[d * P + i];
+    return out;
+}
+template <class T>
+void scatter_nodes(const In<double>& a, std::vector<T>& soa, index_t n, index_t P) {
+    if (a.ndim() != 2 || a.shape(0) != static_cast<size_t>(n) || a.shape(1) != 3)
+        throw nb::value_error("node field must have shape (n_nodes, 3)");
+    const double* p = a.data();
+    for (index_t i = 0; i < n; ++i)
+        for (int d = 0; d < 3; ++d) soa[d * P + i] = T(p[3 * i + d]);
+}
+
+template <class T>
+void bind_engine(nb::module_& m, const char* engine_name, const char* state_name) {
+    using E = Engine<T>;
+    using S = PyState<T>;
+    nb::class_<S>(m, state_name)
+        .def_prop_ro("n_nodes", [](const S& s) { return s.n_nodes; })
+        .def_prop_rw("t", [](const S& s) { return s.s.t; }, [](S& s, double t) { s.s.t = t; })
+        .def_prop_rw("dt", [](const S& s) { return s.s.dt; }, [](S& s, double v) { s.s.dt = v; })
+        .def_prop_rw("step", [](const S& s) { return s.s.step; }, [](S& s, long v) { s.s.step = v; })
+        .def("get_u", [](const S& s) {
+            const index_t P = static_cast<index_t>(s.s.u.size() / 3);
+            return to_numpy(gather_nodes(s.s.u, s.n_nodes, P), {size_t(s.n_nodes), 3});
+        })
+        .def("get_u_prev", [](const S& s) {
+            const index_t P = static_cast<index_t>(s.s.u.size() / 3);
+            return to_numpy(gather_nodes(s.s.u_prev, s.n_nodes, P), {size_t(s.n_nodes), 3});
+        })
+        .def("set_u", [](S& s, In<double> a) {
+            scatter_nodes(a, s.s.u, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+        })
+        .def("set_u_prev", [](S& s, In<double> a) {
+            scatter_nodes(a, s.s.u_prev, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+        })
+        .def("copy", [](const S& s) { return S(s); })
+        .def("assign", [](S& s, const S& o) { s = o; });
+
+    nb::class_<E>(m, engine_name)
+        .def("__init__",
+             [](E* self, In<double> X, In<index_t> tets, In<double> density,
+                std::vector<index_t> group_end, std::vector<int> group_kind,
+                std::vector<double> group_params, In<double> patterns,
+                std::vector<index_t> pattern_curve, std::vector<index_t> cons_node,
+                std::vector<int> cons_dim, std::vector<double> cons_value,
+                std::vector<index_t> cons_curve, std::vector<int> curve_kind,
+                std::vector<double> curve_t0, std::vector<double> curve_t1,
+                std::vector<index_t> curve_table_begin, std::vector<index_t> curve_table_count,
+                std::vector<double> table_t, std::vector<double> table_v, std::vector<double> gravity,
+                index_t gravity_curve, int threads) {
+                 ModelInput in;
+                 in.X = X.data();
+                 in.n_nodes = static_cast<index_t>(X.shape(0));
+                 in.tets = tets.data();
+                 in.n_elems = static_cast<index_t>(tets.shape(0));
+                 in.density = density.data();
+                 in.group_end = std::move(group_end);
+                 in.group_kind = std::move(group_kind);
+                 in.group_params = std::move(group_params);
+                 in.patterns = patterns.data();
+                 in.n_patterns = static_cast<int>(pattern_curve.size());
+                 in.pattern_curve = std::move(pattern_curve);
+                 in.cons_node = std::move(cons_node);
+                 in.cons_dim = std::move(cons_dim);
+                 in.cons_value = std::move(cons_value);
+                 in.cons_curve = std::move(cons_curve);
+                 for (std::size_t c = 0; c < curve_kind.size(); ++c)
+                     in.curves.push_back({static_cast<CurveKind>(curve_kind[c]), curve_t0[c],
+                                          curve_t1[c], curve_table_begin[c], curve_table_count[c]});
+                 in.table_t = std::move(table_t);
+                 in.table_v = std::move(table_v);
+                 for (int d = 0; d < 3; ++d) in.gravity[d] = gravity[d];
+                 in.gravity_curve = gravity_curve;
+                 new (self) E(in, threads);
+             })
+        .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
+        .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
+        .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
+        .def_prop_ro("dt_critical", [](const E& e) { return e.model.dt_critical; })
+        .def_prop_ro("dt_critical_element", [](const E& e) { return e.model.dt_critical_elem; })
+        .def_prop_ro("bytes", [](const E& e) { return e.model.bytes(); })
+        .def_prop_ro("threads", [](const E& e) { return e.solver.threads(); })
+        .def("new_state", [](const E& e) { return S{State<T>(e.model.n_pad), e.model.n_nodes}; })
+        .def("mass", [](const E& e) {
+            std::vector<T> m(e.model.mass.begin(), e.model.mass.begin() + e.model.n_nodes);
+            return to_numpy(std::move(m), {size_t(e.model.n_nodes)});
+        })
+        .def("step", [](E& e, const S& in, S& out, double dt, double alpha) {
+                 nb::gil_scoped_release g;
+                 return report(e.solver.step(in.s, out.s, dt, alpha));
+             }, "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
+        .def("run", [](E& e, S& s, long n, double dt, double alpha, int check_every, double blowup) {
+                 RunReport r;
+                 {
+                     nb::gil_scoped_release g;
+                     r = e.solver.run(s.s, n, dt, alpha, check_every, blowup);
+                 }
+                 return report(r);
+             })
+        .def("relax", [](E& e, S& s, double t_eval, double dt, double tol, long max_steps,
+                         int check_every, double blowup) {
+                 RunReport r;
+                 {
+                     nb::gil_scoped_release g;
+                     r = e.solver.relax(s.s, t_eval, dt, tol, max_steps, check_every, blowup);
+                 }
+                 return report(r);
+             })
+        .def("measures", [](E& e, const S& s) {
+            const size_t M = size_t(e.model.n_elems);
+            std::vector<T> J(M), W(M), PK2(6 * M), sig(6 * M), Eg(6 * M);
+            e.solver.measures(s.s, J.data(), W.data(), PK2.data(), sig.data(), Eg.data());
+            return nb::make_tuple(to_numpy(std::move(J), {M}), to_numpy(std::move(W), {M}),
+                                  to_numpy(std::move(PK2), {M, 6}), to_numpy(std::move(sig), {M, 6}),
+                                  to_numpy(std::move(Eg), {M, 6}));
+        })
+        .def("internal_forces", [](E& e, const S& s) {
+            std::vector<T> f = e.solver.internal_forces(s.s);
+            return to_numpy(gather_nodes(f, e.model.n_nodes, e.model.n_pad),
+                            {size_t(e.model.n_nodes), 3});
+        });
+}
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "pliant engine: TLED on linear tetrahedra, CPU backend (OpenMP + SIMD)";
+    bind_engine<float>(m, "EngineF32", "StateF32");
+    bind_engine<double>(m, "EngineF64", "StateF64");
+    m.attr("lanes") = kLanes;
+    m.def("max_threads", []() { return omp_get_max_threads(); });
+    m.def("tet_geometry", [](In<double> X, In<index_t> tets) {
+        // Reference volume [m³] and smallest altitude [m] per tet, for validation by the builder.
+        const size_t M = tets.shape(0), N = X.shape(0);
+        std::vector<double> vol(M), alt(M);
+        const double* x = X.data();
+        const index_t* t = tets.data();
+        for (size_t e = 0; e < M; ++e) {
+            double P[4][3], g[4][3];
+            for (int a = 0; a < 4; ++a) {
+                const index_t n = t[4 * e + a];
+                if (n < 0 || size_t(n) >= N) throw nb::index_error("node index out of range");
+                for (int d = 0; d < 3; ++d) P[a][d] = x[3 * n + d];
+            }
+            tet_reference(P, g, vol[e], alt[e]);
+        }
+        return nb::make_tuple(to_numpy(std::move(vol), {M}), to_numpy(std::move(alt), {M}));
+    });
+}

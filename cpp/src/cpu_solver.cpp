@@ -1,0 +1,270 @@
+// pliant — CPU backend implementation (see cpu_solver.hpp).
+#include "cpu_solver.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace pliant {
+
+template <class T>
+CpuSolver<T>::CpuSolver(const Model<T>& model, int threads)
+    : m_(model), threads_(threads > 0 ? threads : omp_get_max_threads()) {
+    const std::size_t S = static_cast<std::size_t>(m_.n_blocks) * kLanes;
+    f_elem_.assign(12 * S, T(0));
+    J_.assign(S, T(1));
+    scratch_.assign(3 * static_cast<std::size_t>(m_.n_pad), T(0));
+    f_node_[0] = scratch_;
+    f_node_[1] = scratch_;
+}
+
+// Kernel 1 over all blocks; called inside a parallel region (implicit barrier at the end).
+template <class T>
+void CpuSolver<T>::element_pass(const T* __restrict u) {
+    const ElementData<T> el = m_.elements();
+    T* __restrict f = f_elem_.data();
+    T* __restrict J = J_.data();
+    const index_t P = m_.n_pad;
+#pragma omp for schedule(static)
+    for (index_t b = 0; b < m_.n_blocks; ++b) {
+        with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
+#pragma omp simd
+            for (int l = 0; l < kLanes; ++l) element_forces(b, l, mat, el, u, P, f, J);
+        });
+    }
+}
+
+// Kernel 2 over all nodes, then the kinematic constraints; inside a parallel region.
+template <class T>
+void CpuSolver<T>::node_pass(const Buffers& bu, const T* pattern_factors, const T* cons_factors,
+                             const Integrator<T>& it, T* f_node) {
+    const NodeData<T> nd = m_.nodes();
+    const T* f = f_elem_.data();
+    const index_t P = m_.n_pad;
+#pragma omp for schedule(static)
+    for (index_t n = 0; n < m_.n_nodes; ++n)
+        node_update(n, nd, f, pattern_factors, it, bu.cur, bu.prev, P, bu.next, f_node);
+    const index_t nc = static_cast<index_t>(m_.cons_dof.size());
+#pragma omp for schedule(static)
+    for (index_t i = 0; i < nc; ++i)
+        apply_constraint(i, m_.cons_dof.data(), m_.cons_value.data(), m_.cons_curve.data(),
+                         cons_factors, bu.next);
+}
+
+template <class T>
+bool CpuSolver<T>::check(const T* u, double t, double blowup, RunReport& rep) const {
+    const std::size_t S = J_.size();
+    for (std::size_t s = 0; s < S; ++s) {
+        const index_t e = m_.elem_id[s];
+        if (e < 0 || J_[s] > T(0)) continue;
+        rep.status = std::isfinite(static_cast<double>(J_[s])) ? 2 : 1;
+        rep.where = e;
+        rep.value = J_[s];
+        rep.t = t;
+        return false;
+    }
+    const index_t P = m_.n_pad;
+    for (index_t n = 0; n < m_.n_nodes; ++n) {
+        for (int d = 0; d < 3; ++d) {
+            const double v = u[d * P + n];
+            if (std::isfinite(v) && std::abs(v) <= blowup) continue;
+            rep.status = std::isfinite(v) ? 3 : 1;
+            rep.where = n;
+            rep.value = v;
+            rep.t = t;
+            return false;
+        }
+    }
+    return true;
+}
+
+// Central differences assume equal steps: when Δt changes, keep the velocity (u − u⁻)/Δt.
+template <class T>
+void CpuSolver<T>::rescale_history(State<T>& s, double dt) const {
+    if (s.dt <= 0.0 || s.dt == dt) return;
+    const T r = T(dt / s.dt);
+    for (std::size_t i = 0; i < s.u.size(); ++i) s.u_prev[i] = s.u[i] - r * (s.u[i] - s.u_prev[i]);
+}
+
+template <class T>
+RunReport CpuSolver<T>::step(const State<T>& in, State<T>& out, double dt, double alpha) {
+    State<T> tmp = in;
+    rescale_history(tmp, dt);
+    RunReport rep = run(tmp, 1, dt, alpha, 1, INFINITY);
+    out = std::move(tmp);
+    return rep;
+}
+
+template <class T>
+RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int check_every,
+                            double blowup) {
+    rescale_history(s, dt);
+    std::vector<T>* v[3] = {&s.u_prev, &s.u, &scratch_};
+    RunReport rep;
+    const Integrator<T> it = central_difference<T>(dt, alpha);
+    const std::size_t nc = m_.curves.size(), np = m_.pattern_curve.size();
+    const double t0 = s.t;
+    long done = 0;
+    bool ok = true;
+#pragma omp parallel num_threads(threads_)
+    {
+        std::vector<T> cnow(nc), cnext(nc), pf(np + 1);
+        int ip = 0, ic = 1, in = 2;
+        for (long k = 0; k < n; ++k) {
+            const double t = t0 + k * dt;
+            m_.curve_factors(t, cnow.data());
+            m_.curve_factors(t + dt, cnext.data());
+            for (std::size_t p = 0; p < np; ++p) pf[p] = cnow[m_.pattern_curve[p]];
+            element_pass(v[ic]->data());
+            node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cnext.data(), it,
+                      nullptr);
+            ip = std::exchange(ic, std::exchange(in, ip));
+            if ((k + 1) % check_every == 0 || k + 1 == n) {
+#pragma omp single
+                {
+                    // J_ belongs to u at t (the step's input), u at t + Δt is now current.
+                    done = k + 1;
+                    ok = check(v[ip]->data(), t, blowup, rep) &&
+                         check(v[ic]->data(), t + dt, blowup, rep);
+                }
+                if (!ok) break;
+            }
+        }
+#pragma omp single
+        {
+            std::vector<T> a = std::move(*v[ip]), b = std::move(*v[ic]), c = std::move(*v[in]);
+            s.u_prev = std::move(a);
+            s.u = std::move(b);
+            scratch_ = std::move(c);
+        }
+    }
+    s.t = t0 + done * dt;
+    s.dt = dt;
+    s.step += done;
+    rep.steps = done;
+    if (rep.status == 0) rep.t = s.t;
+    return rep;
+}
+
+template <class T>
+RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
+                              int check_every, double blowup) {
+    s.u_prev = s.u;  // start at rest
+    std::vector<T>* v[3] = {&s.u_prev, &s.u, &scratch_};
+    RunReport rep;
+    const std::size_t nc = m_.curves.size(), np = m_.pattern_curve.size();
+    std::vector<T> cf(nc), pf(np + 1);
+    m_.curve_factors(t_eval, cf.data());
+    for (std::size_t p = 0; p < np; ++p) pf[p] = cf[m_.pattern_curve[p]];
+    const index_t P = m_.n_pad;
+    const std::size_t N3 = 3 * static_cast<std::size_t>(P);
+    double alpha = 0.0;
+    long done = 0;
+    bool stop = false;
+#pragma omp parallel num_threads(threads_)
+    {
+        int ip = 0, ic = 1, in = 2, fc = 0;
+        for (long k = 0; k < max_steps && !stop; ++k) {
+            const Integrator<T> it = central_difference<T>(dt, alpha);
+            element_pass(v[ic]->data());
+            node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cf.data(), it,
+                      f_node_[fc].data());
+            // f_node_[fc] = f(u_cur), f_node_[1 − fc] = f(u_prev)
+            if ((k + 1) % check_every == 0 && k > 0) {
+#pragma omp single
+                {
+                    done = k + 1;
+                    const T* uc = v[ic]->data();
+                    const T* up = v[ip]->data();
+                    const T* fcur = f_node_[fc].data();
+                    const T* fprev = f_node_[1 - fc].data();
+                    const T* lp = m_.load_patterns.data();
+                    double res = 0.0, scale = 0.0, num = 0.0, den = 0.0;
+                    for (std::size_t i = 0; i < N3; ++i) {
+                        double r = 0.0;
+                        for (std::size_t p = 0; p < np; ++p) r += double(pf[p]) * lp[p * N3 + i];
+                        const double fm = m_.free_mask[i];
+                        res += fm * (r - fcur[i]) * (r - fcur[i]);
+                        scale += r * r + (1.0 - fm) * double(fcur[i]) * fcur[i];
+                        const double du = double(uc[i]) - up[i];
+                        num += fm * du * (double(fcur[i]) - fprev[i]);
+                        den += fm * double(m_.mass[i % P]) * du * du;
+                    }
+                    rep.residual = scale > 0.0 ? std::sqrt(res / scale) : 0.0;
+                    if (den > 0.0) alpha = 2.0 * std::sqrt(std::max(num / den, 0.0));
+                    const bool ok = check(uc, t_eval, blowup, rep);
+                    stop = !ok || rep.residual < tol;
+                }
+            }
+            ip = std::exchange(ic, std::exchange(in, ip));
+            fc = 1 - fc;
+        }
+#pragma omp single
+        {
+            // After the loop, v[ic] holds the newest displacements.
+            std::vector<T> a = std::move(*v[ip]), b = std::move(*v[ic]), c = std::move(*v[in]);
+            s.u_prev = std::move(a);
+            s.u = std::move(b);
+            scratch_ = std::move(c);
+            if (!stop) done = max_steps;
+        }
+    }
+    s.u_prev = s.u;  // equilibrium: at rest
+    s.t = t_eval;
+    s.dt = dt;
+    rep.steps = done;
+    rep.damping = alpha;
+    if (rep.status == 0) rep.t = t_eval;
+    return rep;
+}
+
+template <class T>
+void CpuSolver<T>::measures(const State<T>& s, T* J_out, T* W_out, T* S_out, T* sigma_out,
+                            T* E_out) const {
+    const ElementData<T> el = m_.elements();
+    const index_t P = m_.n_pad;
+    const T* u = s.u.data();
+#pragma omp parallel for schedule(static) num_threads(threads_)
+    for (index_t b = 0; b < m_.n_blocks; ++b) {
+        with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
+            for (int l = 0; l < kLanes; ++l) {
+                const index_t e = m_.elem_id[b * kLanes + l];
+                if (e < 0) continue;
+                const ElementMeasures<T> q = element_measures(b, l, mat, el, u, P);
+                J_out[e] = q.J;
+                W_out[e] = q.energy;
+                const Sym3<T>* src[3] = {&q.S, &q.sigma, &q.E};
+                T* dst[3] = {S_out, sigma_out, E_out};
+                for (int k = 0; k < 3; ++k) {
+                    const T vals[6] = {src[k]->xx, src[k]->yy, src[k]->zz,
+                                       src[k]->xy, src[k]->yz, src[k]->xz};
+                    for (int c = 0; c < 6; ++c) dst[k][6 * e + c] = vals[c];
+                }
+            }
+        });
+    }
+}
+
+template <class T>
+std::vector<T> CpuSolver<T>::internal_forces(const State<T>& s) {
+    std::vector<T> f(3 * static_cast<std::size_t>(m_.n_pad), T(0));
+    const NodeData<T> nd = m_.nodes();
+    const Integrator<T> it{T(0), T(0), T(0)};
+    const std::vector<T> zeros(m_.pattern_curve.size() + 1, T(0));
+#pragma omp parallel num_threads(threads_)
+    {
+        element_pass(s.u.data());
+#pragma omp for schedule(static)
+        for (index_t n = 0; n < m_.n_nodes; ++n)
+            node_update(n, nd, f_elem_.data(), zeros.data(), it, s.u.data(), s.u.data(),
+                        m_.n_pad, scratch_.data(), f.data());
+    }
+    return f;
+}
+
+template class CpuSolver<float>;
+template class CpuSolver<double>;
+
+}  // namespace pliant

@@ -1,0 +1,62 @@
+// pliant — CPU backend: launches the kernels of tled.hpp with OpenMP threads across element
+// blocks and SIMD across the lanes of a block. Every thread count gives the same bits: each
+// element and node is computed by the same code whatever thread runs it, and sums run in a fixed order.
+#pragma once
+
+#include <vector>
+
+#include "model.hpp"
+
+namespace pliant {
+
+/// Outcome of a run: status 0 ok, 1 non-finite value, 2 inverted element (J ≤ 0), 3 blow-up
+/// (|u| above the limit). `where` is the builder's element (status 2) or node (1, 3) index,
+/// `value` the offending quantity, `t` the time [s] at which it was found.
+struct RunReport {
+    long steps = 0;
+    double t = 0.0;
+    int status = 0;
+    index_t where = -1;
+    double value = 0.0;
+    double residual = 0.0;  // relax: relative out-of-balance force at the end
+    double damping = 0.0;   // relax: last adaptive damping coefficient α [1/s]
+};
+
+template <class T>
+class CpuSolver {
+public:
+    CpuSolver(const Model<T>& model, int threads);
+
+    /// One central-difference step from `in` to `out` (distinct states), Δt [s], damping α [1/s].
+    RunReport step(const State<T>& in, State<T>& out, double dt, double alpha);
+    /// n steps in place, checking stability every `check_every` steps and at the end.
+    RunReport run(State<T>& s, long n, double dt, double alpha, int check_every, double blowup);
+    /// Dynamic relaxation to the static equilibrium of the loads at time t_eval [s], with adaptive
+    /// mass-proportional damping (Joldes, Wittek & Miller 2009, CMAME 198:3313, §3).
+    RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
+                    int check_every, double blowup);
+    /// Per element (builder order): J, W [Pa], S, σ [Pa] and E as (xx, yy, zz, xy, yz, xz).
+    void measures(const State<T>& s, T* J_out, T* W_out, T* S_out, T* sigma_out, T* E_out) const;
+    /// Internal nodal forces f(u) [N], SoA (3, P), of the state's current displacements.
+    std::vector<T> internal_forces(const State<T>& s);
+
+    int threads() const { return threads_; }
+
+private:
+    struct Buffers {
+        const T* prev;
+        const T* cur;
+        T* next;
+    };
+    void element_pass(const T* u);
+    void node_pass(const Buffers& b, const T* pattern_factors, const T* cons_factors,
+                   const Integrator<T>& it, T* f_node);
+    bool check(const T* u_cur, double t, double blowup, RunReport& rep) const;
+    void rescale_history(State<T>& s, double dt) const;
+
+    const Model<T>& m_;
+    int threads_;
+    std::vector<T> f_elem_, J_, scratch_, f_node_[2];
+};
+
+}  // namespace pliant

@@ -1,0 +1,139 @@
+// pliant — building the CPU model: AoSoA padding per material group, reference geometry,
+// lumped mass, node → element incidence, constraints, loads and the critical time step.
+#include "model.hpp"
+
+#include <algorithm>
+
+namespace pliant {
+
+template <class T>
+Model<T>::Model(const ModelInput& in) {
+    n_nodes = in.n_nodes;
+    n_pad = (n_nodes + kLanes - 1) / kLanes * kLanes;
+    n_elems = in.n_elems;
+    const std::size_t P = static_cast<std::size_t>(n_pad);
+
+    // Groups: each starts on a fresh block so that a block has a single material.
+    index_t begin = 0, blocks = 0;
+    for (std::size_t g = 0; g < in.group_end.size(); ++g) {
+        const index_t end = in.group_end[g];
+        const index_t nb = (end - begin + kLanes - 1) / kLanes;
+        Group<T> grp{blocks, blocks + nb, {static_cast<MaterialKind>(in.group_kind[g]), {}}};
+        for (int k = 0; k < 4; ++k) grp.material.p[k] = T(in.group_params[4 * g + k]);
+        groups.push_back(grp);
+        for (index_t b = 0; b < nb; ++b) block_group.push_back(static_cast<index_t>(g));
+        blocks += nb;
+        begin = end;
+    }
+    n_blocks = blocks;
+    const std::size_t S = static_cast<std::size_t>(n_blocks) * kLanes;  // padded element slots
+    elem_nodes.assign(4 * S, 0);
+    elem_grad.assign(9 * S, T(0));
+    elem_vol.assign(S, T(0));
+    elem_id.assign(S, -1);
+    mass.assign(P, T(0));
+    std::vector<double> mass_d(P, 0.0);
+    std::vector<index_t> count(n_nodes + 1, 0);
+
+    begin = 0;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        const index_t end = in.group_end[g];
+        const index_t first_slot = groups[g].block_begin * kLanes;
+        MaterialParams<double> md{groups[g].material.kind, {}};
+        for (int k = 0; k < 4; ++k) md.p[k] = in.group_params[4 * g + k];
+        const double modulus = with_material(md, [](auto m) { return m.dilatational_modulus(); });
+        for (index_t e = begin; e < end; ++e) {
+            const index_t s = first_slot + (e - begin);
+            double X[4][3], grad[4][3], vol, alt;
+            for (int a = 0; a < 4; ++a) {
+                const index_t n = in.tets[4 * e + a];
+                elem_nodes[aosoa(s / kLanes, s % kLanes, a, 4)] = n;
+                ++count[n + 1];
+                for (int d = 0; d < 3; ++d) X[a][d] = in.X[3 * n + d];
+            }
+            tet_reference(X, grad, vol, alt);
+            if (!(vol > 0.0))
+                throw std::invalid_argument("element " + std::to_string(e) +
+                                            " has non-positive reference volume");
+            for (int a = 0; a < 3; ++a)
+                for (int d = 0; d < 3; ++d) elem_grad[aosoa(s / kLanes, s % kLanes, 3 * a + d, 9)] = T(grad[a][d]);
+            elem_vol[s] = T(vol);
+            elem_id[s] = e;
+            const double rho = in.density[e];
+            for (int a = 0; a < 4; ++a) mass_d[in.tets[4 * e + a]] += rho * vol / 4.0;
+            const double dt_e = alt / std::sqrt(modulus / rho);
+            if (dt_critical_elem < 0 || dt_e < dt_critical) {
+                dt_critical = dt_e;
+                dt_critical_elem = e;
+            }
+        }
+        begin = end;
+    }
+    inv_mass.assign(P, T(0));
+    for (std::size_t n = 0; n < P; ++n) {
+        mass[n] = T(mass_d[n]);
+        inv_mass[n] = mass_d[n] > 0.0 ? T(1.0 / mass_d[n]) : T(0);
+    }
+
+    // Node → (element slot, corner) incidence, ordered by slot: a fixed summation order.
+    for (index_t n = 0; n < n_nodes; ++n) count[n + 1] += count[n];
+    inc_offsets.assign(count.begin(), count.end());
+    inc_index.assign(static_cast<std::size_t>(count[n_nodes]), 0);
+    std::vector<index_t> fill(count.begin(), count.end() - 1);
+    for (std::size_t s = 0; s < S; ++s) {
+        if (elem_id[s] < 0) continue;
+        for (int a = 0; a < 4; ++a) {
+            const index_t n = elem_nodes[aosoa(static_cast<index_t>(s / kLanes), s % kLanes, a, 4)];
+            inc_index[fill[n]++] = aosoa(static_cast<index_t>(s / kLanes), s % kLanes, 3 * a, 12);
+        }
+    }
+
+    // Loads: (K, N, 3) → (K, 3, P).
+    pattern_curve = in.pattern_curve;
+    load_patterns.assign(static_cast<std::size_t>(in.n_patterns) * 3 * P, T(0));
+    for (int k = 0; k < in.n_patterns; ++k)
+        for (index_t n = 0; n < n_nodes; ++n)
+            for (int d = 0; d < 3; ++d)
+                load_patterns[(static_cast<std::size_t>(k) * 3 + d) * P + n] =
+                    T(in.patterns[(static_cast<std::size_t>(k) * n_nodes + n) * 3 + d]);
+
+    if (in.gravity_curve >= 0) {  // body force ρg lumped like the mass: m_a·g
+        const std::size_t k = pattern_curve.size();
+        pattern_curve.push_back(in.gravity_curve);
+        load_patterns.resize((k + 1) * 3 * P, T(0));
+        for (int d = 0; d < 3; ++d)
+            for (index_t n = 0; n < n_nodes; ++n)
+                load_patterns[(k * 3 + d) * P + n] = T(mass_d[n] * in.gravity[d]);
+    }
+
+    // Constraints.
+    free_mask.assign(3 * P, T(1));
+    for (std::size_t i = 0; i < in.cons_node.size(); ++i) {
+        const index_t dof = in.cons_dim[i] * n_pad + in.cons_node[i];
+        cons_dof.push_back(dof);
+        cons_value.push_back(T(in.cons_value[i]));
+        cons_curve.push_back(in.cons_curve[i]);
+        free_mask[dof] = T(0);
+    }
+    curves = in.curves;
+    if (curves.empty()) curves.push_back({CurveKind::Constant, 0.0, 0.0, 0, 0});
+    table_t = in.table_t;
+    table_v = in.table_v;
+    if (table_t.empty()) {
+        table_t.push_back(0.0);
+        table_v.push_back(0.0);
+    }
+}
+
+template <class T>
+std::size_t Model<T>::bytes() const {
+    auto b = [](const auto& v) { return v.size() * sizeof(v[0]); };
+    return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) +
+           b(inc_offsets) + b(inc_index) + b(mass) + b(inv_mass) + b(free_mask) +
+           b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve);
+}
+
+template struct Model<float>;
+template struct Model<double>;
+
+}  // namespace pliant

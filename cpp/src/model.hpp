@@ -1,0 +1,90 @@
+// pliant — the static model (Model) and the per-step state (State) of the CPU backend, laid out
+// for the kernels of tled.hpp. Built once from arrays that the Python ModelBuilder prepared.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pliant/tled.hpp"
+
+namespace pliant {
+
+/// One element group: consecutive blocks sharing a material.
+template <class T>
+struct Group {
+    index_t block_begin, block_end;
+    MaterialParams<T> material;
+};
+
+/// Raw description of a model handed over by the builder (all in SI units, user-facing node and
+/// element numbering already replaced by the builder's locality-friendly order).
+struct ModelInput {
+    const double* X;          // reference positions [m], (N, 3)
+    index_t n_nodes;
+    const index_t* tets;      // (M, 4), positively oriented
+    const double* density;    // [kg/m³], (M,)
+    index_t n_elems;
+    std::vector<index_t> group_end;        // element index one past each group, ascending
+    std::vector<int> group_kind;           // MaterialKind per group
+    std::vector<double> group_params;      // 4 per group
+    const double* patterns;   // load patterns [N], (K, N, 3)
+    int n_patterns;
+    std::vector<index_t> pattern_curve;    // curve per pattern
+    double gravity[3] = {0.0, 0.0, 0.0};   // [m/s²], applied as the pattern m_a·g
+    index_t gravity_curve = -1;            // −1: no gravity
+    std::vector<index_t> cons_node;        // constrained DOFs: node, dim, value [m], curve
+    std::vector<int> cons_dim;
+    std::vector<double> cons_value;
+    std::vector<index_t> cons_curve;
+    std::vector<LoadCurve> curves;
+    std::vector<double> table_t, table_v;
+};
+
+template <class T>
+struct Model {
+    index_t n_nodes = 0, n_pad = 0, n_elems = 0, n_blocks = 0;
+    std::vector<index_t> elem_nodes;   // AoSoA K=4 over padded elements
+    std::vector<T> elem_grad, elem_vol;
+    std::vector<index_t> elem_id;      // padded slot → builder element index (−1 for padding)
+    std::vector<index_t> block_group;  // block → group
+    std::vector<Group<T>> groups;
+    std::vector<index_t> inc_offsets, inc_index;
+    std::vector<T> mass, inv_mass, free_mask;  // (P,), (P,), (3P,)
+    std::vector<T> load_patterns;              // (K, 3, P)
+    std::vector<index_t> pattern_curve;
+    std::vector<index_t> cons_dof, cons_curve;
+    std::vector<T> cons_value;
+    std::vector<LoadCurve> curves;
+    std::vector<double> table_t, table_v;
+    double dt_critical = 0.0;   // min over elements of h_min / c_d [s]
+    index_t dt_critical_elem = -1;
+
+    explicit Model(const ModelInput& in);
+
+    ElementData<T> elements() const { return {elem_nodes.data(), elem_grad.data(), elem_vol.data()}; }
+    NodeData<T> nodes() const {
+        return {inc_offsets.data(), inc_index.data(), inv_mass.data(), load_patterns.data(),
+                static_cast<int>(pattern_curve.size())};
+    }
+    /// Curve factors at time t [s], one per curve.
+    void curve_factors(double t, T* out) const {
+        for (std::size_t c = 0; c < curves.size(); ++c)
+            out[c] = T(curve_value(curves[c], t, table_t.data(), table_v.data()));
+    }
+    std::size_t bytes() const;
+};
+
+/// Per-step state: displacements now and one step before [m], SoA (3, P); time t [s] and the last
+/// step Δt [s] (velocity v_{n−½} = (u − u⁻)/Δt).
+template <class T>
+struct State {
+    std::vector<T> u, u_prev;
+    double t = 0.0, dt = 0.0;
+    long step = 0;
+    explicit State(index_t n_pad) : u(3 * static_cast<std::size_t>(n_pad), T(0)), u_prev(u) {}
+};
+
+}  // namespace pliant

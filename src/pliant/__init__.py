@@ -1,0 +1,27 @@
+"""pliant: soft-body simulation by nonlinear finite elements (Total Lagrangian Explicit Dynamics)
+on tetrahedra, in SI units (m, kg, s, N, Pa).
+
+    import pliant as pl
+    b = pl.ModelBuilder(); b.add_mesh(nodes, tets)
+    b.set_material(pl.NeoHookean(E=3e3, nu=0.45), density=1000.0)
+    sim = pl.Simulation(b.finalize())
+"""
+
+from . import _core, mesh
+from .errors import (ConvergenceError, DegenerateElementError, InputError, InstabilityError,
+                     InvertedElementError, MaterialError, MeshError, PliantError, TimeStepError)
+from .materials import (LinearElastic, Material, MooneyRivlin, NeoHookean, NeoHookeanCoupled,
+                        StVenantKirchhoff)
+from .tled import (Constant, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo, Simulation,
+                   SmoothRamp, Solver, State, Step, Table)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
+    "Constant", "Step", "Ramp", "SmoothRamp", "Table",
+    "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
+    "LinearElastic",
+    "PliantError", "InputError", "MaterialError", "MeshError", "InvertedElementError",
+    "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError",
+]

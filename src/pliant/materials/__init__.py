@@ -1,0 +1,179 @@
+"""Hyperelastic materials (SI units: Pa).
+
+Each class holds validated parameters and its kind code; the stress functions themselves live once,
+in C++ (``cpp/include/pliant/materials.hpp``), shared by every backend. Every material accepts
+engineering constants ``E`` [Pa] and ``nu`` [-] or its native parameters.
+
+=========================  ==========================================================  ==============
+class                      strain energy W                                              native params
+=========================  ==========================================================  ==============
+NeoHookean                 μ/2 (Ī1 − 3) + K/2 (J − 1)²  (decoupled; NiftySim "NH")      mu, K
+MooneyRivlin               C10 (Ī1 − 3) + C01 (Ī2 − 3) + K/2 (J − 1)²                   C10, C01, K
+NeoHookeanCoupled          μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²  (Bonet & Wood; FEBio)   mu, lam
+StVenantKirchhoff          λ/2 (tr E)² + μ E:E                                          mu, lam
+LinearElastic              λ/2 (tr ε)² + μ ε:ε, small strain                            mu, lam
+=========================  ==========================================================  ==============
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..errors import MaterialError
+
+__all__ = ["Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
+           "LinearElastic", "lame_from_young"]
+
+
+def _positive(name: str, value: float, cls: str) -> float:
+    v = float(value)
+    if not math.isfinite(v) or v <= 0.0:
+        raise MaterialError(f"{cls}: {name} = {value!r}; expected a finite value > 0 [Pa]")
+    return v
+
+
+def lame_from_young(E: float, nu: float, cls: str = "material") -> tuple[float, float]:
+    """(μ, λ) [Pa] from Young's modulus E [Pa] and Poisson's ratio ν (−1 < ν < 0.5)."""
+    E = _positive("E", E, cls)
+    nu = float(nu)
+    if not math.isfinite(nu) or nu >= 0.5 or nu <= -1.0:
+        raise MaterialError(f"{cls}: nu = {nu!r}; expected -1 < nu < 0.5 (0.5 is incompressible, "
+                            "which explicit dynamics cannot represent: use e.g. 0.49)")
+    return E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+
+
+class Material:
+    """Base class: ``kind`` (engine code), ``params`` (4 floats), ``mu``/``lam`` Lamé constants [Pa]."""
+
+    kind: int = -1
+    mu: float
+    lam: float
+
+    @property
+    def params(self) -> tuple[float, float, float, float]:
+        raise NotImplementedError
+
+    @property
+    def bulk_modulus(self) -> float:
+        """Small-strain bulk modulus K = λ + 2μ/3 [Pa]."""
+        return self.lam + 2.0 * self.mu / 3.0
+
+    @property
+    def young(self) -> float:
+        """Small-strain Young's modulus E [Pa]."""
+        K, mu = self.bulk_modulus, self.mu
+        return 9.0 * K * mu / (3.0 * K + mu)
+
+    @property
+    def poisson(self) -> float:
+        """Small-strain Poisson's ratio ν."""
+        K, mu = self.bulk_modulus, self.mu
+        return (3.0 * K - 2.0 * mu) / (2.0 * (3.0 * K + mu))
+
+    def _key(self):
+        return (self.kind, self.params)
+
+    def __eq__(self, other):
+        return isinstance(other, Material) and self._key() == other._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
+    def __repr__(self):
+        return f"{type(self).__name__}(mu={self.mu:g}, lam={self.lam:g})"
+
+
+def _mu_k(cls: str, mu, K, E, nu, k_name: str = "K") -> tuple[float, float]:
+    if E is not None or nu is not None:
+        if E is None or nu is None or mu is not None or K is not None:
+            raise MaterialError(f"{cls}: give either (E, nu) or ({'mu' if cls != 'MooneyRivlin' else 'C10, C01'}, {k_name})")
+        m, lam = lame_from_young(E, nu, cls)
+        return m, lam + 2.0 * m / 3.0
+    if mu is None or K is None:
+        raise MaterialError(f"{cls}: missing parameters; expected (E, nu) or (mu, {k_name})")
+    return _positive("mu", mu, cls), _positive(k_name, K, cls)
+
+
+class NeoHookean(Material):
+    """Decoupled Neo-Hookean: W = μ/2 (Ī1 − 3) + K/2 (J − 1)² (Taylor et al. 2008, eq. 10).
+
+    ``NeoHookean(mu=..., K=...)`` (shear and bulk modulus [Pa], NiftySim's order) or
+    ``NeoHookean(E=..., nu=...)``.
+    """
+
+    kind = 0
+
+    def __init__(self, mu=None, K=None, *, E=None, nu=None):
+        self.mu, self.K = _mu_k("NeoHookean", mu, K, E, nu)
+        self.lam = self.K - 2.0 * self.mu / 3.0
+
+    @property
+    def params(self):
+        return (self.mu, self.K, 0.0, 0.0)
+
+
+class MooneyRivlin(Material):
+    """Decoupled Mooney–Rivlin: W = C10 (Ī1 − 3) + C01 (Ī2 − 3) + K/2 (J − 1)².
+
+    Small-strain shear modulus μ = 2 (C10 + C01). ``MooneyRivlin(C10=..., C01=..., K=...)``.
+    """
+
+    kind = 1
+
+    def __init__(self, C10, C01, K):
+        self.C10 = _positive("C10", C10, "MooneyRivlin")
+        self.C01 = float(C01)
+        if not math.isfinite(self.C01) or self.C01 < 0.0:
+            raise MaterialError(f"MooneyRivlin: C01 = {C01!r}; expected a finite value >= 0 [Pa]")
+        self.K = _positive("K", K, "MooneyRivlin")
+        self.mu = 2.0 * (self.C10 + self.C01)
+        self.lam = self.K - 2.0 * self.mu / 3.0
+
+    @property
+    def params(self):
+        return (self.C10, self.C01, self.K, 0.0)
+
+    def __repr__(self):
+        return f"MooneyRivlin(C10={self.C10:g}, C01={self.C01:g}, K={self.K:g})"
+
+
+class _MuLambda(Material):
+    _name = ""
+
+    def __init__(self, mu=None, lam=None, *, E=None, nu=None):
+        cls = type(self).__name__
+        if E is not None or nu is not None:
+            if E is None or nu is None or mu is not None or lam is not None:
+                raise MaterialError(f"{cls}: give either (E, nu) or (mu, lam)")
+            self.mu, self.lam = lame_from_young(E, nu, cls)
+        else:
+            if mu is None or lam is None:
+                raise MaterialError(f"{cls}: missing parameters; expected (E, nu) or (mu, lam)")
+            self.mu = _positive("mu", mu, cls)
+            self.lam = float(lam)
+            if not math.isfinite(self.lam) or self.lam + 2.0 * self.mu / 3.0 <= 0.0:
+                raise MaterialError(f"{cls}: lam = {lam!r}; expected lam + 2 mu / 3 > 0 "
+                                    "(positive bulk modulus)")
+
+    @property
+    def params(self):
+        return (self.mu, self.lam, 0.0, 0.0)
+
+
+class NeoHookeanCoupled(_MuLambda):
+    """Coupled compressible Neo-Hookean: W = μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²
+    (Bonet & Wood 2008, §6.4.3; FEBio's "neo-Hookean")."""
+
+    kind = 2
+
+
+class StVenantKirchhoff(_MuLambda):
+    """St Venant–Kirchhoff: W = λ/2 (tr E)² + μ E:E (Bonet & Wood 2008, §6.4.2)."""
+
+    kind = 3
+
+
+class LinearElastic(_MuLambda):
+    """Small-strain linear elasticity, σ = λ tr(ε) I + 2μ ε; for small displacements only."""
+
+    kind = 4

@@ -1,0 +1,53 @@
+"""Tetrahedral meshes of simple shapes, positively oriented, in metres."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from ..errors import InputError
+
+
+def orient_positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Return tets (M, 4) with corners 2 and 3 swapped where det[X1−X0, X2−X0, X3−X0] < 0."""
+    X = np.asarray(nodes, float)
+    T = np.array(tets, dtype=np.int64)
+    d = np.einsum("ij,ij->i", np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]),
+                  X[T[:, 3]] - X[T[:, 0]])
+    neg = d < 0
+    T[neg, 2], T[neg, 3] = T[neg, 3].copy(), T[neg, 2].copy()
+    return T
+
+
+def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitter: float = 0.0,
+             seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Box [origin, origin + size] [m] split into nx·ny·nz hexahedra of 6 tetrahedra each (Kuhn
+    triangulation, conforming). ``jitter`` moves interior nodes randomly by up to that fraction of
+    a cell, making the mesh unstructured. Returns nodes (N, 3) [m] and tets (M, 4)."""
+    nx, ny, nz = (int(c) for c in cells)
+    if min(nx, ny, nz) < 1:
+        raise InputError(f"cells = {cells!r}; expected three integers >= 1")
+    size = np.asarray(size, float)
+    if size.shape != (3,) or np.any(size <= 0):
+        raise InputError(f"size = {size!r}; expected three lengths > 0 [m]")
+    g = [np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))]
+    X = np.stack(np.meshgrid(*g, indexing="ij"), axis=-1).reshape(-1, 3)
+    idx = np.arange(X.shape[0]).reshape(nx + 1, ny + 1, nz + 1)
+    i, j, k = (a.ravel() for a in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz),
+                                             indexing="ij"))
+    tets = []
+    for perm in itertools.permutations(range(3)):
+        corner = np.zeros((3, i.size), dtype=np.int64)
+        path = [idx[i, j, k]]
+        for axis in perm:
+            corner[axis] += 1
+            path.append(idx[i + corner[0], j + corner[1], k + corner[2]])
+        tets.append(np.stack(path, axis=1))
+    T = np.concatenate(tets)
+    if jitter > 0:
+        h = size / np.array([nx, ny, nz])
+        rng = np.random.default_rng(seed)
+        interior = np.all((X > 1e-12 * size) & (X < size * (1 - 1e-12)), axis=1)
+        X[interior] += (rng.uniform(-1, 1, (interior.sum(), 3)) * jitter * h)
+    return X + np.asarray(origin, float), orient_positive(X, T)

@@ -1,0 +1,227 @@
+"""ModelBuilder: collects a mesh, materials, constraints and loads, validates them, and builds a
+static :class:`~pliant.tled.model.Model`. Importers (meshio files, NiftySim XML, scenes) only feed it.
+
+Conventions: SI units (m, kg, s, N, Pa); node coordinates shape (N, 3); tetrahedra shape (M, 4),
+positively oriented (det[X1 − X0, X2 − X0, X3 − X0] > 0); DOFs named x, y, z.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import _core
+from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
+from ..materials import Material
+from .curves import Constant, LoadCurve
+
+__all__ = ["ModelBuilder"]
+
+_DOFS = {"x": 0, "y": 1, "z": 2}
+
+
+def _dofs(dofs) -> list[int]:
+    if isinstance(dofs, str):
+        out = []
+        for c in dofs.lower():
+            if c not in _DOFS:
+                raise InputError(f"dofs = {dofs!r}: unknown DOF {c!r}; expected letters from 'xyz'")
+            out.append(_DOFS[c])
+        return sorted(set(out))
+    out = sorted({int(d) for d in np.atleast_1d(dofs)})
+    if any(d not in (0, 1, 2) for d in out):
+        raise InputError(f"dofs = {dofs!r}: expected 0, 1, 2 or letters from 'xyz'")
+    return out
+
+
+@dataclass
+class _ElementSet:
+    name: str
+    elements: np.ndarray
+    material: Material
+    density: float
+
+
+class ModelBuilder:
+    """Collects what a model needs. Typical use::
+
+        b = ModelBuilder()
+        b.add_mesh(nodes, tets)
+        b.set_material(NeoHookean(E=3e3, nu=0.45), density=1000.0)
+        b.fix(bottom_nodes)
+        b.add_force(top_nodes, (0, 0, -0.1), curve=Ramp(1.0))
+        model = b.finalize()
+    """
+
+    def __init__(self):
+        self.nodes = np.zeros((0, 3))
+        self.tets = np.zeros((0, 4), dtype=np.int64)
+        self.sets: list[_ElementSet] = []
+        self.damping = 0.0  # mass-proportional damping α [1/s]
+        self._cons: dict[tuple[int, int], tuple[float, LoadCurve]] = {}
+        self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
+        self._gravity: tuple[np.ndarray, LoadCurve] | None = None
+        self.source = "arrays"  # what the mesh came from, for error messages
+
+    # --- mesh -------------------------------------------------------------------------------
+    def add_mesh(self, nodes, tets, source: str | None = None) -> np.ndarray:
+        """Append nodes [m] (N, 3) and tetrahedra (M, 4) (indices into these nodes, 0-based).
+
+        Returns the global indices of the new elements."""
+        src = source or self.source
+        X = np.asarray(nodes, dtype=float)
+        T = np.asarray(tets)
+        if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] == 0:
+            raise MeshError(f"{src}: nodes have shape {X.shape}; expected (N, 3) with N >= 1")
+        if not np.all(np.isfinite(X)):
+            bad = int(np.argwhere(~np.isfinite(X))[0, 0])
+            raise MeshError(f"{src}: node {bad} has a non-finite coordinate {X[bad].tolist()}")
+        if T.ndim != 2 or T.shape[1] != 4 or T.shape[0] == 0:
+            raise MeshError(f"{src}: tetrahedra have shape {T.shape}; expected (M, 4) with M >= 1")
+        if not np.issubdtype(T.dtype, np.integer):
+            if not np.all(np.equal(np.mod(T, 1), 0)):
+                raise MeshError(f"{src}: tetrahedron indices must be integers")
+            T = T.astype(np.int64)
+        bad = np.argwhere((T < 0) | (T >= X.shape[0]))
+        if bad.size:
+            e = int(bad[0, 0])
+            raise MeshError(f"{src}: element {e} has node index {int(T[e, bad[0, 1]])}; "
+                            f"expected 0 <= index < {X.shape[0]}")
+        rep = np.sort(T, axis=1)
+        dup = np.nonzero(np.any(rep[:, 1:] == rep[:, :-1], axis=1))[0]
+        if dup.size:
+            e = int(dup[0])
+            raise DegenerateElementError(f"{src}: element {e} repeats a node: {T[e].tolist()}", e)
+        base = self.nodes.shape[0]
+        first = self.tets.shape[0]
+        self.nodes = np.vstack([self.nodes, X])
+        self.tets = np.vstack([self.tets, T.astype(np.int64) + base])
+        self.source = src
+        return np.arange(first, self.tets.shape[0])
+
+    @property
+    def n_nodes(self) -> int:
+        return self.nodes.shape[0]
+
+    @property
+    def n_elements(self) -> int:
+        return self.tets.shape[0]
+
+    # --- materials --------------------------------------------------------------------------
+    def set_material(self, material: Material, density: float, elements=None, name: str | None = None):
+        """Assign a material and density [kg/m³] to elements (indices; default: all not yet assigned)."""
+        if not isinstance(material, Material):
+            raise MaterialError(f"material = {material!r}; expected a pliant.materials.Material")
+        rho = float(density)
+        if not math.isfinite(rho) or rho <= 0:
+            raise MaterialError(f"density = {density!r}; expected a finite value > 0 [kg/m^3]")
+        if elements is None:
+            taken = np.zeros(self.n_elements, bool)
+            for s in self.sets:
+                taken[s.elements] = True
+            elements = np.nonzero(~taken)[0]
+        elements = np.asarray(elements, dtype=np.int64).ravel()
+        if elements.size and (elements.min() < 0 or elements.max() >= self.n_elements):
+            raise InputError(f"set_material: element index out of range 0..{self.n_elements - 1}")
+        self.sets.append(_ElementSet(name or f"set{len(self.sets)}", elements, material, rho))
+
+    # --- constraints and loads --------------------------------------------------------------
+    def _node_ids(self, nodes, what: str) -> np.ndarray:
+        ids = np.asarray(nodes, dtype=np.int64).ravel()
+        if ids.size and (ids.min() < 0 or ids.max() >= self.n_nodes):
+            bad = ids[(ids < 0) | (ids >= self.n_nodes)][0]
+            raise InputError(f"{what}: node {int(bad)} out of range; expected 0..{self.n_nodes - 1}")
+        return ids
+
+    def fix(self, nodes, dofs="xyz"):
+        """Fix the given DOFs of the nodes (zero displacement)."""
+        self.prescribe(nodes, 0.0, dofs=dofs, curve=Constant())
+
+    def prescribe(self, nodes, displacement, dofs="xyz", curve: LoadCurve | None = None):
+        """Prescribe displacements [m] on DOFs of nodes, scaled in time by ``curve`` (default 1).
+
+        ``displacement``: a scalar (all DOFs), a vector per DOF in ``dofs`` (len(dofs),), or per
+        node (n, len(dofs)). A DOF prescribed twice with different values or curves is an error."""
+        ids = self._node_ids(nodes, "prescribe")
+        ds = _dofs(dofs)
+        val = np.broadcast_to(np.asarray(displacement, dtype=float), (ids.size, len(ds))) \
+            if np.ndim(displacement) < 2 else np.asarray(displacement, dtype=float)
+        if val.shape != (ids.size, len(ds)):
+            raise InputError(f"prescribe: displacement shape {np.shape(displacement)}; expected a "
+                             f"scalar, ({len(ds)},) or ({ids.size}, {len(ds)})")
+        if not np.all(np.isfinite(val)):
+            raise InputError("prescribe: displacement values must be finite")
+        curve = curve or Constant()
+        for i, n in enumerate(ids):
+            for j, d in enumerate(ds):
+                key = (int(n), d)
+                new = (float(val[i, j]), curve)
+                old = self._cons.get(key)
+                if old is not None and old != new:
+                    raise InputError(f"node {int(n)} DOF {'xyz'[d]} is constrained twice: "
+                                     f"{old[0]:g} m with {old[1]!r} and {new[0]:g} m with {new[1]!r}")
+                self._cons[key] = new
+
+    def add_force(self, nodes, force, curve: LoadCurve | None = None):
+        """Add a force [N] on each node: (3,) for all, or (n, 3) per node; scaled by ``curve``."""
+        ids = self._node_ids(nodes, "add_force")
+        f = np.asarray(force, dtype=float)
+        f = np.broadcast_to(f, (ids.size, 3)) if f.ndim == 1 else f
+        if f.shape != (ids.size, 3) or not np.all(np.isfinite(f)):
+            raise InputError(f"add_force: force shape {np.shape(force)}; expected finite (3,) or "
+                             f"({ids.size}, 3) [N]")
+        self._forces.append((ids, np.array(f), curve or Constant()))
+
+    def set_gravity(self, g=(0.0, 0.0, -9.81), curve: LoadCurve | None = None):
+        """Body acceleration g [m/s²] applied to every node as m_a·g, scaled by ``curve``."""
+        gv = np.asarray(g, dtype=float).ravel()
+        if gv.shape != (3,) or not np.all(np.isfinite(gv)):
+            raise InputError(f"gravity = {g!r}; expected 3 finite components [m/s^2]")
+        self._gravity = (gv, curve or Constant())
+
+    # --- finalize ---------------------------------------------------------------------------
+    def finalize(self, dtype="float32", threads: int | None = None):
+        """Validate everything and build the static Model (engine arrays in a cache-friendly order)."""
+        from .model import Model
+
+        if self.n_elements == 0:
+            raise MeshError(f"{self.source}: no tetrahedra; add a mesh before finalize()")
+        dtype = np.dtype(dtype)
+        if dtype not in (np.float32, np.float64):
+            raise InputError(f"dtype = {dtype}; expected float32 or float64")
+        a = float(self.damping)
+        if not math.isfinite(a) or a < 0:
+            raise InputError(f"damping = {self.damping!r}; expected a finite value >= 0 [1/s]")
+        owner = np.full(self.n_elements, -1, dtype=np.int64)
+        for k, s in enumerate(self.sets):
+            clash = s.elements[owner[s.elements] >= 0]
+            if clash.size:
+                raise InputError(f"element {int(clash[0])} is in two element sets "
+                                 f"({self.sets[owner[clash[0]]].name!r} and {s.name!r})")
+            owner[s.elements] = k
+        if np.any(owner < 0):
+            raise MaterialError(f"{self.source}: element {int(np.argmax(owner < 0))} has no material; "
+                                "call set_material() for every element")
+        X = np.ascontiguousarray(self.nodes)
+        T32 = np.ascontiguousarray(self.tets.astype(np.int32))
+        vol, alt = _core.tet_geometry(X, T32)
+        edges = X[T32[:, [1, 2, 3, 2, 3, 3]]] - X[T32[:, [0, 0, 0, 1, 1, 2]]]
+        lmax = np.sqrt((edges**2).sum(-1)).max(axis=1)
+        rel = vol / np.maximum(lmax, np.finfo(float).tiny) ** 3
+        degenerate = np.nonzero(np.abs(rel) < 1e-8)[0]
+        if degenerate.size:
+            e = int(degenerate[0])
+            raise DegenerateElementError(
+                f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is degenerate: volume "
+                f"{vol[e]:.3e} m^3 for longest edge {lmax[e]:.3e} m; expected a non-flat tetrahedron", e)
+        inverted = np.nonzero(vol < 0)[0]
+        if inverted.size:
+            e = int(inverted[0])
+            raise InvertedElementError(
+                f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is inverted: volume "
+                f"{vol[e]:.3e} m^3; expected positive orientation (swap two nodes), "
+                f"{inverted.size} inverted element(s) in all", e)
+        return Model(self, owner, dtype, threads)

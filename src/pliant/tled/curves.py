@@ -1,0 +1,132 @@
+"""Load curves: dimensionless factors of time that scale loads and prescribed displacements.
+
+The evaluation itself is the engine's ``curve_value`` (``cpp/include/pliant/tled.hpp``); these
+classes only validate and describe. Times in seconds.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = ["LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Table"]
+
+
+class LoadCurve:
+    kind: int = 0
+    t0 = 0.0
+    t1 = 0.0
+    times: tuple = ()
+    values: tuple = ()
+
+    @property
+    def end_time(self) -> float:
+        """Time [s] from which the curve stays at its final value."""
+        return 0.0
+
+    def _key(self):
+        return (self.kind, self.t0, self.t1, self.times, self.values)
+
+    def __eq__(self, other):
+        return isinstance(other, LoadCurve) and self._key() == other._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
+    def __call__(self, t):
+        """Factor at time(s) t [s] (a NumPy mirror of the engine's curve_value, for plotting)."""
+        t = np.asarray(t, dtype=float)
+        if self.kind == 0:
+            return np.ones_like(t)
+        if self.kind == 1:
+            return (t >= self.t0).astype(float)
+        if self.kind in (2, 3):
+            tau = np.clip((t - self.t0) / (self.t1 - self.t0), 0.0, 1.0)
+            return tau if self.kind == 2 else tau**3 * (10 - 15 * tau + 6 * tau**2)
+        return np.interp(t, self.times, self.values)
+
+
+def _time(name, v, cls):
+    v = float(v)
+    if not math.isfinite(v):
+        raise InputError(f"{cls}: {name} = {v!r}; expected a finite time [s]")
+    return v
+
+
+class Constant(LoadCurve):
+    """Factor 1 at all times."""
+
+    kind = 0
+
+    def __repr__(self):
+        return "Constant()"
+
+
+class Step(LoadCurve):
+    """0 before t0 [s], 1 from t0 on."""
+
+    kind = 1
+
+    def __init__(self, t0: float = 0.0):
+        self.t0 = _time("t0", t0, "Step")
+
+    @property
+    def end_time(self):
+        return self.t0
+
+    def __repr__(self):
+        return f"Step(t0={self.t0:g})"
+
+
+class Ramp(LoadCurve):
+    """Linear from 0 at t0 to 1 at t1 [s], then held (NiftySim's RAMP with t0 = 0)."""
+
+    kind = 2
+
+    def __init__(self, t1: float, t0: float = 0.0):
+        self.t0, self.t1 = _time("t0", t0, type(self).__name__), _time("t1", t1, type(self).__name__)
+        if not self.t1 > self.t0:
+            raise InputError(f"{type(self).__name__}: t1 = {t1!r} must be later than t0 = {t0!r}")
+
+    @property
+    def end_time(self):
+        return self.t1
+
+    def __repr__(self):
+        return f"{type(self).__name__}(t1={self.t1:g}, t0={self.t0:g})"
+
+
+class SmoothRamp(Ramp):
+    """10τ³ − 15τ⁴ + 6τ⁵ with τ = (t − t0)/(t1 − t0): zero velocity and acceleration at both ends
+    (NiftySim's POLY345)."""
+
+    kind = 3
+
+
+class Table(LoadCurve):
+    """Piecewise linear through (times [s], values), held constant outside."""
+
+    kind = 4
+
+    def __init__(self, times, values):
+        t = np.asarray(times, dtype=float).ravel()
+        v = np.asarray(values, dtype=float).ravel()
+        if t.size < 1 or t.size != v.size:
+            raise InputError(f"Table: {t.size} times and {v.size} values; expected equal, >= 1")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+            raise InputError("Table: times and values must be finite")
+        if np.any(np.diff(t) <= 0):
+            k = int(np.argmax(np.diff(t) <= 0))
+            raise InputError(f"Table: times must increase strictly; times[{k + 1}] = {t[k + 1]:g} "
+                             f"<= times[{k}] = {t[k]:g}")
+        self.times, self.values = tuple(t), tuple(v)
+
+    @property
+    def end_time(self):
+        return self.times[-1]
+
+    def __repr__(self):
+        return f"Table(times={list(self.times)}, values={list(self.values)})"

@@ -1,0 +1,278 @@
+"""Model (static) and State (per step), in the user's node and element numbering.
+
+Internally the engine stores nodes and elements in its own cache-friendly order (elements grouped
+by material and sorted along a Morton curve, nodes numbered by first use); the Model maps every
+array back, so users never see that order.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .. import _core
+from ..errors import InputError
+from .curves import Constant, LoadCurve
+
+__all__ = ["Model", "State"]
+
+
+def _morton_order(points: np.ndarray) -> np.ndarray:
+    """Permutation sorting points (n, 3) along a 3-D Morton (Z-order) curve, 10 bits per axis."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    q = ((points - lo) / np.maximum(hi - lo, 1e-300) * 1023).astype(np.uint64)
+    code = np.zeros(len(points), dtype=np.uint64)
+    for bit in range(10):
+        for d in range(3):
+            code |= ((q[:, d] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + d)
+    return np.argsort(code, kind="stable")
+
+
+class Model:
+    """Static part of a simulation: mesh, materials, masses, constraints, loads (build it with
+    :class:`~pliant.tled.builder.ModelBuilder`).
+
+    Attributes: ``n_nodes``, ``n_elements``, ``dtype``, ``damping`` α [1/s], ``dt_critical`` [s]
+    (smallest h_min/c_d over elements), ``dt_critical_element`` (user element index),
+    ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,).
+    """
+
+    def __init__(self, builder, owner: np.ndarray, dtype: np.dtype, threads: int | None):
+        X, T = builder.nodes, builder.tets
+        self.reference_positions = X.copy()
+        self.tets = T.copy()
+        self.dtype = dtype
+        self.damping = float(builder.damping)
+        self.sets = list(builder.sets)
+        N, M = X.shape[0], T.shape[0]
+
+        # Element order: by element set, then along a Morton curve of the centroids.
+        centroids = X[T].mean(axis=1)
+        morton = _morton_order(centroids)
+        rank = np.empty(M, dtype=np.int64)
+        rank[morton] = np.arange(M)
+        elem_order = np.lexsort((rank, owner))  # engine element i is user element elem_order[i]
+        group_end = np.cumsum(np.bincount(owner[elem_order], minlength=len(self.sets)))
+        keep = np.diff(np.concatenate([[0], group_end])) > 0
+        # Node order: first use in element order; orphan nodes last.
+        flat = T[elem_order].ravel()
+        _, first = np.unique(flat, return_index=True)
+        used = flat[np.sort(first)]
+        orphans = np.setdiff1d(np.arange(N), used)
+        if orphans.size:
+            warnings.warn(f"{builder.source}: {orphans.size} node(s) belong to no element (first: "
+                          f"{int(orphans[0])}); they carry no mass and never move unless prescribed",
+                          stacklevel=3)
+        node_order = np.concatenate([used, orphans])  # engine node i is user node node_order[i]
+        node_rank = np.empty(N, dtype=np.int64)
+        node_rank[node_order] = np.arange(N)
+        self._node_order, self._node_rank, self._elem_order = node_order, node_rank, elem_order
+
+        # Curves (deduplicated), load patterns per curve, constraints.
+        curves: list[LoadCurve] = [Constant()]
+
+        def cid(c: LoadCurve) -> int:
+            if c not in curves:
+                curves.append(c)
+            return curves.index(c)
+
+        pattern_of: dict[int, np.ndarray] = {}
+        for ids, f, c in builder._forces:
+            k = cid(c)
+            R = pattern_of.setdefault(k, np.zeros((N, 3)))
+            np.add.at(R, node_rank[ids], f)
+        pattern_curve = sorted(pattern_of)
+        patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve \
+            else np.zeros((0, N, 3))
+        cons = sorted(builder._cons.items())
+        self._cons_user = [(n, d) for (n, d), _ in cons]
+        g, gcurve = (builder._gravity[0], cid(builder._gravity[1])) if builder._gravity \
+            else (np.zeros(3), -1)
+        self.curves = curves
+        tb, tc, tt, tv = [], [], [], []
+        for c in curves:
+            tb.append(len(tt))
+            tc.append(len(c.times))
+            tt.extend(c.times)
+            tv.extend(c.values)
+
+        density = np.array([s.density for s in self.sets])[owner[elem_order]]
+        params = [p for k in np.nonzero(keep)[0] for p in self.sets[k].material.params]
+        Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
+        self._engine = Engine(
+            np.ascontiguousarray(X[node_order]),
+            np.ascontiguousarray(node_rank[T[elem_order]].astype(np.int32)),
+            np.ascontiguousarray(density),
+            [int(e) for e in group_end[keep]],
+            [self.sets[k].material.kind for k in np.nonzero(keep)[0]],
+            params,
+            np.ascontiguousarray(patterns, dtype=float),
+            pattern_curve,
+            [int(node_rank[n]) for (n, d), _ in cons], [d for (n, d), _ in cons],
+            [v for _, (v, c) in cons], [cid(c) for _, (v, c) in cons],
+            [c.kind for c in curves], [c.t0 for c in curves], [c.t1 for c in curves],
+            tb, tc, tt, tv, [float(x) for x in g], gcurve,
+            int(threads or 0),
+        )
+        self.n_nodes, self.n_elements = N, M
+        self.dt_critical = float(self._engine.dt_critical)
+        self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
+        self.mass = self.to_user_nodes(self._engine.mass().astype(float))
+        self.last_load_time = max(c.end_time for c in curves)
+        self.constrained = np.zeros((N, 3), dtype=bool)
+        for n, d in self._cons_user:
+            self.constrained[n, d] = True
+
+    # --- numbering ----------------------------------------------------------------------------
+    def to_user_nodes(self, a: np.ndarray) -> np.ndarray:
+        out = np.empty_like(a)
+        out[self._node_order] = a
+        return out
+
+    def to_engine_nodes(self, a: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(a[self._node_order])
+
+    def to_user_elements(self, a: np.ndarray) -> np.ndarray:
+        out = np.empty_like(a)
+        out[self._elem_order] = a
+        return out
+
+    def user_node(self, engine_node: int) -> int:
+        return int(self._node_order[engine_node])
+
+    def user_element(self, engine_element: int) -> int:
+        return int(self._elem_order[engine_element])
+
+    @property
+    def threads(self) -> int:
+        return int(self._engine.threads)
+
+    @property
+    def memory_bytes(self) -> int:
+        """Engine memory for the model's arrays [bytes] (states and scratch not included)."""
+        return int(self._engine.bytes)
+
+    # --- states and results --------------------------------------------------------------------
+    def state(self) -> "State":
+        """A new state at rest, t = 0, zero displacement."""
+        return State(self, self._engine.new_state())
+
+    def element_results(self, state: "State") -> dict[str, np.ndarray]:
+        """Per element (user order): ``J``; ``energy_density`` W [Pa]; ``pk2`` S, ``cauchy`` σ [Pa] and
+        ``green_strain`` E, each (M, 6) as xx, yy, zz, xy, yz, xz; ``von_mises`` [Pa] (M,)."""
+        J, W, S, sig, E = self._engine.measures(state._s)
+        out = {k: self.to_user_elements(np.asarray(v, dtype=float)) for k, v in
+               dict(J=J, energy_density=W, pk2=S, cauchy=sig, green_strain=E).items()}
+        s = out["cauchy"]
+        out["von_mises"] = np.sqrt(0.5 * ((s[:, 0] - s[:, 1]) ** 2 + (s[:, 1] - s[:, 2]) ** 2 +
+                                          (s[:, 2] - s[:, 0]) ** 2) +
+                                   3.0 * (s[:, 3] ** 2 + s[:, 4] ** 2 + s[:, 5] ** 2))
+        return out
+
+    def element_volumes(self) -> np.ndarray:
+        """Reference volume V0 [m³] per element (M,)."""
+        vol, _ = _core.tet_geometry(np.ascontiguousarray(self.reference_positions),
+                                    np.ascontiguousarray(self.tets.astype(np.int32)))
+        return np.asarray(vol)
+
+    def internal_forces(self, state: "State") -> np.ndarray:
+        """Internal nodal forces f(u) [N], (N, 3); at constrained DOFs of an equilibrium state they
+        are the reaction forces the supports exert, with opposite sign."""
+        return self.to_user_nodes(np.asarray(self._engine.internal_forces(state._s), dtype=float))
+
+    def strain_energy(self, state: "State") -> float:
+        """Total strain energy Σ V0 W [J]."""
+        return float(np.dot(self.element_volumes(), self.element_results(state)["energy_density"]))
+
+    def kinetic_energy(self, state: "State") -> float:
+        """½ Σ m v² [J] with the half-step velocity of the state."""
+        v = state.velocities
+        return float(0.5 * np.sum(self.mass[:, None] * v * v))
+
+
+class State:
+    """Per-step state: displacement u [m] and the previous step's u⁻, time t [s], last step Δt [s].
+
+    ``displacements``, ``positions``, ``velocities`` are (N, 3) float64 copies in user order;
+    ``velocities`` is the half-step velocity (u − u⁻)/Δt [m/s].
+    """
+
+    def __init__(self, model: Model, core_state):
+        self.model = model
+        self._s = core_state
+
+    @property
+    def time(self) -> float:
+        return float(self._s.t)
+
+    @time.setter
+    def time(self, t: float):
+        self._s.t = float(t)
+
+    @property
+    def dt(self) -> float:
+        return float(self._s.dt)
+
+    @property
+    def steps(self) -> int:
+        return int(self._s.step)
+
+    @property
+    def displacements(self) -> np.ndarray:
+        return self.model.to_user_nodes(np.asarray(self._s.get_u(), dtype=float))
+
+    @property
+    def positions(self) -> np.ndarray:
+        return self.model.reference_positions + self.displacements
+
+    @property
+    def velocities(self) -> np.ndarray:
+        if self._s.dt <= 0:
+            return np.zeros((self.model.n_nodes, 3))
+        u_prev = self.model.to_user_nodes(np.asarray(self._s.get_u_prev(), dtype=float))
+        return (self.displacements - u_prev) / self._s.dt
+
+    def _check(self, a, name) -> np.ndarray:
+        a = np.asarray(a, dtype=float)
+        if a.shape != (self.model.n_nodes, 3) or not np.all(np.isfinite(a)):
+            raise InputError(f"{name}: expected finite values of shape ({self.model.n_nodes}, 3), "
+                             f"got shape {a.shape}")
+        return a
+
+    def set_displacements(self, u, velocities=None, dt: float | None = None):
+        """Set u [m] (N, 3) and optionally the velocity [m/s] (N, 3) for steps of Δt [s]."""
+        u = self._check(u, "displacements")
+        self._s.set_u(self.model.to_engine_nodes(u))
+        if velocities is None:
+            self._s.set_u_prev(self.model.to_engine_nodes(u))
+        else:
+            if dt is None or not dt > 0:
+                raise InputError("set_displacements: a velocity needs the time step dt > 0 [s]")
+            v = self._check(velocities, "velocities")
+            self._s.set_u_prev(self.model.to_engine_nodes(u - v * dt))
+            self._s.dt = float(dt)
+
+    def copy(self) -> "State":
+        return State(self.model, self._s.copy())
+
+    def assign(self, other: "State"):
+        """Copy another state of the same model into this one."""
+        self._s.assign(other._s)
+
+    def save(self, path):
+        """Save to a .npz file (u, u⁻ in user order, t, Δt, step count)."""
+        u_prev = self.model.to_user_nodes(np.asarray(self._s.get_u_prev(), dtype=float))
+        np.savez(path, u=self.displacements, u_prev=u_prev, t=self.time, dt=self.dt,
+                 step=self.steps, n_nodes=self.model.n_nodes, n_elements=self.model.n_elements)
+
+    def load(self, path):
+        """Restore from a file written by :meth:`save` (same model)."""
+        with np.load(path) as d:
+            if int(d["n_nodes"]) != self.model.n_nodes or int(d["n_elements"]) != self.model.n_elements:
+                raise InputError(f"{path}: state of a model with {int(d['n_nodes'])} nodes / "
+                                 f"{int(d['n_elements'])} elements; this model has "
+                                 f"{self.model.n_nodes} / {self.model.n_elements}")
+            self._s.set_u(self.model.to_engine_nodes(self._check(d["u"], f"{path}: u")))
+            self._s.set_u_prev(self.model.to_engine_nodes(self._check(d["u_prev"], f"{path}: u_prev")))
+            self._s.t, self._s.dt, self._s.step = float(d["t"]), float(d["dt"]), int(d["step"])

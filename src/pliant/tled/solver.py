@@ -1,0 +1,200 @@
+"""Explicit TLED solver: central differences with lumped mass and mass-proportional damping,
+and dynamic relaxation for quasi-static solutions.
+
+    u⁺ = γ1 M⁻¹ (r − f(u)) + γ2 u + γ3 u⁻,  γ1 = 2Δt²/(αΔt + 2), γ2 = 4/(αΔt + 2), γ3 = 1 − γ2
+    (Taylor, Cheng & Ourselin 2008, IEEE TMI 27(5), eq. 9; Miller et al. 2007, CNME 23:121).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
+from .model import Model, State
+
+__all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation"]
+
+
+@dataclass
+class RunInfo:
+    steps: int
+    time: float  # [s]
+
+
+@dataclass
+class RelaxInfo:
+    steps: int
+    residual: float  # ||r − f|| on free DOFs / ||(r, reactions)||
+    converged: bool
+    damping: float  # final adaptive α [1/s]
+
+
+class Solver:
+    """Explicit solver for a :class:`Model`.
+
+    dt: time step [s]; default ``safety × model.dt_critical``. A dt above the critical step is refused
+    (:class:`TimeStepError`) unless ``allow_unstable=True``. damping: α [1/s], default the model's.
+    check_every: steps between stability checks (NaN, J ≤ 0, blow-up).
+    """
+
+    def __init__(self, model: Model, dt: float | None = None, safety: float = 0.8,
+                 damping: float | None = None, allow_unstable: bool = False, check_every: int = 16):
+        self.model = model
+        if not (0 < safety <= 1):
+            raise InputError(f"safety = {safety!r}; expected 0 < safety <= 1")
+        if dt is None:
+            dt = safety * model.dt_critical
+        dt = float(dt)
+        if not math.isfinite(dt) or dt <= 0:
+            raise TimeStepError(f"dt = {dt!r}; expected a finite time step > 0 [s]")
+        if dt > model.dt_critical and not allow_unstable:
+            raise TimeStepError(
+                f"dt = {dt:.4g} s exceeds the critical time step {model.dt_critical:.4g} s "
+                f"(element {model.dt_critical_element}: smallest altitude / dilatational wave speed); "
+                f"use dt <= {model.dt_critical:.4g} s, or allow_unstable=True to force it")
+        self.dt = dt
+        self.damping = model.damping if damping is None else float(damping)
+        if not math.isfinite(self.damping) or self.damping < 0:
+            raise InputError(f"damping = {damping!r}; expected a finite value >= 0 [1/s]")
+        if int(check_every) < 1:
+            raise InputError(f"check_every = {check_every!r}; expected >= 1")
+        self.check_every = int(check_every)
+        X = model.reference_positions
+        # Blow-up: any displacement beyond 100 × the body's size.
+        self.blowup = 100.0 * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+
+    def _raise(self, rep: dict):
+        m, t, v = self.model, rep["t"], rep["value"]
+        if rep["status"] == 2:
+            e = m.user_element(rep["where"])
+            raise InstabilityError(
+                f"unstable at t = {t:.6g} s: element {e} inverted (J = {v:.3g} <= 0); reduce dt "
+                f"(now {self.dt:.3g} s), the loads, or refine/soften around it", t, "J", v, element=e)
+        node = m.user_node(rep["where"])
+        if rep["status"] == 1:
+            raise InstabilityError(f"unstable at t = {t:.6g} s: non-finite displacement at node {node}"
+                                   f" (value {v}); dt = {self.dt:.3g} s", t, "displacement", v, node=node)
+        raise InstabilityError(f"unstable at t = {t:.6g} s: displacement {v:.3g} m at node {node} "
+                               f"exceeds 100 x the body size (energy blow-up); dt = {self.dt:.3g} s",
+                               t, "displacement", v, node=node)
+
+    def _same_model(self, *states: State):
+        for s in states:
+            if s.model is not self.model:
+                raise InputError("state belongs to another model")
+
+    def step(self, state_in: State, state_out: State, dt: float | None = None) -> None:
+        """One step from state_in to state_out (distinct objects); dt [s] defaults to the solver's."""
+        self._same_model(state_in, state_out)
+        if state_in is state_out:
+            raise InputError("step(state_in, state_out): states must be distinct; use run() in place")
+        dt = self.dt if dt is None else float(dt)
+        if dt > self.model.dt_critical and self.dt <= self.model.dt_critical:
+            raise TimeStepError(f"dt = {dt:.4g} s exceeds the critical time step "
+                                f"{self.model.dt_critical:.4g} s")
+        rep = self.model._engine.step(state_in._s, state_out._s, dt, self.damping)
+        if rep["status"]:
+            self._raise(rep)
+
+    def run(self, state: State, steps: int | None = None, until: float | None = None) -> RunInfo:
+        """Advance ``state`` in place by ``steps`` steps or to time ``until`` [s]."""
+        self._same_model(state)
+        if (steps is None) == (until is None):
+            raise InputError("run: give exactly one of steps= or until=")
+        if steps is None:
+            steps = max(0, int(math.ceil((float(until) - state.time) / self.dt - 1e-9)))
+        steps = int(steps)
+        if steps < 0:
+            raise InputError(f"steps = {steps}; expected >= 0")
+        if steps == 0:
+            return RunInfo(0, state.time)
+        rep = self.model._engine.run(state._s, steps, self.dt, self.damping, self.check_every,
+                                     self.blowup)
+        if rep["status"]:
+            self._raise(rep)
+        return RunInfo(int(rep["steps"]), float(rep["t"]))
+
+    def relax(self, state: State, at_time: float | None = None, tol: float = 1e-5,
+              max_steps: int = 200_000, increments: int = 1, check_every: int = 10,
+              strict: bool = True) -> RelaxInfo:
+        """Quasi-static equilibrium under the loads and prescribed displacements of time ``at_time``
+        [s] (default: when every load curve has reached its final value), by dynamic relaxation with
+        adaptive damping (Joldes, Wittek & Miller 2009, CMAME 198:3313).
+
+        ``increments`` > 1 relaxes in turn at evenly spaced times from the state's time to
+        ``at_time`` (load stepping along the load curves: use it for large deformations, where
+        applying everything at once can invert elements). Stops each increment when the relative
+        out-of-balance force falls below ``tol``; raises :class:`ConvergenceError` if the last one
+        does not within ``max_steps`` (unless ``strict=False``)."""
+        self._same_model(state)
+        t_end = self.model.last_load_time if at_time is None else float(at_time)
+        if int(increments) < 1:
+            raise InputError(f"increments = {increments!r}; expected >= 1")
+        steps = 0
+        for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
+            rep = self.model._engine.relax(state._s, float(t), self.dt, float(tol), int(max_steps),
+                                           int(check_every), self.blowup)
+            steps += int(rep["steps"])
+            if rep["status"]:
+                self._raise(rep)
+        info = RelaxInfo(steps, float(rep["residual"]), rep["residual"] < tol,
+                         float(rep["damping"]))
+        if strict and not info.converged:
+            raise ConvergenceError(f"dynamic relaxation reached residual {info.residual:.3g} after "
+                                   f"{info.steps} steps; tolerance {tol:g} (raise max_steps or tol)")
+        return info
+
+
+class Simulation:
+    """Convenience wrapper: a model, a solver and the current state.
+
+    ``sim.step(n)``, ``sim.run_to(T)``, ``sim.solve_static()``, ``sim.displacements``...
+    """
+
+    def __init__(self, model: Model, **solver_options):
+        self.model = model
+        self.solver = Solver(model, **solver_options)
+        self.state = model.state()
+
+    def step(self, n: int = 1) -> RunInfo:
+        return self.solver.run(self.state, steps=n)
+
+    def run_to(self, t: float) -> RunInfo:
+        return self.solver.run(self.state, until=t)
+
+    def solve_static(self, **options) -> RelaxInfo:
+        return self.solver.relax(self.state, **options)
+
+    @property
+    def time(self) -> float:
+        return self.state.time
+
+    @property
+    def displacements(self) -> np.ndarray:
+        return self.state.displacements
+
+    @property
+    def positions(self) -> np.ndarray:
+        return self.state.positions
+
+    @property
+    def velocities(self) -> np.ndarray:
+        return self.state.velocities
+
+    def element_results(self) -> dict:
+        return self.model.element_results(self.state)
+
+    def kinetic_energy(self) -> float:
+        return self.model.kinetic_energy(self.state)
+
+    def strain_energy(self) -> float:
+        return self.model.strain_energy(self.state)
+
+    def save(self, path):
+        self.state.save(path)
+
+    def load(self, path):
+        self.state.load(path)
