@@ -148,8 +148,12 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
             return to_numpy(std::move(m), {size_t(e.model.n_nodes)});
         })
         .def("step", [](E& e, const S& in, S& out, double dt, double alpha) {
-                 nb::gil_scoped_release g;
-                 return report(e.solver.step(in.s, out.s, dt, alpha));
+                 RunReport r;
+                 {
+                     nb::gil_scoped_release g;
+                     r = e.solver.step(in.s, out.s, dt, alpha);
+                 }
+                 return report(r);
              }, "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
         .def("run", [](E& e, S& s, long n, double dt, double alpha, int check_every, double blowup) {
                  RunReport r;
