@@ -12,6 +12,16 @@
 #define PLIANT_HD inline __attribute__((always_inline))
 #endif
 
+// Fully unroll a small fixed-count loop: GCC vectorizes the element loop across lanes only when no
+// inner loop remains.
+#if defined(__CUDACC__) || defined(__clang__)
+#define PLIANT_UNROLL _Pragma("unroll")
+#elif defined(__GNUC__)
+#define PLIANT_UNROLL _Pragma("GCC unroll 16")
+#else
+#define PLIANT_UNROLL
+#endif
+
 namespace pliant {
 
 using index_t = std::int32_t;

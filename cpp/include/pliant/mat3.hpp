@@ -82,6 +82,7 @@ template <class T>
 PLIANT_HD Mat3<T> mul(const Mat3<T>& F, const Sym3<T>& S) {
     const T* a = F.a;
     Mat3<T> P;
+    PLIANT_UNROLL
     for (int r = 0; r < 3; ++r) {
         const T f0 = a[3 * r], f1 = a[3 * r + 1], f2 = a[3 * r + 2];
         P.a[3 * r + 0] = f0 * S.xx + f1 * S.xy + f2 * S.xz;
@@ -115,6 +116,7 @@ PLIANT_HD T inv_cbrt(T J) {
     // Seed: exponent of J divided by −3 (0x54a2fa8c = 4/3 of the float exponent bias, tuned).
     T y = static_cast<T>(bits_float(0x54a2fa8c - float_bits(jf) / 3));
     constexpr int iterations = sizeof(T) == 4 ? 4 : 5;
+    PLIANT_UNROLL
     for (int k = 0; k < iterations; ++k) y = y * (T(4) - J * y * y * y) * T(1.0 / 3.0);
     return y;
 }

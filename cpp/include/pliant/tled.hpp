@@ -36,13 +36,17 @@ template <class T>
 PLIANT_HD Mat3<T> deformation_gradient(index_t b, int l, const ElementData<T>& el, const T* u,
                                        index_t P) {
     index_t n[4];
+    PLIANT_UNROLL
     for (int a = 0; a < 4; ++a) n[a] = el.nodes[aosoa(b, l, a, 4)];
     Mat3<T> F = identity3<T>();
+    PLIANT_UNROLL
     for (int i = 0; i < 3; ++i) {
         const T* ui = u + i * P;
         const T u3 = ui[n[3]];
+        PLIANT_UNROLL
         for (int a = 0; a < 3; ++a) {
             const T du = ui[n[a]] - u3;
+            PLIANT_UNROLL
             for (int j = 0; j < 3; ++j) F.a[3 * i + j] += du * el.grad[aosoa(b, l, 3 * a + j, 9)];
         }
     }
@@ -60,9 +64,12 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
     const Mat3<T> Pk = mat.pk1(F);
     const T V0 = el.vol[aosoa(b, l, 0, 1)];
     T g[9];
+    PLIANT_UNROLL
     for (int k = 0; k < 9; ++k) g[k] = el.grad[aosoa(b, l, k, 9)];
+    PLIANT_UNROLL
     for (int i = 0; i < 3; ++i) {
         T f3 = T(0);
+        PLIANT_UNROLL
         for (int a = 0; a < 3; ++a) {
             const T fa = V0 * (Pk.a[3 * i] * g[3 * a] + Pk.a[3 * i + 1] * g[3 * a + 1] +
                                Pk.a[3 * i + 2] * g[3 * a + 2]);
@@ -155,6 +162,7 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem,
         f[2] += f_elem[o + 2 * kLanes];
     }
     const T w = it.g1 * nd.inv_mass[n];
+    PLIANT_UNROLL
     for (int d = 0; d < 3; ++d) {
         const index_t i = d * P + n;
         T r = T(0);
@@ -209,7 +217,9 @@ PLIANT_HD ElementMeasures<T> element_measures(index_t b, int l, const Material& 
 PLIANT_HD void tet_reference(const double X[4][3], double grad_out[4][3], double& vol_out,
                              double& altitude_out) {
     double A[3][3];
+    PLIANT_UNROLL
     for (int r = 0; r < 3; ++r)
+        PLIANT_UNROLL
         for (int c = 0; c < 3; ++c) A[r][c] = X[c + 1][r] - X[0][r];  // columns X_a − X_0
     const double d = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
                      A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
@@ -218,11 +228,14 @@ PLIANT_HD void tet_reference(const double X[4][3], double grad_out[4][3], double
     // Rows of A⁻¹ are ∇ξ, ∇η, ∇ζ = ∇N_1, ∇N_2, ∇N_3.
     const double inv = d != 0.0 ? 1.0 / d : 0.0;
     double B[3][3];
+    PLIANT_UNROLL
     for (int r = 0; r < 3; ++r)
+        PLIANT_UNROLL
         for (int c = 0; c < 3; ++c) {
             const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
             B[r][c] = (A[r1][c1] * A[r2][c2] - A[r1][c2] * A[r2][c1]) * inv;
         }
+    PLIANT_UNROLL
     for (int j = 0; j < 3; ++j) {
         grad_out[1][j] = B[0][j];
         grad_out[2][j] = B[1][j];
@@ -231,6 +244,7 @@ PLIANT_HD void tet_reference(const double X[4][3], double grad_out[4][3], double
     }
     // Face opposite corner a has area 3|V|·|∇N_a|, so the altitude from corner a is 1/|∇N_a|.
     double gmax = 0.0;
+    PLIANT_UNROLL
     for (int a = 0; a < 4; ++a) {
         const double g = grad_out[a][0] * grad_out[a][0] + grad_out[a][1] * grad_out[a][1] +
                          grad_out[a][2] * grad_out[a][2];
