@@ -39,6 +39,8 @@ nb::dict report(const RunReport& r) {
     d["value"] = r.value;
     d["residual"] = r.residual;
     d["damping"] = r.damping;
+    d["elem_seconds"] = r.elem_seconds;
+    d["node_seconds"] = r.node_seconds;
     return d;
 }
 

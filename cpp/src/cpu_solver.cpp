@@ -117,9 +117,16 @@ RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int ch
             m_.curve_factors(t, cnow.data());
             m_.curve_factors(t + dt, cnext.data());
             for (std::size_t p = 0; p < np; ++p) pf[p] = cnow[m_.pattern_curve[p]];
+            const bool master = omp_get_thread_num() == 0;
+            const double w0 = master ? omp_get_wtime() : 0.0;
             element_pass(v[ic]->data());
+            const double w1 = master ? omp_get_wtime() : 0.0;
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cnext.data(), it,
                       nullptr);
+            if (master) {
+                rep.elem_seconds += w1 - w0;
+                rep.node_seconds += omp_get_wtime() - w1;
+            }
             ip = std::exchange(ic, std::exchange(in, ip));
             if ((k + 1) % check_every == 0 || k + 1 == n) {
 #pragma omp single

@@ -20,6 +20,7 @@ struct RunReport {
     double value = 0.0;
     double residual = 0.0;  // relax: relative out-of-balance force at the end
     double damping = 0.0;   // relax: last adaptive damping coefficient α [1/s]
+    double elem_seconds = 0.0, node_seconds = 0.0;  // run: wall time in kernel 1 and kernel 2
 };
 
 template <class T>

@@ -22,6 +22,8 @@ __all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation"]
 class RunInfo:
     steps: int
     time: float  # [s]
+    element_seconds: float = 0.0  # wall time in kernel 1 (element forces) [s]
+    node_seconds: float = 0.0  # wall time in kernel 2 (gather + update + constraints) [s]
 
 
 @dataclass
@@ -115,7 +117,8 @@ class Solver:
                                      self.blowup)
         if rep["status"]:
             self._raise(rep)
-        return RunInfo(int(rep["steps"]), float(rep["t"]))
+        return RunInfo(int(rep["steps"]), float(rep["t"]), float(rep["elem_seconds"]),
+                       float(rep["node_seconds"]))
 
     def relax(self, state: State, at_time: float | None = None, tol: float = 1e-5,
               max_steps: int = 200_000, increments: int = 1, check_every: int = 10,

@@ -1,0 +1,96 @@
+"""Benchmark: the study's table (8,000 steps of Δt = 0.025 ms on 7,456 / 12,584 / 27,918 tets,
+Neo-Hookean) plus larger meshes. Prints figures; it is not a test.
+
+Study (Chapter on GPU TLED, 2013 hardware): GPU 2.88 / 5.21 / 8.74 s, CPU 298 / 667 / 1,186 s.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .materials import NeoHookean
+from .mesh import box_tets
+from .tled import ModelBuilder, Solver
+
+STUDY = {7456: (2.88, 298.0), 12584: (5.21, 667.0), 27918: (8.74, 1186.0)}
+DT = 2.5e-5  # s (0.025 ms, the study's step)
+
+
+@dataclass
+class BenchRow:
+    tets: int
+    nodes: int
+    steps: int
+    dt: float
+    threads: int
+    dtype: str
+    seconds: float  # wall time of the timed steps [s]
+    seconds_per_8000: float  # scaled to the study's 8,000 steps [s]
+    element_seconds: float  # kernel 1 share of `seconds`
+    node_seconds: float  # kernel 2 (+ constraints) share
+    element_steps_per_second: float
+    memory_bytes: int  # model + two states + scratch
+    bytes_per_tet: float
+    speedup_vs_study_gpu: float | None
+    speedup_vs_study_cpu: float | None
+
+
+def exact_count_mesh(n_tets: int, size: float = 0.1, seed: int = 0):
+    """A jittered box mesh with exactly ``n_tets`` tets: the first n_tets of a Kuhn-split grid
+    (a compact, layered chunk), unused nodes removed. Returns nodes [m] (N, 3), tets (n_tets, 4)."""
+    n = max(2, int(np.ceil((n_tets / 6.0) ** (1.0 / 3.0))))
+    X, T = box_tets((size, size, size), (n, n, n), jitter=0.2, seed=seed)
+    # Order cells layer by layer (z slowest) so that a prefix is compact.
+    cz = X[T].mean(axis=1)
+    order = np.lexsort((cz[:, 0], cz[:, 1], np.floor(cz[:, 2] / (size / n))))
+    T = T[order[:n_tets]]
+    used = np.unique(T)
+    remap = np.full(len(X), -1, dtype=np.int64)
+    remap[used] = np.arange(used.size)
+    return X[used], remap[T]
+
+
+def bench_one(n_tets: int, steps: int, threads: int | None = None, dtype: str = "float32",
+              warmup: int = 50) -> BenchRow:
+    X, T = exact_count_mesh(n_tets)
+    b = ModelBuilder()
+    b.add_mesh(X, T, source=f"bench mesh ({n_tets} tets)")
+    b.set_material(NeoHookean(mu=3.0e3, K=5.0e4), density=1000.0)  # soft tissue
+    b.fix(np.nonzero(X[:, 2] < 1e-9)[0])
+    b.set_gravity()
+    b.damping = 10.0
+    model = b.finalize(dtype, threads=threads)
+    solver = Solver(model, dt=DT)
+    state = model.state()
+    solver.run(state, steps=warmup)
+    t0 = time.perf_counter()
+    info = solver.run(state, steps=steps)
+    wall = time.perf_counter() - t0
+    itemsize = np.dtype(dtype).itemsize
+    pad = -(-model.n_nodes // 16) * 16
+    mem = model.memory_bytes + itemsize * (2 * 2 * 3 * pad + 3 * pad) + \
+        itemsize * 13 * (-(-n_tets // 16) * 16)
+    per8000 = wall * 8000.0 / steps
+    study = STUDY.get(n_tets)
+    return BenchRow(n_tets, model.n_nodes, steps, DT, model.threads, dtype, wall, per8000,
+                    info.element_seconds, info.node_seconds, n_tets * steps / wall, mem,
+                    mem / n_tets, study[0] / per8000 if study else None,
+                    study[1] / per8000 if study else None)
+
+
+def run_benchmark(sizes=(7456, 12584, 27918, 100_000, 1_000_000), steps: int = 8000,
+                  large_steps: int = 200, threads: int | None = None, dtype: str = "float32",
+                  json_path: str | None = None, echo=print) -> list[BenchRow]:
+    rows = []
+    for n in sizes:
+        row = bench_one(n, steps if n in STUDY else large_steps, threads, dtype)
+        rows.append(row)
+        echo(row)
+    if json_path:
+        with open(json_path, "w") as f:
+            json.dump({"backend": "cpu", "rows": [asdict(r) for r in rows]}, f, indent=2)
+    return rows

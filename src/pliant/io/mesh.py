@@ -1,0 +1,40 @@
+"""Volume meshes from files (any format meshio reads: .vtu, .vtk, .msh, .mesh, .xdmf...)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshError
+
+
+def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Read a tetrahedral mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
+    {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds'."""
+    import meshio
+
+    path = Path(path)
+    if not path.is_file():
+        raise MeshError(f"{path}: no such file")
+    try:
+        mesh = meshio.read(path)
+    except Exception as e:  # meshio raises many types for unreadable input
+        raise MeshError(f"{path}: cannot read as a volume mesh ({type(e).__name__}: {e})") from None
+    blocks = [(i, c) for i, c in enumerate(mesh.cells) if c.type == "tetra"]
+    if not blocks:
+        kinds = sorted({c.type for c in mesh.cells}) or ["none"]
+        raise MeshError(f"{path}: no linear tetrahedra (cell types: {', '.join(kinds)}); expected "
+                        "'tetra' cells (surface meshes go through the mesh pipeline)")
+    tets = np.concatenate([c.data for _, c in blocks]).astype(np.int64)
+    X = np.asarray(mesh.points, dtype=float)
+    if X.ndim != 2 or X.shape[1] < 3:
+        X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
+    sets: dict[str, np.ndarray] = {}
+    for key in ("gmsh:physical", "CellEntityIds", "medit:ref", "cell_sets"):
+        if key in mesh.cell_data:
+            ids = np.concatenate([np.asarray(mesh.cell_data[key][i]).ravel() for i, _ in blocks])
+            for v in np.unique(ids):
+                sets[f"{key}={int(v)}"] = np.nonzero(ids == v)[0]
+            break
+    return X[:, :3], tets, sets
