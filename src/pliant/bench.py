@@ -39,10 +39,13 @@ class BenchRow:
     speedup_vs_study_cpu: float | None
 
 
-def exact_count_mesh(n_tets: int, size: float = 0.1, seed: int = 0):
+def exact_count_mesh(n_tets: int, size: float | None = None, seed: int = 0):
     """A jittered box mesh with exactly ``n_tets`` tets: the first n_tets of a Kuhn-split grid
-    (a compact, layered chunk), unused nodes removed. Returns nodes [m] (N, 3), tets (n_tets, 4)."""
+    (a compact, layered chunk), unused nodes removed. The box edge [m] defaults to 0.1 m at
+    27,918 tets and scales with the cube root of the count (same element size, so the study's
+    Δt stays stable). Returns nodes [m] (N, 3), tets (n_tets, 4)."""
     n = max(2, int(np.ceil((n_tets / 6.0) ** (1.0 / 3.0))))
+    size = 0.1 * (n_tets / 27918.0) ** (1.0 / 3.0) if size is None else size
     X, T = box_tets((size, size, size), (n, n, n), jitter=0.2, seed=seed)
     # Order cells layer by layer (z slowest) so that a prefix is compact.
     cz = X[T].mean(axis=1)

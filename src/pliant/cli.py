@@ -77,7 +77,7 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
         run_benchmark(n, steps, large_steps, threads, dtype, str(json_out) if json_out else None, echo)
     except InputError as e:
         _fail(e, 2)
-    console.print(table)
+    console.print(table, width=max(console.width, 140))
 
 
 @app.command()

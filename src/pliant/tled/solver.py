@@ -146,8 +146,11 @@ class Solver:
         info = RelaxInfo(steps, float(rep["residual"]), rep["residual"] < tol,
                          float(rep["damping"]))
         if strict and not info.converged:
-            raise ConvergenceError(f"dynamic relaxation reached residual {info.residual:.3g} after "
-                                   f"{info.steps} steps; tolerance {tol:g} (raise max_steps or tol)")
+            raise ConvergenceError(
+                f"dynamic relaxation reached residual {info.residual:.3g} after {info.steps} steps; "
+                f"tolerance {tol:g}. It stops early when the residual no longer falls (the round-off "
+                f"floor of {self.model.dtype.name}: use float64 for tighter tolerances), else raise "
+                "max_steps or tol")
         return info
 
 
