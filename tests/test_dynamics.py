@@ -135,3 +135,43 @@ def test_threads_give_identical_bits(dtype):
     assert np.abs(results[0][0]).max() > 0
     assert np.array_equal(results[0][0], results[1][0])
     assert np.array_equal(results[0][1], results[1][1])
+
+
+def test_load_curves_drive_prescribed_displacements():
+    """A node prescribed with Table / Step / Ramp curves follows them exactly at every step
+    (reference: the curves' definitions, np.interp for the table)."""
+    X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (2, 2, 2))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=5e4, nu=0.3), density=1000.0)
+    times, values = [0.0, 0.01, 0.03, 0.05], [0.0, 1.0, -0.5, 0.25]
+    b.prescribe([0], 0.002, "x", curve=pl.Table(times, values))
+    b.prescribe([1], 0.003, "y", curve=pl.Step(0.02))
+    b.prescribe([2], 0.004, "z", curve=pl.Ramp(0.04, t0=0.01))
+    model = b.finalize("float64")
+    sim = pl.Simulation(model)
+    for _ in range(40):
+        sim.step(3)
+        t, u = sim.time, sim.displacements
+        assert u[0, 0] == pytest.approx(0.002 * np.interp(t, times, values), abs=1e-15)
+        assert u[1, 1] == (0.003 if t >= 0.02 else 0.0)
+        assert u[2, 2] == pytest.approx(0.004 * np.clip((t - 0.01) / 0.03, 0, 1), abs=1e-15)
+
+
+def test_inverted_element_during_run_is_named():
+    """Driving one node through the opposite face inverts the elements around it: the run stops
+    with J ≤ 0 naming an element that contains that node, and the time."""
+    X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (2, 2, 2))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=5e4, nu=0.3), density=1000.0)
+    centre = int(np.argmin(np.linalg.norm(X - 0.05, axis=1)))
+    b.fix(np.nonzero(np.any((X < 1e-9) | (X > 0.1 - 1e-9), axis=1))[0])
+    b.prescribe([centre], (0.0, 0.0, -0.09), curve=pl.Ramp(0.01))
+    model = b.finalize("float64")
+    sim = pl.Simulation(model, check_every=1)
+    with pytest.raises(pl.InstabilityError) as err:
+        sim.run_to(0.02)
+    e = err.value
+    assert e.quantity == "J" and e.value <= 0 and centre in T[e.element]
+    assert 0 < e.time <= 0.02 and f"element {e.element}" in str(e)

@@ -89,6 +89,7 @@ class Model:
         self._cons_user = [(n, d) for (n, d), _ in cons]
         g, gcurve = (builder._gravity[0], cid(builder._gravity[1])) if builder._gravity \
             else (np.zeros(3), -1)
+        cons_curve = [cid(c) for _, (v, c) in cons]  # register every curve before the tables
         self.curves = curves
         tb, tc, tt, tv = [], [], [], []
         for c in curves:
@@ -110,7 +111,7 @@ class Model:
             np.ascontiguousarray(patterns, dtype=float),
             pattern_curve,
             [int(node_rank[n]) for (n, d), _ in cons], [d for (n, d), _ in cons],
-            [v for _, (v, c) in cons], [cid(c) for _, (v, c) in cons],
+            [v for _, (v, c) in cons], cons_curve,
             [c.kind for c in curves], [c.t0 for c in curves], [c.t1 for c in curves],
             tb, tc, tt, tv, [float(x) for x in g], gcurve,
             int(threads or 0),
