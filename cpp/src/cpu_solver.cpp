@@ -43,14 +43,15 @@ void CpuSolver<T>::node_pass(const Buffers& bu, const T* pattern_factors, const 
     const NodeData<T> nd = m_.nodes();
     const T* f = f_elem_.data();
     const index_t P = m_.n_pad;
+    const index_t* co = m_.cons_offsets.data();
+    // A node's constraints are applied right after its update, by the same thread: one barrier.
 #pragma omp for schedule(static)
-    for (index_t n = 0; n < m_.n_nodes; ++n)
+    for (index_t n = 0; n < m_.n_nodes; ++n) {
         node_update(n, nd, f, pattern_factors, it, bu.cur, bu.prev, P, bu.next, f_node);
-    const index_t nc = static_cast<index_t>(m_.cons_dof.size());
-#pragma omp for schedule(static)
-    for (index_t i = 0; i < nc; ++i)
-        apply_constraint(i, m_.cons_dof.data(), m_.cons_value.data(), m_.cons_curve.data(),
-                         cons_factors, bu.next);
+        for (index_t i = co[n]; i < co[n + 1]; ++i)
+            apply_constraint(i, m_.cons_dof.data(), m_.cons_value.data(), m_.cons_curve.data(),
+                             cons_factors, bu.next);
+    }
 }
 
 template <class T>

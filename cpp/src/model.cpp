@@ -108,13 +108,21 @@ Model<T>::Model(const ModelInput& in) {
 
     // Constraints.
     free_mask.assign(3 * P, T(1));
-    for (std::size_t i = 0; i < in.cons_node.size(); ++i) {
+    std::vector<std::size_t> order(in.cons_node.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return in.cons_node[a] < in.cons_node[b];
+    });
+    cons_offsets.assign(static_cast<std::size_t>(n_nodes) + 1, 0);
+    for (std::size_t i : order) {
         const index_t dof = in.cons_dim[i] * n_pad + in.cons_node[i];
         cons_dof.push_back(dof);
         cons_value.push_back(T(in.cons_value[i]));
         cons_curve.push_back(in.cons_curve[i]);
         free_mask[dof] = T(0);
+        ++cons_offsets[in.cons_node[i] + 1];
     }
+    for (index_t n = 0; n < n_nodes; ++n) cons_offsets[n + 1] += cons_offsets[n];
     curves = in.curves;
     if (curves.empty()) curves.push_back({CurveKind::Constant, 0.0, 0.0, 0, 0});
     table_t = in.table_t;
@@ -130,7 +138,7 @@ std::size_t Model<T>::bytes() const {
     auto b = [](const auto& v) { return v.size() * sizeof(v[0]); };
     return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) +
            b(inc_offsets) + b(inc_index) + b(mass) + b(inv_mass) + b(free_mask) +
-           b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve);
+           b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) + b(cons_offsets);
 }
 
 template struct Model<float>;

@@ -55,8 +55,9 @@ struct Model {
     std::vector<T> mass, inv_mass, free_mask;  // (P,), (P,), (3P,)
     std::vector<T> load_patterns;              // (K, 3, P)
     std::vector<index_t> pattern_curve;
-    std::vector<index_t> cons_dof, cons_curve;
+    std::vector<index_t> cons_dof, cons_curve;  // sorted by node
     std::vector<T> cons_value;
+    std::vector<index_t> cons_offsets;          // node n's constraints: [cons_offsets[n], [n+1])
     std::vector<LoadCurve> curves;
     std::vector<double> table_t, table_v;
     double dt_critical = 0.0;   // min over elements of h_min / c_d [s]

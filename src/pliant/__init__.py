@@ -13,13 +13,13 @@ from .errors import (ConvergenceError, DegenerateElementError, InputError, Insta
 from .materials import (LinearElastic, Material, MooneyRivlin, NeoHookean, NeoHookeanCoupled,
                         StVenantKirchhoff)
 from .tled import (Constant, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo, Simulation,
-                   SmoothRamp, Solver, State, Step, Table)
+                   SmoothRamp, Hilly, Solver, State, Step, Table)
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
-    "Constant", "Step", "Ramp", "SmoothRamp", "Table",
+    "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table",
     "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
     "LinearElastic",
     "PliantError", "InputError", "MaterialError", "MeshError", "InvertedElementError",

@@ -27,6 +27,47 @@ def _fail(e: Exception, code: int) -> None:
     raise typer.Exit(code)
 
 
+def load_any(path: Path, ignore: list[str] | None = None):
+    """A scene (.toml) or a NiftySim model (.xml)."""
+    from .scene import load_scene
+
+    if path.suffix.lower() == ".xml":
+        from .io.niftysim import load_niftysim
+
+        return load_niftysim(path, tuple(ignore or ()))
+    return load_scene(path)
+
+
+@app.command()
+def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim model (.xml)."),
+        out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
+        threads: Optional[int] = typer.Option(None, help="CPU threads (default: scene or all)."),
+        ignore: Optional[list[str]] = typer.Option(None, "--ignore",
+                                                   help="Unsupported NiftySim feature to skip."),
+        allow_unstable: bool = typer.Option(False, help="Accept a Δt above the critical step."),
+        progress: bool = typer.Option(True, help="Show a progress bar.")):
+    """Run a scene or a NiftySim model; write result.pvd, frames, summary.json and result.png."""
+    from .runner import run_scene
+
+    try:
+        sc = load_any(scene, ignore)
+        for w in sc.warnings:
+            err_console.print(f"[yellow]warning:[/] {w}", highlight=False)
+        summary = run_scene(sc, out, progress=progress, allow_unstable=allow_unstable,
+                            threads=threads, echo=console.print)
+    except InputError as e:
+        _fail(e, 2)
+    except PliantError as e:
+        _fail(e, 1)
+    if summary["interrupted"]:
+        err_console.print(f"interrupted at t = {summary['simulated_time']:.4g} s; "
+                          f"{summary['frames']} frames kept in {out}")
+        raise typer.Exit(130)
+    console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.4g} s in "
+                  f"{summary['wall_time']:.2f} s; results in [bold]{out}[/] (result.pvd for "
+                  "ParaView, summary.json, result.png)")
+
+
 @app.command()
 def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Output folder."),
          duration: float = typer.Option(0.6, help="Simulated time [s]."),

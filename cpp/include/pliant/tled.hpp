@@ -96,7 +96,7 @@ PLIANT_HD Integrator<T> central_difference(double dt, double alpha) {
 }
 
 /// Load-curve kinds; a curve maps time t [s] to a dimensionless factor.
-enum class CurveKind : int { Constant = 0, Step = 1, Ramp = 2, SmoothRamp = 3, Table = 4 };
+enum class CurveKind : int { Constant = 0, Step = 1, Ramp = 2, SmoothRamp = 3, Table = 4, Hilly = 5 };
 
 struct LoadCurve {
     CurveKind kind;
@@ -105,17 +105,20 @@ struct LoadCurve {
 };
 
 /// Factor of curve c at time t: Ramp is linear; SmoothRamp is 10τ³ − 15τ⁴ + 6τ⁵ (NiftySim's
-/// POLY345, zero velocity and acceleration at both ends); Table interpolates linearly.
+/// POLY345, zero velocity and acceleration at both ends); Hilly is τ exp(cos(4πτ) − 1) (NiftySim's
+/// HILLY); Table interpolates linearly. τ = (t − t0)/(t1 − t0) clamped to [0, 1].
 PLIANT_HD double curve_value(const LoadCurve& c, double t, const double* table_t,
                              const double* table_v) {
     switch (c.kind) {
         case CurveKind::Constant: return 1.0;
         case CurveKind::Step: return t >= c.t0 ? 1.0 : 0.0;
         case CurveKind::Ramp:
-        case CurveKind::SmoothRamp: {
+        case CurveKind::SmoothRamp:
+        case CurveKind::Hilly: {
             double tau = (t - c.t0) / (c.t1 - c.t0);
             tau = tau < 0.0 ? 0.0 : (tau > 1.0 ? 1.0 : tau);
             if (c.kind == CurveKind::Ramp) return tau;
+            if (c.kind == CurveKind::Hilly) return tau * std::exp(std::cos(4.0 * M_PI * tau) - 1.0);
             return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
         }
         default: {

@@ -1,9 +1,9 @@
 """Total Lagrangian Explicit Dynamics: builder, model, state, solver, load curves."""
 
 from .builder import ModelBuilder
-from .curves import Constant, LoadCurve, Ramp, SmoothRamp, Step, Table
+from .curves import Constant, LoadCurve, Ramp, SmoothRamp, Hilly, Step, Table
 from .model import Model, State
 from .solver import RelaxInfo, RunInfo, Simulation, Solver
 
 __all__ = ["ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
-           "LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Table"]
+           "LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table"]

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Table"]
+__all__ = ["LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table"]
 
 
 class LoadCurve:
@@ -43,8 +43,10 @@ class LoadCurve:
             return np.ones_like(t)
         if self.kind == 1:
             return (t >= self.t0).astype(float)
-        if self.kind in (2, 3):
+        if self.kind in (2, 3, 5):
             tau = np.clip((t - self.t0) / (self.t1 - self.t0), 0.0, 1.0)
+            if self.kind == 5:
+                return tau * np.exp(np.cos(4 * np.pi * tau) - 1)
             return tau if self.kind == 2 else tau**3 * (10 - 15 * tau + 6 * tau**2)
         return np.interp(t, self.times, self.values)
 
@@ -104,6 +106,12 @@ class SmoothRamp(Ramp):
     (NiftySim's POLY345)."""
 
     kind = 3
+
+
+class Hilly(Ramp):
+    """τ exp(cos(4πτ) − 1) with τ = (t − t0)/(t1 − t0): a peaky curve (NiftySim's HILLY)."""
+
+    kind = 5
 
 
 class Table(LoadCurve):

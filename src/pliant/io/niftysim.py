@@ -1,0 +1,234 @@
+"""NiftySim model import (XML, T4 elements): nodes, elements, element sets with NH and LE materials,
+Fix / Disp / Force / Gravity constraints with their load shapes, Output frequency and SystemParams.
+Anything else is refused by name (``unsupported`` lists what may be skipped knowingly).
+
+Format: NiftySim user guide v2.4 (Johnsen et al. 2015). Materials: NH = decoupled Neo-Hookean
+(μ, K) — pliant's NeoHookean; LE = NiftySim's total-Lagrangian "linear elastic" (E, ν), whose S is
+λ tr(E) I + 2μ E (tledMaterialLE) — pliant's StVenantKirchhoff. Load shapes use the relative time
+t/T of the whole analysis: RAMP, STEP, POLY345, HILLY.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..materials import NeoHookean, StVenantKirchhoff
+from ..scene import Scene
+from ..scene.schema import SceneError
+from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
+
+_KNOWN_TOP = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams", "SubMesh", "Output"}
+_SYSTEM = {"TimeStep", "TotalTime", "DampingCoeff", "Density", "HGKappa", "DoDeformableCollision"}
+
+
+class NiftySimError(SceneError):
+    """A NiftySim file that cannot be imported (malformed, or a feature pliant does not support)."""
+
+
+def _numbers(el, path, what, dtype=float):
+    try:
+        return np.array((el.text or "").split(), dtype=dtype)
+    except ValueError:
+        raise NiftySimError(f"<{what}>: expected numbers", str(path), what,
+                            getattr(el, "sourceline", None)) from None
+
+
+def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
+    """Import a NiftySim XML model. ``ignore`` names unsupported features to skip with a warning
+    (e.g. 'DoDeformableCollision'); any other unsupported feature is an error naming it."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError) as e:
+        raise NiftySimError(f"not a readable XML file ({e})", str(path)) from None
+    f = str(path)
+    if root.tag != "Model":
+        raise NiftySimError(f"root element <{root.tag}>; expected <Model>", f)
+    warnings: list[str] = []
+
+    def unsupported(name: str, why: str):
+        if name in ignore:
+            warnings.append(f"{f}: ignored unsupported NiftySim feature {name} ({why})")
+            return
+        raise NiftySimError(f"unsupported NiftySim feature {name}: {why}; pass "
+                            f"--ignore {name} to skip it knowingly", f, name)
+
+    for child in root:
+        if child.tag not in _KNOWN_TOP:
+            unsupported(child.tag, "not implemented in pliant")
+
+    nodes_el = root.find("Nodes")
+    elems_el = root.find("Elements")
+    if nodes_el is None or elems_el is None:
+        raise NiftySimError("missing <Nodes> or <Elements>", f)
+    if nodes_el.get("DOF", "3") != "3":
+        raise NiftySimError(f"<Nodes DOF={nodes_el.get('DOF')!r}>: only 3 DOF per node", f, "Nodes")
+    X = _numbers(nodes_el, f, "Nodes")
+    if X.size % 3:
+        raise NiftySimError(f"<Nodes>: {X.size} coordinates, not a multiple of 3", f, "Nodes")
+    X = X.reshape(-1, 3)
+    if "NumNodes" in nodes_el.attrib and int(nodes_el.get("NumNodes")) != len(X):
+        raise NiftySimError(f"<Nodes NumNodes={nodes_el.get('NumNodes')}> but {len(X)} nodes "
+                            "listed", f, "Nodes")
+    etype = elems_el.get("Type")
+    if etype != "T4":
+        unsupported(f"Elements Type={etype}", "pliant has linear tetrahedra (T4) only")
+    T = _numbers(elems_el, f, "Elements", np.int64)
+    if T.size % 4:
+        raise NiftySimError(f"<Elements>: {T.size} indices, not a multiple of 4", f, "Elements")
+    T = T.reshape(-1, 4)
+    M = len(T)
+
+    sp = root.find("SystemParams")
+    if sp is None:
+        raise NiftySimError("missing <SystemParams>", f)
+    params = {}
+    for c in sp:
+        if c.tag not in _SYSTEM:
+            unsupported(f"SystemParams/{c.tag}", "not implemented in pliant")
+            continue
+        params[c.tag] = (c.text or "").strip()
+    for req in ("TimeStep", "TotalTime", "DampingCoeff"):
+        if req not in params:
+            raise NiftySimError(f"<SystemParams> lacks <{req}>", f, f"SystemParams/{req}")
+    try:
+        dt, total, damping = (float(params[k]) for k in ("TimeStep", "TotalTime", "DampingCoeff"))
+        default_rho = float(params["Density"]) if "Density" in params else None
+    except ValueError:
+        raise NiftySimError("<SystemParams>: non-numeric value", f, "SystemParams") from None
+    if params.get("DoDeformableCollision", "0").strip() not in ("0", ""):
+        unsupported("DoDeformableCollision", "contact between deformable bodies is not yet in pliant")
+    if "HGKappa" in params:
+        warnings.append(f"{f}: HGKappa ignored (hourglass control applies to H8 elements only)")
+
+    b = ModelBuilder()
+    b.add_mesh(X, T, source=f)
+    b.damping = damping
+    for k, es in enumerate(root.findall("ElementSet")):
+        key = f"ElementSet[{k}]"
+        size = es.get("Size", "")
+        listed = _numbers(es, f, key, np.int64) if (es.text or "").strip() else np.zeros(0, np.int64)
+        if size == "all":
+            elems = np.arange(M)
+        else:
+            try:
+                n = int(size)
+            except ValueError:
+                raise NiftySimError(f"<ElementSet Size={size!r}>: expected a count or 'all'", f, key) from None
+            if listed.size == n:
+                elems = listed
+            elif listed.size <= 1:  # shorthand: N consecutive elements from the first listed (or 0)
+                first = int(listed[0]) if listed.size else 0
+                elems = np.arange(first, first + n)
+            else:
+                raise NiftySimError(f"<ElementSet Size={n}> lists {listed.size} elements", f, key)
+        if elems.size and (elems.min() < 0 or elems.max() >= M):
+            raise NiftySimError(f"element index out of range 0..{M - 1}", f, key)
+        m = es.find("Material")
+        if m is None:
+            raise NiftySimError("<ElementSet> without <Material>", f, key)
+        mtype = m.get("Type")
+        ep = m.find("ElasticParams")
+        vals = _numbers(ep, f, f"{key}/ElasticParams") if ep is not None else np.zeros(0)
+        rho_el = m.find("Density")
+        rho = float(rho_el.text) if rho_el is not None else default_rho
+        if rho is None:
+            raise NiftySimError("no density: give <Density> in the material or SystemParams", f, key)
+        try:
+            if mtype == "NH":
+                if vals.size != 2:
+                    raise NiftySimError(f"NH takes 2 parameters (mu, K); got {vals.size}", f, key)
+                material = NeoHookean(mu=vals[0], K=vals[1])
+            elif mtype == "LE":
+                if vals.size != 2:
+                    raise NiftySimError(f"LE takes 2 parameters (E, nu); got {vals.size}", f, key)
+                material = StVenantKirchhoff(E=vals[0], nu=vals[1])
+            else:
+                unsupported(f"Material Type={mtype}", "pliant imports NH and LE")
+                continue
+            b.set_material(material, rho, elements=elems, name=key)
+        except SceneError:
+            raise
+        except InputError as e:
+            raise NiftySimError(str(e), f, key) from None
+
+    shapes = {"RAMP": lambda: Ramp(total), "STEP": lambda: Step(0.0),
+              "POLY345": lambda: SmoothRamp(total), "HILLY": lambda: Hilly(total)}
+    for k, c in enumerate(root.findall("Constraint")):
+        key = f"Constraint[{k}]"
+        ctype = c.get("Type")
+        if c.get("SpecType", "NODES") != "NODES":
+            unsupported(f"Constraint SpecType={c.get('SpecType')}", "only node lists")
+            continue
+        if ctype not in ("Fix", "Disp", "Force", "Gravity"):
+            unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force and Gravity")
+            continue
+        dof = c.get("DOF", "all")
+        dofs = "xyz" if dof == "all" else {"0": "x", "1": "y", "2": "z"}.get(dof)
+        if dofs is None:
+            raise NiftySimError(f"DOF={dof!r}: expected 0, 1, 2 or all", f, key)
+        curve = Constant()
+        if ctype != "Fix":
+            shape = c.get("LoadShape")
+            if shape not in shapes:
+                unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345 and HILLY")
+                continue
+            curve = shapes[shape]()
+        if ctype == "Gravity":
+            try:
+                g = float(c.find("AccelerationMagnitude").text)
+                d = _numbers(c.find("AccelerationDirection"), f, key)
+            except (AttributeError, ValueError, TypeError):
+                raise NiftySimError("Gravity needs <AccelerationMagnitude> and "
+                                    "<AccelerationDirection>", f, key) from None
+            b.set_gravity(g * d / np.linalg.norm(d), curve)
+            continue
+        nodes_el = c.find("Nodes")
+        if nodes_el is None:
+            raise NiftySimError("<Constraint> without <Nodes>", f, key)
+        ids = _numbers(nodes_el, f, f"{key}/Nodes", np.int64)
+        if ctype == "Fix":
+            b.fix(ids, dofs)
+            continue
+        mag = c.find("Magnitudes")
+        if mag is None:
+            raise NiftySimError(f"{ctype} needs <Magnitudes>", f, key)
+        mtype = mag.get("Type", "UNIFORM")
+        vals = _numbers(mag, f, f"{key}/Magnitudes")
+        if mtype == "UNIFORM" and vals.size == 1:
+            v = np.full(ids.size, vals[0])
+        elif mtype == "DIFFORM" and vals.size == ids.size:
+            v = vals
+        elif mtype in ("UNIFORM", "DIFFORM"):
+            raise NiftySimError(f"Magnitudes {mtype}: {vals.size} values for {ids.size} nodes", f, key)
+        else:
+            unsupported(f"Magnitudes Type={mtype}", "pliant imports UNIFORM and DIFFORM")
+            continue
+        ndof = len(dofs)
+        if ctype == "Disp":
+            b.prescribe(ids, np.repeat(v[:, None], ndof, axis=1), dofs, curve)
+        else:
+            force = np.zeros((ids.size, 3))
+            for d in dofs:
+                force[:, "xyz".index(d)] = v
+            b.add_force(ids, force, curve)
+
+    out_every = None
+    for o in root.findall("Output"):
+        try:
+            out_every = int(o.get("Freq"))
+        except (TypeError, ValueError):
+            raise NiftySimError("<Output Freq=...>: expected an integer", f, "Output") from None
+    steps = int(round(total / dt))
+    scene = Scene(f, b, duration=total, dt=dt, dtype="float32", output_every=out_every,
+                  frames=20, title=path.stem, warnings=warnings)
+    scene.meta["mesh_source"] = f
+    scene.meta["niftysim_steps"] = steps
+    from ..scene.select import boundary_nodes
+
+    scene.meta["boundary_nodes"] = boundary_nodes(T)
+    return scene

@@ -1,0 +1,98 @@
+"""Triangle surface meshes: reading (OBJ read here, robust to texture data; other formats through
+meshio), writing, and primitive surfaces. Vertices [m] (V, 3) float64, faces (F, 3) int64."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshError
+
+
+def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    V, F = [], []
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for lineno, line in enumerate(f, 1):
+            if line.startswith("v "):
+                parts = line.split()
+                try:
+                    V.append([float(x) for x in parts[1:4]])
+                except ValueError:
+                    raise MeshError(f"{path}:{lineno}: bad vertex line {line.strip()!r}") from None
+                if len(V[-1]) != 3:
+                    raise MeshError(f"{path}:{lineno}: vertex with {len(V[-1])} coordinates")
+            elif line.startswith("f "):
+                try:
+                    idx = [int(t.split("/")[0]) for t in line.split()[1:]]
+                except ValueError:
+                    raise MeshError(f"{path}:{lineno}: bad face line {line.strip()!r}") from None
+                idx = [i - 1 if i > 0 else len(V) + i for i in idx]
+                if len(idx) < 3:
+                    raise MeshError(f"{path}:{lineno}: face with {len(idx)} vertices")
+                for k in range(1, len(idx) - 1):  # fan-triangulate polygons
+                    F.append([idx[0], idx[k], idx[k + 1]])
+    return np.asarray(V, dtype=float).reshape(-1, 3), np.asarray(F, dtype=np.int64).reshape(-1, 3)
+
+
+def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a triangle surface (.obj, .stl, .ply, .off, .vtk, .vtu... any meshio format with
+    triangles). Raises MeshError for a missing, unreadable, empty or out-of-range mesh."""
+    path = Path(path)
+    if not path.is_file():
+        raise MeshError(f"{path}: no such file")
+    if path.suffix.lower() == ".obj":
+        V, F = _read_obj(path)
+    else:
+        import meshio
+
+        try:
+            m = meshio.read(path)
+        except Exception as e:
+            raise MeshError(f"{path}: cannot read as a surface mesh ({type(e).__name__}: {e})") from None
+        tris = [c.data for c in m.cells if c.type == "triangle"]
+        quads = [c.data for c in m.cells if c.type == "quad"]
+        parts = tris + [q[:, [0, 1, 2]] for q in quads] + [q[:, [0, 2, 3]] for q in quads]
+        if not parts:
+            raise MeshError(f"{path}: no triangles (cell types: "
+                            f"{', '.join(sorted({c.type for c in m.cells})) or 'none'})")
+        V, F = np.asarray(m.points, float)[:, :3], np.concatenate(parts).astype(np.int64)
+    if len(V) == 0 or len(F) == 0:
+        raise MeshError(f"{path}: empty mesh ({len(V)} vertices, {len(F)} faces)")
+    if F.min() < 0 or F.max() >= len(V):
+        raise MeshError(f"{path}: face index out of range 0..{len(V) - 1}")
+    if not np.all(np.isfinite(V)):
+        raise MeshError(f"{path}: non-finite vertex coordinates")
+    return V, F
+
+
+def write_surface(path, V: np.ndarray, F: np.ndarray) -> None:
+    """Write a triangle surface in any meshio format (by extension), atomically."""
+    import os
+
+    import meshio
+
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    meshio.write(tmp, meshio.Mesh(np.asarray(V, float), [("triangle", np.asarray(F))]))
+    os.replace(tmp, path)
+
+
+def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:
+    """Closed, outward-oriented triangle surfaces [m]: sphere(radius), cylinder(radius, height; axis
+    z, centred), torus(major_radius, minor_radius; axis z). Resolution follows ``segments``."""
+    import trimesh
+
+    if kind == "sphere":
+        m = trimesh.creation.icosphere(subdivisions=int(p.get("subdivisions", 3)),
+                                       radius=p["radius"])
+    elif kind == "cylinder":
+        m = trimesh.creation.cylinder(radius=p["radius"], height=p["height"],
+                                      sections=int(p.get("segments", 48)))
+    elif kind == "torus":
+        m = trimesh.creation.torus(major_radius=p["major_radius"], minor_radius=p["minor_radius"],
+                                   major_sections=int(p.get("segments", 48)),
+                                   minor_sections=int(p.get("minor_segments", 24)))
+    else:
+        raise MeshError(f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus")
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)

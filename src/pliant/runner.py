@@ -1,0 +1,104 @@
+"""Running a scene: dynamics (or a quasi-static solve) with periodic output frames, a progress bar,
+clean Ctrl-C, summary.json and a PNG picture. Every file is written atomically."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .errors import InstabilityError
+from .io import ResultWriter, atomic_write_text
+from .scene import Scene
+from .tled import Solver
+
+
+def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
+    if scene.output_every:
+        return scene.output_every
+    if scene.output_interval:
+        return max(1, int(round(scene.output_interval / dt)))
+    return max(1, math.ceil(total_steps / scene.frames))
+
+
+def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool = False,
+              threads: int | None = None, echo=print) -> dict:
+    """Run ``scene`` and write OUTDIR/result.pvd, frame_*.vtu, summary.json and result.png.
+    Returns the summary. Raises InstabilityError (after writing what it has) when the run fails;
+    on KeyboardInterrupt the summary says ``interrupted`` and the frames so far are kept."""
+    from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
+                               TimeRemainingColumn)
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    t_build = time.perf_counter()
+    model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads)
+    solver = Solver(model, dt=scene.dt, safety=scene.safety, allow_unstable=allow_unstable,
+                    check_every=scene.check_every)
+    state = model.state()
+    writer = ResultWriter(out, model)
+    writer.write(state)
+    build_s = time.perf_counter() - t_build
+    total = max(1, math.ceil(scene.duration / solver.dt - 1e-9))
+    summary = {"pliant": __version__, "scene": scene.source, "title": scene.title,
+               "mode": "static" if scene.static else "dynamic", "steps": 0, "dt": solver.dt,
+               "dt_critical": model.dt_critical, "simulated_time": 0.0, "wall_time": 0.0,
+               "setup_time": build_s, "backend": "cpu", "threads": model.threads,
+               "dtype": scene.dtype, "elements": model.n_elements, "nodes": model.n_nodes,
+               "interrupted": False, "error": None, "warnings": list(scene.warnings)}
+    t0 = time.perf_counter()
+    try:
+        if scene.static:
+            info = solver.relax(state, at_time=scene.duration, tol=scene.tol,
+                                increments=scene.increments, strict=False)
+            summary.update(relax_steps=info.steps, residual=info.residual, converged=info.converged)
+            if not info.converged:
+                summary["warnings"].append(f"quasi-static solve stopped at residual "
+                                           f"{info.residual:.3g} (tolerance {scene.tol:g})")
+            writer.write(state)
+        else:
+            every = _frame_steps(scene, solver.dt, total)
+            cols = (TextColumn("t = {task.fields[t]:.4g} s"), BarColumn(),
+                    TextColumn("{task.completed}/{task.total} steps"),
+                    TextColumn("{task.fields[rate]:,.0f} steps/s"), TimeElapsedColumn(),
+                    TimeRemainingColumn())
+            with Progress(*cols, disable=not progress, transient=False) as bar:
+                task = bar.add_task("run", total=total, t=0.0, rate=0.0)
+                done = 0
+                while done < total:
+                    n = min(every - done % every, total - done)
+                    solver.run(state, steps=n)
+                    done += n
+                    if done % every == 0 or done == total:
+                        writer.write(state)
+                    el = time.perf_counter() - t0
+                    bar.update(task, completed=done, t=state.time, rate=done / max(el, 1e-9))
+    except KeyboardInterrupt:
+        summary["interrupted"] = True
+    except InstabilityError as e:
+        summary["error"] = str(e)
+        raise
+    finally:
+        summary["wall_time"] = time.perf_counter() - t0
+        summary["steps"] = state.steps if not scene.static else summary.get("relax_steps", 0)
+        summary["simulated_time"] = state.time
+        summary["frames"] = len(writer.frames)
+        u = state.displacements
+        if np.all(np.isfinite(u)):
+            res = model.element_results(state)
+            summary.update(max_displacement=float(np.linalg.norm(u, axis=1).max()),
+                           max_von_mises=float(res["von_mises"].max()),
+                           kinetic_energy=model.kinetic_energy(state),
+                           strain_energy=float(np.dot(model.element_volumes(),
+                                                      res["energy_density"])))
+            if scene.png:
+                from .view import render_png
+
+                render_png(out / "result.png", state.positions, model.tets, res["von_mises"],
+                           title=f"{scene.title}: t = {state.time:.4g} s")
+        atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
+    return summary

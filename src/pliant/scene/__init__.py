@@ -1,0 +1,327 @@
+"""Scene files (TOML): mesh, materials per region, constraints and loads with load curves, solver
+settings and outputs. ``load_scene(path)`` validates everything and returns a :class:`Scene` whose
+``builder`` is ready to finalize. Unknown keys are errors that name the file, key and line.
+
+See docs/scenes.md for the full reference, and examples/ for complete scenes.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import materials as mat
+from ..errors import InputError, MeshError
+from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
+from ..tled.curves import LoadCurve
+from .schema import Ctx, SceneError, check_keys, vector
+from .select import boundary_nodes, select_elements, select_nodes
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Scene", "load_scene", "SceneError", "make_curve"]
+
+
+@dataclass
+class Scene:
+    """A validated scene: builder (mesh, materials, constraints, loads) plus run settings."""
+
+    source: str
+    builder: ModelBuilder
+    duration: float = 1.0  # [s]
+    dt: float | None = None  # [s]; None: safety × critical
+    safety: float = 0.8
+    dtype: str = "float32"
+    threads: int | None = None
+    static: bool = False
+    tol: float = 1e-5
+    increments: int = 1
+    check_every: int = 16
+    output_every: int | None = None  # steps
+    output_interval: float | None = None  # [s]
+    frames: int = 20
+    png: bool = True
+    title: str = ""
+    warnings: list[str] = field(default_factory=list)
+    meta: dict = field(default_factory=dict)
+
+
+_MATERIALS = {
+    "neo-hookean": (mat.NeoHookean, ("mu", "K")),
+    "mooney-rivlin": (mat.MooneyRivlin, ("C10", "C01", "K")),
+    "neo-hookean-coupled": (mat.NeoHookeanCoupled, ("mu", "lambda")),
+    "st-venant-kirchhoff": (mat.StVenantKirchhoff, ("mu", "lambda")),
+    "linear-elastic": (mat.LinearElastic, ("mu", "lambda")),
+}
+
+
+def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
+    """'constant' | 'step' | 'ramp' | 'smooth-ramp' (0 → 1 over the duration) or a table
+    {type = 'ramp' | 'smooth-ramp', t0, t1} | {type = 'step', t0} | {type = 'table', times, values}."""
+    if spec is None:
+        return Constant()
+    if isinstance(spec, str):
+        spec = {"type": spec}
+    check_keys(ctx, spec, path, {"type": "str", "t0": "number", "t1": "number", "times": "list",
+                                 "values": "list"}, ("type",))
+    kind = spec["type"]
+    try:
+        if kind == "constant":
+            return Constant()
+        if kind == "step":
+            return Step(spec.get("t0", 0.0))
+        if kind in ("ramp", "smooth-ramp"):
+            cls = Ramp if kind == "ramp" else SmoothRamp
+            return cls(spec.get("t1", duration), spec.get("t0", 0.0))
+        if kind == "table":
+            if "times" not in spec or "values" not in spec:
+                raise ctx.error(path, "a table curve needs 'times' and 'values'")
+            return Table(spec["times"], spec["values"])
+    except InputError as e:
+        if isinstance(e, SceneError):
+            raise
+        raise ctx.error(path, str(e)) from None
+    raise ctx.error(f"{path}.type", f"unknown curve {kind!r}; expected constant, step, ramp, "
+                    "smooth-ramp or table")
+
+
+def _rotation(deg) -> np.ndarray:
+    R = np.eye(3)
+    for axis, a in enumerate(np.radians(deg)):
+        c, s = math.cos(a), math.sin(a)
+        i, j = [(1, 2), (0, 2), (0, 1)][axis]
+        Q = np.eye(3)
+        Q[i, i], Q[i, j], Q[j, i], Q[j, j] = c, -s, s, c
+        if axis == 1:
+            Q[i, j], Q[j, i] = s, -s
+        R = Q @ R
+    return R
+
+
+def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
+    from .. import mesh as pm
+    from ..io.mesh import read_volume_mesh
+
+    check_keys(ctx, spec, "mesh", {
+        "file": "str", "primitive": "str", "size": "list|number", "cells": "list", "radius": "number",
+        "height": "number", "major_radius": "number", "minor_radius": "number",
+        "edge_length": "number", "scale": "number", "rotate": "list", "translate": "list",
+        "jitter": "number"})
+    if ("file" in spec) == ("primitive" in spec):
+        raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
+    sets: dict[str, np.ndarray] = {}
+    scale = float(spec.get("scale", 1.0))
+    if not scale > 0:
+        raise ctx.error("mesh.scale", "expected a scale > 0")
+
+    def pos(key):
+        v = spec.get(key)
+        if v is None:
+            raise ctx.error("mesh", f"primitive {spec['primitive']!r} needs '{key}' [m]")
+        if not v > 0:
+            raise ctx.error(f"mesh.{key}", f"{key} = {v!r}: expected a length > 0 [m]")
+        return float(v)
+
+    el = spec.get("edge_length")
+    if el is not None and not el > 0:
+        raise ctx.error("mesh.edge_length", "expected a length > 0 [m]")
+    if "file" in spec:
+        f = Path(spec["file"])
+        f = f if f.is_absolute() else base / f
+        if not f.is_file():
+            raise ctx.error("mesh.file", f"no such file: {f}")
+        surface_ext = {".obj", ".stl", ".ply", ".off"}
+        try:
+            if f.suffix.lower() in surface_ext:
+                V, F = pm.read_surface(f)
+                X, T = pm.tetrahedralize(V * scale, F, edge_length=el)
+                scale = 1.0
+            else:
+                X, T, sets = read_volume_mesh(f)
+        except MeshError as e:
+            raise ctx.error("mesh.file", str(e)) from None
+        scene.meta["mesh_source"] = str(f)
+    else:
+        kind = spec["primitive"]
+        if kind == "box":
+            size = spec.get("size", [0.1, 0.1, 0.1])
+            size = vector(ctx, size, "mesh.size") if isinstance(size, list) else [float(size)] * 3
+            if min(size) <= 0:
+                raise ctx.error("mesh.size", "expected lengths > 0 [m]")
+            h = el or min(size) / 4
+            cells = spec.get("cells") or [max(1, round(s / h)) for s in size]
+            if not (len(cells) == 3 and all(isinstance(c, int) and c >= 1 for c in cells)):
+                raise ctx.error("mesh.cells", "expected three integers >= 1")
+            X, T = pm.box_tets(size, cells, origin=[-s / 2 for s in size],
+                               jitter=float(spec.get("jitter", 0.0)))
+        elif kind in ("sphere", "cylinder", "torus"):
+            if kind == "sphere":
+                V, F = pm.primitive_surface("sphere", radius=pos("radius"))
+            elif kind == "cylinder":
+                V, F = pm.primitive_surface("cylinder", radius=pos("radius"), height=pos("height"))
+            else:
+                V, F = pm.primitive_surface("torus", major_radius=pos("major_radius"),
+                                            minor_radius=pos("minor_radius"))
+            X, T = pm.tetrahedralize(V, F, edge_length=el)
+        else:
+            raise ctx.error("mesh.primitive", f"unknown primitive {kind!r}; expected box, sphere, "
+                            "cylinder or torus")
+        scene.meta["mesh_source"] = f"primitive {kind}"
+    X = np.asarray(X, float) * scale
+    if "rotate" in spec:
+        X = X @ _rotation(vector(ctx, spec["rotate"], "mesh.rotate")).T
+    if "translate" in spec:
+        X = X + np.array(vector(ctx, spec["translate"], "mesh.translate"))
+    extent = float(np.ptp(X, axis=0).max())
+    if extent > 10.0:
+        scene.warnings.append(f"{ctx.file}: the mesh is {extent:g} m across; pliant expects SI "
+                              "metres: if the file is in millimetres, set mesh.scale = 0.001")
+    return X, np.asarray(T, np.int64), sets
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a scene file (TOML). Raises SceneError naming file, key and line."""
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(f"no such scene file: {path}", str(path))
+    text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"not valid TOML: {e}", str(path)) from None
+    ctx = Ctx(str(path), text)
+    check_keys(ctx, data, "", {"title": "str", "mesh": "table", "material": "list",
+                               "solver": "table", "constraint": "list", "load": "list",
+                               "output": "table"}, ("mesh", "material"))
+    b = ModelBuilder()
+    scene = Scene(str(path), b, title=data.get("title", path.stem))
+    solver = check_keys(ctx, data.get("solver", {}), "solver", {
+        "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
+        "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
+        "check_every": "int"})
+    scene.duration = float(solver.get("duration", 1.0))
+    if not scene.duration > 0:
+        raise ctx.error("solver.duration", "expected a duration > 0 [s]")
+    dt = solver.get("dt", "auto")
+    if isinstance(dt, str):
+        if dt != "auto":
+            raise ctx.error("solver.dt", f"dt = {dt!r}: expected 'auto' or a time step [s]")
+    elif not dt > 0:
+        raise ctx.error("solver.dt", f"dt = {dt!r}: expected a time step > 0 [s]")
+    else:
+        scene.dt = float(dt)
+    scene.safety = float(solver.get("safety", 0.8))
+    if not 0 < scene.safety <= 1:
+        raise ctx.error("solver.safety", "expected 0 < safety <= 1")
+    scene.dtype = solver.get("dtype", "float32")
+    if scene.dtype not in ("float32", "float64"):
+        raise ctx.error("solver.dtype", f"dtype = {scene.dtype!r}: expected 'float32' or 'float64'")
+    scene.threads = solver.get("threads") or None
+    scene.static = bool(solver.get("static", False))
+    scene.tol = float(solver.get("tol", 1e-5))
+    scene.increments = int(solver.get("increments", 1))
+    scene.check_every = int(solver.get("check_every", 16))
+    if scene.increments < 1 or scene.check_every < 1:
+        raise ctx.error("solver", "increments and check_every must be >= 1")
+    damping = float(solver.get("damping", 0.0))
+    if damping < 0:
+        raise ctx.error("solver.damping", "expected damping >= 0 [1/s]")
+    b.damping = damping
+
+    X, T, sets = _load_mesh(ctx, data["mesh"], path.parent, scene)
+    try:
+        b.add_mesh(X, T, source=scene.meta["mesh_source"])
+    except MeshError as e:
+        raise ctx.error("mesh", str(e)) from None
+
+    for i, m in enumerate(data["material"]):
+        p = f"material[{i}]"
+        check_keys(ctx, m, p, {"type": "str", "region": "table", "density": "number", "E": "number",
+                               "nu": "number", "mu": "number", "K": "number", "lambda": "number",
+                               "C10": "number", "C01": "number", "name": "str"}, ("type", "density"))
+        if m["type"] not in _MATERIALS:
+            raise ctx.error(f"{p}.type", f"unknown material {m['type']!r}; expected one of "
+                            f"{', '.join(_MATERIALS)}")
+        cls, native = _MATERIALS[m["type"]]
+        given = {k for k in m if k in ("E", "nu", "mu", "K", "lambda", "C10", "C01")}
+        try:
+            if given == {"E", "nu"} and m["type"] != "mooney-rivlin":
+                material = cls(E=m["E"], nu=m["nu"])
+            elif given == set(native):
+                material = cls(*[m[k] for k in native])
+            else:
+                alt = " or (E, nu)" if m["type"] != "mooney-rivlin" else ""
+                raise ctx.error(p, f"{m['type']} takes ({', '.join(native)}){alt}; got "
+                                f"({', '.join(sorted(given)) or 'nothing'})")
+            elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) \
+                if "region" in m else None
+            b.set_material(material, m["density"], elements=elems, name=m.get("name", p))
+        except SceneError:
+            raise
+        except InputError as e:
+            raise ctx.error(p, str(e)) from None
+
+    for i, c in enumerate(data.get("constraint", [])):
+        p = f"constraint[{i}]"
+        check_keys(ctx, c, p, {"type": "str", "nodes": "table", "dofs": "str", "value": "number|list",
+                               "curve": "str|table"}, ("type", "nodes"))
+        ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T)
+        dofs = c.get("dofs", "xyz")
+        try:
+            if c["type"] == "fix":
+                if "value" in c or "curve" in c:
+                    raise ctx.error(p, "a 'fix' constraint takes no value or curve")
+                b.fix(ids, dofs)
+            elif c["type"] == "displacement":
+                if "value" not in c:
+                    raise ctx.error(p, "a 'displacement' constraint needs 'value' [m]")
+                b.prescribe(ids, c["value"], dofs,
+                            make_curve(ctx, c.get("curve"), f"{p}.curve", scene.duration))
+            else:
+                raise ctx.error(f"{p}.type", f"unknown constraint {c['type']!r}; expected 'fix' or "
+                                "'displacement'")
+        except SceneError:
+            raise
+        except InputError as e:
+            raise ctx.error(p, str(e)) from None
+
+    for i, ld in enumerate(data.get("load", [])):
+        p = f"load[{i}]"
+        check_keys(ctx, ld, p, {"type": "str", "nodes": "table", "force": "list",
+                                "total_force": "list", "g": "list", "curve": "str|table"}, ("type",))
+        curve = make_curve(ctx, ld.get("curve"), f"{p}.curve", scene.duration)
+        if ld["type"] == "gravity":
+            b.set_gravity(vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g"), curve)
+        elif ld["type"] == "force":
+            if "nodes" not in ld or (("force" in ld) == ("total_force" in ld)):
+                raise ctx.error(p, "a 'force' load needs 'nodes' and one of 'force' (per node [N]) "
+                                "or 'total_force' (shared equally [N])")
+            ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+            if "force" in ld:
+                f = np.array(vector(ctx, ld["force"], f"{p}.force"))
+            else:
+                f = np.array(vector(ctx, ld["total_force"], f"{p}.total_force")) / ids.size
+            b.add_force(ids, f, curve)
+        else:
+            raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force' or 'gravity'")
+
+    out = check_keys(ctx, data.get("output", {}), "output",
+                     {"every": "int", "interval": "number", "frames": "int", "png": "bool"})
+    if sum(k in out for k in ("every", "interval", "frames")) > 1:
+        raise ctx.error("output", "give at most one of 'every' (steps), 'interval' [s], 'frames'")
+    if "every" in out and out["every"] < 1 or "frames" in out and out["frames"] < 1 \
+            or "interval" in out and not out["interval"] > 0:
+        raise ctx.error("output", "every, frames and interval must be positive")
+    scene.output_every = out.get("every")
+    scene.output_interval = out.get("interval")
+    scene.frames = int(out.get("frames", 20))
+    scene.png = bool(out.get("png", True))
+    scene.meta["boundary_nodes"] = boundary_nodes(T)
+    return scene

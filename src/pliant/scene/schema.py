@@ -1,0 +1,108 @@
+"""Validation of scene tables: unknown keys are errors; every error names the file, the key path,
+the line where it can be found, and what was expected."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import InputError
+
+
+class SceneError(InputError):
+    """A scene file that does not meet the schema. ``file``, ``key`` and ``line`` name the culprit."""
+
+    def __init__(self, message: str, file: str = "", key: str = "", line: int | None = None):
+        where = file
+        if line:
+            where += f":{line}"
+        if key:
+            where += f" [{key}]"
+        super().__init__(f"{where}: {message}" if where else message)
+        self.file, self.key, self.line = file, key, line
+
+
+@dataclass
+class Ctx:
+    """Where we are: the file name and its text (for line numbers)."""
+
+    file: str
+    text: str
+
+    def line_of(self, key: str) -> int | None:
+        """Line of a key path such as 'material[1].E' or 'solver.dt' (best effort)."""
+        parts = re.findall(r"([A-Za-z_][\w-]*)(?:\[(\d+)\])?", key)
+        if not parts:
+            return None
+        lines = self.text.splitlines()
+        header, idx = parts[0]
+        leaf = parts[-1][0] if len(parts) > 1 else None
+        count, start = -1, None
+        want = int(idx) if idx else 0
+        for i, ln in enumerate(lines):
+            s = ln.strip()
+            if re.match(rf"^\[\[?\s*{re.escape(header)}\s*\]\]?", s):
+                count += 1
+                if count == want:
+                    start = i
+                    if leaf is None:
+                        return i + 1
+                    continue
+            if start is not None and i > start:
+                if s.startswith("[") and not s.startswith("[["+header) and re.match(r"^\[", s) \
+                        and not re.match(rf"^\[{re.escape(header)}\.", s):
+                    break
+                if leaf and re.match(rf"^{re.escape(leaf)}\s*=", s):
+                    return i + 1
+                if leaf and re.search(rf"[{{,]\s*{re.escape(leaf)}\s*=", s):
+                    return i + 1
+        if start is not None:
+            return start + 1
+        for i, ln in enumerate(lines):  # top-level key
+            if re.match(rf"^\s*{re.escape(header)}\s*=", ln):
+                return i + 1
+        return None
+
+    def error(self, key: str, message: str) -> SceneError:
+        return SceneError(message, self.file, key, self.line_of(key))
+
+
+_TYPES = {"number": (int, float), "int": (int,), "str": (str,), "bool": (bool,), "table": (dict,),
+          "list": (list,)}
+
+
+def check_keys(ctx: Ctx, table: Any, path: str, allowed: dict[str, str],
+               required: tuple[str, ...] = ()) -> dict:
+    """Check that ``table`` is a table whose keys are among ``allowed`` (key → type name; '|' for
+    alternatives) and that ``required`` keys are present. Returns the table."""
+    if not isinstance(table, dict):
+        raise ctx.error(path, f"expected a table, got {type(table).__name__}")
+    for k, v in table.items():
+        if k not in allowed:
+            raise ctx.error(f"{path}.{k}" if path else k,
+                            f"unknown key {k!r}; expected one of: {', '.join(sorted(allowed))}")
+        kinds = allowed[k].split("|")
+        ok = False
+        for kind in kinds:
+            types = _TYPES.get(kind, ())
+            if isinstance(v, types) and not (kind in ("number", "int") and isinstance(v, bool)):
+                ok = True
+        if not ok:
+            raise ctx.error(f"{path}.{k}" if path else k,
+                            f"{k} = {v!r}: expected {' or '.join(kinds)}")
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ctx.error(f"{path}.{k}" if path else k, f"{k} = {v!r}: expected a finite number")
+    for k in required:
+        if k not in table:
+            raise ctx.error(path, f"missing key {k!r}")
+    return table
+
+
+def vector(ctx: Ctx, value, path: str, n: int = 3) -> list[float]:
+    if not (isinstance(value, list) and len(value) == n and
+            all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                for x in value)):
+        raise ctx.error(path, f"{value!r}: expected a list of {n} finite numbers")
+    return [float(x) for x in value]

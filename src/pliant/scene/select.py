@@ -1,0 +1,108 @@
+"""Node and element selections for scene files.
+
+A selection is a table combining any of (intersection):
+  all = true | ids = [..] | box = [[x0,y0,z0],[x1,y1,z1]] | sphere = {center=[..], radius=r}
+  plane = {point=[..], normal=[..], side="below"|"above"|"on", tol=...}
+  surface = true   (only nodes on the boundary surface: with box/sphere/plane, a surface patch)
+Coordinates are in metres, after the mesh transform.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .schema import Ctx, check_keys, vector
+
+_KEYS = {"all": "bool", "ids": "list", "box": "list", "sphere": "table", "plane": "table",
+         "surface": "bool", "set": "str"}
+
+
+def boundary_nodes(tets: np.ndarray) -> np.ndarray:
+    """Indices of nodes on faces used by exactly one tetrahedron."""
+    faces = np.sort(np.concatenate([tets[:, [0, 1, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 3]],
+                                    tets[:, [1, 2, 3]]]), axis=1)
+    uniq, count = np.unique(faces, axis=0, return_counts=True)
+    return np.unique(uniq[count == 1])
+
+
+def _mask(ctx: Ctx, spec: dict, path: str, P: np.ndarray, extent: float) -> np.ndarray:
+    m = np.ones(len(P), dtype=bool)
+    if "ids" in spec:
+        ids = spec["ids"]
+        if not all(isinstance(i, int) and not isinstance(i, bool) for i in ids):
+            raise ctx.error(f"{path}.ids", "expected a list of integer indices")
+        ids = np.asarray(ids, dtype=np.int64)
+        if ids.size and (ids.min() < 0 or ids.max() >= len(P)):
+            raise ctx.error(f"{path}.ids", f"index out of range 0..{len(P) - 1}")
+        sel = np.zeros(len(P), bool)
+        sel[ids] = True
+        m &= sel
+    if "box" in spec:
+        b = spec["box"]
+        if not (isinstance(b, list) and len(b) == 2):
+            raise ctx.error(f"{path}.box", "expected [[x0, y0, z0], [x1, y1, z1]] [m]")
+        lo, hi = np.array(vector(ctx, b[0], f"{path}.box")), np.array(vector(ctx, b[1], f"{path}.box"))
+        m &= np.all((P >= np.minimum(lo, hi)) & (P <= np.maximum(lo, hi)), axis=1)
+    if "sphere" in spec:
+        s = check_keys(ctx, spec["sphere"], f"{path}.sphere", {"center": "list", "radius": "number"},
+                       ("center", "radius"))
+        m &= np.linalg.norm(P - np.array(vector(ctx, s["center"], f"{path}.sphere.center")),
+                            axis=1) <= s["radius"]
+    if "plane" in spec:
+        p = check_keys(ctx, spec["plane"], f"{path}.plane",
+                       {"point": "list", "normal": "list", "side": "str", "tol": "number"},
+                       ("point", "normal"))
+        n = np.array(vector(ctx, p["normal"], f"{path}.plane.normal"))
+        if not np.linalg.norm(n) > 0:
+            raise ctx.error(f"{path}.plane.normal", "expected a non-zero normal")
+        d = (P - np.array(vector(ctx, p["point"], f"{path}.plane.point"))) @ (n / np.linalg.norm(n))
+        tol = float(p.get("tol", 1e-6 * extent))
+        side = p.get("side", "on")
+        if side == "on":
+            m &= np.abs(d) <= tol
+        elif side == "below":
+            m &= d <= tol
+        elif side == "above":
+            m &= d >= -tol
+        else:
+            raise ctx.error(f"{path}.plane.side", f"side = {side!r}; expected 'below', 'above' or 'on'")
+    return m
+
+
+def select_nodes(ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Node indices selected by ``spec``; an empty selection is an error naming the key."""
+    check_keys(ctx, spec, path, _KEYS)
+    if "set" in spec:
+        raise ctx.error(f"{path}.set", "node sets by name are not supported; use ids, box, sphere, "
+                        "plane or surface")
+    if not spec:
+        raise ctx.error(path, "empty selection; give all, ids, box, sphere, plane and/or surface")
+    extent = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
+    m = _mask(ctx, spec, path, nodes, extent)
+    if spec.get("surface"):
+        s = np.zeros(len(nodes), bool)
+        s[boundary_nodes(tets)] = True
+        m &= s
+    ids = np.nonzero(m)[0]
+    if ids.size == 0:
+        raise ctx.error(path, "selects no node; check the coordinates (metres, after scale and "
+                        "transform)")
+    return ids
+
+
+def select_elements(ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray,
+                    sets: dict[str, np.ndarray]) -> np.ndarray:
+    """Element indices whose centroid is selected by ``spec`` (or the named element set)."""
+    check_keys(ctx, spec, path, _KEYS)
+    if "set" in spec:
+        if spec["set"] not in sets:
+            raise ctx.error(f"{path}.set", f"unknown element set {spec['set']!r}; the mesh has: "
+                            f"{', '.join(sets) or 'none'}")
+        return sets[spec["set"]]
+    if spec.get("surface"):
+        raise ctx.error(f"{path}.surface", "surface selects nodes, not elements")
+    c = nodes[tets].mean(axis=1)
+    ids = np.nonzero(_mask(ctx, spec, path, c, float(np.ptp(nodes, axis=0).max())))[0]
+    if ids.size == 0:
+        raise ctx.error(path, "selects no element")
+    return ids

@@ -1,0 +1,68 @@
+"""Offscreen PNG of a deformed tet mesh: its boundary surface coloured by a per-element field
+(von Mises stress by default), with a colour bar. Uses matplotlib's Agg backend (no display)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+
+def boundary_faces(tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary triangles (F, 3), outward for positive tets, and the element of each (F,)."""
+    local = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
+    faces = tets[:, local].reshape(-1, 3)
+    owner = np.repeat(np.arange(len(tets)), 4)
+    key = np.sort(faces, axis=1)
+    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    once = count[inv.ravel()] == 1
+    return faces[once], owner[once]
+
+
+def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.ndarray,
+               label: str = "von Mises stress [Pa]", title: str = "", max_faces: int = 60000) -> Path:
+    """Write a PNG [path] of the surface of the mesh at ``positions`` [m] (N, 3), coloured by
+    ``element_field`` (M,). Written atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    faces, owner = boundary_faces(np.asarray(tets))
+    if len(faces) > max_faces:  # keep rendering time bounded
+        keep = np.linspace(0, len(faces) - 1, max_faces).astype(int)
+        faces, owner = faces[keep], owner[keep]
+    P = np.asarray(positions, float)
+    vals = np.asarray(element_field, float)[owner]
+    fig = plt.figure(figsize=(8, 6), dpi=100)
+    ax = fig.add_subplot(111, projection="3d")
+    norm = matplotlib.colors.Normalize(vmin=float(vals.min()), vmax=float(vals.max()) or 1.0)
+    cmap = matplotlib.colormaps["viridis"]
+    tri = P[faces]
+    # Simple Lambert shading from a fixed light, on top of the field colours.
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+    shade = 0.55 + 0.45 * np.abs(n @ np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8]))
+    colours = cmap(norm(vals))
+    colours[:, :3] *= shade[:, None]
+    ax.add_collection3d(Poly3DCollection(tri, facecolors=colours, edgecolors="none"))
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    c, r = (lo + hi) / 2, (hi - lo).max() / 2 or 1.0
+    ax.set_xlim(c[0] - r, c[0] + r)
+    ax.set_ylim(c[1] - r, c[1] + r)
+    ax.set_zlim(c[2] - r, c[2] + r)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+    ax.set_title(title)
+    sm = matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap)
+    fig.colorbar(sm, ax=ax, shrink=0.7, label=label)
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    fig.savefig(tmp)
+    plt.close(fig)
+    os.replace(tmp, path)
+    return path
