@@ -18,8 +18,8 @@ from .errors import InputError, PliantError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra.")
-console = Console()
-err_console = Console(stderr=True)
+console = Console(soft_wrap=True)
+err_console = Console(stderr=True, soft_wrap=True)
 
 
 def _fail(e: Exception, code: int) -> None:
@@ -70,19 +70,22 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
 
 @app.command()
 def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Output folder."),
-         duration: float = typer.Option(0.6, help="Simulated time [s]."),
-         threads: Optional[int] = typer.Option(None, help="CPU threads (default: all).")):
-    """Run the embedded default: a soft-tissue slab on a table, pressed by an indenter."""
+         duration: Optional[float] = typer.Option(None, help="Simulated time [s] (default 1 s)."),
+         threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
+         progress: bool = typer.Option(True, help="Show a progress bar.")):
+    """Run the embedded default: Spot the cow on the ground, indented by a tool."""
     from .demo import run_demo
 
     try:
-        summary = run_demo(out, duration=duration, threads=threads, echo=console.print)
+        summary = run_demo(out, duration=duration, threads=threads, progress=progress,
+                           echo=console.print)
     except InputError as e:
         _fail(e, 2)
     except PliantError as e:
         _fail(e, 1)
-    console.print(f"results in [bold]{out}[/]: {summary['frames']} frames, result.pvd (open it in "
-                  f"ParaView), summary.json")
+    console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.3g} s in "
+                  f"{summary['wall_time']:.1f} s. Results in [bold]{out}[/]: result.pvd (open it "
+                  "in ParaView), result.png, summary.json")
 
 
 @app.command()

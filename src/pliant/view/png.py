@@ -38,7 +38,10 @@ def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.
     vals = np.asarray(element_field, float)[owner]
     fig = plt.figure(figsize=(8, 6), dpi=100)
     ax = fig.add_subplot(111, projection="3d")
-    norm = matplotlib.colors.Normalize(vmin=float(vals.min()), vmax=float(vals.max()) or 1.0)
+    # Colour range: 1st to 99th percentile, so that a few stress peaks (at supports, tool edges)
+    # do not flatten the picture; the colour bar says so.
+    lo_v, hi_v = np.percentile(vals, [1, 99]) if vals.size > 100 else (vals.min(), vals.max())
+    norm = matplotlib.colors.Normalize(vmin=float(lo_v), vmax=float(hi_v) if hi_v > lo_v else float(lo_v) + 1.0)
     cmap = matplotlib.colormaps["viridis"]
     tri = P[faces]
     # Simple Lambert shading from a fixed light, on top of the field colours.
@@ -59,7 +62,7 @@ def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.
     ax.set_zlabel("z [m]")
     ax.set_title(title)
     sm = matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap)
-    fig.colorbar(sm, ax=ax, shrink=0.7, label=label)
+    fig.colorbar(sm, ax=ax, shrink=0.7, extend="both", label=f"{label} (1st–99th percentile)")
     path = Path(path)
     tmp = path.with_name(f".{path.stem}.tmp.png")
     fig.savefig(tmp)

@@ -1,0 +1,164 @@
+"""Scene files: validation errors name file, key and line; scenes drive the engine correctly."""
+
+import json
+import textwrap
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import pliant as pl
+from pliant.cli import app
+from pliant.scene import SceneError, load_scene
+from test_uniaxial import MATERIALS, uniaxial_reference
+
+runner = CliRunner()
+
+TENSION = """
+title = "tension"
+[mesh]
+primitive = "box"
+size = [0.1, 0.1, 0.1]
+cells = [3, 3, 3]
+jitter = 0.2
+translate = [0.05, 0.05, 0.05]
+
+[[material]]
+type = "neo-hookean"
+mu = 1000.0
+K = 10000.0
+density = 1000.0
+
+[solver]
+static = true
+duration = 1.0
+increments = 5
+dtype = "float64"
+tol = 1e-8
+
+[[constraint]]
+type = "fix"
+dofs = "x"
+nodes = { plane = { point = [0, 0, 0], normal = [1, 0, 0] } }
+[[constraint]]
+type = "fix"
+dofs = "y"
+nodes = { plane = { point = [0, 0, 0], normal = [0, 1, 0] } }
+[[constraint]]
+type = "fix"
+dofs = "z"
+nodes = { plane = { point = [0, 0, 0], normal = [0, 0, 1] } }
+[[constraint]]
+type = "displacement"
+dofs = "x"
+value = 0.03
+curve = "ramp"
+nodes = { plane = { point = [0.1, 0, 0], normal = [1, 0, 0] } }
+
+[output]
+png = false
+"""
+
+
+def _write(tmp_path, text, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(textwrap.dedent(text))
+    return p
+
+
+def test_scene_tension_matches_closed_form(tmp_path):
+    """A scene with symmetry planes and a stretched face gives the closed-form uniaxial stress."""
+    sc = load_scene(_write(tmp_path, TENSION))
+    model = sc.builder.finalize(sc.dtype)
+    sim = pl.Simulation(model)
+    sim.solve_static(at_time=sc.duration, tol=sc.tol, increments=sc.increments)
+    X = model.reference_positions
+    right = np.nonzero(X[:, 0] > 0.1 - 1e-9)[0]
+    P = model.internal_forces(sim.state)[right, 0].sum() / 0.01
+    P_ref, _ = uniaxial_reference(MATERIALS["NeoHookean"][1], 1.3)
+    assert P == pytest.approx(P_ref, rel=5e-3)
+
+
+def test_run_cli_static_scene_outputs(tmp_path):
+    out = tmp_path / "out"
+    r = runner.invoke(app, ["run", str(_write(tmp_path, TENSION)), "-o", str(out), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    s = json.loads((out / "summary.json").read_text())
+    assert s["mode"] == "static" and s["converged"] and s["frames"] == 2
+    # The stretched face moved by 0.03 m along x: the largest displacement is at least that.
+    assert s["max_displacement"] >= 0.03
+
+
+@pytest.mark.parametrize("patch, key, line, text", [
+    (("[solver]\n", "[solver]\nfoo = 1\n"), "solver.foo", 17, "unknown key 'foo'"),
+    (("mu = 1000.0", 'mu = "soft"'), "material[0].mu", 12, "expected number"),
+    (('type = "neo-hookean"', 'type = "rubber"'), "material[0].type", 11, "unknown material"),
+    (("value = 0.03", "value = 0.03\ncurve2 = 1"), "constraint[3].curve2", None, "unknown key"),
+    (("normal = [1, 0, 0] } }\n[[constraint]]\ntype = \"fix\"\ndofs = \"y\"",
+      "normal = [1, 0, 0] }, box = [[5, 5, 5], [6, 6, 6]] }\n[[constraint]]\ntype = \"fix\"\ndofs = \"y\""),
+     "constraint[0].nodes", None, "selects no node"),
+])
+def test_scene_errors_name_key_and_line(tmp_path, patch, key, line, text):
+    bad = TENSION.replace(*patch, 1)
+    assert bad != TENSION
+    p = _write(tmp_path, bad)
+    with pytest.raises(SceneError) as err:
+        load_scene(p)
+    e = err.value
+    assert e.key == key and text in str(e) and str(p) in str(e)
+    if line:
+        assert e.line == line and f":{line}" in str(e)
+    r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2 and "error" in r.output
+
+
+def test_not_toml_and_missing_file(tmp_path):
+    r = runner.invoke(app, ["run", str(_write(tmp_path, "[mesh\nfile=")), "-o", str(tmp_path)])
+    assert r.exit_code == 2 and "not valid TOML" in r.output
+    r = runner.invoke(app, ["run", str(tmp_path / "nope.toml"), "-o", str(tmp_path)])
+    assert r.exit_code == 2 and "no such scene file" in r.output
+
+
+def test_millimetre_warning(tmp_path):
+    text = """
+    [mesh]
+    primitive = "box"
+    size = [100.0, 50.0, 50.0]
+    [[material]]
+    type = "linear-elastic"
+    E = 1e4
+    nu = 0.3
+    density = 1000.0
+    """
+    sc = load_scene(_write(tmp_path, text))
+    assert any("millimetres" in w for w in sc.warnings)
+
+
+def test_time_step_above_critical_exits_2(tmp_path):
+    text = TENSION.replace("static = true", "static = false\ndt = 1.0")
+    r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2 and "exceeds the critical time step" in r.output
+
+
+def test_interrupt_keeps_frames_and_summary(tmp_path, monkeypatch):
+    """Ctrl-C in the middle of a run: the frames so far and a summary saying so are kept."""
+    from pliant import runner as run_mod
+    from pliant.tled import Solver
+
+    text = TENSION.replace("static = true", "static = false").replace("[output]",
+                                                                      "[output]\nframes = 10")
+    sc = load_scene(_write(tmp_path, text))
+    calls = {"n": 0}
+    orig = Solver.run
+
+    def flaky(self, *a, **k):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise KeyboardInterrupt
+        return orig(self, *a, **k)
+
+    monkeypatch.setattr(Solver, "run", flaky)
+    s = run_mod.run_scene(sc, tmp_path / "o", progress=False)
+    assert s["interrupted"] and s["frames"] == 4
+    saved = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert saved["interrupted"] and (tmp_path / "o" / "result.pvd").read_text().count("<DataSet") == 4
