@@ -22,6 +22,15 @@ console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
 
 
+def _add_mesh_commands():
+    from .cli_mesh import mesh_app
+
+    app.add_typer(mesh_app, name="mesh")
+
+
+_add_mesh_commands()
+
+
 def _fail(e: Exception, code: int) -> None:
     err_console.print(f"[bold red]error:[/] {e}", highlight=False)
     raise typer.Exit(code)

@@ -1,0 +1,168 @@
+"""`pliant mesh ...`: the mesh pipeline on the command line. Bad input exits with code 2."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import typer
+from rich.console import Console
+
+from .errors import InputError, PliantError
+
+mesh_app = typer.Typer(no_args_is_help=True, add_completion=False,
+                       help="Mesh pipeline: simplify, subdivide, repair, check, tetrahedralize, quality.")
+console = Console(soft_wrap=True)
+err = Console(stderr=True, soft_wrap=True)
+
+
+def _guard(fn):
+    import functools
+
+    @functools.wraps(fn)
+    def wrapper(*a, **k):
+        try:
+            return fn(*a, **k)
+        except InputError as e:
+            err.print(f"[bold red]error:[/] {e}", highlight=False)
+            raise typer.Exit(2)
+        except PliantError as e:
+            err.print(f"[bold red]error:[/] {e}", highlight=False)
+            raise typer.Exit(1)
+    return wrapper
+
+
+@mesh_app.command("simplify")
+@_guard
+def simplify_cmd(inp: Path, out: Path,
+                 target_faces: Optional[int] = typer.Option(None, "--target-faces", help="Faces to keep."),
+                 ratio: Optional[float] = typer.Option(None, "--ratio", help="Fraction of faces to keep.")):
+    """QEM simplification (Garland–Heckbert, via fast-simplification)."""
+    from .mesh import read_surface, simplify, write_surface
+
+    V, F = read_surface(inp)
+    t = time.perf_counter()
+    Vs, Fs = simplify(V, F, target_faces=target_faces, ratio=ratio)
+    write_surface(out, Vs, Fs)
+    console.print(f"{len(V):,} vertices / {len(F):,} faces → {len(Vs):,} / {len(Fs):,} in "
+                  f"{time.perf_counter() - t:.2f} s: {out}")
+
+
+@mesh_app.command("subdivide")
+@_guard
+def subdivide_cmd(inp: Path, out: Path, levels: int = typer.Option(1, "--levels", help="Levels.")):
+    """Loop subdivision (with Loop's boundary rules, via trimesh)."""
+    from .mesh import read_surface, subdivide_loop, write_surface
+
+    V, F = read_surface(inp)
+    Vs, Fs = subdivide_loop(V, F, levels)
+    write_surface(out, Vs, Fs)
+    console.print(f"{len(V):,} vertices → {len(Vs):,} vertices, {len(Fs):,} faces: {out}")
+
+
+@mesh_app.command("check")
+@_guard
+def check_cmd(inp: Path, as_json: bool = typer.Option(False, "--json")):
+    """Watertightness, holes, non-manifold edges, self-intersections, degenerate faces, winding,
+    bodies. Exit code 0 if clean, 1 if problems were found."""
+    from .mesh import check_surface, read_surface
+
+    V, F = read_surface(inp)
+    rep = check_surface(V, F)
+    if as_json:
+        typer.echo(json.dumps(rep.as_dict(), indent=2))
+    else:
+        console.print(f"{inp}: {rep.vertices:,} vertices, {rep.faces:,} faces, {rep.bodies} body/bodies")
+        console.print("  ok" if rep.ok else "  problems: " + "; ".join(rep.problems))
+    raise typer.Exit(0 if rep.ok else 1)
+
+
+@mesh_app.command("repair")
+@_guard
+def repair_cmd(inp: Path, out: Path,
+               keep_largest: bool = typer.Option(False, help="Keep only the largest body.")):
+    """Fill holes, fix winding, drop fragments; refuse with the reason where it cannot."""
+    from .mesh import check_surface, read_surface, repair_surface, write_surface
+
+    V, F = read_surface(inp)
+    Vr, Fr, actions = repair_surface(V, F, keep_largest=keep_largest)
+    write_surface(out, Vr, Fr)
+    rep = check_surface(Vr, Fr)
+    console.print(f"{out}: " + ("; ".join(actions) or "nothing to repair"))
+    if rep.self_intersections:
+        console.print(f"  note: {rep.self_intersections} self-intersecting face pairs remain; "
+                      "tetrahedralize handles them (fTetWild's envelope)")
+
+
+@mesh_app.command("tetrahedralize")
+@_guard
+def tetrahedralize_cmd(inp: Path, out: Path,
+                       edge_length: Optional[float] = typer.Option(None, help="Target tet edge [m]."),
+                       max_volume: Optional[float] = typer.Option(None, help="Target tet volume [m³]."),
+                       target_tets: int = typer.Option(20000, help="Tets wanted when no size is given."),
+                       quality: Optional[float] = typer.Option(
+                           None, help="Refuse if the worst radius–edge ratio exceeds this."),
+                       repair: bool = typer.Option(True, help="Repair the surface first.")):
+    """Surface → positively oriented tet mesh (.vtu) with surface nodes and faces marked."""
+    import meshio
+
+    from .mesh import read_surface, surface_to_tets, tet_quality
+    from .view.png import boundary_faces
+
+    V, F = read_surface(inp)
+    if max_volume is not None:
+        if not max_volume > 0:
+            raise InputError("--max-volume must be > 0 [m^3]")
+        edge_length = (6 * np.sqrt(2) * max_volume) ** (1 / 3)  # regular tet of that volume
+    X, T, info = surface_to_tets(V, F, edge_length=edge_length, target_tets=target_tets,
+                                 repair=repair, log=console.print)
+    q = tet_quality(X, T)
+    if quality is not None and q["radius_edge"].max() > quality:
+        raise PliantError(f"worst radius–edge ratio {q['radius_edge'].max():.2f} exceeds --quality "
+                          f"{quality}")
+    faces, _ = boundary_faces(T)
+    surf = np.zeros(len(X), np.int8)
+    surf[np.unique(faces)] = 1
+    tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
+    meshio.write(tmp, meshio.Mesh(X, [("tetra", T), ("triangle", faces)],
+                                  point_data={"surface_node": surf},
+                                  cell_data={"surface_face": [np.zeros(len(T), np.int8),
+                                                              np.ones(len(faces), np.int8)]}))
+    tmp.replace(out)
+    console.print(f"{out}: {len(X):,} nodes, {len(T):,} tets, {len(faces):,} surface faces")
+
+
+@mesh_app.command("quality")
+@_guard
+def quality_cmd(inp: Path,
+                png: Optional[Path] = typer.Option(None, help="Histogram picture."),
+                E: float = typer.Option(3000.0, "--E", help="Young's modulus for Δt [Pa]."),
+                nu: float = typer.Option(0.45, "--nu", help="Poisson's ratio for Δt."),
+                density: float = typer.Option(1000.0, help="Density for Δt [kg/m³]."),
+                as_json: bool = typer.Option(False, "--json")):
+    """Per-tet radius–edge ratio, dihedral angles, volume and critical time step: summary + PNG."""
+    from .io.mesh import read_volume_mesh
+    from .materials import LinearElastic
+    from .mesh import critical_time_steps, quality_summary, tet_quality
+    from .mesh.quality import quality_histogram
+
+    X, T, _ = read_volume_mesh(inp)
+    q = tet_quality(X, T)
+    dt = critical_time_steps(X, T, LinearElastic(E=E, nu=nu), density)
+    s = quality_summary(q, dt)
+    if png:
+        quality_histogram(png, q, dt)
+    if as_json:
+        typer.echo(json.dumps(s, indent=2))
+        return
+    console.print(f"{inp}: {s['tets']:,} tets, {s['inverted']} inverted, "
+                  f"{s['slivers_min_dihedral_below_5deg']} slivers (min dihedral < 5°)")
+    for k in ("radius_edge", "min_dihedral", "max_dihedral", "volume"):
+        v = s[k]
+        console.print(f"  {k:13s} min {v['min']:.4g}  median {v['median']:.4g}  max {v['max']:.4g}")
+    d = s["dt_critical"]
+    console.print(f"  critical Δt: {d['min']:.3g} s (element {d['element']}), median {d['median']:.3g}"
+                  f" s: the worst element costs {d['cost_factor']:.1f}× the steps")

@@ -1,0 +1,99 @@
+"""Tetrahedron quality: radius–edge ratio, dihedral angles, volume, and the critical time step each
+element implies for a material (the worst element sets the explicit solver's cost)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _core
+
+
+def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
+    """Per tet: ``volume`` [m³], ``radius_edge`` (circumradius / shortest edge; √6/4 ≈ 0.612 for
+    the regular tet), ``min_dihedral`` and ``max_dihedral`` [degrees] (70.53 for the regular tet),
+    ``min_altitude`` [m] (the length in the stable time step)."""
+    X = np.ascontiguousarray(nodes, float)
+    T = np.ascontiguousarray(tets, np.int32)
+    vol, alt = _core.tet_geometry(X, T)
+    P = X[T]
+    a, b, c = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0], P[:, 3] - P[:, 0]
+    # Circumcentre offset from P0: (|a|²(b×c) + |b|²(c×a) + |c|²(a×b)) / (2 a·(b×c)).
+    det = 2.0 * np.einsum("ij,ij->i", a, np.cross(b, c))
+    num = (np.einsum("ij,ij->i", a, a)[:, None] * np.cross(b, c) +
+           np.einsum("ij,ij->i", b, b)[:, None] * np.cross(c, a) +
+           np.einsum("ij,ij->i", c, c)[:, None] * np.cross(a, b))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        R = np.linalg.norm(num, axis=1) / np.abs(det)
+    pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+    edges = np.stack([np.linalg.norm(P[:, j] - P[:, i], axis=1) for i, j in pairs], 1)
+    # Dihedral angle at each edge from the outward normals of the two faces sharing it.
+    faces = [(1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)]  # face k is opposite corner k
+    n = np.stack([np.cross(P[:, f[1]] - P[:, f[0]], P[:, f[2]] - P[:, f[0]]) for f in faces], 1)
+    n /= np.maximum(np.linalg.norm(n, axis=2, keepdims=True), 1e-300)
+    dih = []
+    for i, j in pairs:  # edge (i, j) is shared by the faces opposite the two other corners
+        k, l = [c for c in range(4) if c not in (i, j)]
+        cosang = -np.einsum("ij,ij->i", n[:, k], n[:, l])
+        dih.append(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))))
+    dih = np.stack(dih, 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        re = R / edges.min(axis=1)
+    return {"volume": np.asarray(vol), "radius_edge": re, "min_dihedral": dih.min(axis=1),
+            "max_dihedral": dih.max(axis=1), "min_altitude": np.asarray(alt)}
+
+
+def critical_time_steps(nodes, tets, material, density: float) -> np.ndarray:
+    """Stable explicit step per element [s]: h_min / √((λ + 2μ)/ρ) (Belytschko et al. 2000, §6.3)."""
+    q = tet_quality(nodes, tets)
+    c = np.sqrt((material.lam + 2.0 * material.mu) / density)
+    return q["min_altitude"] / c
+
+
+def quality_summary(q: dict[str, np.ndarray], dt: np.ndarray | None = None) -> dict:
+    out = {"tets": int(len(q["volume"]))}
+    for k in ("volume", "radius_edge", "min_dihedral", "max_dihedral", "min_altitude"):
+        v = q[k]
+        out[k] = {"min": float(np.min(v)), "p5": float(np.percentile(v, 5)),
+                  "median": float(np.median(v)), "p95": float(np.percentile(v, 95)),
+                  "max": float(np.max(v))}
+    out["inverted"] = int((q["volume"] <= 0).sum())
+    out["slivers_min_dihedral_below_5deg"] = int((q["min_dihedral"] < 5).sum())
+    if dt is not None:
+        worst = int(np.argmin(dt))
+        out["dt_critical"] = {"min": float(dt[worst]), "element": worst,
+                              "median": float(np.median(dt)),
+                              "cost_factor": float(np.median(dt) / dt[worst])}
+    return out
+
+
+def quality_histogram(path, q: dict[str, np.ndarray], dt: np.ndarray | None = None) -> None:
+    """PNG with histograms of radius–edge ratio, dihedral angles and (optionally) critical steps."""
+    import os
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = 3 if dt is not None else 2
+    fig, ax = plt.subplots(1, n, figsize=(5 * n, 4))
+    ax[0].hist(np.clip(q["radius_edge"], 0, 5), bins=60, color="tab:blue")
+    ax[0].axvline(np.sqrt(6) / 4, color="k", ls="--", label="regular tet")
+    ax[0].set_xlabel("radius–edge ratio (clipped at 5)")
+    ax[0].legend()
+    ax[1].hist(q["min_dihedral"], bins=60, alpha=0.7, label="min")
+    ax[1].hist(q["max_dihedral"], bins=60, alpha=0.7, label="max")
+    ax[1].set_xlabel("dihedral angle [deg]")
+    ax[1].legend()
+    if dt is not None:
+        ax[2].hist(dt * 1e6, bins=60, color="tab:red")
+        ax[2].set_xlabel("critical time step [µs]")
+    for a in ax:
+        a.set_ylabel("tets")
+    fig.tight_layout()
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    fig.savefig(tmp, dpi=90)
+    plt.close(fig)
+    os.replace(tmp, path)

@@ -1,0 +1,317 @@
+"""Surface checks and repair, QEM simplification and Loop subdivision.
+
+Libraries: trimesh (MIT) for connectivity, winding and Loop subdivision; fast-simplification (MIT,
+Fast-Quadric-Mesh-Simplification, Garland–Heckbert quadric error metrics) for QEM. Hole filling
+is ours: each boundary loop is closed by a fan around a new vertex at the loop's centroid.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..errors import MeshError
+
+
+@dataclass
+class SurfaceReport:
+    """What `check_surface` found. ``ok`` means: a closed, manifold, consistently oriented,
+    single-body surface without degenerate faces."""
+
+    vertices: int
+    faces: int
+    bodies: int
+    boundary_edges: int
+    holes: int
+    non_manifold_edges: int
+    degenerate_faces: int
+    duplicate_faces: int
+    winding_consistent: bool
+    outward: bool
+    watertight: bool
+    volume: float
+    self_intersections: int | None = None
+    problems: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d["ok"] = self.ok
+        return d
+
+
+def _edges(F: np.ndarray):
+    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    uniq, count = np.unique(e, axis=0, return_counts=True)
+    return uniq, count
+
+
+def boundary_loops(F: np.ndarray) -> list[np.ndarray]:
+    """Closed loops of boundary edges (edges used by one face), as ordered vertex lists."""
+    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    key = np.sort(directed, axis=1)
+    uniq, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    b = directed[count[inv.ravel()] == 1]
+    nxt: dict[int, list[int]] = {}
+    for a, c in b:
+        nxt.setdefault(int(a), []).append(int(c))
+    loops, seen = [], set()
+    for start in list(nxt):
+        if start in seen:
+            continue
+        loop, v = [], start
+        while v not in seen and v in nxt:
+            seen.add(v)
+            loop.append(v)
+            v = nxt[v][0]
+        if len(loop) >= 3:
+            loops.append(np.array(loop))
+    return loops
+
+
+def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True) -> SurfaceReport:
+    """Watertightness, holes, non-manifold edges, degenerate and duplicate faces, winding
+    consistency and orientation, number of bodies, self-intersections (sampled exactly)."""
+    import trimesh
+
+    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    m = trimesh.Trimesh(V, F, process=False, validate=False)
+    uniq, count = _edges(F)
+    boundary = int((count == 1).sum())
+    nonman = int((count > 2).sum())
+    area = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1) / 2
+    scale = float(np.ptp(V, axis=0).max()) or 1.0
+    degenerate = int((area <= 1e-12 * scale**2).sum())
+    dup = len(F) - len(np.unique(np.sort(F, axis=1), axis=0))
+    bodies = int(len(m.split(only_watertight=False))) if len(F) else 0
+    holes = len(boundary_loops(F)) if boundary else 0
+    winding = bool(m.is_winding_consistent)
+    watertight = boundary == 0 and nonman == 0
+    volume = float(m.volume) if watertight else float("nan")
+    rep = SurfaceReport(len(V), len(F), bodies, boundary, holes, nonman, degenerate, dup, winding,
+                        bool(watertight and volume > 0), watertight, volume)
+    if self_intersections and nonman == 0:
+        rep.self_intersections = count_self_intersections(V, F)
+    if boundary:
+        rep.problems.append(f"{holes} hole(s) ({boundary} boundary edges)")
+    if nonman:
+        rep.problems.append(f"{nonman} non-manifold edge(s)")
+    if degenerate:
+        rep.problems.append(f"{degenerate} degenerate face(s)")
+    if dup:
+        rep.problems.append(f"{dup} duplicate face(s)")
+    if not winding:
+        rep.problems.append("inconsistent winding")
+    elif watertight and volume <= 0:
+        rep.problems.append("faces oriented inward")
+    if bodies > 1:
+        rep.problems.append(f"{bodies} separate bodies")
+    if rep.self_intersections:
+        rep.problems.append(f"{rep.self_intersections} self-intersecting face pair(s)")
+    return rep
+
+
+def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_000_000) -> int:
+    """Number of pairs of faces that share no vertex and intersect (Möller 1997 interval test on
+    candidate pairs from a uniform grid over face bounding boxes)."""
+    tri = V[F]
+    lo, hi = tri.min(axis=1), tri.max(axis=1)
+    h = float(np.median(hi - lo).max()) * 2 or 1.0
+    origin = lo.min(axis=0)
+    cl = np.floor((lo - origin) / h).astype(np.int64)
+    ch = np.floor((hi - origin) / h).astype(np.int64)
+    cells, owners = [], []
+    for i in range(len(F)):
+        r = [np.arange(cl[i, d], ch[i, d] + 1) for d in range(3)]
+        g = np.stack(np.meshgrid(*r, indexing="ij"), -1).reshape(-1, 3)
+        cells.append(g)
+        owners.append(np.full(len(g), i))
+    cells = np.concatenate(cells)
+    owners = np.concatenate(owners)
+    key = (cells[:, 0] * 73856093) ^ (cells[:, 1] * 19349663) ^ (cells[:, 2] * 83492791)
+    order = np.argsort(key, kind="stable")
+    key, owners = key[order], owners[order]
+    starts = np.nonzero(np.r_[True, key[1:] != key[:-1]])[0]
+    ends = np.r_[starts[1:], len(key)]
+    pairs = []
+    for s, e in zip(starts, ends):
+        if e - s > 1:
+            o = owners[s:e]
+            a, b = np.triu_indices(len(o), 1)
+            pairs.append(np.stack([o[a], o[b]], 1))
+    if not pairs:
+        return 0
+    P = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0)
+    P = P[P[:, 0] != P[:, 1]][:max_pairs]
+    share = (F[P[:, 0]][:, :, None] == F[P[:, 1]][:, None, :]).any(axis=(1, 2))
+    P = P[~share]
+    overlap = np.all((lo[P[:, 0]] <= hi[P[:, 1]]) & (lo[P[:, 1]] <= hi[P[:, 0]]), axis=1)
+    P = P[overlap]
+    return int(_tri_tri_intersect(tri[P[:, 0]], tri[P[:, 1]]).sum())
+
+
+def _tri_tri_intersect(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Vectorized triangle–triangle intersection test for non-coplanar pairs (Möller 1997)."""
+    def plane(T):
+        n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+        return n, -np.einsum("ij,ij->i", n, T[:, 0])
+
+    nA, dA = plane(A)
+    nB, dB = plane(B)
+    sB = np.einsum("ikj,ij->ik", B, nA) + dA[:, None]
+    sA = np.einsum("ikj,ij->ik", A, nB) + dB[:, None]
+    eps = 1e-12 * (np.abs(sA).max(axis=1) + np.abs(sB).max(axis=1) + 1e-300)
+    sB = np.where(np.abs(sB) < eps[:, None], 0, sB)
+    sA = np.where(np.abs(sA) < eps[:, None], 0, sA)
+    sep = (np.all(sB > 0, 1) | np.all(sB < 0, 1) | np.all(sA > 0, 1) | np.all(sA < 0, 1))
+    coplanar = np.all(sB == 0, 1)
+    D = np.cross(nA, nB)
+
+    def interval(T, s, Dc):
+        p = np.einsum("ikj,ij->ik", T, Dc)
+        out = np.empty((len(T), 2))
+        for i in range(len(T)):
+            si, pi = s[i], p[i]
+            ts = []
+            for a, b in ((0, 1), (1, 2), (2, 0)):
+                if si[a] == 0:
+                    ts.append(pi[a])
+                if si[a] * si[b] < 0:
+                    ts.append(pi[a] + (pi[b] - pi[a]) * si[a] / (si[a] - si[b]))
+            out[i] = (min(ts), max(ts)) if ts else (np.inf, -np.inf)
+        return out
+
+    res = np.zeros(len(A), bool)
+    cand = np.nonzero(~sep & ~coplanar)[0]
+    if cand.size:
+        ia = interval(A[cand], sA[cand], D[cand])
+        ib = interval(B[cand], sB[cand], D[cand])
+        tol = 1e-12 * (np.abs(ia).max(axis=1) + np.abs(ib).max(axis=1))
+        res[cand] = (ia[:, 0] < ib[:, 1] - tol) & (ib[:, 0] < ia[:, 1] - tol)
+    return res
+
+
+def fill_loop(V: np.ndarray, loop: np.ndarray, existing_edges: set | None = None) -> np.ndarray:
+    """Minimum-area triangulation of a boundary loop (vertex indices in boundary-edge order):
+    W(i, j) = min_m W(i, m) + W(m, j) + area(i, m, j), never using as a diagonal an edge that the
+    surface already has (that would make it non-manifold). Faces are oriented to continue the
+    surface (each boundary edge a → b is used as b → a). Returns faces (len(loop) − 2, 3)."""
+    P = V[loop]
+    n = len(loop)
+    W = np.zeros((n, n))
+    best = np.zeros((n, n), dtype=np.int64)
+    existing = existing_edges or set()
+    for L in range(2, n):
+        for i in range(0, n - L):
+            j = i + L
+            if L < n - 1 and (min(loop[i], loop[j]), max(loop[i], loop[j])) in existing:
+                W[i, j] = np.inf
+                continue
+            m = np.arange(i + 1, j)
+            area = 0.5 * np.linalg.norm(np.cross(P[m] - P[i], P[j] - P[i]), axis=1)
+            cost = W[i, m] + W[m, j] + area
+            k = int(np.argmin(cost))
+            W[i, j], best[i, j] = cost[k], m[k]
+    faces, stack = [], [(0, n - 1)]
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2:
+            continue
+        m = best[i, j]
+        faces.append((loop[j], loop[m], loop[i]))
+        stack += [(i, m), (m, j)]
+    return np.array(faces, dtype=np.int64)
+
+
+def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
+                   keep_largest: bool = False) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Merge duplicate vertices, drop degenerate and duplicate faces, fill holes (centroid fans),
+    make winding consistent and outward. Returns (V, F, actions). Raises MeshError naming the
+    reason when the result is still not a closed manifold (e.g. non-manifold edges)."""
+    import trimesh
+
+    actions = []
+    m = trimesh.Trimesh(np.asarray(V, float), np.asarray(F, np.int64), process=True, validate=True)
+    if len(m.vertices) < len(V):
+        actions.append(f"merged {len(V) - len(m.vertices)} duplicate/unused vertices")
+    if len(m.faces) < len(F):
+        actions.append(f"removed {len(F) - len(m.faces)} degenerate/duplicate faces")
+    if len(m.faces) == 0:
+        raise MeshError("repair: no valid faces left")
+    parts = m.split(only_watertight=False)
+    if len(parts) > 1:  # drop fragments: bodies with under 1 % of the faces
+        big = [p for p in parts if len(p.faces) >= 0.01 * len(m.faces)]
+        if len(big) < len(parts):
+            actions.append(f"dropped {len(parts) - len(big)} fragment(s) of "
+                           f"{sum(len(p.faces) for p in parts) - sum(len(p.faces) for p in big)} faces")
+        parts = big
+        m = trimesh.util.concatenate(parts) if len(parts) > 1 else parts[0]
+    if len(parts) > 1:
+        if not keep_largest:
+            raise MeshError(f"repair: {len(parts)} separate bodies; simulate them as separate "
+                            "meshes, or keep the largest (--keep-largest)")
+        m = max(parts, key=lambda p: len(p.faces))
+        actions.append(f"kept the largest of {len(parts)} bodies")
+    Vr, Fr = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    _, count = _edges(Fr)
+    if (count > 2).any():
+        raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than two "
+                        "faces); cannot repair automatically")
+    if fill_holes:
+        loops = boundary_loops(Fr)
+        if loops:
+            uniq, _ = _edges(Fr)
+            existing = set(map(tuple, uniq.tolist()))
+            Fr = np.concatenate([Fr] + [fill_loop(Vr, loop, existing) for loop in loops])
+            actions.append(f"filled {len(loops)} hole(s) ({sum(len(l) for l in loops)} boundary "
+                           "edges) by minimum-area triangulation")
+    m = trimesh.Trimesh(Vr, Fr, process=False)
+    if not m.is_winding_consistent:
+        trimesh.repair.fix_winding(m)
+        actions.append("made winding consistent")
+    if m.is_watertight and m.volume < 0:
+        m.invert()
+        actions.append("flipped faces outward")
+    rep = check_surface(m.vertices, m.faces, self_intersections=False)
+    if not rep.watertight or not rep.winding_consistent:
+        raise MeshError(f"repair: still not a closed, consistently oriented surface after "
+                        f"repair ({'; '.join(rep.problems)})")
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64), actions
+
+
+def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,
+             ratio: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """QEM simplification (Garland & Heckbert 1997) to ``target_faces`` faces or a ``ratio`` of
+    them, through fast-simplification."""
+    import fast_simplification
+
+    if (target_faces is None) == (ratio is None):
+        raise MeshError("simplify: give exactly one of target_faces or ratio")
+    if ratio is not None:
+        if not 0 < ratio <= 1:
+            raise MeshError(f"simplify: ratio = {ratio!r}; expected 0 < ratio <= 1")
+        target_faces = int(round(ratio * len(F)))
+    if target_faces < 4:
+        raise MeshError(f"simplify: target of {target_faces} faces; expected >= 4")
+    if target_faces >= len(F):
+        return np.asarray(V, float), np.asarray(F, np.int64)
+    Vs, Fs = fast_simplification.simplify(np.asarray(V, np.float32), np.asarray(F, np.int32),
+                                          target_reduction=1.0 - target_faces / len(F), agg=7)
+    return np.asarray(Vs, float), np.asarray(Fs, np.int64)
+
+
+def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Loop subdivision (Loop 1987) with boundary rules, ``levels`` times (trimesh)."""
+    import trimesh
+
+    if levels < 0:
+        raise MeshError(f"subdivide: levels = {levels}; expected >= 0")
+    if levels == 0:
+        return np.asarray(V, float), np.asarray(F, np.int64)
+    Vs, Fs = trimesh.remesh.subdivide_loop(np.asarray(V, float), np.asarray(F, np.int64),
+                                           iterations=int(levels))
+    return np.asarray(Vs, float), np.asarray(Fs, np.int64)
