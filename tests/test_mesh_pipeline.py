@@ -29,38 +29,51 @@ def _euler(F):
 
 
 def test_qem_simplification_of_the_study_bunny():
-    """Bunny 35,947 vertices → about 3,596 and 362 (the study's figures), staying on the surface."""
+    """Bunny 35,947 vertices → 3,596 and 362 (the study's figures), staying on the surface. The
+    scan is repaired first (holes closed): a closed genus-0 surface of F faces has F/2 + 2
+    vertices, so the targets are 7,188 and 720 faces."""
     from scipy.spatial import cKDTree
 
     V, F = pl.mesh.read_surface(shared("stanford-bunny.obj"))
     assert (len(V), len(F)) == (35947, 69451)  # the published scan
     diag = np.linalg.norm(np.ptp(V, axis=0))
     tree = cKDTree(V)
+    Vr, Fr, _ = pl.mesh.repair_surface(V, F)
     for target_v in (3596, 362):
-        # A mesh with h holes of B boundary edges has about F/2 vertices: aim the faces at 2 V.
-        Vs, Fs = pl.mesh.simplify(V, F, target_faces=2 * target_v)
-        assert abs(len(np.unique(Fs)) - target_v) <= 0.03 * target_v
+        Vs, Fs = pl.mesh.simplify(Vr, Fr, target_faces=2 * target_v - 4)
+        assert len(Vs) == target_v
+        rep = pl.mesh.check_surface(Vs, Fs, self_intersections=False)
+        assert rep.watertight and rep.winding_consistent  # manifold kept
         # Simplified vertices stay near the original surface (nearest original vertex; the scan's
         # vertex spacing is ~1e-3 of the diagonal): within 1 % of the diagonal.
-        d, _ = tree.query(Vs[np.unique(Fs)])
+        d, _ = tree.query(Vs)
         assert np.percentile(d, 99) < 0.01 * diag
 
 
-def test_loop_subdivision_counts_follow_euler():
-    """Loop subdivision adds one vertex per edge: V' = V + E, F' = 4F (closed or open)."""
+def test_simplify_open_scan_keeps_its_boundary():
     V, F = pl.mesh.read_surface(shared("stanford-bunny.obj"))
-    V, F = pl.mesh.simplify(V, F, target_faces=2 * 362)
-    used = np.unique(F)
-    remap = np.full(len(V), -1)
-    remap[used] = np.arange(used.size)
-    V, F = V[used], remap[F]
+    Vs, Fs = pl.mesh.simplify(V, F, target_faces=7000)
+    before = pl.mesh.check_surface(V, F, self_intersections=False)
+    after = pl.mesh.check_surface(Vs, Fs, self_intersections=False)
+    assert after.non_manifold_edges == 0
+    assert after.boundary_edges == before.boundary_edges and after.holes == before.holes
+
+
+def test_loop_subdivision_counts_follow_euler():
+    """Loop subdivision adds one vertex per edge: V' = V + E, F' = 4F. On the closed 362-vertex
+    bunny V' = 4V − 6: 1,442 / 5,762 / 23,042 (the study's 1,416 / 5,603 / 22,293 fit V' = 4V − 3 − B
+    for a mesh with one hole of B = 29 edges, B doubling each level)."""
+    V, F = pl.mesh.read_surface(shared("stanford-bunny.obj"))
+    V, F, _ = pl.mesh.repair_surface(V, F)
+    V, F = pl.mesh.simplify(V, F, target_faces=720)
     counts = [len(V)]
+    Vp, Fp = V, F
     for level in (1, 2, 3):
         Vs, Fs = pl.mesh.subdivide_loop(V, F, level)
-        Vp, Fp = (V, F) if level == 1 else pl.mesh.subdivide_loop(V, F, level - 1)
         assert len(Vs) == len(Vp) + _euler(Fp) and len(Fs) == 4 * len(Fp)
         counts.append(len(Vs))
-    print("Loop subdivision of the bunny:", counts, "(study: 362 → 1,416 / 5,603 / 22,293)")
+        Vp, Fp = Vs, Fs
+    assert counts == [362, 1442, 5762, 23042]
 
 
 def test_regular_tet_quality_and_time_step():
@@ -102,11 +115,18 @@ def test_open_scans_become_valid_tet_meshes(name):
     q = pl.mesh.tet_quality(X, T)
     assert q["volume"].min() > 0 and 5000 < len(T) < 200_000
     assert 0.9 <= info["volume_ratio"] <= 1.1
-    # The tet mesh's boundary is a closed 2-manifold: every boundary edge in exactly two faces.
+    # A valid tet mesh: no face in more than two tets, one face-connected body, and a closed
+    # boundary (every boundary edge in an even number of boundary faces).
+    from pliant.mesh.tetra import largest_component
     from pliant.view.png import boundary_faces
 
+    faces = np.sort(np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]],
+                                    T[:, [0, 1, 2]]]), axis=1)
+    assert np.unique(faces, axis=0, return_counts=True)[1].max() <= 2
+    assert len(largest_component(T)) == len(T)
     bf, _ = boundary_faces(T)
-    assert pl.mesh.check_surface(X, bf, self_intersections=False).watertight
+    e = np.sort(np.concatenate([bf[:, [0, 1]], bf[:, [1, 2]], bf[:, [2, 0]]]), axis=1)
+    assert np.all(np.unique(e, axis=0, return_counts=True)[1] % 2 == 0)
     b = pl.ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(pl.NeoHookean(E=5e3, nu=0.45), density=1000.0)

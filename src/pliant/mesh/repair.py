@@ -250,6 +250,11 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
                            f"{sum(len(p.faces) for p in parts) - sum(len(p.faces) for p in big)} faces")
         parts = big
         m = trimesh.util.concatenate(parts) if len(parts) > 1 else parts[0]
+        m.merge_vertices()
+    _, count = _edges(np.asarray(m.faces))
+    if (count > 2).any():
+        raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than two "
+                        "faces); cannot repair automatically")
     if len(parts) > 1:
         if not keep_largest:
             raise MeshError(f"repair: {len(parts)} separate bodies; simulate them as separate "
@@ -257,10 +262,6 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
         m = max(parts, key=lambda p: len(p.faces))
         actions.append(f"kept the largest of {len(parts)} bodies")
     Vr, Fr = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
-    _, count = _edges(Fr)
-    if (count > 2).any():
-        raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than two "
-                        "faces); cannot repair automatically")
     if fill_holes:
         loops = boundary_loops(Fr)
         if loops:
@@ -284,9 +285,12 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
 
 
 def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,
-             ratio: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+             ratio: float | None = None, preserve_boundary: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """QEM simplification (Garland & Heckbert 1997) to ``target_faces`` faces or a ``ratio`` of
-    them, through fast-simplification."""
+    them, through fast-simplification. Open boundaries are kept (their vertices are not collapsed)
+    unless ``preserve_boundary=False``; the result is checked for manifoldness, and a collapse
+    order that made an edge non-manifold is retried less aggressively before giving up.
+    (A closed surface of genus 0 with F faces has F/2 + 2 vertices.)"""
     import fast_simplification
 
     if (target_faces is None) == (ratio is None):
@@ -299,9 +303,20 @@ def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,
         raise MeshError(f"simplify: target of {target_faces} faces; expected >= 4")
     if target_faces >= len(F):
         return np.asarray(V, float), np.asarray(F, np.int64)
-    Vs, Fs = fast_simplification.simplify(np.asarray(V, np.float32), np.asarray(F, np.int32),
-                                          target_reduction=1.0 - target_faces / len(F), agg=7)
-    return np.asarray(Vs, float), np.asarray(Fs, np.int64)
+    _, count = _edges(np.asarray(F))
+    open_mesh = bool((count == 1).any())
+    for agg in (7.0, 3.0, 1.0):
+        Vs, Fs = fast_simplification.simplify(
+            np.asarray(V, np.float32), np.asarray(F, np.int32), target_count=int(target_faces),
+            agg=agg, preserve_border=bool(preserve_boundary and open_mesh))
+        Fs = np.asarray(Fs, np.int64)
+        if not (_edges(Fs)[1] > 2).any():
+            used = np.unique(Fs)  # drop vertices no face uses any more
+            remap = np.full(len(Vs), -1, dtype=np.int64)
+            remap[used] = np.arange(used.size)
+            return np.asarray(Vs, float)[used], remap[Fs]
+    raise MeshError("simplify: every collapse order tried made an edge non-manifold; repair the "
+                    "surface first (pliant mesh repair) or simplify less")
 
 
 def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.ndarray, np.ndarray]:

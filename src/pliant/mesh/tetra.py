@@ -44,6 +44,28 @@ def _ftetwild():
     return mod
 
 
+def largest_component(tets: np.ndarray) -> np.ndarray:
+    """The tets of the largest face-connected component (fTetWild can leave small islands of tets
+    inside thin or self-intersecting regions of a scan)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    M = len(tets)
+    faces = np.sort(np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]],
+                                    tets[:, [0, 1, 2]]]), axis=1)
+    owner = np.tile(np.arange(M), 4)
+    _, inv = np.unique(faces, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    order = np.argsort(inv, kind="stable")
+    same = inv[order][1:] == inv[order][:-1]
+    a, b = owner[order][:-1][same], owner[order][1:][same]
+    n, label = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(M, M)),
+                                    directed=False)
+    if n == 1:
+        return tets
+    return tets[label == np.argmax(np.bincount(label))]
+
+
 def cache_dir() -> Path:
     d = Path(os.environ.get("PLIANT_CACHE", Path.home() / ".cache" / "pliant"))
     d.mkdir(parents=True, exist_ok=True)
@@ -68,7 +90,8 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
     if not diag > 0:
         raise MeshError("tetrahedralize: the surface has zero extent")
     el = float(edge_length) if edge_length else edge_length_fac * diag
-    key = hashlib.sha256(V.tobytes() + F.tobytes() + repr((el, epsilon, optimize)).encode()).hexdigest()[:24]
+    key = hashlib.sha256(V.tobytes() + F.tobytes() +
+                         repr((el, epsilon, optimize, 2)).encode()).hexdigest()[:24]
     path = cache_dir() / f"tet-{key}.npz"
     if cache and path.exists():
         with np.load(path) as d:
@@ -87,6 +110,7 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
     e = nodes[tets]
     vol = np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]) / 6
     tets = tets[vol > 1e-9 * el**3]
+    tets = largest_component(tets)
     used = np.unique(tets)
     remap = np.full(len(nodes), -1, dtype=np.int64)
     remap[used] = np.arange(used.size)
