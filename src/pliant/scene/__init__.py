@@ -113,7 +113,7 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
         "file": "str", "primitive": "str", "size": "list|number", "cells": "list", "radius": "number",
         "height": "number", "major_radius": "number", "minor_radius": "number",
         "edge_length": "number", "scale": "number", "rotate": "list", "translate": "list",
-        "jitter": "number"})
+        "jitter": "number", "segments": "int", "minor_segments": "int", "target_tets": "int"})
     if ("file" in spec) == ("primitive" in spec):
         raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
     sets: dict[str, np.ndarray] = {}
@@ -141,7 +141,9 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
         try:
             if f.suffix.lower() in surface_ext:
                 V, F = pm.read_surface(f)
-                X, T = pm.tetrahedralize(V * scale, F, edge_length=el)
+                X, T, info = pm.surface_to_tets(V * scale, F, edge_length=el,
+                                                target_tets=spec.get("target_tets", 10000))
+                scene.meta["mesh_pipeline"] = info
                 scale = 1.0
             else:
                 X, T, sets = read_volume_mesh(f)
@@ -165,11 +167,16 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
             if kind == "sphere":
                 V, F = pm.primitive_surface("sphere", radius=pos("radius"))
             elif kind == "cylinder":
-                V, F = pm.primitive_surface("cylinder", radius=pos("radius"), height=pos("height"))
+                V, F = pm.primitive_surface("cylinder", radius=pos("radius"), height=pos("height"),
+                                            segments=spec.get("segments", 48))
             else:
                 V, F = pm.primitive_surface("torus", major_radius=pos("major_radius"),
-                                            minor_radius=pos("minor_radius"))
-            X, T = pm.tetrahedralize(V, F, edge_length=el)
+                                            minor_radius=pos("minor_radius"),
+                                            segments=spec.get("segments", 48),
+                                            minor_segments=spec.get("minor_segments", 24))
+            X, T, info = pm.surface_to_tets(V, F, edge_length=el,
+                                            target_tets=spec.get("target_tets", 10000))
+            scene.meta["mesh_pipeline"] = info
         else:
             raise ctx.error("mesh.primitive", f"unknown primitive {kind!r}; expected box, sphere, "
                             "cylinder or torus")
