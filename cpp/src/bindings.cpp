@@ -111,7 +111,11 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 std::vector<double> curve_t0, std::vector<double> curve_t1,
                 std::vector<index_t> curve_table_begin, std::vector<index_t> curve_table_count,
                 std::vector<double> table_t, std::vector<double> table_v, std::vector<double> gravity,
-                index_t gravity_curve, int threads) {
+                index_t gravity_curve, std::vector<index_t> contact_nodes,
+                std::vector<int> tool_kind, std::vector<double> tool_params,
+                std::vector<double> tool_mu, std::vector<std::vector<double>> tool_keys,
+                std::vector<index_t> tool_grid_dims, std::vector<std::vector<double>> tool_grids,
+                int threads) {
                  ModelInput in;
                  in.X = X.data();
                  in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -135,6 +139,21 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  in.table_v = std::move(table_v);
                  for (int d = 0; d < 3; ++d) in.gravity[d] = gravity[d];
                  in.gravity_curve = gravity_curve;
+                 in.contact_nodes = std::move(contact_nodes);
+                 for (std::size_t k = 0; k < tool_kind.size(); ++k) {
+                     RigidTool t{};
+                     t.kind = static_cast<ToolKind>(tool_kind[k]);
+                     for (int c = 0; c < 4; ++c) t.p[c] = tool_params[4 * k + c];
+                     t.mu_s = tool_mu[2 * k];
+                     t.mu_k = tool_mu[2 * k + 1];
+                     t.key_begin = static_cast<index_t>(in.tool_keys.size() / 8);
+                     t.key_count = static_cast<index_t>(tool_keys[k].size() / 8);
+                     in.tool_keys.insert(in.tool_keys.end(), tool_keys[k].begin(), tool_keys[k].end());
+                     t.grid_begin = static_cast<index_t>(in.tool_grid.size());
+                     for (int c = 0; c < 3; ++c) t.grid_dims[c] = tool_grid_dims[3 * k + c];
+                     in.tool_grid.insert(in.tool_grid.end(), tool_grids[k].begin(), tool_grids[k].end());
+                     in.tools.push_back(t);
+                 }
                  new (self) E(in, threads);
              })
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
@@ -181,6 +200,30 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
             return nb::make_tuple(to_numpy(std::move(J), {M}), to_numpy(std::move(W), {M}),
                                   to_numpy(std::move(PK2), {M, 6}), to_numpy(std::move(sig), {M, 6}),
                                   to_numpy(std::move(Eg), {M, 6}));
+        })
+        .def("set_tool_keys", [](E& e, std::vector<std::vector<double>> keys) {
+            // Replace every tool's keyframes (8 numbers each: t, position, quaternion w x y z).
+            if (keys.size() != e.model.tools.size()) throw nb::value_error("one key list per tool");
+            e.model.tool_keys.clear();
+            for (std::size_t k = 0; k < keys.size(); ++k) {
+                if (keys[k].empty() || keys[k].size() % 8) throw nb::value_error("keys: 8 numbers each");
+                e.model.tools[k].key_begin = static_cast<index_t>(e.model.tool_keys.size() / 8);
+                e.model.tools[k].key_count = static_cast<index_t>(keys[k].size() / 8);
+                e.model.tool_keys.insert(e.model.tool_keys.end(), keys[k].begin(), keys[k].end());
+            }
+        })
+        .def("tool_history", [](const E& e) {
+            std::vector<double> h = e.solver.tool_history();
+            const size_t nt = e.model.tools.size();
+            const size_t steps = nt ? h.size() / (6 * nt) : 0;
+            return to_numpy(std::move(h), {steps, nt, 6});
+        })
+        .def("contact_state", [](const E& e) {
+            std::vector<index_t> nodes = e.model.contact_nodes, tool = e.solver.contact_tool();
+            std::vector<double> f = e.solver.contact_force();
+            const size_t n = nodes.size();
+            return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(tool), {n}),
+                                  to_numpy(std::move(f), {n, 3}));
         })
         .def("internal_forces", [](E& e, const S& s) {
             std::vector<T> f = e.solver.internal_forces(s.s);

@@ -18,6 +18,48 @@ CpuSolver<T>::CpuSolver(const Model<T>& model, int threads)
     scratch_.assign(3 * static_cast<std::size_t>(m_.n_pad), T(0));
     f_node_[0] = scratch_;
     f_node_[1] = scratch_;
+    contact_force_.assign(3 * m_.contact_nodes.size(), 0.0);
+    contact_tool_.assign(m_.contact_nodes.size(), -1);
+    pose0_.resize(m_.tools.size());
+    pose1_.resize(m_.tools.size());
+}
+
+// Contact kernel over the contact nodes, then the per-tool force and torque (one thread, fixed
+// order: deterministic). Inside a parallel region; hist receives 6 values per tool.
+template <class T>
+void CpuSolver<T>::contact_pass(const T* u_cur, T* u_next, double t0, double t1, double g1,
+                                double* hist) {
+    const int nt = static_cast<int>(m_.tools.size());
+#pragma omp single
+    for (int k = 0; k < nt; ++k) {
+        pose0_[k] = tool_pose(m_.tools[k], t0, m_.tool_keys.data());
+        pose1_[k] = tool_pose(m_.tools[k], t1, m_.tool_keys.data());
+    }
+    const index_t nc = static_cast<index_t>(m_.contact_nodes.size());
+#pragma omp for schedule(static)
+    for (index_t i = 0; i < nc; ++i)
+        contact_node(i, m_.contact_nodes.data(), m_.X.data(), m_.mass.data(), u_cur, m_.n_pad,
+                     m_.tools.data(), nt, pose0_.data(), pose1_.data(), m_.tool_grid.data(), g1,
+                     u_next, contact_force_.data(), contact_tool_.data());
+#pragma omp single
+    {
+        for (int k = 0; k < 6 * nt; ++k) hist[k] = 0.0;
+        const index_t P = m_.n_pad;
+        for (index_t i = 0; i < nc; ++i) {
+            const index_t k = contact_tool_[i];
+            if (k < 0) continue;
+            const index_t n = m_.contact_nodes[i];
+            const double* f = &contact_force_[3 * i];
+            double r[3];
+            for (int d = 0; d < 3; ++d) {
+                hist[6 * k + d] -= f[d];  // the tool receives the reaction
+                r[d] = m_.X[3 * n + d] + double(u_next[d * P + n]) - pose1_[k].t[d];
+            }
+            hist[6 * k + 3] -= r[1] * f[2] - r[2] * f[1];
+            hist[6 * k + 4] -= r[2] * f[0] - r[0] * f[2];
+            hist[6 * k + 5] -= r[0] * f[1] - r[1] * f[0];
+        }
+    }
 }
 
 // Kernel 1 over all blocks; called inside a parallel region (implicit barrier at the end).
@@ -109,6 +151,8 @@ RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int ch
     const double t0 = s.t;
     long done = 0;
     bool ok = true;
+    const std::size_t nt = m_.tools.size();
+    tool_history_.assign(static_cast<std::size_t>(n) * 6 * nt, 0.0);
 #pragma omp parallel num_threads(threads_)
     {
         std::vector<T> cnow(nc), cnext(nc), pf(np + 1);
@@ -124,6 +168,8 @@ RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int ch
             const double w1 = master ? omp_get_wtime() : 0.0;
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cnext.data(), it,
                       nullptr);
+            if (nt) contact_pass(v[ic]->data(), v[in]->data(), t, t + dt, double(it.g1),
+                                 tool_history_.data() + static_cast<std::size_t>(k) * 6 * nt);
             if (master) {
                 rep.elem_seconds += w1 - w0;
                 rep.node_seconds += omp_get_wtime() - w1;
@@ -171,6 +217,7 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
     double alpha = 0.0;
     long done = 0;
     bool stop = false;
+    tool_history_.assign(6 * m_.tools.size(), 0.0);  // relax keeps the last step's forces
     // Stall: the best residual has not improved by 1 % over the last 1,000 checks (round-off floor).
     double best = INFINITY;
     long best_check = 0, checks = 0;
@@ -182,6 +229,9 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
             element_pass(v[ic]->data());
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cf.data(), it,
                       f_node_[fc].data());
+            if (!m_.tools.empty())
+                contact_pass(v[ic]->data(), v[in]->data(), t_eval, t_eval, double(it.g1),
+                             tool_history_.data());
             // f_node_[fc] = f(u_cur), f_node_[1 − fc] = f(u_prev)
             if ((k + 1) % check_every == 0 && k > 0) {
 #pragma omp single
@@ -193,8 +243,14 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
                     const T* fprev = f_node_[1 - fc].data();
                     const T* lp = m_.load_patterns.data();
                     double res = 0.0, scale = 0.0, num = 0.0, den = 0.0;
+                    // Contact forces from the rigid tools are external loads at equilibrium.
+                    std::vector<double> fcon(m_.tools.empty() ? 0 : N3, 0.0);
+                    for (std::size_t c = 0; c < fcon.size() / N3 * contact_tool_.size(); ++c)
+                        if (contact_tool_[c] >= 0)
+                            for (int d = 0; d < 3; ++d)
+                                fcon[d * P + m_.contact_nodes[c]] += contact_force_[3 * c + d];
                     for (std::size_t i = 0; i < N3; ++i) {
-                        double r = 0.0;
+                        double r = fcon.empty() ? 0.0 : fcon[i];
                         for (std::size_t p = 0; p < np; ++p) r += double(pf[p]) * lp[p * N3 + i];
                         const double fm = m_.free_mask[i];
                         res += fm * (r - fcur[i]) * (r - fcur[i]);

@@ -42,6 +42,12 @@ public:
     std::vector<T> internal_forces(const State<T>& s);
 
     int threads() const { return threads_; }
+    /// Per step of the last run/relax: for each tool, the force [N] and torque [N·m] it received
+    /// (6 values, torque about the tool's position), shape (steps, tools, 6).
+    const std::vector<double>& tool_history() const { return tool_history_; }
+    /// Per contact node of the last step: tool index (−1: none) and contact force on the node [N].
+    const std::vector<index_t>& contact_tool() const { return contact_tool_; }
+    const std::vector<double>& contact_force() const { return contact_force_; }
 
 private:
     struct Buffers {
@@ -53,11 +59,15 @@ private:
     void node_pass(const Buffers& b, const T* pattern_factors, const T* cons_factors,
                    const Integrator<T>& it, T* f_node);
     bool check(const T* u_cur, double t, double blowup, RunReport& rep) const;
+    void contact_pass(const T* u_cur, T* u_next, double t0, double t1, double g1, double* hist);
     void rescale_history(State<T>& s, double dt) const;
 
     const Model<T>& m_;
     int threads_;
     std::vector<T> f_elem_, J_, scratch_, f_node_[2];
+    std::vector<double> contact_force_, tool_history_;
+    std::vector<index_t> contact_tool_;
+    std::vector<Pose> pose0_, pose1_;
 };
 
 }  // namespace pliant

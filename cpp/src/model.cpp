@@ -123,6 +123,12 @@ Model<T>::Model(const ModelInput& in) {
         ++cons_offsets[in.cons_node[i] + 1];
     }
     for (index_t n = 0; n < n_nodes; ++n) cons_offsets[n + 1] += cons_offsets[n];
+    X.assign(in.X, in.X + 3 * static_cast<std::size_t>(n_nodes));
+    contact_nodes = in.contact_nodes;
+    tools = in.tools;
+    tool_keys = in.tool_keys;
+    tool_grid = in.tool_grid;
+    if (tool_grid.empty()) tool_grid.push_back(0.0);
     curves = in.curves;
     if (curves.empty()) curves.push_back({CurveKind::Constant, 0.0, 0.0, 0, 0});
     table_t = in.table_t;

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "pliant/tled.hpp"
+#include "pliant/contact.hpp"
 
 namespace pliant {
 
@@ -41,6 +41,10 @@ struct ModelInput {
     std::vector<index_t> cons_curve;
     std::vector<LoadCurve> curves;
     std::vector<double> table_t, table_v;
+    std::vector<index_t> contact_nodes;    // surface nodes that take part in contact
+    std::vector<RigidTool> tools;
+    std::vector<double> tool_keys;         // 8 per keyframe: t, position (3), quaternion (4)
+    std::vector<double> tool_grid;         // signed-distance grids [m]
 };
 
 template <class T>
@@ -60,6 +64,10 @@ struct Model {
     std::vector<index_t> cons_offsets;          // node n's constraints: [cons_offsets[n], [n+1])
     std::vector<LoadCurve> curves;
     std::vector<double> table_t, table_v;
+    std::vector<double> X;                     // reference positions [m], AoS (N, 3)
+    std::vector<index_t> contact_nodes;
+    std::vector<RigidTool> tools;
+    std::vector<double> tool_keys, tool_grid;
     double dt_critical = 0.0;   // min over elements of h_min / c_d [s]
     index_t dt_critical_elem = -1;
 

@@ -64,6 +64,7 @@ class ModelBuilder:
         self._cons: dict[tuple[int, int], tuple[float, LoadCurve]] = {}
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
+        self.tools: list = []  # rigid tools (pliant.contact)
         self.source = "arrays"  # what the mesh came from, for error messages
 
     # --- mesh -------------------------------------------------------------------------------
@@ -181,6 +182,16 @@ class ModelBuilder:
         if gv.shape != (3,) or not np.all(np.isfinite(gv)):
             raise InputError(f"gravity = {g!r}; expected 3 finite components [m/s^2]")
         self._gravity = (gv, curve or Constant())
+
+    def add_tool(self, tool):
+        """Add a rigid tool (pliant.contact.Plane, Sphere, Capsule, Box, MeshTool): the surface
+        nodes of the body (except constrained ones) are kept out of it, with friction."""
+        from ..contact import RigidTool
+
+        if not isinstance(tool, RigidTool):
+            raise InputError(f"add_tool: {tool!r} is not a pliant.contact tool")
+        self.tools.append(tool)
+        return tool
 
     # --- finalize ---------------------------------------------------------------------------
     def finalize(self, dtype="float32", threads: int | None = None):

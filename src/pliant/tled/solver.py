@@ -27,6 +27,16 @@ class RunInfo:
 
 
 @dataclass
+class ToolHistory:
+    """Per tool: ``time`` [s] (steps,), ``force`` [N] (steps, 3), ``torque`` [N·m] (steps, 3)."""
+
+    name: str
+    time: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+
+
+@dataclass
 class RelaxInfo:
     steps: int
     residual: float  # ||r − f|| on free DOFs / ||(r, reactions)||
@@ -67,6 +77,7 @@ class Solver:
         X = model.reference_positions
         # Blow-up: any displacement beyond 100 × the body's size.
         self.blowup = 100.0 * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+        self.tool_histories: dict[int, ToolHistory] = {}
 
     def _raise(self, rep: dict):
         m, t, v = self.model, rep["t"], rep["value"]
@@ -113,12 +124,33 @@ class Solver:
             raise InputError(f"steps = {steps}; expected >= 0")
         if steps == 0:
             return RunInfo(0, state.time)
+        t0 = state.time
         rep = self.model._engine.run(state._s, steps, self.dt, self.damping, self.check_every,
                                      self.blowup)
+        self._record_tools(t0, int(rep["steps"]))
         if rep["status"]:
             self._raise(rep)
         return RunInfo(int(rep["steps"]), float(rep["t"]), float(rep["elem_seconds"]),
                        float(rep["node_seconds"]))
+
+    def _record_tools(self, t0: float, steps: int):
+        if not self.model.tools:
+            return
+        h = self.model.tool_history()[:steps]
+        t = t0 + self.dt * np.arange(1, steps + 1)
+        for k, tool in enumerate(self.model.tools):
+            H = self.tool_histories.setdefault(k, ToolHistory(tool.name, np.zeros(0), np.zeros((0, 3)),
+                                                              np.zeros((0, 3))))
+            H.time = np.concatenate([H.time, t])
+            H.force = np.concatenate([H.force, h[:, k, :3]])
+            H.torque = np.concatenate([H.torque, h[:, k, 3:]])
+
+    def tool_force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Force [N] and torque [N·m] tool k received at the last step (zeros before any step)."""
+        H = self.tool_histories.get(k)
+        if H is None or len(H.time) == 0:
+            return np.zeros(3), np.zeros(3)
+        return H.force[-1].copy(), H.torque[-1].copy()
 
     def relax(self, state: State, at_time: float | None = None, tol: float = 1e-5,
               max_steps: int = 200_000, increments: int = 1, check_every: int = 10,
@@ -145,6 +177,10 @@ class Solver:
                 self._raise(rep)
         info = RelaxInfo(steps, float(rep["residual"]), rep["residual"] < tol,
                          float(rep["damping"]))
+        if self.model.tools:  # the equilibrium contact forces
+            h = self.model.tool_history()[0]
+            self.relaxed_tool_forces = [(h[k, :3].copy(), h[k, 3:].copy())
+                                        for k in range(len(self.model.tools))]
         if strict and not info.converged:
             raise ConvergenceError(
                 f"dynamic relaxation reached residual {info.residual:.3g} after {info.steps} steps; "
@@ -198,6 +234,23 @@ class Simulation:
 
     def strain_energy(self) -> float:
         return self.model.strain_energy(self.state)
+
+    def set_tool_pose(self, k: int, position, rotation=(1.0, 0.0, 0.0, 0.0)):
+        """Drive tool k from Python (a haptic device, a viewer): it moves from its current pose to
+        this one over the next step, then stays."""
+        tool = self.model.tools[k]
+        R, p = tool.pose(self.state.time)
+        from ..contact import quat_from_matrix
+
+        t = self.state.time
+        tool.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
+        tool._fixed = False
+        tool.at(t + self.solver.dt, position, rotation)
+        self.model.set_tool_keys()
+
+    def tool_force(self, k: int = 0):
+        """(force [N], torque [N·m]) tool k received at the last step."""
+        return self.solver.tool_force(k)
 
     def save(self, path):
         self.state.save(path)
