@@ -162,3 +162,26 @@ def test_interrupt_keeps_frames_and_summary(tmp_path, monkeypatch):
     assert s["interrupted"] and s["frames"] == 4
     saved = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert saved["interrupted"] and (tmp_path / "o" / "result.pvd").read_text().count("<DataSet") == 4
+
+
+def test_scene_tools_and_errors(tmp_path):
+    """[[tool]] tables build rigid tools with keyframes; bad ones are named errors."""
+    text = TENSION.replace("[output]", """[[tool]]
+type = "capsule"
+radius = 0.005
+length = 0.04
+rotation = [90.0, 0.0, 0.0]
+mu_s = 0.3
+keyframes = [{ t = 0.0, position = [0.05, 0.05, 0.2] }, { t = 1.0, position = [0.05, 0.05, 0.11] }]
+
+[output]""")
+    sc = load_scene(_write(tmp_path, text))
+    (tool,) = sc.builder.tools
+    R, p = tool.pose(0.5)
+    assert np.allclose(p, [0.05, 0.05, 0.155]) and np.allclose(R @ [0, 0, 1], [0, -1, 0], atol=1e-12)
+    bad = text.replace('type = "capsule"', 'type = "scalpel"')
+    with pytest.raises(SceneError, match="unknown tool 'scalpel'"):
+        load_scene(_write(tmp_path, bad, "b.toml"))
+    bad = text.replace("mu_s = 0.3", "mu_s = 0.3\nmu_k = 0.5")
+    with pytest.raises(SceneError, match="mu_k <= mu_s"):
+        load_scene(_write(tmp_path, bad, "c.toml"))
