@@ -41,6 +41,7 @@ nb::dict report(const RunReport& r) {
     d["damping"] = r.damping;
     d["elem_seconds"] = r.elem_seconds;
     d["node_seconds"] = r.node_seconds;
+    d["contact_seconds"] = r.contact_seconds;
     return d;
 }
 

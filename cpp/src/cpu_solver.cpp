@@ -20,45 +20,63 @@ CpuSolver<T>::CpuSolver(const Model<T>& model, int threads)
     f_node_[1] = scratch_;
     contact_force_.assign(3 * m_.contact_nodes.size(), 0.0);
     contact_tool_.assign(m_.contact_nodes.size(), -1);
-    pose0_.resize(m_.tools.size());
-    pose1_.resize(m_.tools.size());
+    chunk_hist_.assign((m_.contact_nodes.size() / 512 + 1) * 6 * m_.tools.size(), 0.0);
 }
 
-// Contact kernel over the contact nodes, then the per-tool force and torque (one thread, fixed
-// order: deterministic). Inside a parallel region; hist receives 6 values per tool.
+// Contact kernel over the contact nodes in fixed chunks of kContactChunk nodes, each chunk
+// summing its per-tool force and torque; the chunk sums are added in chunk order by one thread.
+// Fixed chunks (not per-thread partials) keep the result independent of the thread count.
+// Inside a parallel region; hist receives 6 values per tool. One barrier.
 template <class T>
 void CpuSolver<T>::contact_pass(const T* u_cur, T* u_next, double t0, double t1, double g1,
                                 double* hist) {
+    constexpr index_t kContactChunk = 512;
     const int nt = static_cast<int>(m_.tools.size());
-#pragma omp single
+    Pose p0[8], p1[8];  // every thread evaluates the (few) poses itself: no barrier
+    std::vector<Pose> q0, q1;
+    Pose* P0 = p0;
+    Pose* P1 = p1;
+    if (nt > 8) {
+        q0.resize(nt);
+        q1.resize(nt);
+        P0 = q0.data();
+        P1 = q1.data();
+    }
     for (int k = 0; k < nt; ++k) {
-        pose0_[k] = tool_pose(m_.tools[k], t0, m_.tool_keys.data());
-        pose1_[k] = tool_pose(m_.tools[k], t1, m_.tool_keys.data());
+        P0[k] = tool_pose(m_.tools[k], t0, m_.tool_keys.data());
+        P1[k] = tool_pose(m_.tools[k], t1, m_.tool_keys.data());
     }
     const index_t nc = static_cast<index_t>(m_.contact_nodes.size());
+    const index_t chunks = (nc + kContactChunk - 1) / kContactChunk;
+    const index_t P = m_.n_pad;
 #pragma omp for schedule(static)
-    for (index_t i = 0; i < nc; ++i)
-        contact_node(i, m_.contact_nodes.data(), m_.X.data(), m_.mass.data(), u_cur, m_.n_pad,
-                     m_.tools.data(), nt, pose0_.data(), pose1_.data(), m_.tool_grid.data(), g1,
-                     u_next, contact_force_.data(), contact_tool_.data());
-#pragma omp single
-    {
-        for (int k = 0; k < 6 * nt; ++k) hist[k] = 0.0;
-        const index_t P = m_.n_pad;
-        for (index_t i = 0; i < nc; ++i) {
+    for (index_t c = 0; c < chunks; ++c) {
+        double* h = &chunk_hist_[static_cast<std::size_t>(c) * 6 * nt];
+        for (int k = 0; k < 6 * nt; ++k) h[k] = 0.0;
+        const index_t end = std::min(nc, (c + 1) * kContactChunk);
+        for (index_t i = c * kContactChunk; i < end; ++i) {
+            contact_node(i, m_.contact_nodes.data(), m_.X.data(), m_.mass.data(), u_cur, P,
+                         m_.tools.data(), nt, P0, P1, m_.tool_grid.data(), g1, u_next,
+                         contact_force_.data(), contact_tool_.data());
             const index_t k = contact_tool_[i];
             if (k < 0) continue;
             const index_t n = m_.contact_nodes[i];
             const double* f = &contact_force_[3 * i];
             double r[3];
             for (int d = 0; d < 3; ++d) {
-                hist[6 * k + d] -= f[d];  // the tool receives the reaction
-                r[d] = m_.X[3 * n + d] + double(u_next[d * P + n]) - pose1_[k].t[d];
+                h[6 * k + d] -= f[d];  // the tool receives the reaction
+                r[d] = m_.X[3 * n + d] + double(u_next[d * P + n]) - P1[k].t[d];
             }
-            hist[6 * k + 3] -= r[1] * f[2] - r[2] * f[1];
-            hist[6 * k + 4] -= r[2] * f[0] - r[0] * f[2];
-            hist[6 * k + 5] -= r[0] * f[1] - r[1] * f[0];
+            h[6 * k + 3] -= r[1] * f[2] - r[2] * f[1];
+            h[6 * k + 4] -= r[2] * f[0] - r[0] * f[2];
+            h[6 * k + 5] -= r[0] * f[1] - r[1] * f[0];
         }
+    }
+#pragma omp single nowait
+    {
+        for (int k = 0; k < 6 * nt; ++k) hist[k] = 0.0;
+        for (index_t c = 0; c < chunks; ++c)
+            for (int k = 0; k < 6 * nt; ++k) hist[k] += chunk_hist_[static_cast<std::size_t>(c) * 6 * nt + k];
     }
 }
 
@@ -168,11 +186,13 @@ RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int ch
             const double w1 = master ? omp_get_wtime() : 0.0;
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cnext.data(), it,
                       nullptr);
+            const double w2 = master ? omp_get_wtime() : 0.0;
             if (nt) contact_pass(v[ic]->data(), v[in]->data(), t, t + dt, double(it.g1),
                                  tool_history_.data() + static_cast<std::size_t>(k) * 6 * nt);
             if (master) {
                 rep.elem_seconds += w1 - w0;
-                rep.node_seconds += omp_get_wtime() - w1;
+                rep.node_seconds += w2 - w1;
+                rep.contact_seconds += omp_get_wtime() - w2;
             }
             ip = std::exchange(ic, std::exchange(in, ip));
             if ((k + 1) % check_every == 0 || k + 1 == n) {

@@ -21,6 +21,7 @@ struct RunReport {
     double residual = 0.0;  // relax: relative out-of-balance force at the end
     double damping = 0.0;   // relax: last adaptive damping coefficient α [1/s]
     double elem_seconds = 0.0, node_seconds = 0.0;  // run: wall time in kernel 1 and kernel 2
+    double contact_seconds = 0.0;                   // run: wall time in the contact kernel
 };
 
 template <class T>
@@ -65,9 +66,8 @@ private:
     const Model<T>& m_;
     int threads_;
     std::vector<T> f_elem_, J_, scratch_, f_node_[2];
-    std::vector<double> contact_force_, tool_history_;
+    std::vector<double> contact_force_, tool_history_, chunk_hist_;
     std::vector<index_t> contact_tool_;
-    std::vector<Pose> pose0_, pose1_;
 };
 
 }  // namespace pliant

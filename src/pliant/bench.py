@@ -97,3 +97,44 @@ def run_benchmark(sizes=(7456, 12584, 27918, 100_000, 1_000_000), steps: int = 8
         with open(json_path, "w") as f:
             json.dump({"backend": "cpu", "rows": [asdict(r) for r in rows]}, f, indent=2)
     return rows
+
+
+def bench_contact(steps: int = 2000, echo=print) -> list[dict]:
+    """Share of the contact kernel in the step: the demo (Spot, ground plane and sphere) and the
+    liver example pressed by a capsule. Returns one dict per case."""
+    from pathlib import Path
+
+    from .contact import Capsule
+    from .demo import DEMO_SCENE
+    from .scene import load_scene
+
+    cases = []
+    demo = load_scene(DEMO_SCENE)
+    cases.append(("demo: Spot + ground + sphere", demo))
+    liver_path = Path.cwd() / "examples" / "liver_indentation.toml"  # run from the repository
+    if not liver_path.exists():
+        echo({"case": "liver + capsule", "skipped": f"{liver_path} not found (run from the "
+              "repository root)"})
+    else:
+        liver = load_scene(liver_path)
+        tool = Capsule(0.005, 0.06, rotation=(0.7071068, 0.7071068, 0.0, 0.0), mu_s=0.2, mu_k=0.1)
+        tool.at(0.0, (-0.0554, 0.3745, 0.112)).at(0.3, (-0.0554, 0.3745, 0.09))
+        liver.builder.add_tool(tool)
+        cases.append(("liver + capsule", liver))
+    rows = []
+    for name, sc in cases:
+        model = sc.builder.finalize(sc.dtype)
+        solver = Solver(model)
+        state = model.state()
+        solver.run(state, steps=50)
+        t0 = time.perf_counter()
+        info = solver.run(state, steps=steps)
+        wall = time.perf_counter() - t0
+        row = {"case": name, "tets": model.n_elements, "contact_nodes": int(len(model.contact_nodes)),
+               "tools": len(model.tools), "steps": steps, "seconds": wall,
+               "contact_share": info.contact_seconds / wall,
+               "element_share": info.element_seconds / wall, "node_share": info.node_seconds / wall}
+        rows.append(row)
+        echo(row)
+    return rows
+

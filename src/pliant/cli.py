@@ -103,9 +103,10 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
           steps: int = typer.Option(8000, help="Steps for the study's sizes."),
           large_steps: int = typer.Option(200, help="Steps for the other sizes."),
           threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
-          dtype: str = typer.Option("float32", help="float32 or float64.")):
+          dtype: str = typer.Option("float32", help="float32 or float64."),
+          contact: bool = typer.Option(False, help="Also time the contact cases (demo, liver).")):
     """Reproduce the study's timing table (8,000 steps of 0.025 ms, Neo-Hookean) and larger meshes."""
-    from .bench import run_benchmark
+    from .bench import bench_contact, run_benchmark
 
     try:
         n = [int(s) for s in sizes.split(",") if s.strip()]
@@ -130,7 +131,17 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
         run_benchmark(n, steps, large_steps, threads, dtype, str(json_out) if json_out else None, echo)
     except InputError as e:
         _fail(e, 2)
-    console.print(table, width=max(console.width, 140))
+    Console(width=max(console.width, 140)).print(table)
+    if contact:
+        rows = bench_contact(echo=lambda r: console.print(f"  {r['case']}: {r['skipped']}") if
+                             "skipped" in r else console.print(
+            f"  {r['case']}: {r['tets']:,} tets, {r['contact_nodes']:,} contact nodes, "
+            f"{r['steps']} steps in {r['seconds']:.2f} s; contact {100 * r['contact_share']:.1f} %, "
+            f"kernel 1 {100 * r['element_share']:.0f} %, kernel 2 {100 * r['node_share']:.0f} %"))
+        if json_out:
+            data = json.loads(Path(json_out).read_text())
+            data["contact"] = rows
+            Path(json_out).write_text(json.dumps(data, indent=2))
 
 
 @app.command()

@@ -149,7 +149,7 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
 /// φ(x⁺) < 0 is moved out along the normal by δ_n = −φ n, then friction acts on its tangential
 /// motion relative to the tool over the step, d_t: stick (remove d_t) if |d_t| ≤ μs|δ_n|, else slip
 /// (remove μk|δ_n| along d_t). The force it took, m (x_corrected − x⁺)/γ1 [N], is stored per node
-/// in force_out (3) with the tool index in tool_out (−1: no contact).
+/// in force_out (3) with the tool index in tool_out (−1: no contact; force_out then untouched).
 /// Inputs: node n, reference X [m] (3 per node, AoS, double), mass [kg], u and u⁺ [m] SoA (3, P),
 /// tools with their poses at t and t + Δt. Outputs: u⁺ corrected, force_out, tool_out.
 template <class T>
@@ -194,10 +194,11 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const double* X, co
         }
         tool_out[i] = k;
     }
+    if (tool_out[i] < 0) return;  // force_out is only meaningful where tool_out >= 0
     const double m_over_g1 = double(mass[n]) / g1;
     for (int d = 0; d < 3; ++d) {
         force_out[3 * i + d] = m_over_g1 * (x1[d] - xs[d]);
-        if (tool_out[i] >= 0) u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
+        u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
     }
 }
 

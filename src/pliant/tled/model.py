@@ -30,10 +30,9 @@ def _morton_order(points: np.ndarray) -> np.ndarray:
 
 
 def _auto_threads(n_elements: int) -> int:
-    """Threads for a model: all cores, but one per ~8,000 elements at most, since every step has
-    two barriers that cost more than a small model's work (measured on the 2-core development
-    machine: 1,578 tets ran 1.8× faster on 1 thread than on 2 before the barrier reduction)."""
-    return max(1, min(_core.max_threads(), n_elements // 8000))
+    """Threads for a model: all cores, but one per ~1,000 elements at most: every step has
+    barriers (two to four) that cost a few microseconds each, more than a tiny model's work."""
+    return max(1, min(_core.max_threads(), n_elements // 1000))
 
 
 class Model:
@@ -132,7 +131,7 @@ class Model:
             [v for _, (v, c) in cons], cons_curve,
             [c.kind for c in curves], [c.t0 for c in curves], [c.t1 for c in curves],
             tb, tc, tt, tv, [float(x) for x in g], gcurve,
-            [int(node_rank[n]) for n in cn],
+            sorted(int(node_rank[n]) for n in cn),  # engine order: sequential access
             [t.kind for t in self.tools], [p for t in self.tools for p in t.params()],
             [m for t in self.tools for m in (t.mu_s, t.mu_k)],
             [t.key_array().tolist() for t in self.tools],
@@ -191,7 +190,9 @@ class Model:
         """Last step: contact nodes (user numbering), tool index per node (−1: no contact), force
         the tool exerts on each node [N] (n, 3)."""
         nodes, tool, f = self._engine.contact_state()
-        return self._node_order[np.asarray(nodes)], np.asarray(tool), np.asarray(f)
+        tool, f = np.asarray(tool), np.array(f)
+        f[tool < 0] = 0.0
+        return self._node_order[np.asarray(nodes)], tool, f
 
     def state(self) -> "State":
         """A new state at rest, t = 0, zero displacement."""

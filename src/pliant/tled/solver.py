@@ -24,6 +24,7 @@ class RunInfo:
     time: float  # [s]
     element_seconds: float = 0.0  # wall time in kernel 1 (element forces) [s]
     node_seconds: float = 0.0  # wall time in kernel 2 (gather + update + constraints) [s]
+    contact_seconds: float = 0.0  # wall time in the contact kernel [s]
 
 
 @dataclass
@@ -131,7 +132,7 @@ class Solver:
         if rep["status"]:
             self._raise(rep)
         return RunInfo(int(rep["steps"]), float(rep["t"]), float(rep["elem_seconds"]),
-                       float(rep["node_seconds"]))
+                       float(rep["node_seconds"]), float(rep["contact_seconds"]))
 
     def _record_tools(self, t0: float, steps: int):
         if not self.model.tools:
