@@ -9,10 +9,14 @@
 
 #include <omp.h>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
 #include "cpu_solver.hpp"
+#ifdef PLIANT_WITH_CUDA
+#include "cuda_backend.hpp"
+#endif
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -46,16 +50,54 @@ nb::dict report(const RunReport& r) {
 }
 
 template <class T>
-struct Engine {
-    Model<T> model;
-    CpuSolver<T> solver;
-    Engine(const ModelInput& in, int threads) : model(in), solver(model, threads) {}
-};
-
-template <class T>
 struct PyState {
     State<T> s;
     index_t n_nodes;
+    std::uint64_t version = 0;  // bumped by every host-side change (device copy bookkeeping)
+};
+
+template <class T>
+struct Engine {
+    Model<T> model;
+    CpuSolver<T> solver;
+#ifdef PLIANT_WITH_CUDA
+    std::unique_ptr<cuda::CudaEngine<T>> gpu;  // set by enable_cuda: run() then goes to the device
+    const void* resident = nullptr;            // the state whose copy the device holds
+    std::uint64_t resident_version = 0;
+#endif
+    Engine(const ModelInput& in, int threads) : model(in), solver(model, threads) {}
+
+    RunReport run(PyState<T>& st, long n, double dt, double alpha, int check_every, double blowup) {
+#ifdef PLIANT_WITH_CUDA
+        if (gpu) {
+            State<T>& s = st.s;
+            if (s.dt > 0.0 && s.dt != dt) {  // keep the velocity when Δt changes (as the CPU does)
+                const T r = T(dt / s.dt);
+                for (std::size_t i = 0; i < s.u.size(); ++i) s.u_prev[i] = s.u[i] - r * (s.u[i] - s.u_prev[i]);
+                ++st.version;
+            }
+            if (resident != &st || resident_version != st.version) gpu->upload(s);
+            RunReport r = gpu->run(n, s.t, dt, alpha, check_every > 0 ? check_every : 1, blowup);
+            gpu->download(s);
+            s.t = s.t + r.steps * dt;
+            s.dt = dt;
+            s.step += r.steps;
+            if (r.status) r.t = s.t;
+            resident = &st;
+            resident_version = ++st.version;
+            return r;
+        }
+#endif
+        ++st.version;
+        return solver.run(st.s, n, dt, alpha, check_every, blowup);
+    }
+
+    std::vector<double> tool_history() const {
+#ifdef PLIANT_WITH_CUDA
+        if (gpu) return gpu->tool_history();
+#endif
+        return solver.tool_history();
+    }
 };
 
 // Node field (3, P) in the engine's padded SoA layout ↔ (N, 3) array.
@@ -81,8 +123,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
     using S = PyState<T>;
     nb::class_<S>(m, state_name)
         .def_prop_ro("n_nodes", [](const S& s) { return s.n_nodes; })
-        .def_prop_rw("t", [](const S& s) { return s.s.t; }, [](S& s, double t) { s.s.t = t; })
-        .def_prop_rw("dt", [](const S& s) { return s.s.dt; }, [](S& s, double v) { s.s.dt = v; })
+        .def_prop_rw("t", [](const S& s) { return s.s.t; }, [](S& s, double t) { s.s.t = t; ++s.version; })
+        .def_prop_rw("dt", [](const S& s) { return s.s.dt; }, [](S& s, double v) { s.s.dt = v; ++s.version; })
         .def_prop_rw("step", [](const S& s) { return s.s.step; }, [](S& s, long v) { s.s.step = v; })
         .def("get_u", [](const S& s) {
             const index_t P = static_cast<index_t>(s.s.u.size() / 3);
@@ -94,12 +136,14 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
         })
         .def("set_u", [](S& s, In<double> a) {
             scatter_nodes(a, s.s.u, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+            ++s.version;
         })
         .def("set_u_prev", [](S& s, In<double> a) {
             scatter_nodes(a, s.s.u_prev, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+            ++s.version;
         })
-        .def("copy", [](const S& s) { return S(s); })
-        .def("assign", [](S& s, const S& o) { s = o; });
+        .def("copy", [](const S& s) { S c(s); c.version = 0; return c; })
+        .def("assign", [](S& s, const S& o) { const auto v = s.version; s = o; s.version = v + 1; });
 
     nb::class_<E>(m, engine_name)
         .def("__init__",
@@ -174,6 +218,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  {
                      nb::gil_scoped_release g;
                      r = e.solver.step(in.s, out.s, dt, alpha);
+                     ++out.version;
                  }
                  return report(r);
              }, "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
@@ -181,7 +226,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e.solver.run(s.s, n, dt, alpha, check_every, blowup);
+                     r = e.run(s, n, dt, alpha, check_every, blowup);
                  }
                  return report(r);
              })
@@ -191,6 +236,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  {
                      nb::gil_scoped_release g;
                      r = e.solver.relax(s.s, t_eval, dt, tol, max_steps, check_every, blowup);
+                     ++s.version;
                  }
                  return report(r);
              })
@@ -213,8 +259,31 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 e.model.tool_keys.insert(e.model.tool_keys.end(), keys[k].begin(), keys[k].end());
             }
         })
+        .def("enable_cuda", [](E& e, int device) {
+#ifdef PLIANT_WITH_CUDA
+            std::string why;
+            const int n = cuda::device_count(why);
+            if (n == 0) throw nb::value_error(("no usable CUDA device: " + why).c_str());
+            if (device < 0 || device >= n)
+                throw nb::value_error(("CUDA device " + std::to_string(device) + " does not exist (" +
+                                       std::to_string(n) + " present)").c_str());
+            e.gpu = std::make_unique<cuda::CudaEngine<T>>(e.model, device);
+#else
+            (void)e;
+            (void)device;
+            throw nb::value_error("this build of pliant has no CUDA backend (nvcc was not found "
+                                  "when it was built)");
+#endif
+        })
+        .def_prop_ro("backend", [](const E& e) {
+#ifdef PLIANT_WITH_CUDA
+            if (e.gpu) return std::string("cuda");
+#endif
+            (void)e;
+            return std::string("cpu");
+        })
         .def("tool_history", [](const E& e) {
-            std::vector<double> h = e.solver.tool_history();
+            std::vector<double> h = e.tool_history();
             const size_t nt = e.model.tools.size();
             const size_t steps = nt ? h.size() / (6 * nt) : 0;
             return to_numpy(std::move(h), {steps, nt, 6});
@@ -241,6 +310,24 @@ NB_MODULE(_core, m) {
     bind_engine<double>(m, "EngineF64", "StateF64");
     m.attr("lanes") = kLanes;
     m.def("max_threads", []() { return omp_get_max_threads(); });
+    m.def("cuda_compiled", []() {
+#ifdef PLIANT_WITH_CUDA
+        return true;
+#else
+        return false;
+#endif
+    });
+    m.def("cuda_devices", []() {
+        // (names of usable devices, reason when there are none)
+        std::vector<std::string> names;
+        std::string why = "the CUDA backend is not compiled in this build";
+#ifdef PLIANT_WITH_CUDA
+        why.clear();
+        const int n = cuda::device_count(why);
+        for (int i = 0; i < n; ++i) names.push_back(cuda::device_name(i));
+#endif
+        return nb::make_tuple(names, why);
+    });
     m.def("tet_geometry", [](In<double> X, In<index_t> tets) {
         // Reference volume [m³] and smallest altitude [m] per tet, for validation by the builder.
         const size_t M = tets.shape(0), N = X.shape(0);

@@ -8,7 +8,7 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
 """
 
 from . import _core, io, mesh
-from .errors import (ConvergenceError, DegenerateElementError, InputError, InstabilityError,
+from .errors import (BackendError, ConvergenceError, DegenerateElementError, InputError, InstabilityError,
                      InvertedElementError, MaterialError, MeshError, PliantError, TimeStepError)
 from .materials import (LinearElastic, Material, MooneyRivlin, NeoHookean, NeoHookeanCoupled,
                         StVenantKirchhoff)
@@ -22,6 +22,6 @@ __all__ = [
     "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table",
     "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
     "LinearElastic",
-    "PliantError", "InputError", "MaterialError", "MeshError", "InvertedElementError",
+    "PliantError", "InputError", "BackendError", "MaterialError", "MeshError", "InvertedElementError",
     "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError",
 ]

@@ -147,14 +147,17 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
 @app.command()
 def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable output.")):
     """Version, compiled backends, threads, devices."""
+    names, why = _core.cuda_devices()
+    cuda = {"compiled": bool(_core.cuda_compiled()), "usable": bool(names), "devices": list(names)}
+    if not names:
+        cuda["reason"] = why
     data = {
         "version": __version__,
         "python": sys.version.split()[0],
         "platform": platform.platform(),
         "backends": {"cpu": {"compiled": True, "usable": True, "threads": _core.max_threads(),
                              "simd_lanes": int(_core.lanes)},
-                     "cuda": {"compiled": False, "usable": False,
-                              "reason": "the CUDA backend is not built yet (issue: CUDA backend)"}},
+                     "cuda": cuda},
         "cpu_count": os.cpu_count(),
     }
     if as_json:
@@ -163,7 +166,13 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
     console.print(f"pliant {data['version']} (Python {data['python']}, {data['platform']})")
     cpu = data["backends"]["cpu"]
     console.print(f"  cpu : compiled, usable, {cpu['threads']} threads, {cpu['simd_lanes']} lanes per block")
-    console.print(f"  cuda: not compiled ({data['backends']['cuda']['reason']})")
+    c = data["backends"]["cuda"]
+    if not c["compiled"]:
+        console.print(f"  cuda: not compiled ({c['reason']})")
+    elif c["usable"]:
+        console.print(f"  cuda: compiled, {len(c['devices'])} device(s): {', '.join(c['devices'])}")
+    else:
+        console.print(f"  cuda: compiled, no device present ({c['reason']})")
 
 
 def main():  # pragma: no cover

@@ -39,6 +39,10 @@ class DegenerateElementError(MeshError):
         self.element = element
 
 
+class BackendError(InputError):
+    """A backend that this build or this machine cannot provide (e.g. CUDA without a GPU)."""
+
+
 class TimeStepError(InputError):
     """A time step above the critical (stable) one, or otherwise invalid."""
 

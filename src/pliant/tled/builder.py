@@ -194,8 +194,12 @@ class ModelBuilder:
         return tool
 
     # --- finalize ---------------------------------------------------------------------------
-    def finalize(self, dtype="float32", threads: int | None = None):
-        """Validate everything and build the static Model (engine arrays in a cache-friendly order)."""
+    def finalize(self, dtype="float32", threads: int | None = None, backend: str = "cpu",
+                 device: int = 0):
+        """Validate everything and build the static Model (engine arrays in a cache-friendly order).
+
+        backend: "cpu" (OpenMP + SIMD) or "cuda" (the same kernels on an NVIDIA GPU, device-
+        resident); "cuda" without a GPU or a CUDA build raises BackendError."""
         from .model import Model
 
         if self.n_elements == 0:
@@ -235,4 +239,9 @@ class ModelBuilder:
                 f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is inverted: volume "
                 f"{vol[e]:.3e} m^3; expected positive orientation (swap two nodes), "
                 f"{inverted.size} inverted element(s) in all", e)
-        return Model(self, owner, dtype, threads)
+        if backend not in ("cpu", "cuda"):
+            raise InputError(f"backend = {backend!r}; expected 'cpu' or 'cuda'")
+        model = Model(self, owner, dtype, threads)
+        if backend == "cuda":
+            model.use_cuda(device)
+        return model

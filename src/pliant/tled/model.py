@@ -177,6 +177,21 @@ class Model:
         return int(self._engine.bytes)
 
     # --- states and results --------------------------------------------------------------------
+    @property
+    def backend(self) -> str:
+        """"cpu" or "cuda": where Solver.run steps this model."""
+        return str(self._engine.backend)
+
+    def use_cuda(self, device: int = 0):
+        """Run this model's steps on CUDA device ``device`` (relax, step and results stay on the
+        host). Raises BackendError if this build has no CUDA backend or the machine no GPU."""
+        from ..errors import BackendError
+
+        try:
+            self._engine.enable_cuda(int(device))
+        except ValueError as e:
+            raise BackendError(f"backend 'cuda': {e}") from None
+
     def set_tool_keys(self):
         """Send the tools' keyframes to the engine (after changing a trajectory)."""
         self._engine.set_tool_keys([t.key_array().tolist() for t in self.tools])
