@@ -7,7 +7,7 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
     sim = pl.Simulation(b.finalize())
 """
 
-from . import _core, io, mesh
+from . import _core, contact, io, mesh
 from .errors import (BackendError, ConvergenceError, DegenerateElementError, InputError, InstabilityError,
                      InvertedElementError, MaterialError, MeshError, PliantError, TimeStepError)
 from .materials import (LinearElastic, Material, MooneyRivlin, NeoHookean, NeoHookeanCoupled,

@@ -54,7 +54,8 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
         ignore: Optional[list[str]] = typer.Option(None, "--ignore",
                                                    help="Unsupported NiftySim feature to skip."),
         allow_unstable: bool = typer.Option(False, help="Accept a Δt above the critical step."),
-        progress: bool = typer.Option(True, help="Show a progress bar.")):
+        progress: bool = typer.Option(True, help="Show a progress bar."),
+        backend: Optional[str] = typer.Option(None, help="cpu or cuda (default: the scene's).")):
     """Run a scene or a NiftySim model; write result.pvd, frames, summary.json and result.png."""
     from .runner import run_scene
 
@@ -63,7 +64,7 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
         for w in sc.warnings:
             err_console.print(f"[yellow]warning:[/] {w}", highlight=False)
         summary = run_scene(sc, out, progress=progress, allow_unstable=allow_unstable,
-                            threads=threads, echo=console.print)
+                            threads=threads, echo=console.print, backend=backend)
     except InputError as e:
         _fail(e, 2)
     except PliantError as e:
@@ -104,7 +105,8 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
           large_steps: int = typer.Option(200, help="Steps for the other sizes."),
           threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
           dtype: str = typer.Option("float32", help="float32 or float64."),
-          contact: bool = typer.Option(False, help="Also time the contact cases (demo, liver).")):
+          contact: bool = typer.Option(False, help="Also time the contact cases (demo, liver)."),
+          backend: str = typer.Option("cpu", help="cpu or cuda (a GPU; e.g. --sizes up to 10000000).")):
     """Reproduce the study's timing table (8,000 steps of 0.025 ms, Neo-Hookean) and larger meshes."""
     from .bench import bench_contact, run_benchmark
 
@@ -114,7 +116,12 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
         _fail(InputError(f"--sizes {sizes!r}: expected comma-separated integers"), 2)
     if steps < 1 or large_steps < 1 or any(v < 1 for v in n):
         _fail(InputError("--steps, --large-steps and --sizes must be positive"), 2)
-    table = Table(title=f"pliant CPU backend, {dtype}, Δt = 0.025 ms")
+    if backend not in ("cpu", "cuda"):
+        _fail(InputError(f"--backend {backend!r}: expected cpu or cuda"), 2)
+    if os.getloadavg()[0] > 0.5:
+        err_console.print(f"[yellow]warning:[/] load average {os.getloadavg()[0]:.1f}: other work is "
+                          "running, timings will suffer")
+    table = Table(title=f"pliant {backend.upper()} backend, {dtype}, Δt = 0.025 ms")
     for c in ("tets", "nodes", "steps", "threads", "s (8000 steps)", "kernel 1 %", "Melem-steps/s",
               "bytes/tet", "× study GPU", "× study CPU"):
         table.add_column(c, justify="right")
@@ -128,7 +135,8 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
         console.print(f"  {r.tets:,} tets: {r.seconds:.3f} s for {r.steps} steps")
 
     try:
-        run_benchmark(n, steps, large_steps, threads, dtype, str(json_out) if json_out else None, echo)
+        run_benchmark(n, steps, large_steps, threads, dtype, str(json_out) if json_out else None, echo,
+                      backend=backend)
     except InputError as e:
         _fail(e, 2)
     Console(width=max(console.width, 140)).print(table)

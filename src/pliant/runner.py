@@ -26,7 +26,7 @@ def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
 
 
 def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool = False,
-              threads: int | None = None, echo=print) -> dict:
+              threads: int | None = None, echo=print, backend: str | None = None) -> dict:
     """Run ``scene`` and write OUTDIR/result.pvd, frame_*.vtu, summary.json and result.png.
     Returns the summary. Raises InstabilityError (after writing what it has) when the run fails;
     on KeyboardInterrupt the summary says ``interrupted`` and the frames so far are kept."""
@@ -36,7 +36,8 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t_build = time.perf_counter()
-    model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads)
+    model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads,
+                                   backend=backend or scene.backend)
     solver = Solver(model, dt=scene.dt, safety=scene.safety, allow_unstable=allow_unstable,
                     check_every=scene.check_every)
     state = model.state()
@@ -47,7 +48,7 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
     summary = {"pliant": __version__, "scene": scene.source, "title": scene.title,
                "mode": "static" if scene.static else "dynamic", "steps": 0, "dt": solver.dt,
                "dt_critical": model.dt_critical, "simulated_time": 0.0, "wall_time": 0.0,
-               "setup_time": build_s, "backend": "cpu", "threads": model.threads,
+               "setup_time": build_s, "backend": model.backend, "threads": model.threads,
                "dtype": scene.dtype, "elements": model.n_elements, "nodes": model.n_nodes,
                "interrupted": False, "error": None, "warnings": list(scene.warnings)}
     t0 = time.perf_counter()

@@ -39,6 +39,7 @@ class Scene:
     dt: float | None = None  # [s]; None: safety × critical
     safety: float = 0.8
     dtype: str = "float32"
+    backend: str = "cpu"
     threads: int | None = None
     static: bool = False
     tol: float = 1e-5
@@ -271,7 +272,7 @@ def load_scene(path) -> Scene:
     solver = check_keys(ctx, data.get("solver", {}), "solver", {
         "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
         "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
-        "check_every": "int"})
+        "check_every": "int", "backend": "str"})
     scene.duration = float(solver.get("duration", 1.0))
     if not scene.duration > 0:
         raise ctx.error("solver.duration", "expected a duration > 0 [s]")
@@ -289,6 +290,9 @@ def load_scene(path) -> Scene:
     scene.dtype = solver.get("dtype", "float32")
     if scene.dtype not in ("float32", "float64"):
         raise ctx.error("solver.dtype", f"dtype = {scene.dtype!r}: expected 'float32' or 'float64'")
+    scene.backend = solver.get("backend", "cpu")
+    if scene.backend not in ("cpu", "cuda"):
+        raise ctx.error("solver.backend", f"backend = {scene.backend!r}: expected 'cpu' or 'cuda'")
     scene.threads = solver.get("threads") or None
     scene.static = bool(solver.get("static", False))
     scene.tol = float(solver.get("tol", 1e-5))
