@@ -53,6 +53,18 @@ def test_demo_writes_a_readable_series(tmp_path):
     # The ground receives the weight plus the tool's push (both downward on the ground: −z).
     assert -Fg == pytest.approx(weight - Ft, rel=0.15)
     assert not list(out.glob(".*tmp*"))  # no temporary files left behind
+    # The results carry the original Spot surface (embedded): at rest it is the file's surface
+    # under the scene's transform (scale 0.1, +90° about x, +0.07368 m in z).
+    from pliant.mesh import read_surface
+    from pliant.demo import DEMO_SCENE
+
+    V, F = read_surface(DEMO_SCENE.parent / "spot.obj")
+    V = 0.1 * V
+    V = np.stack([V[:, 0], -V[:, 2], V[:, 1]], axis=1) + [0.0, 0.0, 0.07368]
+    s0 = meshio.read(out / "surface_00000.vtu")
+    assert s0.cells_dict["triangle"].shape == F.shape
+    assert np.allclose(s0.points, V, atol=1e-6)
+    assert (out / "surface.pvd").read_text().count("<DataSet") == 21
 
 
 def test_bench_json(tmp_path):

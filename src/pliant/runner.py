@@ -41,7 +41,13 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
     solver = Solver(model, dt=scene.dt, safety=scene.safety, allow_unstable=allow_unstable,
                     check_every=scene.check_every)
     state = model.state()
-    writer = ResultWriter(out, model)
+    embedding = None
+    if scene.meta.get("embed_surface"):
+        from .mesh import embed_surface
+
+        Ve, Fe = scene.meta["embed_surface"]
+        embedding = embed_surface(model.reference_positions, model.tets, Ve, Fe)
+    writer = ResultWriter(out, model, fields=scene.fields, embedding=embedding)
     writer.write(state)
     build_s = time.perf_counter() - t_build
     total = max(1, math.ceil(scene.duration / solver.dt - 1e-9))

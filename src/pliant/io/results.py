@@ -24,34 +24,64 @@ def atomic_write_text(path, text: str) -> None:
         raise
 
 
-class ResultWriter:
-    """Writes frames of a simulation: point data displacement [m], velocity [m/s]; cell data von
-    Mises stress [Pa], J, strain-energy density [Pa]. The .pvd index is rewritten after each frame."""
+FIELDS = ("displacement", "velocity", "von_mises", "J", "strain_energy_density", "cauchy",
+          "green_strain")
 
-    def __init__(self, out_dir, model):
+
+class ResultWriter:
+    """Writes frames of a simulation. Point data: displacement [m], velocity [m/s]; cell data:
+    von_mises [Pa], J, strain_energy_density [Pa], and on request cauchy [Pa] and green_strain
+    (6 components xx, yy, zz, xy, yz, xz). ``fields`` chooses (default: the first five). With an
+    ``embedding`` (pliant.mesh.embed_surface), each frame also writes the fine surface that follows
+    the deformation, as surface_NNNNN.vtu in surface.pvd. The .pvd indexes are rewritten after each
+    frame."""
+
+    def __init__(self, out_dir, model, fields=FIELDS[:5], embedding=None):
         self.dir = Path(out_dir)
         self.dir.mkdir(parents=True, exist_ok=True)
         self.model = model
+        unknown = set(fields) - set(FIELDS)
+        if unknown:
+            from ..errors import InputError
+
+            raise InputError(f"unknown output field(s) {sorted(unknown)}; expected some of {FIELDS}")
+        self.fields = tuple(fields)
+        self.embedding = embedding
         self.frames: list[tuple[float, str]] = []
+
+    def _pvd(self, name: str, files: list[tuple[float, str]]):
+        entries = "\n".join(f'    <DataSet timestep="{t:.9g}" part="0" file="{f}"/>' for t, f in files)
+        atomic_write_text(self.dir / name,
+                          '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                          f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
 
     def write(self, state) -> Path:
         import meshio
 
         res = self.model.element_results(state)
         name = f"frame_{len(self.frames):05d}.vtu"
-        mesh = meshio.Mesh(
-            self.model.reference_positions, [("tetra", self.model.tets)],
-            point_data={"displacement": state.displacements, "velocity": state.velocities},
-            cell_data={"von_mises": [res["von_mises"]], "J": [res["J"]],
-                       "strain_energy_density": [res["energy_density"]]})
+        f = self.fields
+        point = {k: v for k, v in (("displacement", state.displacements),
+                                   ("velocity", state.velocities)) if k in f}
+        cell_src = {"von_mises": res["von_mises"], "J": res["J"],
+                    "strain_energy_density": res["energy_density"], "cauchy": res["cauchy"],
+                    "green_strain": res["green_strain"]}
+        mesh = meshio.Mesh(self.model.reference_positions, [("tetra", self.model.tets)],
+                           point_data=point,
+                           cell_data={k: [v] for k, v in cell_src.items() if k in f})
+        if self.embedding is not None:
+            emb = self.embedding
+            sname = f"surface_{len(self.frames):05d}.vtu"
+            Vs = emb.positions(self.model.tets, state.positions)
+            tmp = self.dir / f".{sname}.tmp.vtu"
+            meshio.write(tmp, meshio.Mesh(Vs, [("triangle", emb.faces)]), binary=True)
+            os.replace(tmp, self.dir / sname)
         final = self.dir / name
         tmp = self.dir / f".{name}.tmp.vtu"
         meshio.write(tmp, mesh, binary=True)
         os.replace(tmp, final)
         self.frames.append((state.time, name))
-        entries = "\n".join(f'    <DataSet timestep="{t:.9g}" part="0" file="{f}"/>'
-                            for t, f in self.frames)
-        atomic_write_text(self.dir / "result.pvd",
-                          '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                          f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
+        self._pvd("result.pvd", self.frames)
+        if self.embedding is not None:
+            self._pvd("surface.pvd", [(t, n.replace("frame_", "surface_")) for t, n in self.frames])
         return final

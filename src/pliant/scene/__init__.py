@@ -49,6 +49,7 @@ class Scene:
     output_interval: float | None = None  # [s]
     frames: int = 20
     png: bool = True
+    fields: tuple = ("displacement", "velocity", "von_mises", "J", "strain_energy_density")
     title: str = ""
     warnings: list[str] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
@@ -114,7 +115,8 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
         "file": "str", "primitive": "str", "size": "list|number", "cells": "list", "radius": "number",
         "height": "number", "major_radius": "number", "minor_radius": "number",
         "edge_length": "number", "scale": "number", "rotate": "list", "translate": "list",
-        "jitter": "number", "segments": "int", "minor_segments": "int", "target_tets": "int"})
+        "jitter": "number", "segments": "int", "minor_segments": "int", "target_tets": "int",
+        "embed": "bool", "embed_subdivide": "int"})
     if ("file" in spec) == ("primitive" in spec):
         raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
     sets: dict[str, np.ndarray] = {}
@@ -145,6 +147,9 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
                 X, T, info = pm.surface_to_tets(V * scale, F, edge_length=el,
                                                 target_tets=spec.get("target_tets", 10000))
                 scene.meta["mesh_pipeline"] = info
+                if spec.get("embed") or spec.get("embed_subdivide"):
+                    Ve, Fe = pm.subdivide_loop(V * scale, F, int(spec.get("embed_subdivide", 0)))
+                    scene.meta["embed_surface"] = [Ve, Fe]
                 scale = 1.0
             else:
                 X, T, sets = read_volume_mesh(f)
@@ -183,10 +188,16 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
                             "cylinder or torus")
         scene.meta["mesh_source"] = f"primitive {kind}"
     X = np.asarray(X, float) * scale
+    emb = scene.meta.get("embed_surface")
     if "rotate" in spec:
-        X = X @ _rotation(vector(ctx, spec["rotate"], "mesh.rotate")).T
+        R = _rotation(vector(ctx, spec["rotate"], "mesh.rotate"))
+        X = X @ R.T
+        if emb:
+            emb[0] = emb[0] @ R.T
     if "translate" in spec:
         X = X + np.array(vector(ctx, spec["translate"], "mesh.translate"))
+        if emb:
+            emb[0] = emb[0] + np.array(spec["translate"], float)
     extent = float(np.ptp(X, axis=0).max())
     if extent > 10.0:
         scene.warnings.append(f"{ctx.file}: the mesh is {extent:g} m across; pliant expects SI "
@@ -386,7 +397,15 @@ def load_scene(path) -> Scene:
         b.add_tool(_make_tool(ctx, t, f"tool[{i}]", path.parent))
 
     out = check_keys(ctx, data.get("output", {}), "output",
-                     {"every": "int", "interval": "number", "frames": "int", "png": "bool"})
+                     {"every": "int", "interval": "number", "frames": "int", "png": "bool",
+                      "fields": "list"})
+    from ..io.results import FIELDS
+
+    fields = out.get("fields", list(FIELDS[:5]))
+    bad = [x for x in fields if x not in FIELDS]
+    if bad:
+        raise ctx.error("output.fields", f"unknown field(s) {bad}; expected some of {list(FIELDS)}")
+    scene.fields = tuple(fields)
     if sum(k in out for k in ("every", "interval", "frames")) > 1:
         raise ctx.error("output", "give at most one of 'every' (steps), 'interval' [s], 'frames'")
     if "every" in out and out["every"] < 1 or "frames" in out and out["frames"] < 1 \
