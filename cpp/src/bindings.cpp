@@ -65,6 +65,7 @@ struct Engine {
     const void* resident = nullptr;            // the state whose copy the device holds
     std::uint64_t resident_version = 0;
 #endif
+    std::vector<double> base_params;           // material parameters at build time
     Engine(const ModelInput& in, int threads) : model(in), solver(model, threads) {}
 
     RunReport run(PyState<T>& st, long n, double dt, double alpha, int check_every, double blowup) {
@@ -258,6 +259,17 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 e.model.tools[k].key_count = static_cast<index_t>(keys[k].size() / 8);
                 e.model.tool_keys.insert(e.model.tool_keys.end(), keys[k].begin(), keys[k].end());
             }
+        })
+        .def("scale_materials", [](E& e, double factor) {
+            // Multiply every material's moduli by `factor` relative to the values at build time
+            // (the viewer's stiffness slider). The critical time step scales by 1/sqrt(factor).
+            if (!(factor > 0.0)) throw nb::value_error("factor must be > 0");
+            if (e.base_params.empty())
+                for (const auto& g : e.model.groups)
+                    for (int k = 0; k < 4; ++k) e.base_params.push_back(double(g.material.p[k]));
+            for (std::size_t g = 0; g < e.model.groups.size(); ++g)
+                for (int k = 0; k < 4; ++k)
+                    e.model.groups[g].material.p[k] = T(e.base_params[4 * g + k] * factor);
         })
         .def("enable_cuda", [](E& e, int device) {
 #ifdef PLIANT_WITH_CUDA

@@ -99,6 +99,31 @@ def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Outp
 
 
 @app.command()
+def view(target: Path = typer.Argument(..., help="Scene (.toml), NiftySim model (.xml) or a "
+                                          "results folder to play back."),
+         host: str = typer.Option("127.0.0.1", help="Address to listen on (0.0.0.0 exposes it)."),
+         port: int = typer.Option(8080, help="Port."),
+         threads: Optional[int] = typer.Option(None, help="CPU threads.")):
+    """Interactive 3-D view in the browser: live simulation with draggable tools, or playback."""
+    from .view.viewer import LiveViewer, PlaybackViewer
+
+    try:
+        if target.is_dir():
+            v = PlaybackViewer(target, host, port)
+        else:
+            v = LiveViewer(load_any(target), host, port, threads)
+    except InputError as e:
+        _fail(e, 2)
+    except OSError as e:
+        _fail(InputError(f"cannot listen on {host}:{port}: {e}"), 2)
+    console.print(f"pliant viewer on http://{host}:{port} (Ctrl-C to stop)")
+    try:
+        v.serve()
+    except KeyboardInterrupt:
+        pass
+
+
+@app.command()
 def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write figures as JSON."),
           sizes: str = typer.Option("7456,12584,27918,100000,1000000", help="Tet counts."),
           steps: int = typer.Option(8000, help="Steps for the study's sizes."),

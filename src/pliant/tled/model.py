@@ -140,6 +140,8 @@ class Model:
         )
         self.n_nodes, self.n_elements = N, M
         self.dt_critical = float(self._engine.dt_critical)
+        _, alt = _core.tet_geometry(np.ascontiguousarray(X), np.ascontiguousarray(T.astype(np.int32)))
+        self.min_altitude = float(np.min(alt))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)

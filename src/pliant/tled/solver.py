@@ -238,15 +238,20 @@ class Simulation:
 
     def set_tool_pose(self, k: int, position, rotation=(1.0, 0.0, 0.0, 0.0)):
         """Drive tool k from Python (a haptic device, a viewer): it moves from its current pose to
-        this one over the next step, then stays."""
+        this one, then stays. The move takes at least one step, and longer if needed to keep the
+        tool's speed under 0.1 × the smallest element altitude per step (a sudden jump deeper than
+        an element would invert it)."""
         tool = self.model.tools[k]
         R, p = tool.pose(self.state.time)
         from ..contact import quat_from_matrix
 
-        t = self.state.time
+        t, dt = self.state.time, self.solver.dt
+        target = np.asarray(position, float)
+        v_max = 0.1 * self.model.min_altitude / dt
+        duration = max(dt, float(np.linalg.norm(target - p)) / v_max)
         tool.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
         tool._fixed = False
-        tool.at(t + self.solver.dt, position, rotation)
+        tool.at(t + duration, target, rotation)
         self.model.set_tool_keys()
 
     def tool_force(self, k: int = 0):

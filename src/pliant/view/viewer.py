@@ -1,0 +1,299 @@
+"""Interactive viewer in the browser (viser): the deforming body coloured by von Mises stress or
+displacement, rigid tools draggable with a transform gizmo while the simulation runs in real time,
+play / pause / reset / step, live stiffness and damping, the tool's contact force as a number and
+an arrow; and playback of a results folder with a time slider.
+
+Threads: the simulation runs in its own thread (sub-stepping at its stable Δt to follow the wall
+clock); the drawing loop sends the surface to the browser at about 20 frames per second.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, PliantError
+from .png import boundary_faces
+
+
+def _colours(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    import matplotlib
+
+    norm = (np.asarray(values) - lo) / (hi - lo if hi > lo else 1.0)
+    return (matplotlib.colormaps["viridis"](np.clip(norm, 0, 1))[:, :3] * 255).astype(np.uint8)
+
+
+def _frame_camera(server, X: np.ndarray):
+    """Initial camera looking at the body from a 3/4 view, z up."""
+    lo, hi = X.min(axis=0), X.max(axis=0)
+    c, r = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
+    server.initial_camera.up = (0.0, 0.0, 1.0)
+    server.initial_camera.look_at = tuple(c)
+    server.initial_camera.position = tuple(c + r * np.array([1.2, -1.2, 0.8]))
+
+
+class _Surface:
+    """The boundary of a tet mesh as a compact triangle mesh, with node → vertex mapping."""
+
+    def __init__(self, tets: np.ndarray):
+        faces, owner = boundary_faces(tets)
+        self.nodes = np.unique(faces)
+        remap = np.full(int(tets.max()) + 1, -1)
+        remap[self.nodes] = np.arange(self.nodes.size)
+        self.faces = remap[faces]
+        self.owner = owner  # element behind each face
+
+    def node_values(self, element_values: np.ndarray) -> np.ndarray:
+        """Average of the adjacent faces' element values at each surface vertex."""
+        acc = np.zeros(self.nodes.size)
+        cnt = np.zeros(self.nodes.size)
+        for k in range(3):
+            np.add.at(acc, self.faces[:, k], element_values[self.owner])
+            np.add.at(cnt, self.faces[:, k], 1)
+        return acc / np.maximum(cnt, 1)
+
+
+class LiveViewer:
+    """Serve a scene live. ``host`` 127.0.0.1 by default; ``--host 0.0.0.0`` exposes it."""
+
+    def __init__(self, scene, host: str = "127.0.0.1", port: int = 8080, threads: int | None = None):
+        import viser
+
+        from ..tled import Simulation
+
+        self.scene = scene
+        self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads)
+        self.sim = Simulation(self.model, dt=scene.dt, safety=scene.safety)
+        self.dt0 = self.sim.solver.dt
+        self.surface = _Surface(self.model.tets)
+        self.lock = threading.Lock()
+        self.playing = True
+        self.stop_event = threading.Event()
+        self.steps_per_second = 0.0
+        self.realtime_factor = 0.0
+        self.field = "von Mises stress [Pa]"
+        self.error = ""
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        _frame_camera(self.server, self.model.reference_positions)
+        self._build_gui()
+        self._build_scene()
+
+    # --- GUI ------------------------------------------------------------------------------
+    def _build_gui(self):
+        g = self.server.gui
+        g.add_markdown(f"**pliant** — {self.scene.title}: {self.model.n_elements:,} tets, "
+                       f"Δt = {self.sim.solver.dt:.3g} s")
+        self.play_button = g.add_button("Pause")
+        self.step_button = g.add_button("Single step")
+        self.reset_button = g.add_button("Reset")
+        self.field_dropdown = g.add_dropdown("Colour by", ["von Mises stress [Pa]",
+                                                           "displacement [m]"])
+        self.stiffness = g.add_slider("Stiffness × (live)", 0.25, 4.0, 0.05, 1.0)
+        self.damping = g.add_slider("Damping α [1/s] (live)", 0.0, 100.0, 0.5,
+                                    float(self.sim.solver.damping))
+        self.status = g.add_markdown("")
+        self.colourbar = g.add_markdown("")
+        self.force_text = g.add_markdown("")
+
+        @self.play_button.on_click
+        def _(_):
+            self.playing = not self.playing
+            self.play_button.label = "Pause" if self.playing else "Play"
+
+        @self.step_button.on_click
+        def _(_):
+            with self.lock:
+                self.sim.step(1)
+
+        @self.reset_button.on_click
+        def _(_):
+            with self.lock:
+                self.sim.state = self.model.state()
+                self.error = ""
+                for k, t in enumerate(self.model.tools):
+                    t.keys = [k0.copy() for k0 in self._initial_keys[k]]
+                self.model.set_tool_keys() if self.model.tools else None
+
+        @self.field_dropdown.on_update
+        def _(_):
+            self.field = self.field_dropdown.value
+
+        @self.stiffness.on_update
+        def _(_):
+            with self.lock:
+                self.model._engine.scale_materials(float(self.stiffness.value))
+                # Stiffer material, faster waves: the stable step shrinks as 1/sqrt(factor).
+                self.sim.solver.dt = self.dt0 / np.sqrt(max(1.0, float(self.stiffness.value)))
+
+        @self.damping.on_update
+        def _(_):
+            with self.lock:
+                self.sim.solver.damping = float(self.damping.value)
+
+    def _build_scene(self):
+        sc = self.server.scene
+        self._initial_keys = [[k.copy() for k in t.keys] for t in self.model.tools]
+        self.controls = []
+        ext = float(np.ptp(self.model.reference_positions, axis=0).max())
+        for k, tool in enumerate(self.model.tools):
+            R, p = tool.pose(0.0)
+            from ..contact import Box, Capsule, Plane, Sphere, quat_from_matrix
+
+            q = quat_from_matrix(R)
+            name = f"/tools/{k}"
+            if isinstance(tool, Plane):
+                sc.add_grid(name, width=2 * ext, height=2 * ext, position=p, wxyz=q)
+                self.controls.append(None)
+                continue
+            ctrl = sc.add_transform_controls(name, scale=0.5 * ext, position=p, wxyz=q)
+            if isinstance(tool, Sphere):
+                sc.add_icosphere(f"{name}/shape", radius=tool.radius, color=(200, 80, 80))
+            elif isinstance(tool, Capsule):
+                sc.add_cylinder(f"{name}/shape", radius=tool.radius, height=tool.length,
+                                color=(200, 80, 80))
+            elif isinstance(tool, Box):
+                sc.add_box(f"{name}/shape", dimensions=tuple(2 * tool.half), color=(200, 80, 80))
+            ctrl.on_update(lambda _, k=k, c=ctrl: self._dragged(k, c))
+            self.controls.append(ctrl)
+        self._last_drag = [0.0] * len(self.model.tools)
+
+    def _dragged(self, k, ctrl):
+        self._last_drag[k] = time.perf_counter()
+        self.move_tool(k, ctrl.position, ctrl.wxyz)
+
+    def move_tool(self, k: int, position, wxyz=(1.0, 0.0, 0.0, 0.0)):
+        """What dragging tool k's gizmo does: the tool moves there over the next step."""
+        with self.lock:
+            self.sim.set_tool_pose(k, np.asarray(position, float), np.asarray(wxyz, float))
+
+    # --- loops ----------------------------------------------------------------------------
+    def _simulate(self):
+        last = time.perf_counter()
+        while not self.stop_event.is_set():
+            now = time.perf_counter()
+            wall = min(now - last, 0.05)
+            last = now
+            if not self.playing:
+                time.sleep(0.01)
+                continue
+            with self.lock:
+                dt = self.sim.solver.dt
+                n = max(1, int(round(wall / dt)))
+                t0 = time.perf_counter()
+                try:
+                    self.sim.step(n)
+                except PliantError as e:  # show it, pause; Reset starts again
+                    self.error = str(e)
+                    self.playing = False
+                    self.play_button.label = "Play"
+                    continue
+                el = time.perf_counter() - t0
+            self.steps_per_second = n / max(el, 1e-9)
+            self.realtime_factor = self.steps_per_second * dt
+            time.sleep(0.001)
+
+    def draw(self):
+        """Send the current surface, colours, status and tool forces to the browser."""
+        import trimesh
+
+        with self.lock:
+            P = self.sim.positions
+            if self.field.startswith("von"):
+                vals = self.surface.node_values(self.model.element_results(self.sim.state)["von_mises"])
+            else:
+                vals = np.linalg.norm(self.sim.displacements[self.surface.nodes], axis=1)
+            t = self.sim.time
+            forces = [self.sim.tool_force(k) for k in range(len(self.model.tools))]
+            poses = [tool.pose(t) for tool in self.model.tools]
+        lo, hi = float(vals.min()), float(vals.max())
+        mesh = trimesh.Trimesh(P[self.surface.nodes], self.surface.faces, process=False,
+                               vertex_colors=_colours(vals, lo, hi))
+        self.server.scene.add_mesh_trimesh("/body", mesh)
+        self.status.content = (f"t = {t:.3f} s · {self.steps_per_second:,.0f} steps/s · "
+                               f"real-time factor {self.realtime_factor:.2f}" +
+                               (f"  \n**stopped:** {self.error}" if self.error else ""))
+        self.colourbar.content = f"{self.field}: {lo:.3g} (dark blue) … {hi:.3g} (yellow)"
+        lines = []
+        ext = float(np.ptp(self.model.reference_positions, axis=0).max())
+        from ..contact import quat_from_matrix
+
+        for k, ((f, _), (R, p)) in enumerate(zip(forces, poses)):
+            ctrl = self.controls[k]
+            if ctrl is not None and time.perf_counter() - self._last_drag[k] > 1.0:
+                ctrl.position, ctrl.wxyz = tuple(p), tuple(quat_from_matrix(R))  # follow keyframes
+            lines.append(f"tool {k} ({self.model.tools[k].name}): |F| = {np.linalg.norm(f):.3g} N")
+            fmax = max(np.linalg.norm(f), 1e-12)
+            seg = np.array([[p, p + 0.3 * ext * f / fmax]])
+            self.server.scene.add_line_segments(f"/forces/{k}", seg, (255, 60, 60), thickness=3,
+                                                thickness_units="screen")
+        self.force_text.content = "  \n".join(lines)
+
+    def serve(self, duration: float | None = None):
+        """Run the simulation thread and the drawing loop (until Ctrl-C or ``duration`` [s])."""
+        sim_thread = threading.Thread(target=self._simulate, daemon=True)
+        sim_thread.start()
+        end = None if duration is None else time.perf_counter() + duration
+        try:
+            while end is None or time.perf_counter() < end:
+                self.draw()
+                time.sleep(0.05)
+        finally:
+            self.stop_event.set()
+            sim_thread.join(timeout=2)
+
+    def stop(self):
+        self.stop_event.set()
+        self.server.stop()
+
+
+class PlaybackViewer:
+    """Play back a results folder (OUTDIR/result.pvd) with a time slider."""
+
+    def __init__(self, out_dir, host: str = "127.0.0.1", port: int = 8080):
+        import re
+
+        import meshio
+        import viser
+
+        out = Path(out_dir)
+        pvd = out / "result.pvd"
+        if not pvd.exists():
+            raise InputError(f"{out}: no result.pvd (not a pliant results folder)")
+        entries = re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', pvd.read_text())
+        if not entries:
+            raise InputError(f"{pvd}: no frames")
+        self.times = [float(t) for t, _ in entries]
+        self.files = [out / f for _, f in entries]
+        first = meshio.read(self.files[0])
+        self.X = first.points
+        self.surface = _Surface(first.cells_dict["tetra"])
+        self.meshio = meshio
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        _frame_camera(self.server, self.X)
+        self.slider = self.server.gui.add_slider("frame", 0, len(self.files) - 1, 1, 0)
+        self.label = self.server.gui.add_markdown("")
+        self.slider.on_update(lambda _: self.show(int(self.slider.value)))
+        self.show(0)
+
+    def show(self, i: int):
+        import trimesh
+
+        m = self.meshio.read(self.files[i])
+        u = m.point_data.get("displacement", np.zeros_like(self.X))
+        vm = m.cell_data_dict.get("von_mises", {}).get("tetra")
+        vals = self.surface.node_values(vm) if vm is not None else \
+            np.linalg.norm(u[self.surface.nodes], axis=1)
+        lo, hi = float(vals.min()), float(vals.max())
+        mesh = trimesh.Trimesh((self.X + u)[self.surface.nodes], self.surface.faces, process=False,
+                               vertex_colors=_colours(vals, lo, hi))
+        self.server.scene.add_mesh_trimesh("/body", mesh)
+        self.label.content = (f"t = {self.times[i]:.4g} s (frame {i + 1}/{len(self.files)}); "
+                              f"von Mises {lo:.3g} … {hi:.3g} Pa")
+
+    def serve(self, duration: float | None = None):
+        end = None if duration is None else time.perf_counter() + duration
+        while end is None or time.perf_counter() < end:
+            time.sleep(0.1)

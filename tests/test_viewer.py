@@ -1,0 +1,129 @@
+"""The browser viewer in a real headless browser (Debian's chromium driven by Playwright).
+
+The test set-up installs chromium with apt-get where it is missing (root); without a working
+browser the test fails with the reason. Screenshots go to artifacts/ (PLIANT_ARTIFACTS)."""
+
+import os
+import shutil
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pliant.demo import DEMO_SCENE
+from pliant.scene import load_scene
+
+ARTIFACTS = Path(os.environ.get("PLIANT_ARTIFACTS", Path(__file__).parents[1] / "artifacts"))
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None and os.geteuid() == 0 and shutil.which("apt-get"):
+        env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+        subprocess.run(["apt-get", "update", "-qq"], check=False, env=env, timeout=600,
+                       capture_output=True)
+        subprocess.run(["apt-get", "install", "-y", "-qq", "chromium"], check=False, env=env,
+                       timeout=900, capture_output=True)
+        exe = shutil.which("chromium")
+    if exe is None:
+        pytest.fail("no headless browser: install Debian's chromium (apt-get install chromium)")
+    return exe
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _non_background(png: Path) -> float:
+    """Fraction of the 3-D view's pixels (left part, away from the GUI panel) that are not the
+    white background."""
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(png)[:, :600, :3]
+    return float((img.min(axis=2) < 0.85).mean())
+
+
+def test_viewer_in_a_real_browser(chromium):
+    from playwright.sync_api import sync_playwright
+
+    from pliant.view.viewer import LiveViewer
+
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    port = _free_port()
+    v = LiveViewer(load_scene(DEMO_SCENE), host="127.0.0.1", port=port)
+    assert v.server.get_host() == "127.0.0.1"  # loopback by default
+    serve = threading.Thread(target=v.serve, kwargs=dict(duration=30), daemon=True)
+    serve.start()
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=chromium, headless=True,
+                                        args=["--no-sandbox", "--use-angle=swiftshader",
+                                              "--enable-unsafe-swiftshader"])
+            page = browser.new_page(viewport={"width": 1000, "height": 700})
+            page.goto(f"http://127.0.0.1:{port}")
+            page.wait_for_selector("canvas", timeout=30000)
+            deadline = time.time() + 20
+            while not v.server.get_clients() and time.time() < deadline:
+                time.sleep(0.2)
+            assert v.server.get_clients(), "the page did not connect to the viewer"
+            time.sleep(3)
+            shot = ARTIFACTS / "viewer.png"
+            page.screenshot(path=str(shot))
+            # The body (and tool) are drawn: a fair share of the view is not background.
+            assert _non_background(shot) > 0.02
+            assert v.sim.time > 0 and v.steps_per_second > 0  # the simulation thread runs
+            # Move the tool as its gizmo does (LiveViewer.move_tool is the gizmo's callback) into
+            # the back: the displacement field under it changes, and the tool feels a force.
+            X = v.model.reference_positions
+            under = np.linalg.norm(X - [0.0, -0.055, 0.1], axis=1) < 0.02
+            v.playing = False
+            time.sleep(0.2)
+            before = v.sim.displacements[under].copy()
+            v.move_tool(1, (0.0, -0.055, 0.105))
+            with v.lock:
+                v.sim.run_to(v.sim.time + 0.3)  # the tool travels at a bounded speed
+            after = v.sim.displacements[under]
+            assert np.abs(after - before).max() > 1e-3
+            assert np.linalg.norm(v.sim.tool_force(1)[0]) > 0
+            v.playing = True
+            time.sleep(2)
+            page.screenshot(path=str(ARTIFACTS / "viewer_pressed.png"))
+            browser.close()
+    finally:
+        v.stop_event.set()
+        serve.join(timeout=5)
+        v.server.stop()
+
+
+def test_playback_of_a_results_folder(chromium, tmp_path):
+    from playwright.sync_api import sync_playwright
+
+    from pliant.runner import run_scene
+    from pliant.view.viewer import PlaybackViewer
+
+    sc = load_scene(DEMO_SCENE)
+    sc.duration, sc.frames, sc.png = 0.05, 4, False
+    run_scene(sc, tmp_path, progress=False)
+    port = _free_port()
+    v = PlaybackViewer(tmp_path, port=port)
+    assert len(v.files) == 5
+    v.show(4)
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, headless=True,
+                                    args=["--no-sandbox", "--use-angle=swiftshader",
+                                          "--enable-unsafe-swiftshader"])
+        page = browser.new_page(viewport={"width": 1000, "height": 700})
+        page.goto(f"http://127.0.0.1:{port}")
+        page.wait_for_selector("canvas", timeout=30000)
+        time.sleep(3)
+        page.screenshot(path=str(ARTIFACTS / "playback.png"))
+        browser.close()
+    assert _non_background(ARTIFACTS / "playback.png") > 0.02
+    v.server.stop()
