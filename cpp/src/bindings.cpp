@@ -318,6 +318,9 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
 
 NB_MODULE(_core, m) {
     m.doc() = "pliant engine: TLED on linear tetrahedra, CPU backend (OpenMP + SIMD)";
+    // Engines can still be referenced at interpreter exit (viewer threads are daemons); nanobind's
+    // exit-time leak report is then noise, not a refcounting bug.
+    nb::set_leak_warnings(false);
     bind_engine<float>(m, "EngineF32", "StateF32");
     bind_engine<double>(m, "EngineF64", "StateF64");
     m.attr("lanes") = kLanes;
