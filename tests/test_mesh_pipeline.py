@@ -181,3 +181,19 @@ def test_cli_mesh_commands(tmp_path):
     assert (tmp_path / "q.png").stat().st_size > 5000
     r = runner.invoke(app, ["mesh", "simplify", str(spot), str(tmp_path / "s.obj")])
     assert r.exit_code == 2 and "exactly one" in r.output
+
+
+def test_loop_boundary_and_interior_rules():
+    """Loop's rules on a small open mesh, computed by hand: boundary edge → midpoint; boundary
+    vertex → 3/4 v + 1/8 (its two boundary neighbours); interior edge → 3/8 (a + b) + 1/8 (c + d)."""
+    V = np.array([[0, 0, 0], [1, -0.3, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0.2], [2, 1, 0.0]])
+    F = np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]])
+    V2, F2 = pl.mesh.subdivide_loop(V, F, 1)
+    assert len(V2) == 6 + 9 and len(F2) == 16
+    assert np.allclose(V2[1], 0.75 * V[1] + 0.125 * (V[0] + V[2]))      # boundary even
+    assert np.allclose(V2[0], 0.75 * V[0] + 0.125 * (V[1] + V[3]))      # corner: boundary rule
+    mids = V2[6:]
+    assert np.isclose(np.linalg.norm(mids - 0.5 * (V[0] + V[1]), axis=1), 0).any()  # boundary odd
+    interior = 0.375 * (V[1] + V[4]) + 0.125 * (V[0] + V[5])             # edge (1, 4)
+    assert np.isclose(np.linalg.norm(mids - interior, axis=1), 0).any()
+    assert np.allclose(V2[3], 0.75 * V[3] + 0.125 * (V[0] + V[4]))      # corner (0, 1, 0)

@@ -343,7 +343,7 @@ template <class T>
 std::vector<T> CpuSolver<T>::internal_forces(const State<T>& s) {
     std::vector<T> f(3 * static_cast<std::size_t>(m_.n_pad), T(0));
     const NodeData<T> nd = m_.nodes();
-    const Integrator<T> it{T(0), T(0), T(0)};
+    const Integrator<T> it{T(0), T(0)};
     const std::vector<T> zeros(m_.pattern_curve.size() + 1, T(0));
 #pragma omp parallel num_threads(threads_)
     {

@@ -1,7 +1,8 @@
 """Surface checks and repair, QEM simplification and Loop subdivision.
 
-Libraries: trimesh (MIT) for connectivity, winding and Loop subdivision; fast-simplification (MIT,
-Fast-Quadric-Mesh-Simplification, Garland–Heckbert quadric error metrics) for QEM. Hole filling
+Libraries: trimesh (MIT) for connectivity and winding; fast-simplification (MIT,
+Fast-Quadric-Mesh-Simplification, Garland–Heckbert quadric error metrics) for QEM. Loop
+subdivision is ours (trimesh's weights its boundary vertices with all their neighbours). Hole filling
 is ours: each boundary loop is closed by a fan around a new vertex at the loop's centroid.
 """
 
@@ -320,13 +321,57 @@ def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,
 
 
 def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """Loop subdivision (Loop 1987) with boundary rules, ``levels`` times (trimesh)."""
-    import trimesh
-
+    """Loop subdivision (Loop 1987, "Smooth subdivision surfaces based on triangles", §3), with
+    Loop's boundary rules, ``levels`` times. Each edge gets a new (odd) vertex: 3/8 (a + b) +
+    1/8 (c + d) inside, the midpoint on a boundary; each old (even) vertex moves to
+    (1 − nβ) v + β Σ neighbours, β = (5/8 − (3/8 + cos(2π/n)/4)²)/n, inside, and to
+    3/4 v + 1/8 (b1 + b2) on a boundary (b1, b2 its boundary neighbours: the cubic B-spline rule, so
+    boundary curves subdivide as curves). Vertices: V + E per level; faces: 4 F."""
     if levels < 0:
         raise MeshError(f"subdivide: levels = {levels}; expected >= 0")
-    if levels == 0:
-        return np.asarray(V, float), np.asarray(F, np.int64)
-    Vs, Fs = trimesh.remesh.subdivide_loop(np.asarray(V, float), np.asarray(F, np.int64),
-                                           iterations=int(levels))
-    return np.asarray(Vs, float), np.asarray(Fs, np.int64)
+    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    for _ in range(int(levels)):
+        V, F = _loop_once(V, F)
+    return V, F
+
+
+def _loop_once(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    nv = len(V)
+    half = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])   # (3F, 2), face k*F + f
+    opp = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])                   # vertex opposite each
+    key = np.sort(half, axis=1)
+    edges, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    if (count > 2).any():
+        raise MeshError(f"subdivide: {(count > 2).sum()} non-manifold edge(s); repair first")
+    ne = len(edges)
+    # Odd vertices.
+    opp_sum = np.zeros((ne, 3))
+    np.add.at(opp_sum, inv, V[opp])
+    boundary = count == 1
+    odd = np.where(boundary[:, None], 0.5 * (V[edges[:, 0]] + V[edges[:, 1]]),
+                   0.375 * (V[edges[:, 0]] + V[edges[:, 1]]) + 0.125 * opp_sum)
+    # Even vertices: interior rule from all neighbours, boundary rule from boundary neighbours.
+    nb_sum = np.zeros((nv, 3))
+    n = np.zeros(nv)
+    for a, b in ((0, 1), (1, 0)):
+        np.add.at(nb_sum, edges[:, a], V[edges[:, b]])
+        np.add.at(n, edges[:, a], 1)
+    bnd_sum = np.zeros((nv, 3))
+    bnd_n = np.zeros(nv)
+    be = edges[boundary]
+    for a, b in ((0, 1), (1, 0)):
+        np.add.at(bnd_sum, be[:, a], V[be[:, b]])
+        np.add.at(bnd_n, be[:, a], 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        beta = (0.625 - (0.375 + 0.25 * np.cos(2 * np.pi / n)) ** 2) / n
+    even = np.where((n > 0)[:, None], (1 - n * beta)[:, None] * V + beta[:, None] * nb_sum, V)
+    on_b = bnd_n == 2
+    even[on_b] = 0.75 * V[on_b] + 0.125 * bnd_sum[on_b]
+    # Faces: 4 per face.
+    m = nv + inv.reshape(3, -1)  # odd vertex of edges (0,1), (1,2), (2,0) of each face
+    e01, e12, e20 = m[0], m[1], m[2]
+    a, b, c = F[:, 0], F[:, 1], F[:, 2]
+    F2 = np.concatenate([np.stack([a, e01, e20], 1), np.stack([e01, b, e12], 1),
+                         np.stack([e20, e12, c], 1), np.stack([e01, e12, e20], 1)])
+    return np.concatenate([even, odd]), F2

@@ -332,7 +332,7 @@ def load_scene(path) -> Scene:
                             f"{', '.join(_MATERIALS)}")
         cls, native = _MATERIALS[m["type"]]
         given = {k for k in m if k in ("E", "nu", "mu", "K", "lambda", "C10", "C01")}
-        try:
+        with ctx.under(p):
             if given == {"E", "nu"} and m["type"] != "mooney-rivlin":
                 material = cls(E=m["E"], nu=m["nu"])
             elif given == set(native):
@@ -344,10 +344,6 @@ def load_scene(path) -> Scene:
             elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) \
                 if "region" in m else None
             b.set_material(material, m["density"], elements=elems, name=m.get("name", p))
-        except SceneError:
-            raise
-        except InputError as e:
-            raise ctx.error(p, str(e)) from None
 
     for i, c in enumerate(data.get("constraint", [])):
         p = f"constraint[{i}]"
@@ -355,7 +351,7 @@ def load_scene(path) -> Scene:
                                "curve": "str|table"}, ("type", "nodes"))
         ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T)
         dofs = c.get("dofs", "xyz")
-        try:
+        with ctx.under(p):
             if c["type"] == "fix":
                 if "value" in c or "curve" in c:
                     raise ctx.error(p, "a 'fix' constraint takes no value or curve")
@@ -368,10 +364,6 @@ def load_scene(path) -> Scene:
             else:
                 raise ctx.error(f"{p}.type", f"unknown constraint {c['type']!r}; expected 'fix' or "
                                 "'displacement'")
-        except SceneError:
-            raise
-        except InputError as e:
-            raise ctx.error(p, str(e)) from None
 
     for i, ld in enumerate(data.get("load", [])):
         p = f"load[{i}]"

@@ -3,6 +3,7 @@ the line where it can be found, and what was expected."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 from dataclasses import dataclass
@@ -67,6 +68,17 @@ class Ctx:
 
     def error(self, key: str, message: str) -> SceneError:
         return SceneError(message, self.file, key, self.line_of(key))
+
+    @contextlib.contextmanager
+    def under(self, key: str):
+        """Turn an InputError raised inside (by a builder or material) into a SceneError naming
+        this file, key and line."""
+        try:
+            yield
+        except SceneError:
+            raise
+        except InputError as e:
+            raise self.error(key, str(e)) from None
 
 
 _TYPES = {"number": (int, float), "int": (int,), "str": (str,), "bool": (bool,), "table": (dict,),
