@@ -64,6 +64,18 @@ def _shot_with_content(page, path: Path, timeout: float = 40.0) -> float:
         time.sleep(1.0)
 
 
+def _project(cam, p, W, H):
+    """Screen pixel of world point p through viser's perspective camera (vertical fov, z up)."""
+    pos, look = np.array(cam.position), np.array(cam.look_at)
+    f = (look - pos) / np.linalg.norm(look - pos)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    d = np.asarray(p, float) - pos
+    z, th = d @ f, np.tan(cam.fov / 2)
+    return ((d @ r) / (z * th * W / H) + 1) / 2 * W, (1 - (d @ u) / (z * th)) / 2 * H
+
+
 def _non_background(png: Path) -> float:
     """Fraction of the 3-D view's pixels (left part, away from the GUI panel) that are not the
     white background."""
@@ -94,19 +106,34 @@ def test_viewer_in_a_real_browser(chromium):
             # The body (and tool) are drawn: a fair share of the view is not background.
             assert _shot_with_content(page, ARTIFACTS / "viewer.png") > 0.02
             assert v.sim.time > 0 and v.steps_per_second > 0  # the simulation thread runs
-            # Move the tool as its gizmo does (LiveViewer.move_tool is the gizmo's callback) into
-            # the back: the displacement field under it changes, and the tool feels a force.
+            # Drag the tool's gizmo with the mouse: grab the tip of its blue (z) arrow, projected
+            # through the initial camera, and pull it down to where that point would be 2.5 cm
+            # lower (the axis drag follows the projected axis); then let
+            # the simulation run: the tool comes down into the back and the displacement field
+            # under it changes.
             X = v.model.reference_positions
             under = np.linalg.norm(X - [0.0, -0.055, 0.1], axis=1) < 0.02
             v.playing = False
-            time.sleep(0.2)
+            time.sleep(0.3)
             before = v.sim.displacements[under].copy()
-            # 5 mm into the back where it is now (elements are ~12 mm); sphere radius 15 mm.
-            x = v.sim.positions
-            near = np.hypot(x[:, 0], x[:, 1] + 0.055) < 0.01
-            v.move_tool(1, (0.0, -0.055, x[near, 2].max() + 0.015 - 0.005))
+            _, pos = v.model.tools[1].pose(v.sim.time)
+            scale = 0.5 * float(np.ptp(X, axis=0).max())  # the gizmo's size (LiveViewer)
+            grip = pos + [0.0, 0.0, 0.9 * scale]
+            sx, sy = _project(v.server.initial_camera, grip, 1000, 700)
+            tx, ty = _project(v.server.initial_camera, grip - [0.0, 0.0, 0.025], 1000, 700)
+            dragged_at = v._last_drag[1]
+            page.mouse.move(sx, sy)
+            page.mouse.down()
+            page.mouse.move(tx, ty, steps=8)
+            page.mouse.up()
+            deadline = time.time() + 10
+            while v._last_drag[1] == dragged_at and time.time() < deadline:
+                time.sleep(0.1)
+            assert v._last_drag[1] > dragged_at, "the mouse drag did not reach the tool's gizmo"
+            target = v.model.tools[1].keys[-1][1:4]
+            assert pos[2] - 0.035 < target[2] < pos[2] - 0.015  # dragged down by about 2.5 cm
             with v.lock:
-                v.sim.run_to(v.sim.time + 0.3)  # the tool travels at a bounded speed
+                v.sim.run_to(v.sim.time + 0.3)
             after = v.sim.displacements[under]
             assert np.abs(after - before).max() > 1e-3
             assert np.linalg.norm(v.sim.tool_force(1)[0]) > 0
