@@ -69,6 +69,12 @@ class LiveViewer:
         self.sim = Simulation(self.model, dt=scene.dt, safety=scene.safety)
         self.dt0 = self.sim.solver.dt
         self.surface = _Surface(self.model.tets)
+        self.embedding = None  # the fine surface of the scene, when it has one
+        if scene.meta.get("embed_surface"):
+            from ..mesh import embed_surface
+
+            Ve, Fe = scene.meta["embed_surface"]
+            self.embedding = embed_surface(self.model.reference_positions, self.model.tets, Ve, Fe)
         self.lock = threading.Lock()
         self.playing = True
         self.stop_event = threading.Event()
@@ -201,16 +207,23 @@ class LiveViewer:
 
         with self.lock:
             P = self.sim.positions
-            if self.field.startswith("von"):
-                vals = self.surface.node_values(self.model.element_results(self.sim.state)["von_mises"])
-            else:
-                vals = np.linalg.norm(self.sim.displacements[self.surface.nodes], axis=1)
+            vm = self.model.element_results(self.sim.state)["von_mises"] \
+                if self.field.startswith("von") else None
+            u = self.sim.displacements
             t = self.sim.time
             forces = [self.sim.tool_force(k) for k in range(len(self.model.tools))]
             poses = [tool.pose(t) for tool in self.model.tools]
+        if self.embedding is not None:  # the fine surface follows the tets
+            emb = self.embedding
+            V, F = emb.positions(self.model.tets, P), emb.faces
+            vals = vm[emb.tet] if vm is not None else \
+                np.linalg.norm(emb.positions(self.model.tets, u), axis=1)
+        else:
+            V, F = P[self.surface.nodes], self.surface.faces
+            vals = self.surface.node_values(vm) if vm is not None else \
+                np.linalg.norm(u[self.surface.nodes], axis=1)
         lo, hi = float(vals.min()), float(vals.max())
-        mesh = trimesh.Trimesh(P[self.surface.nodes], self.surface.faces, process=False,
-                               vertex_colors=_colours(vals, lo, hi))
+        mesh = trimesh.Trimesh(V, F, process=False, vertex_colors=_colours(vals, lo, hi))
         self.server.scene.add_mesh_trimesh("/body", mesh)
         self.status.content = (f"t = {t:.3f} s · {self.steps_per_second:,.0f} steps/s · "
                                f"real-time factor {self.realtime_factor:.2f}" +
