@@ -241,7 +241,7 @@ class ModelBuilder:
                 f"{inverted.size} inverted element(s) in all", e)
         if backend not in ("cpu", "cuda"):
             raise InputError(f"backend = {backend!r}; expected 'cpu' or 'cuda'")
-        model = Model(self, owner, dtype, threads)
+        model = Model(self, owner, dtype, threads, geometry=(vol, alt))
         if backend == "cuda":
             model.use_cuda(device)
         return model

@@ -44,7 +44,8 @@ class Model:
     ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,).
     """
 
-    def __init__(self, builder, owner: np.ndarray, dtype: np.dtype, threads: int | None):
+    def __init__(self, builder, owner: np.ndarray, dtype: np.dtype, threads: int | None,
+                 geometry: tuple[np.ndarray, np.ndarray]):
         X, T = builder.nodes, builder.tets
         self.reference_positions = X.copy()
         self.tets = T.copy()
@@ -140,8 +141,8 @@ class Model:
         )
         self.n_nodes, self.n_elements = N, M
         self.dt_critical = float(self._engine.dt_critical)
-        _, alt = _core.tet_geometry(np.ascontiguousarray(X), np.ascontiguousarray(T.astype(np.int32)))
-        self.min_altitude = float(np.min(alt))  # smallest element altitude [m]
+        self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
+        self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)
@@ -229,9 +230,7 @@ class Model:
 
     def element_volumes(self) -> np.ndarray:
         """Reference volume V0 [m³] per element (M,)."""
-        vol, _ = _core.tet_geometry(np.ascontiguousarray(self.reference_positions),
-                                    np.ascontiguousarray(self.tets.astype(np.int32)))
-        return np.asarray(vol)
+        return self._volumes.copy()
 
     def internal_forces(self, state: "State") -> np.ndarray:
         """Internal nodal forces f(u) [N], (N, 3); at constrained DOFs of an equilibrium state they
