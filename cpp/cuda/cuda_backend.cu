@@ -83,18 +83,7 @@ __global__ void contact_kernel(index_t nc, const index_t* nodes, const double* X
     const index_t end = begin + kChunk < nc ? begin + kChunk : nc;
     for (index_t i = begin; i < end; ++i) {
         contact_node(i, nodes, X, mass, u, P, tools, nt, pose0, pose1, grid, g1, u_next, force, tool);
-        const index_t k = tool[i];
-        if (k < 0) continue;
-        const index_t n = nodes[i];
-        const double* f = force + 3 * i;
-        double r[3];
-        for (int d = 0; d < 3; ++d) {
-            h[6 * k + d] -= f[d];
-            r[d] = X[3 * n + d] + double(u_next[d * P + n]) - pose1[k].t[d];
-        }
-        h[6 * k + 3] -= r[1] * f[2] - r[2] * f[1];
-        h[6 * k + 4] -= r[2] * f[0] - r[0] * f[2];
-        h[6 * k + 5] -= r[0] * f[1] - r[1] * f[0];
+        add_tool_reaction(i, nodes, X, u_next, P, pose1, force, tool, h);
     }
 }
 

@@ -72,11 +72,7 @@ struct Engine {
 #ifdef PLIANT_WITH_CUDA
         if (gpu) {
             State<T>& s = st.s;
-            if (s.dt > 0.0 && s.dt != dt) {  // keep the velocity when Δt changes (as the CPU does)
-                const T r = T(dt / s.dt);
-                for (std::size_t i = 0; i < s.u.size(); ++i) s.u_prev[i] = s.u[i] - r * (s.u[i] - s.u_prev[i]);
-                ++st.version;
-            }
+            if (keep_velocity(s, dt)) ++st.version;
             if (resident != &st || resident_version != st.version) gpu->upload(s);
             RunReport r = gpu->run(n, s.t, dt, alpha, check_every > 0 ? check_every : 1, blowup);
             gpu->download(s);

@@ -58,18 +58,8 @@ void CpuSolver<T>::contact_pass(const T* u_cur, T* u_next, double t0, double t1,
             contact_node(i, m_.contact_nodes.data(), m_.X.data(), m_.mass.data(), u_cur, P,
                          m_.tools.data(), nt, P0, P1, m_.tool_grid.data(), g1, u_next,
                          contact_force_.data(), contact_tool_.data());
-            const index_t k = contact_tool_[i];
-            if (k < 0) continue;
-            const index_t n = m_.contact_nodes[i];
-            const double* f = &contact_force_[3 * i];
-            double r[3];
-            for (int d = 0; d < 3; ++d) {
-                h[6 * k + d] -= f[d];  // the tool receives the reaction
-                r[d] = m_.X[3 * n + d] + double(u_next[d * P + n]) - P1[k].t[d];
-            }
-            h[6 * k + 3] -= r[1] * f[2] - r[2] * f[1];
-            h[6 * k + 4] -= r[2] * f[0] - r[0] * f[2];
-            h[6 * k + 5] -= r[0] * f[1] - r[1] * f[0];
+            add_tool_reaction(i, m_.contact_nodes.data(), m_.X.data(), u_next, P, P1,
+                              contact_force_.data(), contact_tool_.data(), h);
         }
     }
 #pragma omp single nowait
@@ -141,18 +131,10 @@ bool CpuSolver<T>::check(const T* u, double t, double blowup, RunReport& rep) co
     return true;
 }
 
-// Central differences assume equal steps: when Δt changes, keep the velocity (u − u⁻)/Δt.
-template <class T>
-void CpuSolver<T>::rescale_history(State<T>& s, double dt) const {
-    if (s.dt <= 0.0 || s.dt == dt) return;
-    const T r = T(dt / s.dt);
-    for (std::size_t i = 0; i < s.u.size(); ++i) s.u_prev[i] = s.u[i] - r * (s.u[i] - s.u_prev[i]);
-}
-
 template <class T>
 RunReport CpuSolver<T>::step(const State<T>& in, State<T>& out, double dt, double alpha) {
     State<T> tmp = in;
-    rescale_history(tmp, dt);
+    keep_velocity(tmp, dt);
     RunReport rep = run(tmp, 1, dt, alpha, 1, INFINITY);
     out = std::move(tmp);
     return rep;
@@ -161,7 +143,7 @@ RunReport CpuSolver<T>::step(const State<T>& in, State<T>& out, double dt, doubl
 template <class T>
 RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int check_every,
                             double blowup) {
-    rescale_history(s, dt);
+    keep_velocity(s, dt);
     std::vector<T>* v[3] = {&s.u_prev, &s.u, &scratch_};
     RunReport rep;
     const Integrator<T> it = central_difference<T>(dt, alpha);

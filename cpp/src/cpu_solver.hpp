@@ -61,7 +61,6 @@ private:
                    const Integrator<T>& it, T* f_node);
     bool check(const T* u_cur, double t, double blowup, RunReport& rep) const;
     void contact_pass(const T* u_cur, T* u_next, double t0, double t1, double g1, double* hist);
-    void rescale_history(State<T>& s, double dt) const;
 
     const Model<T>& m_;
     int threads_;

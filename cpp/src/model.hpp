@@ -96,4 +96,14 @@ struct State {
     explicit State(index_t n_pad) : u(3 * static_cast<std::size_t>(n_pad), T(0)), u_prev(u) {}
 };
 
+/// Central differences assume equal steps: when Δt changes from s.dt to dt, rescale u⁻ so that the
+/// velocity (u − u⁻)/Δt is kept. Returns whether anything changed.
+template <class T>
+bool keep_velocity(State<T>& s, double dt) {
+    if (s.dt <= 0.0 || s.dt == dt) return false;
+    const T r = T(dt / s.dt);
+    for (std::size_t i = 0; i < s.u.size(); ++i) s.u_prev[i] = s.u[i] - r * (s.u[i] - s.u_prev[i]);
+    return true;
+}
+
 }  // namespace pliant

@@ -202,4 +202,24 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const double* X, co
     }
 }
 
+/// Adds contact node i's reaction to its tool's row of h (6 per tool: force [N] the tool
+/// receives, then torque [N·m] about the tool's position at t + Δt). No-op without contact.
+template <class T>
+PLIANT_HD void add_tool_reaction(index_t i, const index_t* nodes, const double* X, const T* u_next,
+                                 index_t P, const Pose* pose1, const double* force,
+                                 const index_t* tool, double* h) {
+    const index_t k = tool[i];
+    if (k < 0) return;
+    const index_t n = nodes[i];
+    const double* f = force + 3 * i;
+    double r[3];
+    for (int d = 0; d < 3; ++d) {
+        h[6 * k + d] -= f[d];  // the tool receives the reaction
+        r[d] = X[3 * n + d] + double(u_next[d * P + n]) - pose1[k].t[d];
+    }
+    h[6 * k + 3] -= r[1] * f[2] - r[2] * f[1];
+    h[6 * k + 4] -= r[2] * f[0] - r[0] * f[2];
+    h[6 * k + 5] -= r[0] * f[1] - r[1] * f[0];
+}
+
 }  // namespace pliant

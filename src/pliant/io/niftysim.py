@@ -228,7 +228,4 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
                   frames=20, title=path.stem, warnings=warnings)
     scene.meta["mesh_source"] = f
     scene.meta["niftysim_steps"] = steps
-    from ..scene.select import boundary_nodes
-
-    scene.meta["boundary_nodes"] = boundary_nodes(T)
     return scene

@@ -19,7 +19,7 @@ from ..errors import InputError, MeshError
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from .schema import Ctx, SceneError, check_keys, vector
-from .select import boundary_nodes, select_elements, select_nodes
+from .select import select_elements, select_nodes
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -407,5 +407,4 @@ def load_scene(path) -> Scene:
     scene.output_interval = out.get("interval")
     scene.frames = int(out.get("frames", 20))
     scene.png = bool(out.get("png", True))
-    scene.meta["boundary_nodes"] = boundary_nodes(T)
     return scene

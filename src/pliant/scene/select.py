@@ -11,18 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..mesh.topology import boundary_nodes
 from .schema import Ctx, check_keys, vector
 
 _KEYS = {"all": "bool", "ids": "list", "box": "list", "sphere": "table", "plane": "table",
          "surface": "bool", "set": "str"}
-
-
-def boundary_nodes(tets: np.ndarray) -> np.ndarray:
-    """Indices of nodes on faces used by exactly one tetrahedron."""
-    faces = np.sort(np.concatenate([tets[:, [0, 1, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 3]],
-                                    tets[:, [1, 2, 3]]]), axis=1)
-    uniq, count = np.unique(faces, axis=0, return_counts=True)
-    return np.unique(uniq[count == 1])
 
 
 def _mask(ctx: Ctx, spec: dict, path: str, P: np.ndarray, extent: float) -> np.ndarray:

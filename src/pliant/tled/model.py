@@ -109,7 +109,7 @@ class Model:
         # Contact: boundary nodes without constraints, if there are tools.
         self.tools = list(builder.tools)
         if self.tools:
-            from ..scene.select import boundary_nodes
+            from ..mesh.topology import boundary_nodes
 
             constrained_nodes = {n for n, _ in self._cons_user}
             cn = np.array([n for n in boundary_nodes(T) if n not in constrained_nodes], np.int64)

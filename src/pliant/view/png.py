@@ -8,16 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def boundary_faces(tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Boundary triangles (F, 3), outward for positive tets, and the element of each (F,)."""
-    local = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
-    faces = tets[:, local].reshape(-1, 3)
-    owner = np.repeat(np.arange(len(tets)), 4)
-    key = np.sort(faces, axis=1)
-    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    once = count[inv.ravel()] == 1
-    return faces[once], owner[once]
+from ..mesh.topology import boundary_faces  # noqa: F401  (re-exported)
 
 
 def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.ndarray,
