@@ -71,7 +71,8 @@ __global__ void node_kernel(index_t n_nodes, NodeData<T> nd, const T* f_elem, co
 
 /// Contact, one chunk of contact nodes per thread (fixed chunks: deterministic force sums).
 template <class T>
-__global__ void contact_kernel(index_t nc, const index_t* nodes, const double* X, const T* mass,
+__global__ void contact_kernel(index_t nc, const index_t* nodes, const index_t* free_bits,
+                               const double* X, const T* mass,
                                const T* u, index_t P, const RigidTool* tools, int nt,
                                const Pose* pose0, const Pose* pose1, const double* grid, double g1,
                                T* u_next, double* force, index_t* tool, double* chunk_out) {
@@ -82,7 +83,8 @@ __global__ void contact_kernel(index_t nc, const index_t* nodes, const double* X
     for (int k = 0; k < 6 * nt; ++k) h[k] = 0.0;
     const index_t end = begin + kChunk < nc ? begin + kChunk : nc;
     for (index_t i = begin; i < end; ++i) {
-        contact_node(i, nodes, X, mass, u, P, tools, nt, pose0, pose1, grid, g1, u_next, force, tool);
+        contact_node(i, nodes, free_bits, X, mass, u, P, tools, nt, pose0, pose1, grid, g1, u_next, force,
+                     tool);
         add_tool_reaction(i, nodes, X, u_next, P, pose1, force, tool, h);
     }
 }
@@ -148,7 +150,8 @@ struct CudaEngine<T>::Impl {
     // model
     index_t* elem_nodes{};
     T *elem_grad{}, *elem_vol{}, *mass{}, *inv_mass{}, *patterns{}, *cval{};
-    index_t *elem_id{}, *inc_off{}, *inc_idx{}, *co{}, *cdof{}, *ccurve{}, *pcurve{}, *cnodes{};
+    index_t *elem_id{}, *inc_off{}, *inc_idx{}, *co{}, *cdof{}, *ccurve{}, *pcurve{}, *cnodes{},
+        *cfree{};
     LoadCurve* curves{};
     double *tt{}, *tv{}, *X{}, *keys{}, *grid{};
     RigidTool* tools{};
@@ -185,6 +188,7 @@ struct CudaEngine<T>::Impl {
         tv = upload_vec(m.table_v);
         X = upload_vec(m.X);
         cnodes = upload_vec(m.contact_nodes);
+        cfree = upload_vec(m.contact_free);
         tools = upload_vec(m.tools);
         keys = upload_vec(m.tool_keys);
         grid = upload_vec(m.tool_grid);
@@ -212,7 +216,7 @@ struct CudaEngine<T>::Impl {
 
     ~Impl() {
         void* ptrs[] = {elem_nodes, elem_grad, elem_vol, elem_id, inc_off, inc_idx, mass, inv_mass,
-                        patterns, pcurve, co, cdof, cval, ccurve, curves, tt, tv, X, cnodes, tools,
+                        patterns, pcurve, co, cdof, cval, ccurve, curves, tt, tv, X, cnodes, cfree, tools,
                         keys, grid, u[0], u[1], u[2], f_elem, J, cnext, pf, pose0, pose1, cforce,
                         ctool, chunk, t0, step, bad, hist};
         for (void* p : ptrs)
@@ -243,7 +247,7 @@ struct CudaEngine<T>::Impl {
             cnext);
         if (nt) {
             contact_kernel<T><<<grid_for(chunks), kThreads, 0, stream>>>(
-                static_cast<index_t>(m.contact_nodes.size()), cnodes, X, mass, u[cur], m.n_pad,
+                static_cast<index_t>(m.contact_nodes.size()), cnodes, cfree, X, mass, u[cur], m.n_pad,
                 tools, nt, pose0, pose1, grid, double(it.g1), u[next], cforce, ctool, chunk);
         }
         finish_step_kernel<<<1, 1, 0, stream>>>(chunks, nt, chunk, hist, step);

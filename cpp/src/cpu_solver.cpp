@@ -49,13 +49,14 @@ void CpuSolver<T>::contact_pass(const T* u_cur, T* u_next, double t0, double t1,
     const index_t nc = static_cast<index_t>(m_.contact_nodes.size());
     const index_t chunks = (nc + kContactChunk - 1) / kContactChunk;
     const index_t P = m_.n_pad;
+    const T* mass = relaxing_ ? m_.relax_mass.data() : m_.mass.data();
 #pragma omp for schedule(static)
     for (index_t c = 0; c < chunks; ++c) {
         double* h = &chunk_hist_[static_cast<std::size_t>(c) * 6 * nt];
         for (int k = 0; k < 6 * nt; ++k) h[k] = 0.0;
         const index_t end = std::min(nc, (c + 1) * kContactChunk);
         for (index_t i = c * kContactChunk; i < end; ++i) {
-            contact_node(i, m_.contact_nodes.data(), m_.X.data(), m_.mass.data(), u_cur, P,
+            contact_node(i, m_.contact_nodes.data(), m_.contact_free.data(), m_.X.data(), mass, u_cur, P,
                          m_.tools.data(), nt, P0, P1, m_.tool_grid.data(), g1, u_next,
                          contact_force_.data(), contact_tool_.data());
             add_tool_reaction(i, m_.contact_nodes.data(), m_.X.data(), u_next, P, P1,
@@ -90,7 +91,7 @@ void CpuSolver<T>::element_pass(const T* __restrict u) {
 template <class T>
 void CpuSolver<T>::node_pass(const Buffers& bu, const T* pattern_factors, const T* cons_factors,
                              const Integrator<T>& it, T* f_node) {
-    const NodeData<T> nd = m_.nodes();
+    const NodeData<T> nd = m_.nodes(relaxing_);
     const T* f = f_elem_.data();
     const index_t P = m_.n_pad;
     const index_t* co = m_.cons_offsets.data();
@@ -208,6 +209,7 @@ template <class T>
 RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
                               int check_every, double blowup) {
     s.u_prev = s.u;  // start at rest
+    relaxing_ = true;  // fictitious masses (Model::relax_mass) in kernel 2, contact and damping
     std::vector<T>* v[3] = {&s.u_prev, &s.u, &scratch_};
     RunReport rep;
     const std::size_t nc = m_.curves.size(), np = m_.pattern_curve.size();
@@ -259,7 +261,7 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
                         scale += r * r + (1.0 - fm) * double(fcur[i]) * fcur[i];
                         const double du = double(uc[i]) - up[i];
                         num += fm * du * (double(fcur[i]) - fprev[i]);
-                        den += fm * double(m_.mass[i % P]) * du * du;
+                        den += fm * double(m_.relax_mass[i % P]) * du * du;
                     }
                     rep.residual = scale > 0.0 ? std::sqrt(res / scale) : 0.0;
                     if (den > 0.0) alpha = 2.0 * std::sqrt(std::max(num / den, 0.0));
@@ -285,6 +287,7 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
             if (!stop) done = max_steps;
         }
     }
+    relaxing_ = false;
     s.u_prev = s.u;  // equilibrium: at rest
     s.t = t_eval;
     s.dt = dt;

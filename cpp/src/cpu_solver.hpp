@@ -64,6 +64,7 @@ private:
 
     const Model<T>& m_;
     int threads_;
+    bool relaxing_ = false;  // inside relax(): the dynamic-relaxation masses replace the physical
     std::vector<T> f_elem_, J_, scratch_, f_node_[2];
     std::vector<double> contact_force_, tool_history_, chunk_hist_;
     std::vector<index_t> contact_tool_;

@@ -32,7 +32,7 @@ Model<T>::Model(const ModelInput& in) {
     elem_vol.assign(S, T(0));
     elem_id.assign(S, -1);
     mass.assign(P, T(0));
-    std::vector<double> mass_d(P, 0.0);
+    std::vector<double> mass_d(P, 0.0), stiff_d(P, 0.0);
     std::vector<index_t> count(n_nodes + 1, 0);
 
     begin = 0;
@@ -60,7 +60,10 @@ Model<T>::Model(const ModelInput& in) {
             elem_vol[s] = T(vol);
             elem_id[s] = e;
             const double rho = in.density[e];
-            for (int a = 0; a < 4; ++a) mass_d[in.tets[4 * e + a]] += rho * vol / 4.0;
+            for (int a = 0; a < 4; ++a) {
+                mass_d[in.tets[4 * e + a]] += rho * vol / 4.0;
+                stiff_d[in.tets[4 * e + a]] += modulus * vol / (alt * alt) / 4.0;  // ρ' Δt_c⁻²
+            }
             const double dt_e = alt / std::sqrt(modulus / rho);
             if (dt_critical_elem < 0 || dt_e < dt_critical) {
                 dt_critical = dt_e;
@@ -70,9 +73,14 @@ Model<T>::Model(const ModelInput& in) {
         begin = end;
     }
     inv_mass.assign(P, T(0));
+    relax_mass.assign(P, T(0));
+    relax_inv_mass.assign(P, T(0));
     for (std::size_t n = 0; n < P; ++n) {
         mass[n] = T(mass_d[n]);
         inv_mass[n] = mass_d[n] > 0.0 ? T(1.0 / mass_d[n]) : T(0);
+        const double mr = stiff_d[n] * dt_critical * dt_critical;  // ρ' = M Δt_c² / h² per element
+        relax_mass[n] = T(mr);
+        relax_inv_mass[n] = mr > 0.0 ? T(1.0 / mr) : T(0);
     }
 
     // Node → (element slot, corner) incidence, ordered by slot: a fixed summation order.
@@ -125,6 +133,10 @@ Model<T>::Model(const ModelInput& in) {
     for (index_t n = 0; n < n_nodes; ++n) cons_offsets[n + 1] += cons_offsets[n];
     X.assign(in.X, in.X + 3 * static_cast<std::size_t>(n_nodes));
     contact_nodes = in.contact_nodes;
+    contact_free.assign(contact_nodes.size(), 0);
+    for (std::size_t i = 0; i < contact_nodes.size(); ++i)
+        for (int d = 0; d < 3; ++d)
+            if (free_mask[d * n_pad + contact_nodes[i]] != T(0)) contact_free[i] |= index_t(1) << d;
     tools = in.tools;
     tool_keys = in.tool_keys;
     tool_grid = in.tool_grid;
@@ -143,7 +155,8 @@ template <class T>
 std::size_t Model<T>::bytes() const {
     auto b = [](const auto& v) { return v.size() * sizeof(v[0]); };
     return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) +
-           b(inc_offsets) + b(inc_index) + b(mass) + b(inv_mass) + b(free_mask) +
+           b(inc_offsets) + b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) +
+           b(relax_inv_mass) + b(free_mask) +
            b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) + b(cons_offsets);
 }
 

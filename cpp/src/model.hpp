@@ -57,6 +57,10 @@ struct Model {
     std::vector<Group<T>> groups;
     std::vector<index_t> inc_offsets, inc_index;
     std::vector<T> mass, inv_mass, free_mask;  // (P,), (P,), (3P,)
+    // Fictitious masses for dynamic relaxation [kg], (P,): element densities scaled so that every
+    // element's critical step equals dt_critical (Underwood 1983, "Dynamic relaxation", §4: the
+    // static solution does not depend on the mass; large elements no longer wait on small ones).
+    std::vector<T> relax_mass, relax_inv_mass;
     std::vector<T> load_patterns;              // (K, 3, P)
     std::vector<index_t> pattern_curve;
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node
@@ -66,6 +70,7 @@ struct Model {
     std::vector<double> table_t, table_v;
     std::vector<double> X;                     // reference positions [m], AoS (N, 3)
     std::vector<index_t> contact_nodes;
+    std::vector<index_t> contact_free;         // per contact node: bit d set if DOF d is free
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys, tool_grid;
     double dt_critical = 0.0;   // min over elements of h_min / c_d [s]
@@ -74,8 +79,10 @@ struct Model {
     explicit Model(const ModelInput& in);
 
     ElementData<T> elements() const { return {elem_nodes.data(), elem_grad.data(), elem_vol.data()}; }
-    NodeData<T> nodes() const {
-        return {inc_offsets.data(), inc_index.data(), inv_mass.data(), load_patterns.data(),
+    /// Node data with the physical masses, or with the dynamic-relaxation masses if `relax`.
+    NodeData<T> nodes(bool relax = false) const {
+        return {inc_offsets.data(), inc_index.data(), relax ? relax_inv_mass.data() : inv_mass.data(),
+                load_patterns.data(),
                 static_cast<int>(pattern_curve.size())};
     }
     /// Curve factors at time t [s], one per curve.

@@ -150,10 +150,14 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
 /// motion relative to the tool over the step, d_t: stick (remove d_t) if |d_t| ≤ μs|δ_n|, else slip
 /// (remove μk|δ_n| along d_t). The force it took, m (x_corrected − x⁺)/γ1 [N], is stored per node
 /// in force_out (3) with the tool index in tool_out (−1: no contact; force_out then untouched).
-/// Inputs: node n, reference X [m] (3 per node, AoS, double), mass [kg], u and u⁺ [m] SoA (3, P),
-/// tools with their poses at t and t + Δt. Outputs: u⁺ corrected, force_out, tool_out.
+/// Only the node's free DOFs move (free_bits[i], bit d: DOF d is not constrained): on a symmetry
+/// plane or a roller the constraint carries the rest of the correction.
+/// Inputs: contact node i → node nodes[i], its free DOFs, reference X [m] (3 per node, AoS,
+/// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt.
+/// Outputs: u⁺ corrected, force_out, tool_out.
 template <class T>
-PLIANT_HD void contact_node(index_t i, const index_t* nodes, const double* X, const T* mass,
+PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* free_bits,
+                            const double* X, const T* mass,
                             const T* u, index_t P, const RigidTool* tools, int n_tools,
                             const Pose* pose0, const Pose* pose1, const double* grid, double g1,
                             T* u_next, double* force_out, index_t* tool_out) {
@@ -197,8 +201,9 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const double* X, co
     if (tool_out[i] < 0) return;  // force_out is only meaningful where tool_out >= 0
     const double m_over_g1 = double(mass[n]) / g1;
     for (int d = 0; d < 3; ++d) {
-        force_out[3 * i + d] = m_over_g1 * (x1[d] - xs[d]);
-        u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
+        const bool free = (free_bits[i] >> d) & 1;
+        force_out[3 * i + d] = free ? m_over_g1 * (x1[d] - xs[d]) : 0.0;
+        if (free) u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
     }
 }
 

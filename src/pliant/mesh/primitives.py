@@ -20,18 +20,19 @@ def orient_positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     return T
 
 
-def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitter: float = 0.0,
-             seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Box [origin, origin + size] [m] split into nx·ny·nz hexahedra of 6 tetrahedra each (Kuhn
-    triangulation, conforming). ``jitter`` moves interior nodes randomly by up to that fraction of
-    a cell, making the mesh unstructured. Returns nodes (N, 3) [m] and tets (M, 4)."""
-    nx, ny, nz = (int(c) for c in cells)
-    if min(nx, ny, nz) < 1:
-        raise InputError(f"cells = {cells!r}; expected three integers >= 1")
-    size = np.asarray(size, float)
-    if size.shape != (3,) or np.any(size <= 0):
-        raise InputError(f"size = {size!r}; expected three lengths > 0 [m]")
-    g = [np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))]
+def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
+    """Tensor-product mesh on the coordinate lines xs, ys, zs [m] (each strictly increasing, at
+    least 2 values): every cell is split into 6 tetrahedra (Kuhn triangulation, conforming). Use it
+    for graded meshes, e.g. fine near a contact and growing geometrically away from it. Returns
+    nodes (N, 3) [m] and positively oriented tets (6·(nx−1)(ny−1)(nz−1), 4)."""
+    g = []
+    for name, c in zip("xyz", (xs, ys, zs)):
+        c = np.asarray(c, float)
+        if c.ndim != 1 or c.size < 2 or not np.all(np.isfinite(c)) or np.any(np.diff(c) <= 0):
+            raise InputError(f"{name}s = {c!r}; expected at least 2 finite, strictly increasing "
+                             "coordinates [m]")
+        g.append(c)
+    nx, ny, nz = (c.size - 1 for c in g)
     X = np.stack(np.meshgrid(*g, indexing="ij"), axis=-1).reshape(-1, 3)
     idx = np.arange(X.shape[0]).reshape(nx + 1, ny + 1, nz + 1)
     i, j, k = (a.ravel() for a in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz),
@@ -44,10 +45,25 @@ def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitt
             corner[axis] += 1
             path.append(idx[i + corner[0], j + corner[1], k + corner[2]])
         tets.append(np.stack(path, axis=1))
-    T = np.concatenate(tets)
+    return X, orient_positive(X, np.concatenate(tets))
+
+
+def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitter: float = 0.0,
+             seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Box [origin, origin + size] [m] split into nx·ny·nz hexahedra of 6 tetrahedra each (Kuhn
+    triangulation, conforming). ``jitter`` moves interior nodes randomly by up to that fraction of
+    a cell, making the mesh unstructured. Returns nodes (N, 3) [m] and tets (M, 4)."""
+    nx, ny, nz = (int(c) for c in cells)
+    if min(nx, ny, nz) < 1:
+        raise InputError(f"cells = {cells!r}; expected three integers >= 1")
+    size = np.asarray(size, float)
+    if size.shape != (3,) or np.any(size <= 0):
+        raise InputError(f"size = {size!r}; expected three lengths > 0 [m]")
+    X, T = grid_tets(*(np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))))
     if jitter > 0:
         h = size / np.array([nx, ny, nz])
         rng = np.random.default_rng(seed)
         interior = np.all((X > 1e-12 * size) & (X < size * (1 - 1e-12)), axis=1)
         X[interior] += (rng.uniform(-1, 1, (interior.sum(), 3)) * jitter * h)
-    return X + np.asarray(origin, float), orient_positive(X, T)
+        T = orient_positive(X, T)
+    return X + np.asarray(origin, float), T

@@ -106,13 +106,15 @@ class Model:
             tv.extend(c.values)
 
         density = np.array([s.density for s in self.sets])[owner[elem_order]]
-        # Contact: boundary nodes without constraints, if there are tools.
+        # Contact: boundary nodes with at least one free DOF, if there are tools (the kernel moves
+        # only the free DOFs: symmetry planes and rollers keep their constraint).
         self.tools = list(builder.tools)
         if self.tools:
             from ..mesh.topology import boundary_nodes
 
-            constrained_nodes = {n for n, _ in self._cons_user}
-            cn = np.array([n for n in boundary_nodes(T) if n not in constrained_nodes], np.int64)
+            n_cons = np.bincount(np.array([n for n, _ in self._cons_user], np.int64),
+                                 minlength=X.shape[0])
+            cn = np.array([n for n in boundary_nodes(T) if n_cons[n] < 3], np.int64)
         else:
             cn = np.zeros(0, np.int64)
         self.contact_nodes = cn
