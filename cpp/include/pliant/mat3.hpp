@@ -40,15 +40,6 @@ PLIANT_HD T det(const Sym3<T>& s) {
 template <class T>
 PLIANT_HD T trace(const Sym3<T>& s) { return s.xx + s.yy + s.zz; }
 
-/// Right Cauchy–Green tensor C = Fᵀ F.
-template <class T>
-PLIANT_HD Sym3<T> right_cauchy_green(const Mat3<T>& F) {
-    const T* a = F.a;
-    return {a[0] * a[0] + a[3] * a[3] + a[6] * a[6], a[1] * a[1] + a[4] * a[4] + a[7] * a[7],
-            a[2] * a[2] + a[5] * a[5] + a[8] * a[8], a[0] * a[1] + a[3] * a[4] + a[6] * a[7],
-            a[1] * a[2] + a[4] * a[5] + a[7] * a[8], a[0] * a[2] + a[3] * a[5] + a[6] * a[8]};
-}
-
 /// Inverse of a symmetric matrix whose determinant `d` is already known.
 template <class T>
 PLIANT_HD Sym3<T> inverse(const Sym3<T>& s, T d) {
@@ -98,6 +89,21 @@ PLIANT_HD Sym3<T> sym(const Mat3<T>& A) {
     const T h = T(0.5);
     return {A.a[0], A.a[4], A.a[8], h * (A.a[1] + A.a[3]), h * (A.a[5] + A.a[7]),
             h * (A.a[2] + A.a[6])};
+}
+
+/// Product A·B of two symmetric matrices that commute (polynomials in one tensor, e.g. C⁻¹ and
+/// dev E), so that A·B is symmetric: its upper triangle.
+template <class T>
+PLIANT_HD Sym3<T> mul_commuting(const Sym3<T>& A, const Sym3<T>& B) {
+    return {A.xx * B.xx + A.xy * B.xy + A.xz * B.xz, A.xy * B.xy + A.yy * B.yy + A.yz * B.yz,
+            A.xz * B.xz + A.yz * B.yz + A.zz * B.zz, A.xx * B.xy + A.xy * B.yy + A.xz * B.yz,
+            A.xy * B.xz + A.yy * B.yz + A.yz * B.zz, A.xx * B.xz + A.xy * B.yz + A.xz * B.zz};
+}
+
+/// Deviator A − (tr A / 3) I.
+template <class T>
+PLIANT_HD Sym3<T> dev(const Sym3<T>& A) {
+    return add_identity(-trace(A) / T(3), A);
 }
 
 /// Double contraction A : A of a symmetric matrix.

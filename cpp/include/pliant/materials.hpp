@@ -1,11 +1,20 @@
 // pliant — hyperelastic materials, header-only, host and device.
 //
-// Each material is a small functor with three methods over the deformation gradient F:
-//   pk2(F)    second Piola–Kirchhoff stress S [Pa]
-//   pk1(F)    first Piola–Kirchhoff stress P = F S [Pa] (what TLED's nodal forces need)
-//   energy(F) strain-energy density W [J/m³ = Pa]
+// Each material is a small functor with three methods over the element's kinematics k (F, the
+// displacement gradient H = F − I, the Green–Lagrange strain E, J and J − 1):
+//   pk2(k)    second Piola–Kirchhoff stress S [Pa]
+//   pk1(k)    first Piola–Kirchhoff stress P = F S [Pa] (what TLED's nodal forces need)
+//   energy(k) strain-energy density W [J/m³ = Pa]
 // and the parameter-only `dilatational_modulus()` = λ + 2μ [Pa] for the critical time step.
-// Conventions: C = FᵀF, J = det F, I1 = tr C, I2 = ½(I1² − tr C²), Ī1 = J^(−2/3) I1, Ī2 = J^(−4/3) I2.
+// Conventions: C = FᵀF = I + 2E, J = det F, I1 = tr C, I2 = ½(I1² − tr C²), Ī1 = J^(−2/3) I1,
+// Ī2 = J^(−4/3) I2.
+//
+// Precision: stresses are formed from E and J − 1 computed from H, never as differences of
+// numbers near 1 (C − I, J − 1, I − I1/3 C⁻¹): in float32 those lose every digit of a strain of
+// 1e-7 and leave a force noise of ε_float·E·area per element, which set a floor on quasi-static
+// residuals (a 1e-5-strain Hertz block stalled at 10 % in float32). Identities used:
+// I − I1/3 C⁻¹ = 2 C⁻¹ dev E;  I − C⁻¹ = 2 C⁻¹ E;
+// I1 I − C − 2/3 I2 C⁻¹ = C⁻¹ dev(I1 C − C²) = C⁻¹ [(2 I1 − 4) dev E − 4 dev E²].
 #pragma once
 
 #include <cmath>
@@ -23,78 +32,116 @@ enum class MaterialKind : int {
     LinearElastic = 4,      // small strain, params (mu, lambda)
 };
 
+/// Kinematics of one element from its displacement gradient H = ∇X u (dimensionless).
+template <class T>
+struct Kinematics {
+    Mat3<T> H, F;  // displacement and deformation gradients, F = I + H
+    Sym3<T> E;     // Green–Lagrange strain ½(H + Hᵀ + HᵀH)
+    T J, Jm1;      // det F and det F − 1 = tr H + ½((tr H)² − tr H²) + det H
+};
+
+template <class T>
+PLIANT_HD Kinematics<T> kinematics(const Mat3<T>& H) {
+    Kinematics<T> k;
+    const T* h = H.a;
+    k.H = H;
+    k.F = H;
+    k.F.a[0] += T(1);
+    k.F.a[4] += T(1);
+    k.F.a[8] += T(1);
+    const T hf = T(0.5);
+    k.E = {h[0] + hf * (h[0] * h[0] + h[3] * h[3] + h[6] * h[6]),
+           h[4] + hf * (h[1] * h[1] + h[4] * h[4] + h[7] * h[7]),
+           h[8] + hf * (h[2] * h[2] + h[5] * h[5] + h[8] * h[8]),
+           hf * (h[1] + h[3] + h[0] * h[1] + h[3] * h[4] + h[6] * h[7]),
+           hf * (h[5] + h[7] + h[1] * h[2] + h[4] * h[5] + h[7] * h[8]),
+           hf * (h[2] + h[6] + h[0] * h[2] + h[3] * h[5] + h[6] * h[8])};
+    const T tr = h[0] + h[4] + h[8];
+    const T tr2 = h[0] * h[0] + h[4] * h[4] + h[8] * h[8] +
+                  T(2) * (h[1] * h[3] + h[2] * h[6] + h[5] * h[7]);  // tr H²
+    k.Jm1 = tr + hf * (tr * tr - tr2) + det(H);
+    k.J = T(1) + k.Jm1;
+    return k;
+}
+
+/// C⁻¹ = (I + 2E)⁻¹ with det C = J².
+template <class T>
+PLIANT_HD Sym3<T> inverse_cauchy_green(const Kinematics<T>& k) {
+    return inverse(add_identity(T(1), scale(T(2), k.E)), k.J * k.J);
+}
+
 /// Decoupled Neo-Hookean, W = μ/2 (Ī1 − 3) + K/2 (J − 1)²;
 /// S = μ J^(−2/3) (I − I1/3 C⁻¹) + K J (J − 1) C⁻¹ (Taylor et al. 2008, IEEE TMI 27(5), eq. 10;
-/// NiftySim's "NH").
+/// NiftySim's "NH"), evaluated as 2μ J^(−2/3) C⁻¹ dev E + K J (J − 1) C⁻¹.
 template <class T>
 struct NeoHookean {
     T mu, K;
     PLIANT_HD T dilatational_modulus() const { return K + T(4) / T(3) * mu; }
-    PLIANT_HD Sym3<T> pk2(const Mat3<T>& F) const {
-        const Sym3<T> C = right_cauchy_green(F);
-        const T J = det(F);
-        const Sym3<T> Ci = inverse(C, J * J);
-        const T j23 = inv_cbrt(J * J);  // J^(-2/3)
-        const T a = mu * j23;
-        return add_identity(a, scale(K * J * (J - T(1)) - a * trace(C) / T(3), Ci));
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> Ci = inverse_cauchy_green(k);
+        const T a = T(2) * mu * inv_cbrt(k.J * k.J);  // 2μ J^(-2/3)
+        return axpby(a, mul_commuting(Ci, dev(k.E)), K * k.J * k.Jm1, Ci);
     }
-    PLIANT_HD Mat3<T> pk1(const Mat3<T>& F) const { return mul(F, pk2(F)); }
-    PLIANT_HD T energy(const Mat3<T>& F) const {
-        const T J = det(F);
-        const T I1 = trace(right_cauchy_green(F));
-        return mu / T(2) * (inv_cbrt(J * J) * I1 - T(3)) + K / T(2) * (J - T(1)) * (J - T(1));
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        const T I1 = T(3) + T(2) * trace(k.E);
+        return mu / T(2) * (inv_cbrt(k.J * k.J) * I1 - T(3)) + K / T(2) * k.Jm1 * k.Jm1;
     }
 };
 
 /// Decoupled Mooney–Rivlin, W = C10 (Ī1 − 3) + C01 (Ī2 − 3) + K/2 (J − 1)²;
 /// S = 2C10 J^(−2/3)(I − I1/3 C⁻¹) + 2C01 J^(−4/3)(I1 I − C − 2/3 I2 C⁻¹) + K J (J − 1) C⁻¹
-/// (Holzapfel, Nonlinear Solid Mechanics 2000, §6.5, eqs. 6.142–6.147).
+/// (Holzapfel, Nonlinear Solid Mechanics 2000, §6.5, eqs. 6.142–6.147), evaluated through E.
 template <class T>
 struct MooneyRivlin {
     T C10, C01, K;
     PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * (C10 + C01); }
-    PLIANT_HD Sym3<T> pk2(const Mat3<T>& F) const {
-        const Sym3<T> C = right_cauchy_green(F);
-        const T J = det(F);
-        const Sym3<T> Ci = inverse(C, J * J);
-        const T I1 = trace(C);
-        const T I2 = T(0.5) * (I1 * I1 - ddot(C));
-        const T j23 = inv_cbrt(J * J);
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> Ci = inverse_cauchy_green(k);
+        const Sym3<T> dE = dev(k.E);
+        const T I1 = T(3) + T(2) * trace(k.E);
+        const T j23 = inv_cbrt(k.J * k.J);
         const T a = T(2) * C10 * j23;
         const T b = T(2) * C01 * j23 * j23;
-        const T ci = K * J * (J - T(1)) - a * I1 / T(3) - b * T(2) / T(3) * I2;
-        return add_identity(a + b * I1, axpby(ci, Ci, -b, C));
+        // a (I − I1/3 C⁻¹) + b (I1 I − C − 2/3 I2 C⁻¹) = C⁻¹ [(2a + b (2 I1 − 4)) dev E − 4b dev E²]
+        const Sym3<T> D = axpby(T(2) * a + b * (T(2) * I1 - T(4)), dE, T(-4) * b,
+                                dev(mul_commuting(k.E, k.E)));
+        return axpby(T(1), mul_commuting(Ci, D), K * k.J * k.Jm1, Ci);
     }
-    PLIANT_HD Mat3<T> pk1(const Mat3<T>& F) const { return mul(F, pk2(F)); }
-    PLIANT_HD T energy(const Mat3<T>& F) const {
-        const Sym3<T> C = right_cauchy_green(F);
-        const T J = det(F);
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        const Sym3<T> C = add_identity(T(1), scale(T(2), k.E));
         const T I1 = trace(C);
         const T I2 = T(0.5) * (I1 * I1 - ddot(C));
-        const T j23 = inv_cbrt(J * J);
-        return C10 * (j23 * I1 - T(3)) + C01 * (j23 * j23 * I2 - T(3)) +
-               K / T(2) * (J - T(1)) * (J - T(1));
+        const T j23 = inv_cbrt(k.J * k.J);
+        return C10 * (j23 * I1 - T(3)) + C01 * (j23 * j23 * I2 - T(3)) + K / T(2) * k.Jm1 * k.Jm1;
     }
 };
 
+/// ln J from J − 1 without cancellation: the series x − x²/2 + x³/3 − x⁴/4 + x⁵/5 below
+/// |x| = 1e-2 (truncation error x⁶/6 < 2e-13), std::log(1 + x) above.
+template <class T>
+PLIANT_HD T log_J(T Jm1) {
+    const T x = Jm1;
+    const T series = x * (T(1) + x * (T(-0.5) + x * (T(1) / T(3) + x * (T(-0.25) + x * T(0.2)))));
+    return std::fabs(x) < T(1e-2) ? series : std::log(T(1) + x);
+}
+
 /// Coupled compressible Neo-Hookean, W = μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²;
 /// S = μ (I − C⁻¹) + λ ln J C⁻¹ (Bonet & Wood, Nonlinear Continuum Mechanics for FEA, 2nd ed.,
-/// §6.4.3, eq. 6.28; FEBio's "neo-Hookean").
+/// §6.4.3, eq. 6.28; FEBio's "neo-Hookean"), evaluated as 2μ C⁻¹ E + λ ln J C⁻¹.
 template <class T>
 struct NeoHookeanCoupled {
     T mu, lambda;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
-    PLIANT_HD Sym3<T> pk2(const Mat3<T>& F) const {
-        const Sym3<T> C = right_cauchy_green(F);
-        const T J = det(F);
-        const Sym3<T> Ci = inverse(C, J * J);
-        return add_identity(mu, scale(lambda * std::log(J) - mu, Ci));
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> Ci = inverse_cauchy_green(k);
+        return axpby(T(2) * mu, mul_commuting(Ci, k.E), lambda * log_J(k.Jm1), Ci);
     }
-    PLIANT_HD Mat3<T> pk1(const Mat3<T>& F) const { return mul(F, pk2(F)); }
-    PLIANT_HD T energy(const Mat3<T>& F) const {
-        const T lnJ = std::log(det(F));
-        return mu / T(2) * (trace(right_cauchy_green(F)) - T(3)) - mu * lnJ +
-               lambda / T(2) * lnJ * lnJ;
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        const T lnJ = log_J(k.Jm1);
+        return mu * trace(k.E) - mu * lnJ + lambda / T(2) * lnJ * lnJ;
     }
 };
 
@@ -104,37 +151,33 @@ template <class T>
 struct StVenantKirchhoff {
     T mu, lambda;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
-    PLIANT_HD Sym3<T> pk2(const Mat3<T>& F) const {
-        const Sym3<T> E = add_identity(T(-0.5), scale(T(0.5), right_cauchy_green(F)));
-        return add_identity(lambda * trace(E), scale(T(2) * mu, E));
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        return add_identity(lambda * trace(k.E), scale(T(2) * mu, k.E));
     }
-    PLIANT_HD Mat3<T> pk1(const Mat3<T>& F) const { return mul(F, pk2(F)); }
-    PLIANT_HD T energy(const Mat3<T>& F) const {
-        const Sym3<T> C = right_cauchy_green(F);
-        const Sym3<T> E = add_identity(T(-0.5), scale(T(0.5), C));
-        const T trE = trace(E);
-        return lambda / T(2) * trE * trE + mu * ddot(E);
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        const T trE = trace(k.E);
+        return lambda / T(2) * trE * trE + mu * ddot(k.E);
     }
 };
 
-/// Small-strain linear elasticity, σ = λ tr(ε) I + 2μ ε with ε = sym(F − I); the nodal forces
-/// use P = σ (geometrically linear; Zienkiewicz & Taylor, The FEM vol. 1, §6.2). Not objective:
-/// a baseline for small displacements only.
+/// Small-strain linear elasticity, σ = λ tr(ε) I + 2μ ε with ε = sym(H) = sym(F − I); the nodal
+/// forces use P = σ (geometrically linear; Zienkiewicz & Taylor, The FEM vol. 1, §6.2). Not
+/// objective: a baseline for small displacements only.
 template <class T>
 struct LinearElastic {
     T mu, lambda;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
-    PLIANT_HD Sym3<T> strain(const Mat3<T>& F) const { return add_identity(T(-1), sym(F)); }
-    PLIANT_HD Sym3<T> pk2(const Mat3<T>& F) const {
-        const Sym3<T> e = strain(F);
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> e = sym(k.H);
         return add_identity(lambda * trace(e), scale(T(2) * mu, e));
     }
-    PLIANT_HD Mat3<T> pk1(const Mat3<T>& F) const {
-        const Sym3<T> s = pk2(F);
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const {
+        const Sym3<T> s = pk2(k);
         return {{s.xx, s.xy, s.xz, s.xy, s.yy, s.yz, s.xz, s.yz, s.zz}};
     }
-    PLIANT_HD T energy(const Mat3<T>& F) const {
-        const Sym3<T> e = strain(F);
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        const Sym3<T> e = sym(k.H);
         const T tr = trace(e);
         return lambda / T(2) * tr * tr + mu * ddot(e);
     }

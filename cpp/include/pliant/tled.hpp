@@ -29,16 +29,17 @@ PLIANT_HD index_t aosoa(index_t b, int l, int field, int width) {
     return (b * width + field) * kLanes + l;
 }
 
-/// Deformation gradient F = I + Σ_a u_a ⊗ ∇X N_a of element slot (b, l), with ∇N_3 = −Σ_{a<3} ∇N_a so
-/// that F = I + Σ_{a<3} (u_a − u_3) ⊗ ∇N_a (Miller et al. 2007, CNME 23:121, eq. 4).
+/// Displacement gradient H = ∇X u = Σ_a u_a ⊗ ∇X N_a of element slot (b, l), with
+/// ∇N_3 = −Σ_{a<3} ∇N_a so that H = Σ_{a<3} (u_a − u_3) ⊗ ∇N_a; F = I + H (Miller et al. 2007,
+/// CNME 23:121, eq. 4). Kept apart from I so that small strains keep their digits in float32.
 /// u: displacements [m], SoA (3, P).
 template <class T>
-PLIANT_HD Mat3<T> deformation_gradient(index_t b, int l, const ElementData<T>& el, const T* u,
-                                       index_t P) {
+PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& el, const T* u,
+                                        index_t P) {
     index_t n[4];
     PLIANT_UNROLL
     for (int a = 0; a < 4; ++a) n[a] = el.nodes[aosoa(b, l, a, 4)];
-    Mat3<T> F = identity3<T>();
+    Mat3<T> H = {{T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0)}};
     PLIANT_UNROLL
     for (int i = 0; i < 3; ++i) {
         const T* ui = u + i * P;
@@ -47,10 +48,10 @@ PLIANT_HD Mat3<T> deformation_gradient(index_t b, int l, const ElementData<T>& e
         for (int a = 0; a < 3; ++a) {
             const T du = ui[n[a]] - u3;
             PLIANT_UNROLL
-            for (int j = 0; j < 3; ++j) F.a[3 * i + j] += du * el.grad[aosoa(b, l, 3 * a + j, 9)];
+            for (int j = 0; j < 3; ++j) H.a[3 * i + j] += du * el.grad[aosoa(b, l, 3 * a + j, 9)];
         }
     }
-    return F;
+    return H;
 }
 
 /// Kernel 1, one element per lane: element nodal forces f_a = V0 · F S ∇X N_a
@@ -60,8 +61,8 @@ PLIANT_HD Mat3<T> deformation_gradient(index_t b, int l, const ElementData<T>& e
 template <class T, class Material>
 PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el,
                               const T* u, index_t P, T* f_out, T* J_out) {
-    const Mat3<T> F = deformation_gradient(b, l, el, u, P);
-    const Mat3<T> Pk = mat.pk1(F);
+    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
+    const Mat3<T> Pk = mat.pk1(k);
     const T V0 = el.vol[aosoa(b, l, 0, 1)];
     T g[9];
     PLIANT_UNROLL
@@ -78,7 +79,7 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
         }
         f_out[aosoa(b, l, 9 + i, 12)] = f3;
     }
-    J_out[aosoa(b, l, 0, 1)] = det(F);
+    J_out[aosoa(b, l, 0, 1)] = k.J;
 }
 
 /// Time-integration coefficients of central differences with mass-proportional damping α [1/s]:
@@ -193,26 +194,26 @@ struct ElementMeasures {
     Sym3<T> S, sigma, E;   // 2nd Piola–Kirchhoff [Pa]; Cauchy σ = J⁻¹ F S Fᵀ [Pa]; Green–Lagrange E
 };
 
-/// σ = J⁻¹ P Fᵀ, E = ½(C − I), W(F) of element slot (b, l) (Bonet & Wood, 2nd ed., eqs. 5.31, 3.15).
+/// σ = J⁻¹ P Fᵀ, E = ½(C − I), W of element slot (b, l) (Bonet & Wood, 2nd ed., eqs. 5.31, 3.15).
 template <class T, class Material>
 PLIANT_HD ElementMeasures<T> element_measures(index_t b, int l, const Material& mat,
                                               const ElementData<T>& el, const T* u, index_t P) {
-    const Mat3<T> F = deformation_gradient(b, l, el, u, P);
+    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
     ElementMeasures<T> m;
-    m.J = det(F);
-    m.energy = mat.energy(F);
-    m.S = mat.pk2(F);
-    const Mat3<T> Pk = mat.pk1(F);
+    m.J = k.J;
+    m.energy = mat.energy(k);
+    m.S = mat.pk2(k);
+    const Mat3<T> Pk = mat.pk1(k);
     const T iJ = T(1) / m.J;
     const T* p = Pk.a;
-    const T* f = F.a;
+    const T* f = k.F.a;
     m.sigma = {iJ * (p[0] * f[0] + p[1] * f[1] + p[2] * f[2]),
                iJ * (p[3] * f[3] + p[4] * f[4] + p[5] * f[5]),
                iJ * (p[6] * f[6] + p[7] * f[7] + p[8] * f[8]),
                iJ * (p[0] * f[3] + p[1] * f[4] + p[2] * f[5]),
                iJ * (p[3] * f[6] + p[4] * f[7] + p[5] * f[8]),
                iJ * (p[0] * f[6] + p[1] * f[7] + p[2] * f[8])};
-    m.E = add_identity(T(-0.5), scale(T(0.5), right_cauchy_green(F)));
+    m.E = k.E;
     return m;
 }
 

@@ -14,6 +14,7 @@ import hashlib
 import importlib.machinery
 import importlib.util
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -97,9 +98,18 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
         with np.load(path) as d:
             return d["nodes"], d["tets"]
     W = _ftetwild()
-    nodes, tets = W.tetrahedralize_mesh(
-        V, F, bool(optimize), False, el / diag, 0.0, float(epsilon), 10.0, False, int(threads), 80,
-        6, True, False, False, np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0))
+    # fTetWild writes a scratch file (__tracked_surface.stl) into the working directory: run it
+    # in a temporary one so that users' folders stay clean.
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory(prefix="pliant-ftetwild-") as scratch:
+        os.chdir(scratch)
+        try:
+            nodes, tets = W.tetrahedralize_mesh(
+                V, F, bool(optimize), False, el / diag, 0.0, float(epsilon), 10.0, False,
+                int(threads), 80, 6, True, False, False, np.zeros((0, 3)),
+                np.zeros((0, 4), np.int32), np.zeros(0))
+        finally:
+            os.chdir(here)
     nodes = np.asarray(nodes, float)
     tets = np.asarray(tets, np.int64)
     if len(tets) == 0:
