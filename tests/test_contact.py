@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pliant as pl
-from pliant.contact import Box, Capsule, Plane, Sphere
+from pliant.contact import Box, Capsule, Cylinder, Plane, Sphere
 
 G = 9.81
 
@@ -108,7 +108,8 @@ def test_moving_tool_momentum_matches_reported_impulse():
 
 
 @pytest.mark.parametrize("tool", [Capsule(0.006, 0.03, rotation=(0.7071068, 0.7071068, 0, 0)),
-                                  Box((0.03, 0.006, 0.006))], ids=["capsule", "box"])
+                                  Cylinder(0.006, 0.012),
+                                  Box((0.03, 0.006, 0.006))], ids=["capsule", "cylinder", "box"])
 def test_no_node_inside_a_pressing_tool(tool):
     """A tool pressed 2 mm into a block (nodal contact: smaller than the surface spacing): no
     surface node ever lies inside it, and the body pushes back on it."""
@@ -126,3 +127,47 @@ def test_no_node_inside_a_pressing_tool(tool):
         nodes, _, _ = model.contact_forces()
         assert tool.signed_distance(sim.positions[nodes], sim.time).min() > -1e-9
     assert sim.tool_force(0)[0][2] > 0  # the body pushes the tool up: force along +z
+
+
+def test_cylinder_distance_matches_geometry():
+    """The engine's flat-ended cylinder: a block pressed by its end face (axis vertical, radius
+    6 mm, 2 mm deep) has every node under the face pushed to exactly the face's height, and the
+    NumPy signed distance agrees with the closed form at sample points."""
+    cyl = Cylinder(0.01, 0.04)
+    y = np.array([[0.0, 0.0, 0.0], [0.02, 0.0, 0.0], [0.0, 0.0, 0.03], [0.013, 0.0, 0.024],
+                  [0.005, 0.0, 0.019]])
+    ref = [-0.01, 0.01, 0.01, 0.005, -0.001]  # inside, beside, above, beyond the rim (3-4-5), inside
+    np.testing.assert_allclose(cyl.signed_distance(y), ref, atol=1e-15)
+    X, b = _block((0.04, 0.04, 0.02), (8, 8, 4), E=3e4)
+    b.fix(np.nonzero(X[:, 2] < 1e-9)[0])
+    tool = Cylinder(0.006, 0.02)
+    tool.at(0.0, (0, 0, 0.03 + 1e-4)).at(0.1, (0, 0, 0.03 - 0.002))  # end face from z = 0.0201 to 0.018
+    b.add_tool(tool)
+    sim = pl.Simulation(b.finalize("float64"))
+    sim.run_to(0.1)
+    under = (np.hypot(X[:, 0], X[:, 1]) < 0.006 - 1e-9) & (X[:, 2] > 0.02 - 1e-9)
+    assert under.sum() >= 5
+    np.testing.assert_allclose(sim.positions[under, 2], 0.018, atol=1e-12)
+
+
+def test_tool_restricted_to_a_node_set():
+    """Two blocks side by side fall under gravity onto a ground plane that only the first one's
+    nodes may touch: the first rests on it, the second falls through in free fall (½ g t²)."""
+    X1, T1 = pl.mesh.box_tets((0.01, 0.01, 0.01), (2, 2, 2), origin=(0.0, 0.0, 0.001))
+    X2, T2 = pl.mesh.box_tets((0.01, 0.01, 0.01), (2, 2, 2), origin=(0.02, 0.0, 0.001))
+    b = pl.ModelBuilder()
+    b.add_mesh(np.vstack([X1, X2]), np.vstack([T1, T2 + len(X1)]))
+    b.set_material(pl.NeoHookean(E=1e5, nu=0.3), density=1000.0)
+    b.set_gravity((0.0, 0.0, -G))
+    b.damping = 20.0
+    b.add_tool(Plane((0, 0, 0), (0, 0, 1)), nodes=np.arange(len(X1)))
+    sim = pl.Simulation(b.finalize("float64"))
+    sim.run_to(0.1)
+    first, second = sim.positions[: len(X1)], sim.positions[len(X1):]
+    assert first[:, 2].min() >= -1e-12          # the first block rests on the plane
+    # The second falls freely; mass-proportional damping α = 20/s slows it: z'' = −g − α z' gives
+    # z(t) = z0 − g/α (t − (1 − e^(−αt))/α). Central differences started with u⁻ = u are at rest
+    # at t = −Δt/2, hence the shifted time; 1e-6 m covers the scheme's O(Δt²) error.
+    t, a = sim.time + sim.solver.dt / 2, 20.0
+    drop = G / a * (t - (1 - math.exp(-a * t)) / a)
+    np.testing.assert_allclose(second[:, 2] - X2[:, 2], -drop, atol=1e-6)

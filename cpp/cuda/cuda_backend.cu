@@ -71,7 +71,7 @@ __global__ void node_kernel(index_t n_nodes, NodeData<T> nd, const T* f_elem, co
 
 /// Contact, one chunk of contact nodes per thread (fixed chunks: deterministic force sums).
 template <class T>
-__global__ void contact_kernel(index_t nc, const index_t* nodes, const index_t* free_bits,
+__global__ void contact_kernel(index_t nc, const index_t* nodes, const index_t* node_bits,
                                const double* X, const T* mass,
                                const T* u, index_t P, const RigidTool* tools, int nt,
                                const Pose* pose0, const Pose* pose1, const double* grid, double g1,
@@ -83,7 +83,7 @@ __global__ void contact_kernel(index_t nc, const index_t* nodes, const index_t* 
     for (int k = 0; k < 6 * nt; ++k) h[k] = 0.0;
     const index_t end = begin + kChunk < nc ? begin + kChunk : nc;
     for (index_t i = begin; i < end; ++i) {
-        contact_node(i, nodes, free_bits, X, mass, u, P, tools, nt, pose0, pose1, grid, g1, u_next, force,
+        contact_node(i, nodes, node_bits, X, mass, u, P, tools, nt, pose0, pose1, grid, g1, u_next, force,
                      tool);
         add_tool_reaction(i, nodes, X, u_next, P, pose1, force, tool, h);
     }
@@ -188,7 +188,7 @@ struct CudaEngine<T>::Impl {
         tv = upload_vec(m.table_v);
         X = upload_vec(m.X);
         cnodes = upload_vec(m.contact_nodes);
-        cfree = upload_vec(m.contact_free);
+        cfree = upload_vec(m.contact_bits);
         tools = upload_vec(m.tools);
         keys = upload_vec(m.tool_keys);
         grid = upload_vec(m.tool_grid);

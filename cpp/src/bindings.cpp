@@ -154,6 +154,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 std::vector<index_t> curve_table_begin, std::vector<index_t> curve_table_count,
                 std::vector<double> table_t, std::vector<double> table_v, std::vector<double> gravity,
                 index_t gravity_curve, std::vector<index_t> contact_nodes,
+                std::vector<index_t> contact_masks,
                 std::vector<int> tool_kind, std::vector<double> tool_params,
                 std::vector<double> tool_mu, std::vector<std::vector<double>> tool_keys,
                 std::vector<index_t> tool_grid_dims, std::vector<std::vector<double>> tool_grids,
@@ -182,6 +183,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  for (int d = 0; d < 3; ++d) in.gravity[d] = gravity[d];
                  in.gravity_curve = gravity_curve;
                  in.contact_nodes = std::move(contact_nodes);
+                 in.contact_masks = std::move(contact_masks);
                  for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                      RigidTool t{};
                      t.kind = static_cast<ToolKind>(tool_kind[k]);

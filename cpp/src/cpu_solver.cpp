@@ -56,7 +56,7 @@ void CpuSolver<T>::contact_pass(const T* u_cur, T* u_next, double t0, double t1,
         for (int k = 0; k < 6 * nt; ++k) h[k] = 0.0;
         const index_t end = std::min(nc, (c + 1) * kContactChunk);
         for (index_t i = c * kContactChunk; i < end; ++i) {
-            contact_node(i, m_.contact_nodes.data(), m_.contact_free.data(), m_.X.data(), mass, u_cur, P,
+            contact_node(i, m_.contact_nodes.data(), m_.contact_bits.data(), m_.X.data(), mass, u_cur, P,
                          m_.tools.data(), nt, P0, P1, m_.tool_grid.data(), g1, u_next,
                          contact_force_.data(), contact_tool_.data());
             add_tool_reaction(i, m_.contact_nodes.data(), m_.X.data(), u_next, P, P1,

@@ -133,10 +133,12 @@ Model<T>::Model(const ModelInput& in) {
     for (index_t n = 0; n < n_nodes; ++n) cons_offsets[n + 1] += cons_offsets[n];
     X.assign(in.X, in.X + 3 * static_cast<std::size_t>(n_nodes));
     contact_nodes = in.contact_nodes;
-    contact_free.assign(contact_nodes.size(), 0);
-    for (std::size_t i = 0; i < contact_nodes.size(); ++i)
+    contact_bits.assign(contact_nodes.size(), 0);
+    for (std::size_t i = 0; i < contact_nodes.size(); ++i) {
+        contact_bits[i] = node_bits(in.contact_masks.empty() ? ~index_t(0) : in.contact_masks[i]);
         for (int d = 0; d < 3; ++d)
-            if (free_mask[d * n_pad + contact_nodes[i]] != T(0)) contact_free[i] |= index_t(1) << d;
+            if (free_mask[d * n_pad + contact_nodes[i]] == T(0)) contact_bits[i] &= ~(index_t(1) << d);
+    }
     tools = in.tools;
     tool_keys = in.tool_keys;
     tool_grid = in.tool_grid;

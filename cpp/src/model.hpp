@@ -42,6 +42,8 @@ struct ModelInput {
     std::vector<LoadCurve> curves;
     std::vector<double> table_t, table_v;
     std::vector<index_t> contact_nodes;    // surface nodes that take part in contact
+    std::vector<index_t> contact_masks;    // per contact node: bit k set if tool k (< kMaskedTools)
+                                           // may touch it
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys;         // 8 per keyframe: t, position (3), quaternion (4)
     std::vector<double> tool_grid;         // signed-distance grids [m]
@@ -70,7 +72,7 @@ struct Model {
     std::vector<double> table_t, table_v;
     std::vector<double> X;                     // reference positions [m], AoS (N, 3)
     std::vector<index_t> contact_nodes;
-    std::vector<index_t> contact_free;         // per contact node: bit d set if DOF d is free
+    std::vector<index_t> contact_bits;  // per contact node: bits 0–2 free DOFs, bit 3 + k tool k
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys, tool_grid;
     double dt_critical = 0.0;   // min over elements of h_min / c_d [s]

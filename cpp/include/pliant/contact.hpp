@@ -11,12 +11,22 @@
 
 namespace pliant {
 
-enum class ToolKind : int { Plane = 0, Sphere = 1, Capsule = 2, Box = 3, Grid = 4 };
+enum class ToolKind : int { Plane = 0, Sphere = 1, Capsule = 2, Box = 3, Grid = 4, Cylinder = 5 };
+
+/// Tools 0 … kMaskedTools − 1 can be restricted to node sets (bits 3 … 30 of a contact node's
+/// bits); later tools act on every contact node.
+constexpr int kMaskedTools = 28;
+
+/// Contact-node bits: DOFs 0–2 free (bits 0–2) and the tool mask `tools` (bit k: tool k) above.
+PLIANT_HD index_t node_bits(index_t tools) {
+    return 7 | static_cast<index_t>((static_cast<unsigned>(tools) << 3) & 0x7ffffff8u);
+}
 
 /// A rigid tool: shape parameters in its own frame, friction, and its keyframed trajectory.
 /// Plane: the half-space z' ≤ 0 of the tool frame (outward normal +z'). Sphere: radius p[0].
-/// Capsule: segment from (0,0,−p[1]) to (0,0,+p[1]) in the tool frame, radius p[0]. Box: half
-/// extents p[0..2]. Grid: signed-distance grid (origin p[0..2], spacing p[3], dims in grid_dims).
+/// Capsule: segment from (0,0,−p[1]) to (0,0,+p[1]) in the tool frame, radius p[0]. Cylinder: the
+/// same axis and radius with flat ends. Box: half extents p[0..2]. Grid: signed-distance grid
+/// (origin p[0..2], spacing p[3], dims in grid_dims).
 struct RigidTool {
     ToolKind kind;
     double p[4];
@@ -109,6 +119,20 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
             n[arg] = y[arg] < 0.0 ? -1.0 : 1.0;
             return inside;
         }
+        case ToolKind::Cylinder: {  // flat ends: radius p[0], axis z from −p[1] to +p[1]
+            const double r = std::sqrt(y[0] * y[0] + y[1] * y[1]);
+            const double dr = r - tl.p[0], dz = std::fabs(y[2]) - tl.p[1];
+            const double er[3] = {r > 0.0 ? y[0] / r : 1.0, r > 0.0 ? y[1] / r : 0.0, 0.0};
+            const double ez = y[2] < 0.0 ? -1.0 : 1.0;
+            if (dr > 0.0 && dz > 0.0) {  // beyond the rim: nearest point on the edge circle
+                const double d = std::sqrt(dr * dr + dz * dz);
+                n[0] = dr * er[0] / d; n[1] = dr * er[1] / d; n[2] = dz * ez / d;
+                return d;
+            }
+            if (dr > dz) { n[0] = er[0]; n[1] = er[1]; n[2] = 0.0; return dr; }
+            n[0] = 0.0; n[1] = 0.0; n[2] = ez;
+            return dz;
+        }
         default: {  // Grid
             const index_t nx = tl.grid_dims[0], ny = tl.grid_dims[1], nz = tl.grid_dims[2];
             double g[3];
@@ -150,13 +174,14 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
 /// motion relative to the tool over the step, d_t: stick (remove d_t) if |d_t| ≤ μs|δ_n|, else slip
 /// (remove μk|δ_n| along d_t). The force it took, m (x_corrected − x⁺)/γ1 [N], is stored per node
 /// in force_out (3) with the tool index in tool_out (−1: no contact; force_out then untouched).
-/// Only the node's free DOFs move (free_bits[i], bit d: DOF d is not constrained): on a symmetry
-/// plane or a roller the constraint carries the rest of the correction.
-/// Inputs: contact node i → node nodes[i], its free DOFs, reference X [m] (3 per node, AoS,
+/// Only the node's free DOFs move (node_bits[i] bit d: DOF d is not constrained): on a symmetry
+/// plane or a roller the constraint carries the rest of the correction. Tool k < kMaskedTools acts
+/// on the node only if bit 3 + k is set (tools restricted to node sets, NiftySim's SlvNodes).
+/// Inputs: contact node i → node nodes[i], its bits, reference X [m] (3 per node, AoS,
 /// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt.
 /// Outputs: u⁺ corrected, force_out, tool_out.
 template <class T>
-PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* free_bits,
+PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits,
                             const double* X, const T* mass,
                             const T* u, index_t P, const RigidTool* tools, int n_tools,
                             const Pose* pose0, const Pose* pose1, const double* grid, double g1,
@@ -170,6 +195,7 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* free
     }
     tool_out[i] = -1;
     for (int k = 0; k < n_tools; ++k) {
+        if (k < kMaskedTools && !((node_bits[i] >> (3 + k)) & 1)) continue;
         double y[3], nt[3], nw[3];
         to_tool(pose1[k], x1, y);
         const double phi = tool_sdf(tools[k], y, grid, nt);
@@ -201,7 +227,7 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* free
     if (tool_out[i] < 0) return;  // force_out is only meaningful where tool_out >= 0
     const double m_over_g1 = double(mass[n]) / g1;
     for (int d = 0; d < 3; ++d) {
-        const bool free = (free_bits[i] >> d) & 1;
+        const bool free = (node_bits[i] >> d) & 1;
         force_out[3 * i + d] = free ? m_over_g1 * (x1[d] - xs[d]) : 0.0;
         if (free) u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
     }

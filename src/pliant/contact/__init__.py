@@ -15,8 +15,8 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["RigidTool", "Plane", "Sphere", "Capsule", "Box", "MeshTool", "quat_from_matrix",
-           "quat_from_axis_angle", "quat_align_z"]
+__all__ = ["RigidTool", "Plane", "Sphere", "Capsule", "Cylinder", "Box", "MeshTool",
+           "quat_from_matrix", "quat_from_axis_angle", "quat_align_z"]
 
 
 def quat_from_axis_angle(axis, angle: float) -> np.ndarray:
@@ -180,6 +180,26 @@ class Capsule(RigidTool):
         c = np.zeros_like(y)
         c[:, 2] = np.clip(y[:, 2], -self.length / 2, self.length / 2)
         return np.linalg.norm(y - c, axis=1) - self.radius
+
+
+class Cylinder(RigidTool):
+    """Cylinder with flat ends (a rod, a retractor blade's edge): axis along the tool's z, from
+    −length/2 to +length/2, radius ``radius``."""
+
+    kind = 5
+
+    def __init__(self, radius: float, length: float, **kw):
+        self.radius = _positive("Cylinder", "radius", radius)
+        self.length = _positive("Cylinder", "length", length)
+        super().__init__(**kw)
+
+    def params(self):
+        return [self.radius, self.length / 2, 0.0, 0.0]
+
+    def _sdf_local(self, y):
+        q = np.stack([np.hypot(y[:, 0], y[:, 1]) - self.radius,
+                      np.abs(y[:, 2]) - self.length / 2], axis=1)
+        return np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0)
 
 
 class Box(RigidTool):

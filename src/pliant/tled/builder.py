@@ -65,6 +65,7 @@ class ModelBuilder:
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
         self.tools: list = []  # rigid tools (pliant.contact)
+        self.tool_nodes: list = []  # per tool: node ids it is restricted to, or None (all)
         self.source = "arrays"  # what the mesh came from, for error messages
 
     # --- mesh -------------------------------------------------------------------------------
@@ -183,14 +184,24 @@ class ModelBuilder:
             raise InputError(f"gravity = {g!r}; expected 3 finite components [m/s^2]")
         self._gravity = (gv, curve or Constant())
 
-    def add_tool(self, tool):
-        """Add a rigid tool (pliant.contact.Plane, Sphere, Capsule, Box, MeshTool): the surface
-        nodes of the body (except constrained ones) are kept out of it, with friction."""
+    def add_tool(self, tool, nodes=None):
+        """Add a rigid tool (pliant.contact.Plane, Sphere, Capsule, Cylinder, Box, MeshTool): the
+        surface nodes of the body (their free DOFs) are kept out of it, with friction.
+
+        ``nodes``: restrict the tool to these nodes (user ids; e.g. one organ of several, or
+        NiftySim's SlvNodes); they take part in contact even if they are not on the surface. Only
+        the first 28 tools can be restricted."""
         from ..contact import RigidTool
 
         if not isinstance(tool, RigidTool):
             raise InputError(f"add_tool: {tool!r} is not a pliant.contact tool")
+        if nodes is not None:
+            if len(self.tools) >= 28:
+                raise InputError(f"add_tool {tool.name!r}: only the first 28 tools can be "
+                                 f"restricted to nodes; this is tool {len(self.tools)}")
+            nodes = np.unique(self._node_ids(nodes, f"add_tool {tool.name!r} nodes"))
         self.tools.append(tool)
+        self.tool_nodes.append(nodes)
         return tool
 
     # --- finalize ---------------------------------------------------------------------------

@@ -114,10 +114,20 @@ class Model:
 
             n_cons = np.bincount(np.array([n for n, _ in self._cons_user], np.int64),
                                  minlength=X.shape[0])
-            cn = np.array([n for n in boundary_nodes(T) if n_cons[n] < 3], np.int64)
+            surface = boundary_nodes(T)
+            restricted = [s for s in builder.tool_nodes if s is not None]
+            cand = np.unique(np.concatenate([surface, *restricted])).astype(np.int64)
+            cn = cand[n_cons[cand] < 3]
+            # Tool mask per contact node: bit k if tool k may touch it (surface nodes for tools
+            # without a node set, the node set otherwise).
+            on_surface = np.isin(cn, surface)
+            masks = np.zeros(cn.size, np.int64)
+            for k, s in enumerate(builder.tool_nodes[:28]):
+                masks |= (on_surface if s is None else np.isin(cn, s)).astype(np.int64) << k
         else:
-            cn = np.zeros(0, np.int64)
+            cn, masks = np.zeros(0, np.int64), np.zeros(0, np.int64)
         self.contact_nodes = cn
+        cn_order = np.argsort(node_rank[cn], kind="stable")
         tool_grids = [t.grid() for t in self.tools]
         params = [p for k in np.nonzero(keep)[0] for p in self.sets[k].material.params]
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
@@ -134,7 +144,8 @@ class Model:
             [v for _, (v, c) in cons], cons_curve,
             [c.kind for c in curves], [c.t0 for c in curves], [c.t1 for c in curves],
             tb, tc, tt, tv, [float(x) for x in g], gcurve,
-            sorted(int(node_rank[n]) for n in cn),  # engine order: sequential access
+            [int(node_rank[n]) for n in cn[cn_order]],  # engine order: sequential access
+            [int(m) for m in masks[cn_order]],
             [t.kind for t in self.tools], [p for t in self.tools for p in t.params()],
             [m for t in self.tools for m in (t.mu_s, t.mu_k)],
             [t.key_array().tolist() for t in self.tools],
