@@ -97,7 +97,10 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path):
           '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'), "LoadShape=RAMPHOLD"),
     (dict(extra_constraint='<Constraint Type="Pressure" NumFaces="all" LoadShape="RAMP"/>'),
      "Constraint Type=Pressure"),
-    (dict(extra_constraint='<ContactPlate/>'), "ContactPlate"),
+    (dict(extra_constraint='<ContactSurface/>'), "ContactSurface"),
+    (dict(extra_constraint='<ContactCylinder><Origin>0 0 0</Origin><Axis>0 0 1</Axis><Radius>0.01'
+          '</Radius><Length>0.1</Length><RadChange>0.01</RadChange></ContactCylinder>'),
+     "ContactCylinder/RadChange"),
 ])
 def test_unsupported_features_are_refused_by_name(tmp_path, kwargs, name):
     *_, xml = _cube_xml(**kwargs)
@@ -112,3 +115,64 @@ def test_malformed_xml(tmp_path):
     p.write_text("<Model><Nodes>1 2</Nodes>")
     r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "o")])
     assert r.exit_code == 2 and "XML" in r.output
+
+
+def _poly345(tr):
+    return tr**3 * (10 - 15 * tr + 6 * tr**2)  # NiftySim user guide v2.4, eq. 1
+
+
+def test_contact_plate_moves_and_presses_only_its_slave_nodes(tmp_path):
+    """A ContactPlate (normal (b − a) × (c − a) = −z) above a cube moves down by 6 mm with the
+    POLY345 profile; only the listed SlvNodes (top nodes with x < 0.05) are kept out of it."""
+    fmt = lambda a: " ".join(str(v) for v in np.ravel(a))  # noqa: E731
+    X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (4, 4, 4))
+    top = np.nonzero(X[:, 2] > 0.1 - 1e-9)[0]
+    slaves = top[X[top, 0] < 0.05 - 1e-9]
+    bottom = np.nonzero(X[:, 2] < 1e-9)[0]
+    a = np.array([-0.05, -0.05, 0.101])
+    xml = f"""<Model>
+  <Nodes DOF="3" NumNodes="{len(X)}">{fmt(X)}</Nodes>
+  <Elements NumEls="{len(T)}" Type="T4">{fmt(T)}</Elements>
+  <ElementSet Size="all"><Material Type="NH"><ElasticParams NumParams="2">3000 30000</ElasticParams>
+    </Material></ElementSet>
+  <Constraint DOF="all" NumNodes="{len(bottom)}" Type="Fix"><Nodes>{fmt(bottom)}</Nodes></Constraint>
+  <ContactPlate><a>{fmt(a)}</a><b>{fmt(a + [0, 0.2, 0])}</b><c>{fmt(a + [0.2, 0, 0])}</c>
+    <Disp>0 0 -0.007</Disp><SlvNodes NumNodes="{len(slaves)}">{fmt(slaves)}</SlvNodes></ContactPlate>
+  <SystemParams><TimeStep>1e-4</TimeStep><TotalTime>0.5</TotalTime><DampingCoeff>50</DampingCoeff>
+    <Density>1000</Density></SystemParams>
+</Model>"""
+    p = tmp_path / "plate.xml"
+    p.write_text(xml)
+    sc = load_niftysim(p)
+    (tool,) = sc.builder.tools
+    # Geometry: the plate's surface at time t is a + s(t/T) d; 1 mm on its normal side is outside.
+    for t in (0.0, 0.1, 0.25, 0.5):
+        x = a + [0.1, 0.1, 0] + _poly345(t / 0.5) * np.array([0, 0, -0.007])
+        phi = tool.signed_distance(np.array([x, x - [0, 0, 0.001]]), t)
+        np.testing.assert_allclose(phi, [0.0, 0.001], atol=1e-4 * 0.007)  # keyframe sampling
+    sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
+    sim.run_to(0.5)
+    z = sim.positions[:, 2]
+    assert z[slaves].max() <= 0.094 + 1e-9        # the slaves are pressed to the plate
+    assert z[top[X[top, 0] > 0.1 - 1e-9]].min() > 0.094 + 1e-4  # others pass through it
+    assert sim.tool_force(0)[0][2] > 0             # the cube pushes the plate up
+
+
+def test_contact_cylinder_and_probe_geometry(tmp_path):
+    """ContactCylinder / ContactUSProbe: Origin at one end, unit Axis, Radius, Length; the probe's
+    hemispherical tip is centred at Origin + Length·Axis."""
+    *_, xml = _cube_xml(extra_constraint="""
+  <ContactCylinder><Origin>0.3 0 0</Origin><Axis>0 0 2</Axis><Radius>0.02</Radius>
+    <Length>0.1</Length></ContactCylinder>
+  <ContactUSProbe><Origin>0.5 0 0</Origin><Axis>1 0 0</Axis><Radius>0.01</Radius>
+    <Length>0.05</Length><OrigDisp>0 0.1 0</OrigDisp><RadChange>0</RadChange></ContactUSProbe>""")
+    p = tmp_path / "tools.xml"
+    p.write_text(xml)
+    cyl, probe = load_niftysim(p).builder.tools
+    pts = np.array([[0.32, 0, 0.05], [0.3, 0, 0.11], [0.31, 0, 0.05]])
+    np.testing.assert_allclose(cyl.signed_distance(pts), [0.0, 0.01, -0.01], atol=1e-12)
+    tip = np.array([[0.5 + 0.05 + 0.01, 0, 0], [0.52, 0.01, 0]])
+    np.testing.assert_allclose(probe.signed_distance(tip, 0.0), [0.0, 0.0], atol=1e-12)
+    # OrigDisp moves it by 0.1 m along y with the POLY345 profile over TotalTime (0.05 s).
+    moved = tip + [0, 0.1 * _poly345(0.5), 0]
+    np.testing.assert_allclose(probe.signed_distance(moved, 0.025), [0.0, 0.0], atol=1e-5)

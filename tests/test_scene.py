@@ -185,3 +185,25 @@ keyframes = [{ t = 0.0, position = [0.05, 0.05, 0.2] }, { t = 1.0, position = [0
     bad = text.replace("mu_s = 0.3", "mu_s = 0.3\nmu_k = 0.5")
     with pytest.raises(SceneError, match="mu_k <= mu_s"):
         load_scene(_write(tmp_path, bad, "c.toml"))
+
+
+def test_scene_cylinder_tool_restricted_to_a_selection(tmp_path):
+    """type = "cylinder" and a `nodes` selection restrict the tool to those nodes (the builder
+    receives exactly the nodes the selection names)."""
+    text = TENSION.replace("[output]", """[[tool]]
+type = "cylinder"
+radius = 0.005
+length = 0.04
+position = [0.05, 0.05, 0.2]
+nodes = { box = [[0.0, 0.0, 0.09], [0.05, 1.0, 1.0]] }
+
+[output]""")
+    sc = load_scene(_write(tmp_path, text))
+    (tool,) = sc.builder.tools
+    assert isinstance(tool, pl.contact.Cylinder) and tool.radius == 0.005
+    X = sc.builder.nodes
+    expect = np.nonzero((X[:, 0] <= 0.05 + 1e-12) & (X[:, 2] >= 0.09 - 1e-12))[0]
+    assert np.array_equal(sc.builder.tool_nodes[0], expect)
+    bad = text.replace("[0.0, 0.0, 0.09], [0.05, 1.0, 1.0]", "[5.0, 5.0, 5.0], [6.0, 6.0, 6.0]")
+    with pytest.raises(SceneError, match=r"tool\[0\]\.nodes"):
+        load_scene(_write(tmp_path, bad, "b.toml"))

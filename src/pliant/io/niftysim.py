@@ -1,6 +1,8 @@
 """NiftySim model import (XML, T4 elements): nodes, elements, element sets with NH and LE materials,
-Fix / Disp / Force / Gravity constraints with their load shapes, Output frequency and SystemParams.
-Anything else is refused by name (``unsupported`` lists what may be skipped knowingly).
+Fix / Disp / Force / Gravity constraints with their load shapes, the analytical rigid contacts
+(ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and motions), Output frequency
+and SystemParams. Anything else is refused by name (``unsupported`` lists what may be skipped
+knowingly).
 
 Format: NiftySim user guide v2.4 (Johnsen et al. 2015). Materials: NH = decoupled Neo-Hookean
 (μ, K) — pliant's NeoHookean; LE = NiftySim's total-Lagrangian "linear elastic" (E, ν), whose S is
@@ -21,7 +23,8 @@ from ..scene import Scene
 from ..scene.schema import SceneError
 from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
 
-_KNOWN_TOP = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams", "SubMesh", "Output"}
+_KNOWN_TOP = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams", "SubMesh", "Output",
+              "ContactPlate", "ContactCylinder", "ContactUSProbe"}
 _SYSTEM = {"TimeStep", "TotalTime", "DampingCoeff", "Density", "HGKappa", "DoDeformableCollision"}
 
 
@@ -217,6 +220,8 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
                 force[:, "xyz".index(d)] = v
             b.add_force(ids, force, curve)
 
+    _rigid_contacts(root, b, total, f, unsupported, warnings)
+
     out_every = None
     for o in root.findall("Output"):
         try:
@@ -229,3 +234,81 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
     scene.meta["mesh_source"] = f
     scene.meta["niftysim_steps"] = steps
     return scene
+
+
+def _vector(el, tag, f, key, n=3):
+    c = el.find(tag)
+    if c is None:
+        raise NiftySimError(f"<{el.tag}> lacks <{tag}>", f, key)
+    v = _numbers(c, f, f"{key}/{tag}")
+    if v.size != n or not np.all(np.isfinite(v)):
+        raise NiftySimError(f"<{tag}>: expected {n} numbers, got {v.size}", f, f"{key}/{tag}")
+    return v if n > 1 else float(v[0])
+
+
+def _rigid_contacts(root, b: ModelBuilder, total: float, f: str, unsupported, warnings) -> None:
+    """NiftySim's analytical rigid contacts (user guide v2.4 §3.9.1) as pliant tools, frictionless
+    like NiftySim's. Each moves by its displacement d times the POLY345 profile of the relative
+    time, s = 10 tR³ − 15 tR⁴ + 6 tR⁵ (user guide eq. 1), sampled as 100 keyframes (linear
+    interpolation between them: within 7e-5 |d|). SlvNodes restrict the tool to those nodes.
+
+    ContactPlate (corners a, b, c; normal (b − a) × (c − a)) → a Box whose top face is the
+    rectangle and whose depth is its longer side. ContactCylinder (Origin at one end, Axis,
+    Radius, Length) → a flat-ended Cylinder; NiftySim ignores nodes beyond the ends, pliant pushes
+    them out through the end faces. ContactUSProbe (a cylinder with a hemispherical tip at
+    Origin + Length·Axis) → a Capsule, which is rounded at the back end too."""
+    from ..contact import Box, Capsule, Cylinder, quat_align_z, quat_from_matrix
+
+    s_of = lambda tr: tr**3 * (10 - 15 * tr + 6 * tr**2)  # noqa: E731
+    times = np.linspace(0.0, total, 101)
+    for tag in ("ContactPlate", "ContactCylinder", "ContactUSProbe"):
+        for k, el in enumerate(root.findall(tag)):
+            key = f"{tag}[{k}]"
+            if tag == "ContactPlate":
+                a, bb, c = (_vector(el, t, f, key) for t in ("a", "b", "c"))
+                ab, ac = bb - a, c - a
+                L1, L2 = np.linalg.norm(ab), np.linalg.norm(ac)
+                if not (L1 > 0 and L2 > 0) or abs(ab @ ac) > 1e-6 * L1 * L2:
+                    raise NiftySimError("ContactPlate: corners a, b, c must span a rectangle "
+                                        "(b − a ⟂ c − a, both non-zero)", f, key)
+                n = np.cross(ab, ac) / (L1 * L2)
+                depth = max(L1, L2)
+                R = np.column_stack([ab / L1, ac / L2, n])
+                start = a + (ab + ac) / 2 - n * depth / 2
+                tool = Box((L1 / 2, L2 / 2, depth / 2), name=f"niftysim {key}")
+                rot = quat_from_matrix(R)
+                disp = _vector(el, "Disp", f, key) if el.find("Disp") is not None else np.zeros(3)
+            else:
+                origin, axis = _vector(el, "Origin", f, key), _vector(el, "Axis", f, key)
+                radius, length = _vector(el, "Radius", f, key, 1), _vector(el, "Length", f, key, 1)
+                na = np.linalg.norm(axis)
+                if not na > 0:
+                    raise NiftySimError(f"{tag}: <Axis> must be non-zero", f, key)
+                axis = axis / na
+                if el.find("RadChange") is not None and _vector(el, "RadChange", f, key, 1) != 0:
+                    unsupported(f"{tag}/RadChange", "pliant's tools keep their radius")
+                try:
+                    cls = Cylinder if tag == "ContactCylinder" else Capsule
+                    tool = cls(radius, length, name=f"niftysim {key}")
+                except InputError as e:
+                    raise NiftySimError(str(e), f, key) from None
+                start = origin + axis * length / 2
+                rot = quat_align_z(axis)
+                disp = (_vector(el, "OrigDisp", f, key) if el.find("OrigDisp") is not None
+                        else np.zeros(3))
+            if np.any(disp != 0):
+                for t in times:
+                    tool.at(float(t), start + s_of(t / total) * disp, rot)
+            else:
+                tool.at(0.0, start, rot)
+            slaves = el.find("SlvNodes")
+            nodes = None
+            if slaves is not None:
+                nodes = _numbers(slaves, f, f"{key}/SlvNodes", np.int64)
+                if nodes.size and (nodes.min() < 0 or nodes.max() >= b.n_nodes):
+                    raise NiftySimError(f"SlvNodes: node index out of range 0..{b.n_nodes - 1}",
+                                        f, f"{key}/SlvNodes")
+            try:
+                b.add_tool(tool, nodes=nodes)
+            except InputError as e:
+                raise NiftySimError(str(e), f, key) from None

@@ -213,7 +213,7 @@ def _make_tool(ctx: Ctx, t: dict, p: str, base: Path):
                            "radius": "number", "length": "number", "half_extents": "list",
                            "point": "list", "normal": "list", "file": "str", "scale": "number",
                            "spacing": "number", "position": "list", "rotation": "list",
-                           "keyframes": "list"}, ("type",))
+                           "keyframes": "list", "nodes": "table"}, ("type",))
     kw = {"mu_s": t.get("mu_s", 0.0), "mu_k": t.get("mu_k"), "name": t.get("name")}
 
     def rot(v, key):
@@ -237,6 +237,8 @@ def _make_tool(ctx: Ctx, t: dict, p: str, base: Path):
             tool = ct.Sphere(t.get("radius", 0.0), **pose, **kw)
         elif kind == "capsule":
             tool = ct.Capsule(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
+        elif kind == "cylinder":
+            tool = ct.Cylinder(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
         elif kind == "box":
             tool = ct.Box(vector(ctx, t.get("half_extents", [0, 0, 0]), f"{p}.half_extents"),
                           **pose, **kw)
@@ -249,7 +251,7 @@ def _make_tool(ctx: Ctx, t: dict, p: str, base: Path):
             tool = ct.MeshTool(V * float(t.get("scale", 1.0)), F, t.get("spacing"), **pose, **kw)
         else:
             raise ctx.error(f"{p}.type", f"unknown tool {kind!r}; expected plane, sphere, capsule, "
-                            "box or mesh")
+                            "cylinder, box or mesh")
         for j, k in enumerate(t.get("keyframes", [])):
             kp = f"{p}.keyframes[{j}]"
             check_keys(ctx, k, kp, {"t": "number", "position": "list", "rotation": "list"},
@@ -386,7 +388,8 @@ def load_scene(path) -> Scene:
             raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force' or 'gravity'")
 
     for i, t in enumerate(data.get("tool", [])):
-        b.add_tool(_make_tool(ctx, t, f"tool[{i}]", path.parent))
+        only = select_nodes(ctx, t["nodes"], f"tool[{i}].nodes", X, T) if "nodes" in t else None
+        b.add_tool(_make_tool(ctx, t, f"tool[{i}]", path.parent), nodes=only)
 
     out = check_keys(ctx, data.get("output", {}), "output",
                      {"every": "int", "interval": "number", "frames": "int", "png": "bool",
