@@ -16,20 +16,11 @@ R, E, NU = 0.01, 1e4, 0.3          # sphere radius [m], Young's modulus [Pa], Po
 DEPTHS = np.array([0.0025, 0.005, 0.01]) * R   # δ [m]: contact radius a = √(Rδ) = 0.05–0.1 R
 
 
-def _graded_line(h, fine_to, ratio, length):
-    """Coordinates [m] from 0: uniform spacing h up to fine_to, then growing by `ratio` per cell
-    until `length` is passed."""
-    xs = list(np.arange(0.0, fine_to + 1e-9 * fine_to, h))
-    while xs[-1] < length:
-        xs.append(xs[-1] + (xs[-1] - xs[-2]) * ratio)
-    return np.array(xs)
-
-
 @pytest.fixture(scope="module")
 def hertz_forces():
     # Mesh: cells of h = R/100 over the contact zone (a/h = 5, 7 and 10 at the three depths),
     # growing by 1.3 per cell to a block of 8.3 R = 83 a_max each way (196,608 tets).
-    xs = _graded_line(R / 100, 0.12 * R, 1.3, 8 * R)
+    xs = pl.mesh.graded_coordinates(R / 100, 0.12 * R, 1.3, 8 * R)
     X, T = pl.mesh.grid_tets(xs, xs, -xs[::-1])
     b = pl.ModelBuilder()
     b.add_mesh(X, T)

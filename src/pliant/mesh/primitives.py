@@ -48,6 +48,23 @@ def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
     return X, orient_positive(X, np.concatenate(tets))
 
 
+def graded_coordinates(h: float, fine_to: float, ratio: float, length: float) -> np.ndarray:
+    """Coordinates [m] from 0 for :func:`grid_tets`: uniform spacing ``h`` up to ``fine_to``,
+    then each cell ``ratio`` times the previous one until ``length`` is reached or passed (the last
+    cell is kept whole). E.g. fine under a contact, coarse far from it."""
+    h, fine_to, ratio, length = (float(v) for v in (h, fine_to, ratio, length))
+    if not (h > 0 and fine_to >= 0 and ratio >= 1 and length > 0 and
+            all(np.isfinite([h, fine_to, ratio, length]))):
+        raise InputError(f"graded_coordinates(h={h}, fine_to={fine_to}, ratio={ratio}, "
+                         f"length={length}); expected h > 0, fine_to >= 0, ratio >= 1, length > 0")
+    xs = list(np.arange(0.0, fine_to + 1e-9 * h, h)) or [0.0]
+    if len(xs) == 1:
+        xs.append(h)
+    while xs[-1] < length * (1 - 1e-12):
+        xs.append(xs[-1] + (xs[-1] - xs[-2]) * ratio)
+    return np.array(xs)
+
+
 def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitter: float = 0.0,
              seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Box [origin, origin + size] [m] split into nx·ny·nz hexahedra of 6 tetrahedra each (Kuhn
