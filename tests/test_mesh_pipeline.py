@@ -197,3 +197,30 @@ def test_loop_boundary_and_interior_rules():
     interior = 0.375 * (V[1] + V[4]) + 0.125 * (V[0] + V[5])             # edge (1, 4)
     assert np.isclose(np.linalg.norm(mids - interior, axis=1), 0).any()
     assert np.allclose(V2[3], 0.75 * V[3] + 0.125 * (V[0] + V[4]))      # corner (0, 1, 0)
+
+
+def test_graded_grid_is_conforming_and_fills_its_box():
+    """grid_tets on graded_coordinates: positive tets whose volumes sum to the box's, and whose
+    boundary triangles (faces used by one tet only) add up to the box's surface area, which holds
+    only if every interior face is shared (conforming)."""
+    from pliant.errors import InputError
+    from pliant.mesh.topology import boundary_faces
+
+    xs = pl.mesh.graded_coordinates(0.1, 0.3, 1.5, 2.0)
+    np.testing.assert_allclose(np.diff(xs)[:3], 0.1)          # uniform up to fine_to
+    np.testing.assert_allclose(np.diff(xs)[3:] / np.diff(xs)[2:-1], 1.5)   # then geometric
+    assert xs[-1] >= 2.0 and xs[-2] < 2.0
+    zs = np.array([0.0, 0.5, 0.7])
+    X, T = pl.mesh.grid_tets(xs, xs[:4], zs)
+    e = X[T]
+    vol = np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]) / 6
+    L = np.array([xs[-1], xs[3], zs[-1]])
+    assert vol.min() > 0 and np.isclose(vol.sum(), L.prod(), rtol=1e-12)
+    F, _ = boundary_faces(T)
+    tri = X[F]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    assert np.isclose(area, 2 * (L[0] * L[1] + L[1] * L[2] + L[0] * L[2]), rtol=1e-12)
+    with pytest.raises(InputError, match="strictly increasing"):
+        pl.mesh.grid_tets([0.0, 1.0, 1.0], xs, zs)
+    with pytest.raises(InputError, match="ratio"):
+        pl.mesh.graded_coordinates(0.1, 0.3, 0.9, 2.0)
