@@ -93,8 +93,9 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path):
     (dict(elements_type="H8"), "Elements Type=H8"),
     (dict(material='<Material Type="AB"><ElasticParams NumParams="3">1 2 3</ElasticParams></Material>'),
      "Material Type=AB"),
-    (dict(extra_constraint='<Constraint DOF="0" LoadShape="RAMPHOLD" NumNodes="1" Type="Disp">'
-          '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'), "LoadShape=RAMPHOLD"),
+    (dict(extra_constraint='<Constraint DOF="0" LoadShape="SINE" NumNodes="1" Type="Disp">'
+          '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'), "LoadShape=SINE"),
+    (dict(elements_type="T4ANP"), "Elements Type=T4ANP"),
     (dict(extra_constraint='<Constraint Type="Pressure" NumFaces="all" LoadShape="RAMP"/>'),
      "Constraint Type=Pressure"),
     (dict(extra_constraint='<ContactSurface/>'), "ContactSurface"),
@@ -176,3 +177,26 @@ def test_contact_cylinder_and_probe_geometry(tmp_path):
     # OrigDisp moves it by 0.1 m along y with the POLY345 profile over TotalTime (0.05 s).
     moved = tip + [0, 0.1 * _poly345(0.5), 0]
     np.testing.assert_allclose(probe.signed_distance(moved, 0.025), [0.0, 0.0], atol=1e-5)
+
+
+def test_h8_cannot_be_ignored_into_garbage(tmp_path):
+    """Eight-node connectivity cannot be read as tetrahedra: --ignore does not make it run."""
+    *_, xml = _cube_xml(elements_type="H8")
+    p = tmp_path / "h8.xml"
+    p.write_text(xml)
+    with pytest.raises(NiftySimError, match="Elements Type=H8"):
+        load_niftysim(p, ignore=("Elements Type=H8",))
+
+
+def test_ramphold_reaches_its_value_at_a_tenth_of_the_total_time(tmp_path):
+    """RAMPHOLD (NiftySim's tledConstraint::ComputeAmplitude): u = magnitude · min(1, t / 0.1T)."""
+    *_, xml = _cube_xml(extra_constraint='<Constraint DOF="1" LoadShape="RAMPHOLD" NumNodes="1" '
+                        'Type="Disp"><Nodes>26</Nodes><Magnitudes Type="UNIFORM">0.002</Magnitudes>'
+                        '</Constraint>')
+    p = tmp_path / "rh.xml"
+    p.write_text(xml)
+    sc = load_niftysim(p)
+    sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
+    for t in (0.0025, 0.005, 0.02):   # T = 0.05 s: ramp until 0.005 s
+        sim.run_to(t)
+        assert np.isclose(sim.displacements[26, 1], 0.002 * min(1.0, sim.time / 0.005), rtol=1e-9)

@@ -7,7 +7,8 @@ knowingly).
 Format: NiftySim user guide v2.4 (Johnsen et al. 2015). Materials: NH = decoupled Neo-Hookean
 (μ, K) — pliant's NeoHookean; LE = NiftySim's total-Lagrangian "linear elastic" (E, ν), whose S is
 λ tr(E) I + 2μ E (tledMaterialLE) — pliant's StVenantKirchhoff. Load shapes use the relative time
-t/T of the whole analysis: RAMP, STEP, POLY345, HILLY.
+t/T of the whole analysis: RAMP, STEP, POLY345, HILLY, RAMPHOLD (ramp over the first 10 %, then
+hold; tledConstraint::ComputeAmplitude).
 """
 
 from __future__ import annotations
@@ -78,8 +79,12 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         raise NiftySimError(f"<Nodes NumNodes={nodes_el.get('NumNodes')}> but {len(X)} nodes "
                             "listed", f, "Nodes")
     etype = elems_el.get("Type")
-    if etype != "T4":
-        unsupported(f"Elements Type={etype}", "pliant has linear tetrahedra (T4) only")
+    if etype == "T4ANP":  # same connectivity; ignoring it runs plain T4 (stiffer when ν → 0.5)
+        unsupported("Elements Type=T4ANP", "pliant's T4 has no nodal-averaged pressure; "
+                    "ignored, the elements run as plain T4")
+    elif etype != "T4":  # other connectivities cannot be read as tetrahedra: not ignorable
+        raise NiftySimError(f"unsupported NiftySim feature Elements Type={etype}: pliant has "
+                            "linear tetrahedra (T4) only", f, "Elements")
     T = _numbers(elems_el, f, "Elements", np.int64)
     if T.size % 4:
         raise NiftySimError(f"<Elements>: {T.size} indices, not a multiple of 4", f, "Elements")
@@ -160,7 +165,8 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
             raise NiftySimError(str(e), f, key) from None
 
     shapes = {"RAMP": lambda: Ramp(total), "STEP": lambda: Step(0.0),
-              "POLY345": lambda: SmoothRamp(total), "HILLY": lambda: Hilly(total)}
+              "POLY345": lambda: SmoothRamp(total), "HILLY": lambda: Hilly(total),
+              "RAMPHOLD": lambda: Ramp(0.1 * total)}  # NiftySim: ramp over 10 % of T, then hold
     for k, c in enumerate(root.findall("Constraint")):
         key = f"Constraint[{k}]"
         ctype = c.get("Type")
@@ -178,7 +184,8 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         if ctype != "Fix":
             shape = c.get("LoadShape")
             if shape not in shapes:
-                unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345 and HILLY")
+                unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and "
+                            "RAMPHOLD")
                 continue
             curve = shapes[shape]()
         if ctype == "Gravity":
