@@ -151,7 +151,8 @@ struct CudaEngine<T>::Impl {
     index_t* elem_nodes{};
     T *elem_grad{}, *elem_vol{}, *mass{}, *inv_mass{}, *patterns{}, *cval{};
     index_t *elem_id{}, *inc_off{}, *inc_idx{}, *co{}, *cdof{}, *ccurve{}, *pcurve{}, *cnodes{},
-        *cfree{};
+        *cfree{}, *pf_off{}, *pf_idx{}, *pnodes{}, *pslot{};
+    T *pedges{}, *pvalue{};
     LoadCurve* curves{};
     double *tt{}, *tv{}, *X{}, *keys{}, *grid{};
     RigidTool* tools{};
@@ -189,6 +190,12 @@ struct CudaEngine<T>::Impl {
         X = upload_vec(m.X);
         cnodes = upload_vec(m.contact_nodes);
         cfree = upload_vec(m.contact_bits);
+        pf_off = upload_vec(m.pface_offsets);
+        pf_idx = upload_vec(m.pface_index);
+        pnodes = upload_vec(m.press_nodes);
+        pslot = upload_vec(m.press_slot);
+        pedges = upload_vec(m.press_edges);
+        pvalue = upload_vec(m.press_value);
         tools = upload_vec(m.tools);
         keys = upload_vec(m.tool_keys);
         grid = upload_vec(m.tool_grid);
@@ -216,7 +223,8 @@ struct CudaEngine<T>::Impl {
 
     ~Impl() {
         void* ptrs[] = {elem_nodes, elem_grad, elem_vol, elem_id, inc_off, inc_idx, mass, inv_mass,
-                        patterns, pcurve, co, cdof, cval, ccurve, curves, tt, tv, X, cnodes, cfree, tools,
+                        patterns, pcurve, co, cdof, cval, ccurve, curves, tt, tv, X, cnodes, cfree, pf_off,
+                        pf_idx, pnodes, pslot, pedges, pvalue, tools,
                         keys, grid, u[0], u[1], u[2], f_elem, J, cnext, pf, pose0, pose1, cforce,
                         ctool, chunk, t0, step, bad, hist};
         for (void* p : ptrs)
@@ -241,7 +249,8 @@ struct CudaEngine<T>::Impl {
                 return 0;
             });
         }
-        const NodeData<T> nd{inc_off, inc_idx, inv_mass, patterns, np};
+        const NodeData<T> nd{inc_off, inc_idx, inv_mass, patterns, m.n_load_patterns,
+                             pf_off, pf_idx, pnodes, pedges, pvalue, pslot};
         node_kernel<T><<<grid_for(m.n_nodes), kThreads, 0, stream>>>(
             m.n_nodes, nd, f_elem, pf, it, u[cur], u[prev], m.n_pad, u[next], co, cdof, cval, ccurve,
             cnext);

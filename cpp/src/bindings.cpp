@@ -158,7 +158,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 std::vector<int> tool_kind, std::vector<double> tool_params,
                 std::vector<double> tool_mu, std::vector<std::vector<double>> tool_keys,
                 std::vector<index_t> tool_grid_dims, std::vector<std::vector<double>> tool_grids,
-                int threads) {
+                std::vector<index_t> press_nodes, std::vector<double> press_value,
+                std::vector<index_t> press_curve, int threads) {
                  ModelInput in;
                  in.X = X.data();
                  in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -184,6 +185,9 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  in.gravity_curve = gravity_curve;
                  in.contact_nodes = std::move(contact_nodes);
                  in.contact_masks = std::move(contact_masks);
+                 in.press_nodes = std::move(press_nodes);
+                 in.press_value = std::move(press_value);
+                 in.press_curve = std::move(press_curve);
                  for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                      RigidTool t{};
                      t.kind = static_cast<ToolKind>(tool_kind[k]);

@@ -247,6 +247,16 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
                     const T* fprev = f_node_[1 - fc].data();
                     const T* lp = m_.load_patterns.data();
                     double res = 0.0, scale = 0.0, num = 0.0, den = 0.0;
+                    // Follower pressure at the current displacements: an external load too.
+                    std::vector<T> rpress(m_.pface_index.empty() ? 0 : N3, T(0));
+                    if (!rpress.empty()) {
+                        const NodeData<T> nd = m_.nodes(true);
+                        for (index_t n = 0; n < m_.n_nodes; ++n) {
+                            T q[3];
+                            pressure_force(n, nd, pf.data(), uc, P, q);
+                            for (int d = 0; d < 3; ++d) rpress[d * P + n] = q[d];
+                        }
+                    }
                     // Contact forces from the rigid tools are external loads at equilibrium.
                     std::vector<double> fcon(m_.tools.empty() ? 0 : N3, 0.0);
                     for (std::size_t c = 0; c < fcon.size() / N3 * contact_tool_.size(); ++c)
@@ -254,8 +264,8 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
                             for (int d = 0; d < 3; ++d)
                                 fcon[d * P + m_.contact_nodes[c]] += contact_force_[3 * c + d];
                     for (std::size_t i = 0; i < N3; ++i) {
-                        double r = fcon.empty() ? 0.0 : fcon[i];
-                        for (std::size_t p = 0; p < np; ++p) r += double(pf[p]) * lp[p * N3 + i];
+                        double r = (fcon.empty() ? 0.0 : fcon[i]) + (rpress.empty() ? 0.0 : rpress[i]);
+                        for (int p = 0; p < m_.n_load_patterns; ++p) r += double(pf[p]) * lp[p * N3 + i];
                         const double fm = m_.free_mask[i];
                         res += fm * (r - fcur[i]) * (r - fcur[i]);
                         scale += r * r + (1.0 - fm) * double(fcur[i]) * fcur[i];

@@ -113,6 +113,37 @@ Model<T>::Model(const ModelInput& in) {
             for (index_t n = 0; n < n_nodes; ++n)
                 load_patterns[(k * 3 + d) * P + n] = T(mass_d[n] * in.gravity[d]);
     }
+    n_load_patterns = static_cast<int>(pattern_curve.size());
+
+    // Follower pressure: one pattern-factor slot per distinct curve, reference edges, node → face
+    // CSR in face order (a fixed summation order).
+    const index_t nf = static_cast<index_t>(in.press_value.size());
+    press_nodes = in.press_nodes;
+    press_value.resize(nf);
+    press_slot.resize(nf);
+    press_edges.resize(6 * static_cast<std::size_t>(nf));
+    pface_offsets.assign(static_cast<std::size_t>(n_nodes) + 1, 0);
+    for (index_t f = 0; f < nf; ++f) {
+        press_value[f] = T(in.press_value[f]);
+        const index_t c = in.press_curve[f];
+        index_t slot = n_load_patterns;
+        while (slot < static_cast<index_t>(pattern_curve.size()) && pattern_curve[slot] != c) ++slot;
+        if (slot == static_cast<index_t>(pattern_curve.size())) pattern_curve.push_back(c);
+        press_slot[f] = slot;
+        const index_t* v = &press_nodes[3 * f];
+        for (int d = 0; d < 3; ++d) {
+            press_edges[6 * f + d] = T(in.X[3 * v[1] + d] - in.X[3 * v[0] + d]);
+            press_edges[6 * f + 3 + d] = T(in.X[3 * v[2] + d] - in.X[3 * v[0] + d]);
+        }
+        for (int a = 0; a < 3; ++a) ++pface_offsets[v[a] + 1];
+    }
+    for (index_t n = 0; n < n_nodes; ++n) pface_offsets[n + 1] += pface_offsets[n];
+    pface_index.assign(static_cast<std::size_t>(pface_offsets[n_nodes]), 0);
+    {
+        std::vector<index_t> fill(pface_offsets.begin(), pface_offsets.end() - 1);
+        for (index_t f = 0; f < nf; ++f)
+            for (int a = 0; a < 3; ++a) pface_index[fill[press_nodes[3 * f + a]]++] = f;
+    }
 
     // Constraints.
     free_mask.assign(3 * P, T(1));
@@ -158,7 +189,8 @@ std::size_t Model<T>::bytes() const {
     auto b = [](const auto& v) { return v.size() * sizeof(v[0]); };
     return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) +
            b(inc_offsets) + b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) +
-           b(relax_inv_mass) + b(free_mask) +
+           b(relax_inv_mass) + b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) +
+           b(press_slot) + b(press_edges) + b(press_value) +
            b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) + b(cons_offsets);
 }
 

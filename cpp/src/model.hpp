@@ -47,6 +47,9 @@ struct ModelInput {
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys;         // 8 per keyframe: t, position (3), quaternion (4)
     std::vector<double> tool_grid;         // signed-distance grids [m]
+    std::vector<index_t> press_nodes;      // follower-pressure triangles, 3 nodes each
+    std::vector<double> press_value;       // [Pa] per triangle (positive: against its normal)
+    std::vector<index_t> press_curve;      // curve per triangle
 };
 
 template <class T>
@@ -64,7 +67,10 @@ struct Model {
     // static solution does not depend on the mass; large elements no longer wait on small ones).
     std::vector<T> relax_mass, relax_inv_mass;
     std::vector<T> load_patterns;              // (K, 3, P)
+    int n_load_patterns = 0;                   // K; pattern_curve also holds the pressure slots
     std::vector<index_t> pattern_curve;
+    std::vector<index_t> pface_offsets, pface_index, press_nodes, press_slot;
+    std::vector<T> press_edges, press_value;
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node
     std::vector<T> cons_value;
     std::vector<index_t> cons_offsets;          // node n's constraints: [cons_offsets[n], [n+1])
@@ -84,8 +90,8 @@ struct Model {
     /// Node data with the physical masses, or with the dynamic-relaxation masses if `relax`.
     NodeData<T> nodes(bool relax = false) const {
         return {inc_offsets.data(), inc_index.data(), relax ? relax_inv_mass.data() : inv_mass.data(),
-                load_patterns.data(),
-                static_cast<int>(pattern_curve.size())};
+                load_patterns.data(), n_load_patterns, pface_offsets.data(), pface_index.data(),
+                press_nodes.data(), press_edges.data(), press_value.data(), press_slot.data()};
     }
     /// Curve factors at time t [s], one per curve.
     void curve_factors(double t, T* out) const {

@@ -149,11 +149,48 @@ struct NodeData {
     const index_t* inc_index;
     const T* inv_mass;  // 1/m_a [1/kg], m_a = Σ ρ V0 / 4 over incident elements
     const T* load_patterns;
-    int n_patterns;
+    int n_patterns;     // rows of load_patterns (pattern factors may have more slots: pressures)
+    // Follower pressure on surface triangles: node → faces CSR, 3 nodes per face, reference edges
+    // X1 − X0 and X2 − X0 [m] (6 per face), pressure [Pa] and its pattern-factor slot per face.
+    const index_t* pface_offsets;
+    const index_t* pface_index;
+    const index_t* press_nodes;
+    const T* press_edges;
+    const T* press_value;
+    const index_t* press_slot;
 };
 
+/// External force [N] of follower pressure on node n: Σ over its faces −(p s / 6)(x1 − x0) × (x2 − x0),
+/// each triangle's current area vector shared equally by its 3 nodes (Bonet & Wood, Nonlinear
+/// Continuum Mechanics for FEA, 2nd ed., §8.4, follower pressure; NiftySim's
+/// tledPressureConstraint). Positive p pushes against the face normal (x1 − x0) × (x2 − x0).
+/// Inputs: node data, pattern factors s (slot per face), u [m] SoA (3, P). Output: out [N] (3).
+template <class T>
+PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors, const T* u,
+                              index_t P, T out[3]) {
+    out[0] = out[1] = out[2] = T(0);
+    const index_t end = nd.pface_offsets[n + 1];
+    for (index_t k = nd.pface_offsets[n]; k < end; ++k) {
+        const index_t f = nd.pface_index[k];
+        const index_t a = nd.press_nodes[3 * f], b = nd.press_nodes[3 * f + 1],
+                      c = nd.press_nodes[3 * f + 2];
+        T e1[3], e2[3];
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) {
+            const T ua = u[d * P + a];
+            e1[d] = nd.press_edges[6 * f + d] + (u[d * P + b] - ua);
+            e2[d] = nd.press_edges[6 * f + 3 + d] + (u[d * P + c] - ua);
+        }
+        const T s = nd.press_value[f] * factors[nd.press_slot[f]] / T(6);
+        out[0] -= s * (e1[1] * e2[2] - e1[2] * e2[1]);
+        out[1] -= s * (e1[2] * e2[0] - e1[0] * e2[2]);
+        out[2] -= s * (e1[0] * e2[1] - e1[1] * e2[0]);
+    }
+}
+
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
-/// bitwise reproducible), then u⁺ = u + (γ2 − 1)(u − u⁻) + γ1 M⁻¹(r − f) (central differences).
+/// bitwise reproducible), then u⁺ = u + (γ2 − 1)(u − u⁻) + γ1 M⁻¹(r − f) (central differences),
+/// r = load patterns + follower pressure at u.
 /// Inputs: node data, element forces, load-pattern factors, u and u⁻ [m] SoA (3, P).
 /// Outputs: u_out [m]; f_node_out [N] (internal force per node, may be null).
 template <class T>
@@ -169,10 +206,12 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem,
         f[2] += f_elem[o + 2 * kLanes];
     }
     const T w = it.g1 * nd.inv_mass[n];
+    T rp[3];
+    pressure_force(n, nd, pattern_factors, u, P, rp);
     PLIANT_UNROLL
     for (int d = 0; d < 3; ++d) {
         const index_t i = d * P + n;
-        T r = T(0);
+        T r = rp[d];
         for (int k = 0; k < nd.n_patterns; ++k) r += pattern_factors[k] * nd.load_patterns[k * 3 * P + i];
         u_out[i] = u[i] + (it.c * (u[i] - u_prev[i]) + w * (r - f[d]));
         if (f_node_out) f_node_out[i] = f[d];

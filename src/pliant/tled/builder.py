@@ -63,6 +63,7 @@ class ModelBuilder:
         self.damping = 0.0  # mass-proportional damping α [1/s]
         self._cons: dict[tuple[int, int], tuple[float, LoadCurve]] = {}
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
+        self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
         self.tools: list = []  # rigid tools (pliant.contact)
         self.tool_nodes: list = []  # per tool: node ids it is restricted to, or None (all)
@@ -176,6 +177,38 @@ class ModelBuilder:
             raise InputError(f"add_force: force shape {np.shape(force)}; expected finite (3,) or "
                              f"({ids.size}, 3) [N]")
         self._forces.append((ids, np.array(f), curve or Constant()))
+
+    def add_pressure(self, faces, pressure, curve: LoadCurve | None = None, orient: bool = True):
+        """Follower pressure [Pa] on surface triangles ``faces`` (F, 3) (user node ids), scaled by
+        ``curve``: each step, −p/3 of the triangle's current area vector on each of its nodes.
+        ``pressure``: one value or one per face; positive pushes into the body (compression).
+
+        ``orient=True`` (default) takes each face's outward orientation from the mesh (a face must
+        then be on its boundary); ``orient=False`` keeps the given winding (normal
+        (x1 − x0) × (x2 − x0); positive p pushes against it), as NiftySim does."""
+        F = np.asarray(faces)
+        if F.ndim != 2 or F.shape[1] != 3 or F.shape[0] == 0 or not np.issubdtype(F.dtype, np.integer):
+            raise InputError(f"add_pressure: faces shape {F.shape}; expected (F, 3) node ids")
+        F = self._node_ids(F.ravel(), "add_pressure faces").reshape(-1, 3)
+        p = np.broadcast_to(np.asarray(pressure, float), (F.shape[0],)).copy() \
+            if np.ndim(pressure) == 0 else np.asarray(pressure, float)
+        if p.shape != (F.shape[0],) or not np.all(np.isfinite(p)):
+            raise InputError(f"add_pressure: pressure shape {np.shape(pressure)}; expected a finite "
+                             f"value or ({F.shape[0]},) [Pa]")
+        if orient:
+            from ..mesh.topology import boundary_faces
+
+            B, _ = boundary_faces(self.tets)
+            index = {tuple(sorted(f)): f for f in B.tolist()}
+            out = []
+            for i, f in enumerate(F.tolist()):
+                b = index.get(tuple(sorted(f)))
+                if b is None:
+                    raise InputError(f"add_pressure: face {i} (nodes {f}) is not on the mesh "
+                                     "boundary; pass orient=False to load it as given")
+                out.append(b)
+            F = np.array(out, np.int64)
+        self._pressures.append((F, p, curve or Constant()))
 
     def set_gravity(self, g=(0.0, 0.0, -9.81), curve: LoadCurve | None = None):
         """Body acceleration g [m/s²] applied to every node as m_a·g, scaled by ``curve``."""

@@ -90,6 +90,11 @@ class Model:
             R = pattern_of.setdefault(k, np.zeros((N, 3)))
             np.add.at(R, node_rank[ids], f)
         pattern_curve = sorted(pattern_of)
+        press_F = np.concatenate([F for F, _, _ in builder._pressures]) if builder._pressures \
+            else np.zeros((0, 3), np.int64)
+        press_p = np.concatenate([p for _, p, _ in builder._pressures]) if builder._pressures \
+            else np.zeros(0)
+        press_c = [cid(c) for F, _, c in builder._pressures for _ in range(len(F))]
         patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve \
             else np.zeros((0, N, 3))
         cons = sorted(builder._cons.items())
@@ -150,6 +155,7 @@ class Model:
             [m for t in self.tools for m in (t.mu_s, t.mu_k)],
             [t.key_array().tolist() for t in self.tools],
             [d for dims, _ in tool_grids for d in dims], [v.tolist() for _, v in tool_grids],
+            [int(v) for v in node_rank[press_F].ravel()], press_p.tolist(), press_c,
             int(threads if threads else _auto_threads(M)),
         )
         self.n_nodes, self.n_elements = N, M
