@@ -96,8 +96,8 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path):
     (dict(extra_constraint='<Constraint DOF="0" LoadShape="SINE" NumNodes="1" Type="Disp">'
           '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'), "LoadShape=SINE"),
     (dict(elements_type="T4ANP"), "Elements Type=T4ANP"),
-    (dict(extra_constraint='<Constraint Type="Pressure" NumFaces="all" LoadShape="RAMP"/>'),
-     "Constraint Type=Pressure"),
+    (dict(extra_constraint='<Constraint Type="Traction" NumFaces="all" LoadShape="RAMP"/>'),
+     "Constraint Type=Traction"),
     (dict(extra_constraint='<ContactSurface/>'), "ContactSurface"),
     (dict(extra_constraint='<ContactCylinder><Origin>0 0 0</Origin><Axis>0 0 1</Axis><Radius>0.01'
           '</Radius><Length>0.1</Length><RadChange>0.01</RadChange></ContactCylinder>'),
@@ -200,3 +200,60 @@ def test_ramphold_reaches_its_value_at_a_tenth_of_the_total_time(tmp_path):
     for t in (0.0025, 0.005, 0.02):   # T = 0.05 s: ramp until 0.005 s
         sim.run_to(t)
         assert np.isclose(sim.displacements[26, 1], 0.002 * min(1.0, sim.time / 0.005), rtol=1e-9)
+
+
+def _pressure_cube_xml(pressure_xml):
+    """Jittered unit cube, symmetry planes x = 0, y = 0, z = 0, NH (μ = 1 kPa, K = 10 kPa)."""
+    fmt = lambda a: " ".join(str(v) for v in np.ravel(a))  # noqa: E731
+    X, T = pl.mesh.box_tets((1.0, 1.0, 1.0), (3, 3, 3), jitter=0.25, seed=1)
+    fixes = "".join(
+        f'<Constraint DOF="{d}" NumNodes="{len(ids)}" Type="Fix"><Nodes>{fmt(ids)}</Nodes></Constraint>'
+        for d, ids in ((d, np.nonzero(X[:, d] < 1e-9)[0]) for d in range(3)))
+    return X, T, f"""<Model>
+  <Nodes DOF="3" NumNodes="{len(X)}">{fmt(X)}</Nodes>
+  <Elements NumEls="{len(T)}" Type="T4">{fmt(T)}</Elements>
+  <ElementSet Size="all"><Material Type="NH"><ElasticParams NumParams="2">1000 10000</ElasticParams>
+    </Material></ElementSet>
+  {fixes}
+  {pressure_xml}
+  <SystemParams><TimeStep>1e-3</TimeStep><TotalTime>1</TotalTime><DampingCoeff>0</DampingCoeff>
+    <Density>1000</Density></SystemParams>
+</Model>"""
+
+
+def test_pressure_faces_list_normal_and_all(tmp_path):
+    """Pressure (user guide §3.5): listed faces (winding kept), SpecType="NORMAL" and NumFaces="all".
+    The x = L faces listed and selected by their normal give the model built through the API,
+    bit for bit; "all" gives hydrostatic compression, J = 1 − p/K (decoupled NH, σ = K(J − 1) I)."""
+    from pliant.mesh.topology import boundary_faces
+
+    fmt = lambda a: " ".join(str(v) for v in np.ravel(a))  # noqa: E731
+    X, T, _ = _pressure_cube_xml("")
+    B, _ = boundary_faces(T)
+    right = B[np.all(X[B][:, :, 0] > 1 - 1e-9, axis=1)]
+    listed = (f'<Constraint Type="Pressure" NumFaces="{len(right)}" FaceType="Tri" LoadShape="RAMP">'
+              f'<Faces>{fmt(right)}</Faces><Magnitude>300</Magnitude></Constraint>')
+    normal = ('<Constraint Type="Pressure" SpecType="NORMAL" LoadShape="RAMP"><Normal '
+              'ToleranceAngle="5">1 0 0</Normal><Magnitude>300</Magnitude></Constraint>')
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(mu=1000, K=10000), density=1000)
+    for d in range(3):
+        b.fix(np.nonzero(X[:, d] < 1e-9)[0], "xyz"[d])
+    b.add_pressure(right, 300.0, pl.Ramp(1.0))
+    ref = pl.Simulation(b.finalize("float64"), dt=1e-3)
+    ref.run_to(0.2)
+    for k, xml in enumerate((listed, normal)):
+        p = tmp_path / f"p{k}.xml"
+        p.write_text(_pressure_cube_xml(xml)[2])
+        sim = pl.Simulation(load_niftysim(p).builder.finalize("float64"), dt=1e-3)
+        sim.run_to(0.2)
+        assert np.abs(sim.displacements).max() > 1e-4
+        assert np.array_equal(sim.displacements, ref.displacements)
+    p = tmp_path / "all.xml"
+    p.write_text(_pressure_cube_xml('<Constraint Type="Pressure" NumFaces="all" LoadShape="RAMP">'
+                                    '<Magnitude>500</Magnitude></Constraint>')[2])
+    sim = pl.Simulation(load_niftysim(p).builder.finalize("float64"))
+    sim.solve_static(tol=1e-9, increments=4)
+    corner = np.argmax(X.sum(axis=1))
+    np.testing.assert_allclose(np.prod(1 + sim.displacements[corner]), 1 - 500 / 1e4, rtol=1e-8)

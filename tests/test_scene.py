@@ -207,3 +207,28 @@ nodes = { box = [[0.0, 0.0, 0.09], [0.05, 1.0, 1.0]] }
     bad = text.replace("[0.0, 0.0, 0.09], [0.05, 1.0, 1.0]", "[5.0, 5.0, 5.0], [6.0, 6.0, 6.0]")
     with pytest.raises(SceneError, match=r"tool\[0\]\.nodes"):
         load_scene(_write(tmp_path, bad, "b.toml"))
+
+
+def test_scene_pressure_load_matches_the_api(tmp_path):
+    """[[load]] type = "pressure": the boundary triangles whose nodes are all selected carry it;
+    the scene's model equals one built through the API with those faces (same bits)."""
+    from pliant.mesh.topology import boundary_faces
+
+    text = TENSION.replace("[output]", """[[load]]
+type = "pressure"
+value = -200.0
+nodes = { plane = { point = [0.1, 0, 0], normal = [1, 0, 0], side = "on", tol = 1e-6 } }
+curve = "ramp"
+
+[output]""")
+    sc = load_scene(_write(tmp_path, text))
+    (F, p, _), = sc.builder._pressures
+    X, T = sc.builder.nodes, sc.builder.tets
+    B, _ = boundary_faces(T)
+    expect = B[np.all(np.abs(X[B][:, :, 0] - 0.1) <= 1e-6, axis=1)]
+    assert sorted(map(tuple, F.tolist())) == sorted(map(tuple, expect.tolist()))
+    assert np.all(p == -200.0)
+    bad = text.replace('nodes = { plane = { point = [0.1, 0, 0], normal = [1, 0, 0], side = "on", '
+                       'tol = 1e-6 } }', "nodes = { ids = [0] }")
+    with pytest.raises(SceneError, match=r"load\[\d\]\.nodes.*no whole boundary triangle"):
+        load_scene(_write(tmp_path, bad, "b.toml"))

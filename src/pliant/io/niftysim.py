@@ -1,5 +1,6 @@
 """NiftySim model import (XML, T4 elements): nodes, elements, element sets with NH and LE materials,
-Fix / Disp / Force / Gravity constraints with their load shapes, the analytical rigid contacts
+Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the analytical rigid
+contacts
 (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and motions), Output frequency
 and SystemParams. Anything else is refused by name (``unsupported`` lists what may be skipped
 knowingly).
@@ -170,11 +171,15 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
     for k, c in enumerate(root.findall("Constraint")):
         key = f"Constraint[{k}]"
         ctype = c.get("Type")
+        if ctype == "Pressure":
+            _pressure(c, b, T, shapes, f, key, unsupported)
+            continue
         if c.get("SpecType", "NODES") != "NODES":
             unsupported(f"Constraint SpecType={c.get('SpecType')}", "only node lists")
             continue
         if ctype not in ("Fix", "Disp", "Force", "Gravity"):
-            unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force and Gravity")
+            unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity and "
+                        "Pressure")
             continue
         dof = c.get("DOF", "all")
         dofs = "xyz" if dof == "all" else {"0": "x", "1": "y", "2": "z"}.get(dof)
@@ -319,3 +324,63 @@ def _rigid_contacts(root, b: ModelBuilder, total: float, f: str, unsupported, wa
                 b.add_tool(tool, nodes=nodes)
             except InputError as e:
                 raise NiftySimError(str(e), f, key) from None
+
+
+def _pressure(c, b: ModelBuilder, T: np.ndarray, shapes: dict, f: str, key: str, unsupported):
+    """<Constraint Type="Pressure"> (user guide v2.4 §3.5): a follower pressure (the current facet
+    normals, tledPressureConstraint) of <Magnitude> on <Faces> (NumFaces triangles, their winding
+    kept: positive pushes against (x1 − x0) × (x2 − x0)), on the whole surface (NumFaces="all") or
+    on the boundary facets within ToleranceAngle degrees of a <Normal> (SpecType="NORMAL")."""
+    from ..mesh.topology import boundary_faces
+
+    shape = c.get("LoadShape")
+    if shape not in shapes:
+        unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and RAMPHOLD")
+        return
+    mag = c.find("Magnitude")
+    if mag is None:
+        raise NiftySimError("Pressure needs <Magnitude> (one value [Pa])", f, key)
+    p = _numbers(mag, f, f"{key}/Magnitude")
+    if p.size != 1:
+        raise NiftySimError(f"<Magnitude>: expected one value, got {p.size}", f, f"{key}/Magnitude")
+    B, _ = boundary_faces(T)
+    spec = c.get("SpecType", "NODES")
+    orient = True
+    if spec == "NORMAL":
+        nrm = c.find("Normal")
+        if nrm is None:
+            raise NiftySimError('SpecType="NORMAL" needs <Normal>', f, key)
+        n = _numbers(nrm, f, f"{key}/Normal")
+        try:
+            angle = float(nrm.get("ToleranceAngle", "0"))
+        except ValueError:
+            raise NiftySimError("<Normal ToleranceAngle>: expected degrees", f, key) from None
+        if n.size != 3 or not np.linalg.norm(n) > 0:
+            raise NiftySimError("<Normal>: expected a non-zero vector", f, f"{key}/Normal")
+        X = b.nodes
+        area = np.cross(X[B[:, 1]] - X[B[:, 0]], X[B[:, 2]] - X[B[:, 0]])
+        cosang = area @ (n / np.linalg.norm(n)) / np.linalg.norm(area, axis=1)
+        faces = B[cosang >= np.cos(np.radians(angle)) - 1e-12]
+    elif c.get("NumFaces") == "all":
+        faces = B
+    else:
+        if c.get("FaceType", "Tri") != "Tri":
+            raise NiftySimError(f"FaceType={c.get('FaceType')!r}: T4 meshes have Tri faces", f, key)
+        fe = c.find("Faces")
+        if fe is None:
+            raise NiftySimError("Pressure needs <Faces>, NumFaces=\"all\" or SpecType=\"NORMAL\"",
+                                f, key)
+        faces = _numbers(fe, f, f"{key}/Faces", np.int64)
+        if faces.size % 3:
+            raise NiftySimError(f"<Faces>: {faces.size} indices, not a multiple of 3", f, key)
+        faces = faces.reshape(-1, 3)
+        if "NumFaces" in c.attrib and c.get("NumFaces").isdigit() and \
+                int(c.get("NumFaces")) != len(faces):
+            raise NiftySimError(f"NumFaces={c.get('NumFaces')} but {len(faces)} faces listed", f, key)
+        orient = False
+    if len(faces) == 0:
+        raise NiftySimError("Pressure: no faces selected", f, key)
+    try:
+        b.add_pressure(faces, float(p[0]), shapes[shape](), orient=orient)
+    except InputError as e:
+        raise NiftySimError(str(e), f, key) from None

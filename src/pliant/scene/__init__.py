@@ -19,6 +19,7 @@ from ..errors import InputError, MeshError
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from .schema import Ctx, SceneError, check_keys, vector
+from ..mesh.topology import boundary_faces
 from .select import select_elements, select_nodes
 
 if sys.version_info >= (3, 11):
@@ -370,7 +371,8 @@ def load_scene(path) -> Scene:
     for i, ld in enumerate(data.get("load", [])):
         p = f"load[{i}]"
         check_keys(ctx, ld, p, {"type": "str", "nodes": "table", "force": "list",
-                                "total_force": "list", "g": "list", "curve": "str|table"}, ("type",))
+                                "total_force": "list", "g": "list", "value": "number",
+                                "curve": "str|table"}, ("type",))
         curve = make_curve(ctx, ld.get("curve"), f"{p}.curve", scene.duration)
         if ld["type"] == "gravity":
             b.set_gravity(vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g"), curve)
@@ -384,8 +386,20 @@ def load_scene(path) -> Scene:
             else:
                 f = np.array(vector(ctx, ld["total_force"], f"{p}.total_force")) / ids.size
             b.add_force(ids, f, curve)
+        elif ld["type"] == "pressure":
+            if "nodes" not in ld or "value" not in ld:
+                raise ctx.error(p, "a 'pressure' load needs 'value' [Pa] and 'nodes' (the boundary "
+                                "triangles whose three nodes are all selected)")
+            ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+            B, _ = boundary_faces(T)
+            faces = B[np.all(np.isin(B, ids), axis=1)]
+            if len(faces) == 0:
+                raise ctx.error(f"{p}.nodes", f"the {ids.size} selected nodes hold no whole boundary "
+                                "triangle: select a surface patch")
+            b.add_pressure(faces, float(ld["value"]), curve)
         else:
-            raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force' or 'gravity'")
+            raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force', "
+                            "'pressure' or 'gravity'")
 
     for i, t in enumerate(data.get("tool", [])):
         only = select_nodes(ctx, t["nodes"], f"tool[{i}].nodes", X, T) if "nodes" in t else None
