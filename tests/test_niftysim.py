@@ -91,8 +91,8 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path):
 
 @pytest.mark.parametrize("kwargs, name", [
     (dict(elements_type="H8"), "Elements Type=H8"),
-    (dict(material='<Material Type="AB"><ElasticParams NumParams="3">1 2 3</ElasticParams></Material>'),
-     "Material Type=AB"),
+    (dict(material='<Material Type="NHV"><ElasticParams NumParams="2">1 2</ElasticParams></Material>'),
+     "Material Type=NHV"),
     (dict(extra_constraint='<Constraint DOF="0" LoadShape="SINE" NumNodes="1" Type="Disp">'
           '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'), "LoadShape=SINE"),
     (dict(elements_type="T4ANP"), "Elements Type=T4ANP"),
@@ -257,3 +257,27 @@ def test_pressure_faces_list_normal_and_all(tmp_path):
     sim.solve_static(tol=1e-9, increments=4)
     corner = np.argmax(X.sum(axis=1))
     np.testing.assert_allclose(np.prod(1 + sim.displacements[corner]), 1 - 500 / 1e4, rtol=1e-8)
+
+
+@pytest.mark.parametrize("xml, expect", [
+    ('<Material Type="PY"><ElasticParams NumParams="6">300 200 100 50 80 10000</ElasticParams>'
+     '</Material>', pl.Polynomial(300, 200, 100, 50, 80, K=10000)),
+    ('<Material Type="AB"><ElasticParams NumParams="3">1000 2.5 10000</ElasticParams></Material>',
+     pl.ArrudaBoyce(1000, 2.5, 10000)),
+    ('<Material Type="TI"><ElasticParams NumParams="6">1000 10000 500 0 0 2</ElasticParams>'
+     '</Material>', pl.TransverselyIsotropic(1000, 10000, 500, (0, 0, 1))),
+])
+def test_other_hyperelastic_materials(tmp_path, xml, expect):
+    """PY (C10 C01 C20 C02 C11 κ), AB (μ λm κ) and TI (μ κ η a1 a2 a3, a normalized), in the order
+    of NiftySim's user guide, App. A.1."""
+    *_, text = _cube_xml(material=xml)
+    p = tmp_path / "m.xml"
+    p.write_text(text)
+    (s,) = load_niftysim(p).builder.sets
+    assert s.material == expect
+    bad = tmp_path / "bad.xml"
+    bad.write_text(text.replace('NumParams="6">1000 10000 500 0 0 2', 'NumParams="5">1000 10000 500 0 0')
+                   .replace('NumParams="3">1000 2.5', 'NumParams="2">1000')
+                   .replace('>300 200 100 50 80 10000<', '>300 200 100 50 80<'))
+    with pytest.raises(NiftySimError, match="takes"):
+        load_niftysim(bad)

@@ -232,3 +232,20 @@ curve = "ramp"
                        'tol = 1e-6 } }', "nodes = { ids = [0] }")
     with pytest.raises(SceneError, match=r"load\[\d\]\.nodes.*no whole boundary triangle"):
         load_scene(_write(tmp_path, bad, "b.toml"))
+
+
+@pytest.mark.parametrize("table, expect", [
+    ('type = "transversely-isotropic"\nmu = 1000.0\nK = 10000.0\neta = 500.0\ndirection = [1, 1, 0]',
+     pl.TransverselyIsotropic(1000.0, 10000.0, 500.0, (1, 1, 0))),
+    ('type = "polynomial"\nC10 = 400.0\nC20 = 50.0\nK = 10000.0',
+     pl.Polynomial(400.0, 0.0, 50.0, K=10000.0)),
+    ('type = "arruda-boyce"\nmu = 1000.0\nlambda_m = 3.0\nK = 10000.0',
+     pl.ArrudaBoyce(1000.0, 3.0, 10000.0)),
+])
+def test_scene_other_materials(tmp_path, table, expect):
+    text = TENSION.replace('type = "neo-hookean"\nmu = 1000.0\nK = 10000.0', table)
+    (s,) = load_scene(_write(tmp_path, text)).builder.sets
+    assert s.material == expect
+    bad = text.replace("K = 10000.0", "E = 3000.0")
+    with pytest.raises(SceneError, match="takes"):
+        load_scene(_write(tmp_path, bad, "b.toml"))

@@ -268,10 +268,14 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
             if (!(factor > 0.0)) throw nb::value_error("factor must be > 0");
             if (e.base_params.empty())
                 for (const auto& g : e.model.groups)
-                    for (int k = 0; k < 4; ++k) e.base_params.push_back(double(g.material.p[k]));
-            for (std::size_t g = 0; g < e.model.groups.size(); ++g)
-                for (int k = 0; k < 4; ++k)
-                    e.model.groups[g].material.p[k] = T(e.base_params[4 * g + k] * factor);
+                    for (int k = 0; k < kMaterialParams; ++k)
+                        e.base_params.push_back(double(g.material.p[k]));
+            for (std::size_t g = 0; g < e.model.groups.size(); ++g) {
+                auto& m = e.model.groups[g].material;
+                for (int k = 0; k < kMaterialParams; ++k)
+                    m.p[k] = T(e.base_params[kMaterialParams * g + k] *
+                               (is_modulus(m.kind, k) ? factor : 1.0));
+            }
         })
         .def("enable_cuda", [](E& e, int device) {
 #ifdef PLIANT_WITH_CUDA

@@ -19,7 +19,8 @@ Model<T>::Model(const ModelInput& in) {
         const index_t end = in.group_end[g];
         const index_t nb = (end - begin + kLanes - 1) / kLanes;
         Group<T> grp{blocks, blocks + nb, {static_cast<MaterialKind>(in.group_kind[g]), {}}};
-        for (int k = 0; k < 4; ++k) grp.material.p[k] = T(in.group_params[4 * g + k]);
+        for (int k = 0; k < kMaterialParams; ++k)
+            grp.material.p[k] = T(in.group_params[kMaterialParams * g + k]);
         groups.push_back(grp);
         for (index_t b = 0; b < nb; ++b) block_group.push_back(static_cast<index_t>(g));
         blocks += nb;
@@ -40,7 +41,7 @@ Model<T>::Model(const ModelInput& in) {
         const index_t end = in.group_end[g];
         const index_t first_slot = groups[g].block_begin * kLanes;
         MaterialParams<double> md{groups[g].material.kind, {}};
-        for (int k = 0; k < 4; ++k) md.p[k] = in.group_params[4 * g + k];
+        for (int k = 0; k < kMaterialParams; ++k) md.p[k] = in.group_params[kMaterialParams * g + k];
         const double modulus = with_material(md, [](auto m) { return m.dilatational_modulus(); });
         for (index_t e = begin; e < end; ++e) {
             const index_t s = first_slot + (e - begin);

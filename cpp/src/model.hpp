@@ -29,7 +29,7 @@ struct ModelInput {
     index_t n_elems;
     std::vector<index_t> group_end;        // element index one past each group, ascending
     std::vector<int> group_kind;           // MaterialKind per group
-    std::vector<double> group_params;      // 4 per group
+    std::vector<double> group_params;      // kMaterialParams per group
     const double* patterns;   // load patterns [N], (K, N, 3)
     int n_patterns;
     std::vector<index_t> pattern_curve;    // curve per pattern

@@ -10,8 +10,8 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
 from . import _core, contact, io, mesh
 from .errors import (BackendError, ConvergenceError, DegenerateElementError, InputError, InstabilityError,
                      InvertedElementError, MaterialError, MeshError, PliantError, TimeStepError)
-from .materials import (LinearElastic, Material, MooneyRivlin, NeoHookean, NeoHookeanCoupled,
-                        StVenantKirchhoff)
+from .materials import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoHookean,
+                        NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic)
 from .tled import (Constant, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo, Simulation,
                    SmoothRamp, Hilly, Solver, State, Step, Table)
 
@@ -21,6 +21,7 @@ __all__ = [
     "ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
     "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table",
     "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
+    "Polynomial", "ArrudaBoyce", "TransverselyIsotropic",
     "LinearElastic",
     "PliantError", "InputError", "BackendError", "MaterialError", "MeshError", "InvertedElementError",
     "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError",

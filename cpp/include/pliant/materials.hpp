@@ -30,6 +30,9 @@ enum class MaterialKind : int {
     NeoHookeanCoupled = 2,  // Bonet & Wood, params (mu, lambda)
     StVenantKirchhoff = 3,  // params (mu, lambda)
     LinearElastic = 4,      // small strain, params (mu, lambda)
+    Polynomial = 5,         // decoupled, params (C10, C01, C20, C02, C11, K)
+    ArrudaBoyce = 6,        // decoupled, params (mu, lambda_m, K)
+    TransverselyIsotropic = 7,  // decoupled, params (mu, K, eta, a1, a2, a3)
 };
 
 /// Kinematics of one element from its displacement gradient H = ∇X u (dimensionless).
@@ -89,35 +92,6 @@ struct NeoHookean {
     }
 };
 
-/// Decoupled Mooney–Rivlin, W = C10 (Ī1 − 3) + C01 (Ī2 − 3) + K/2 (J − 1)²;
-/// S = 2C10 J^(−2/3)(I − I1/3 C⁻¹) + 2C01 J^(−4/3)(I1 I − C − 2/3 I2 C⁻¹) + K J (J − 1) C⁻¹
-/// (Holzapfel, Nonlinear Solid Mechanics 2000, §6.5, eqs. 6.142–6.147), evaluated through E.
-template <class T>
-struct MooneyRivlin {
-    T C10, C01, K;
-    PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * (C10 + C01); }
-    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
-        const Sym3<T> Ci = inverse_cauchy_green(k);
-        const Sym3<T> dE = dev(k.E);
-        const T I1 = T(3) + T(2) * trace(k.E);
-        const T j23 = inv_cbrt(k.J * k.J);
-        const T a = T(2) * C10 * j23;
-        const T b = T(2) * C01 * j23 * j23;
-        // a (I − I1/3 C⁻¹) + b (I1 I − C − 2/3 I2 C⁻¹) = C⁻¹ [(2a + b (2 I1 − 4)) dev E − 4b dev E²]
-        const Sym3<T> D = axpby(T(2) * a + b * (T(2) * I1 - T(4)), dE, T(-4) * b,
-                                dev(mul_commuting(k.E, k.E)));
-        return axpby(T(1), mul_commuting(Ci, D), K * k.J * k.Jm1, Ci);
-    }
-    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
-    PLIANT_HD T energy(const Kinematics<T>& k) const {
-        const Sym3<T> C = add_identity(T(1), scale(T(2), k.E));
-        const T I1 = trace(C);
-        const T I2 = T(0.5) * (I1 * I1 - ddot(C));
-        const T j23 = inv_cbrt(k.J * k.J);
-        return C10 * (j23 * I1 - T(3)) + C01 * (j23 * j23 * I2 - T(3)) + K / T(2) * k.Jm1 * k.Jm1;
-    }
-};
-
 /// ln J from J − 1 without cancellation: the series x − x²/2 + x³/3 − x⁴/4 + x⁵/5 below
 /// |x| = 1e-2 (truncation error x⁶/6 < 2e-13), std::log(1 + x) above.
 template <class T>
@@ -126,6 +100,128 @@ PLIANT_HD T log_J(T Jm1) {
     const T series = x * (T(1) + x * (T(-0.5) + x * (T(1) / T(3) + x * (T(-0.25) + x * T(0.2)))));
     return std::fabs(x) < T(1e-2) ? series : std::log(T(1) + x);
 }
+
+/// Isochoric 2nd Piola–Kirchhoff stress of a decoupled W(Ī1, Ī2) with W1 = ∂W/∂Ī1, W2 = ∂W/∂Ī2:
+/// S_iso = 2W1 J^(−2/3)(I − I1/3 C⁻¹) + 2W2 J^(−4/3)(I1 I − C − 2/3 I2 C⁻¹) (Holzapfel, Nonlinear
+/// Solid Mechanics 2000, §6.5, eqs. 6.142–6.147), evaluated through E as
+/// C⁻¹ [(2a + b (2 I1 − 4)) dev E − 4b dev E²], a = 2W1 J^(−2/3), b = 2W2 J^(−4/3).
+template <class T>
+PLIANT_HD Sym3<T> isochoric_pk2(const Kinematics<T>& k, const Sym3<T>& Ci, T W1, T W2, T j23) {
+    const T I1 = T(3) + T(2) * trace(k.E);
+    const T a = T(2) * W1 * j23;
+    const T b = T(2) * W2 * j23 * j23;
+    const Sym3<T> D = axpby(T(2) * a + b * (T(2) * I1 - T(4)), dev(k.E), T(-4) * b,
+                            dev(mul_commuting(k.E, k.E)));
+    return mul_commuting(Ci, D);
+}
+
+/// Isochoric invariants Ī1 = J^(−2/3) I1, Ī2 = J^(−4/3) I2 of C = I + 2E, given j23 = J^(−2/3).
+template <class T>
+PLIANT_HD void isochoric_invariants(const Kinematics<T>& k, T j23, T& I1b, T& I2b) {
+    const Sym3<T> C = add_identity(T(1), scale(T(2), k.E));
+    const T I1 = trace(C);
+    I1b = j23 * I1;
+    I2b = j23 * j23 * T(0.5) * (I1 * I1 - ddot(C));
+}
+
+/// Decoupled polynomial (N = 2), W = Σ_{i+j=1,2} Cij (Ī1 − 3)^i (Ī2 − 3)^j + K/2 (J − 1)²
+/// (NiftySim user guide v2.4, App. A.1.3, eq. 7; Holzapfel 2000, §6.5); Mooney–Rivlin is
+/// C20 = C02 = C11 = 0. Parameters (C10, C01, C20, C02, C11, K).
+template <class T>
+struct Polynomial {
+    T C10, C01, C20, C02, C11, K;
+    PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * (C10 + C01); }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> Ci = inverse_cauchy_green(k);
+        const T j23 = inv_cbrt(k.J * k.J);
+        T I1b, I2b;
+        isochoric_invariants(k, j23, I1b, I2b);
+        const T W1 = C10 + T(2) * C20 * (I1b - T(3)) + C11 * (I2b - T(3));
+        const T W2 = C01 + T(2) * C02 * (I2b - T(3)) + C11 * (I1b - T(3));
+        return axpby(T(1), isochoric_pk2(k, Ci, W1, W2, j23), K * k.J * k.Jm1, Ci);
+    }
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        T I1b, I2b;
+        isochoric_invariants(k, inv_cbrt(k.J * k.J), I1b, I2b);
+        const T x = I1b - T(3), y = I2b - T(3);
+        return C10 * x + C01 * y + C20 * x * x + C02 * y * y + C11 * x * y +
+               K / T(2) * k.Jm1 * k.Jm1;
+    }
+};
+
+/// Decoupled Mooney–Rivlin, W = C10 (Ī1 − 3) + C01 (Ī2 − 3) + K/2 (J − 1)² (Holzapfel 2000,
+/// §6.5): the polynomial with C20 = C02 = C11 = 0. Parameters (C10, C01, K).
+template <class T>
+struct MooneyRivlin : Polynomial<T> {
+    PLIANT_HD MooneyRivlin(T c10, T c01, T k) : Polynomial<T>{c10, c01, T(0), T(0), T(0), k} {}
+};
+
+/// Decoupled Arruda–Boyce (eight-chain), W = μ Σ_{i=1..5} C_i / λm^(2i−2) (Ī1^i − 3^i)
+/// + K/2 ((J² − 1)/2 − ln J), C = 1/2, 1/20, 11/1050, 19/7000, 519/673750 (Arruda & Boyce 1993,
+/// JMPS 41:389; NiftySim user guide v2.4, App. A.1.2, eq. 6). S = 2W1 J^(−2/3)(I − I1/3 C⁻¹) +
+/// K/2 (J² − 1) C⁻¹. Parameters (μ, λm, K); small-strain shear modulus μ (1 + 3/(5λm²) + …).
+template <class T>
+struct ArrudaBoyce {
+    T mu, lambda_m, K;
+    PLIANT_HD T W1(T I1b) const {  // ∂W/∂Ī1 = μ Σ i C_i Ī1^(i−1) / λm^(2i−2) (Horner in Ī1/λm²)
+        const T x = I1b / (lambda_m * lambda_m);
+        return mu * (T(0.5) + x * (T(2) / T(20) + x * (T(33) / T(1050) +
+                                                      x * (T(76) / T(7000) + x * T(2595) / T(673750)))));
+    }
+    PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * W1(T(3)); }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> Ci = inverse_cauchy_green(k);
+        const T j23 = inv_cbrt(k.J * k.J);
+        const T I1b = j23 * (T(3) + T(2) * trace(k.E));
+        return axpby(T(1), isochoric_pk2(k, Ci, W1(I1b), T(0), j23),
+                     K / T(2) * k.Jm1 * (k.J + T(1)), Ci);
+    }
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        const T I1b = inv_cbrt(k.J * k.J) * (T(3) + T(2) * trace(k.E));
+        const T c[5] = {T(0.5), T(1) / T(20), T(11) / T(1050), T(19) / T(7000), T(519) / T(673750)};
+        T w = T(0), p = T(1), q = T(1), l = T(1);
+        for (int i = 0; i < 5; ++i) {
+            p *= I1b;
+            q *= T(3);
+            w += c[i] / l * (p - q);
+            l *= lambda_m * lambda_m;
+        }
+        return mu * w + K / T(2) * (T(0.5) * k.Jm1 * (k.J + T(1)) - log_J(k.Jm1));
+    }
+};
+
+/// Transversely isotropic (decoupled), W = μ/2 (Ī1 − 3) + η/2 (Ī4 − 1)² + K/2 (J − 1)², Ī4 =
+/// J^(−2/3) a·Ca with the unit fibre direction a (NiftySim user guide v2.4, App. A.1.4, eq. 8;
+/// Holzapfel 2000, §6.7). S = NH + 2η (Ī4 − 1) J^(−2/3)(a ⊗ a − I4/3 C⁻¹). Parameters (μ, K, η, a).
+template <class T>
+struct TransverselyIsotropic {
+    T mu, K, eta, a[3];
+    PLIANT_HD T dilatational_modulus() const { return K + T(4) / T(3) * mu + T(4) * eta; }
+    PLIANT_HD T I4(const Kinematics<T>& k) const {  // a·Ca = 1 + 2 a·Ea
+        const Sym3<T>& E = k.E;
+        return T(1) + T(2) * (a[0] * (E.xx * a[0] + E.xy * a[1] + E.xz * a[2]) +
+                              a[1] * (E.xy * a[0] + E.yy * a[1] + E.yz * a[2]) +
+                              a[2] * (E.xz * a[0] + E.yz * a[1] + E.zz * a[2]));
+    }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> Ci = inverse_cauchy_green(k);
+        const T j23 = inv_cbrt(k.J * k.J);
+        const T i4 = I4(k);
+        const T g = T(2) * eta * (j23 * i4 - T(1)) * j23;
+        const Sym3<T> aa = {a[0] * a[0], a[1] * a[1], a[2] * a[2], a[0] * a[1], a[1] * a[2], a[0] * a[2]};
+        const Sym3<T> S = axpby(T(2) * mu * j23, mul_commuting(Ci, dev(k.E)), K * k.J * k.Jm1, Ci);
+        return axpby(T(1), S, g, axpby(T(1), aa, -i4 / T(3), Ci));
+    }
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const {
+        const T j23 = inv_cbrt(k.J * k.J);
+        const T d4 = j23 * I4(k) - T(1);
+        return mu / T(2) * (j23 * (T(3) + T(2) * trace(k.E)) - T(3)) + eta / T(2) * d4 * d4 +
+               K / T(2) * k.Jm1 * k.Jm1;
+    }
+};
 
 /// Coupled compressible Neo-Hookean, W = μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²;
 /// S = μ (I − C⁻¹) + λ ln J C⁻¹ (Bonet & Wood, Nonlinear Continuum Mechanics for FEA, 2nd ed.,
@@ -183,19 +279,35 @@ struct LinearElastic {
     }
 };
 
+/// Parameters per material (the most any material takes: TransverselyIsotropic's μ, K, η, a).
+constexpr int kMaterialParams = 8;
+
 /// Parameters of one element group's material, as passed from the model to the kernels.
 template <class T>
 struct MaterialParams {
     MaterialKind kind;
-    T p[4];
+    T p[kMaterialParams];
 };
+
+/// Whether parameter k of a material kind is a modulus [Pa] (scaled by the viewer's stiffness
+/// slider) rather than a stretch or a direction.
+PLIANT_HD bool is_modulus(MaterialKind kind, int k) {
+    if (kind == MaterialKind::ArrudaBoyce) return k != 1;              // λm
+    if (kind == MaterialKind::TransverselyIsotropic) return k < 3;     // a
+    return true;
+}
 
 /// Call `f(material)` with the concrete functor for `m` (dispatch once per element group).
 template <class T, class Fn>
 inline auto with_material(const MaterialParams<T>& m, Fn&& f) {
     switch (m.kind) {
         case MaterialKind::NeoHookean: return f(NeoHookean<T>{m.p[0], m.p[1]});
-        case MaterialKind::MooneyRivlin: return f(MooneyRivlin<T>{m.p[0], m.p[1], m.p[2]});
+        case MaterialKind::MooneyRivlin: return f(MooneyRivlin<T>(m.p[0], m.p[1], m.p[2]));
+        case MaterialKind::Polynomial:
+            return f(Polynomial<T>{m.p[0], m.p[1], m.p[2], m.p[3], m.p[4], m.p[5]});
+        case MaterialKind::ArrudaBoyce: return f(ArrudaBoyce<T>{m.p[0], m.p[1], m.p[2]});
+        case MaterialKind::TransverselyIsotropic:
+            return f(TransverselyIsotropic<T>{m.p[0], m.p[1], m.p[2], {m.p[3], m.p[4], m.p[5]}});
         case MaterialKind::NeoHookeanCoupled: return f(NeoHookeanCoupled<T>{m.p[0], m.p[1]});
         case MaterialKind::StVenantKirchhoff: return f(StVenantKirchhoff<T>{m.p[0], m.p[1]});
         case MaterialKind::LinearElastic: default: return f(LinearElastic<T>{m.p[0], m.p[1]});

@@ -6,7 +6,8 @@ and SystemParams. Anything else is refused by name (``unsupported`` lists what m
 knowingly).
 
 Format: NiftySim user guide v2.4 (Johnsen et al. 2015). Materials: NH = decoupled Neo-Hookean
-(μ, K) — pliant's NeoHookean; LE = NiftySim's total-Lagrangian "linear elastic" (E, ν), whose S is
+(μ, K) — pliant's NeoHookean; PY, AB and TI (App. A.1) — Polynomial, ArrudaBoyce and
+TransverselyIsotropic; LE = NiftySim's total-Lagrangian "linear elastic" (E, ν), whose S is
 λ tr(E) I + 2μ E (tledMaterialLE) — pliant's StVenantKirchhoff. Load shapes use the relative time
 t/T of the whole analysis: RAMP, STEP, POLY345, HILLY, RAMPHOLD (ramp over the first 10 %, then
 hold; tledConstraint::ComputeAmplitude).
@@ -20,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..materials import NeoHookean, StVenantKirchhoff
+from ..materials import (ArrudaBoyce, NeoHookean, Polynomial, StVenantKirchhoff,
+                         TransverselyIsotropic)
 from ..scene import Scene
 from ..scene.schema import SceneError
 from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
@@ -28,6 +30,16 @@ from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
 _KNOWN_TOP = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams", "SubMesh", "Output",
               "ContactPlate", "ContactCylinder", "ContactUSProbe"}
 _SYSTEM = {"TimeStep", "TotalTime", "DampingCoeff", "Density", "HGKappa", "DoDeformableCollision"}
+
+
+# NiftySim user guide v2.4, App. A.1: material code → (pliant class, parameters in file order).
+_MATERIALS = {
+    "PY": (lambda c10, c01, c20, c02, c11, k: Polynomial(c10, c01, c20, c02, c11, K=k),
+           ("C10", "C01", "C20", "C02", "C11", "kappa")),
+    "AB": (lambda mu, lm, k: ArrudaBoyce(mu, lm, k), ("mu", "lambda_m", "kappa")),
+    "TI": (lambda mu, k, eta, a1, a2, a3: TransverselyIsotropic(mu, k, eta, (a1, a2, a3)),
+           ("mu", "kappa", "eta", "a1", "a2", "a3")),
+}
 
 
 class NiftySimError(SceneError):
@@ -156,8 +168,14 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
                 if vals.size != 2:
                     raise NiftySimError(f"LE takes 2 parameters (E, nu); got {vals.size}", f, key)
                 material = StVenantKirchhoff(E=vals[0], nu=vals[1])
+            elif mtype in _MATERIALS:
+                cls, names = _MATERIALS[mtype]
+                if vals.size != len(names):
+                    raise NiftySimError(f"{mtype} takes {len(names)} parameters ({', '.join(names)}); "
+                                        f"got {vals.size}", f, key)
+                material = cls(*vals)
             else:
-                unsupported(f"Material Type={mtype}", "pliant imports NH and LE")
+                unsupported(f"Material Type={mtype}", "pliant imports NH, LE, PY, AB and TI")
                 continue
             b.set_material(material, rho, elements=elems, name=key)
         except SceneError:

@@ -12,6 +12,9 @@ MooneyRivlin               C10 (Ī1 − 3) + C01 (Ī2 − 3) + K/2 (J − 1)²  
 NeoHookeanCoupled          μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²  (Bonet & Wood; FEBio)   mu, lam
 StVenantKirchhoff          λ/2 (tr E)² + μ E:E                                          mu, lam
 LinearElastic              λ/2 (tr ε)² + μ ε:ε, small strain                            mu, lam
+Polynomial                 Σ Cij (Ī1 − 3)^i (Ī2 − 3)^j, i + j ≤ 2, + K/2 (J − 1)² ("PY")   C10 … C11, K
+ArrudaBoyce                μ Σ Ci/λm^(2i−2) (Ī1^i − 3^i) + K/2 ((J²−1)/2 − ln J) ("AB")  mu, lambda_m, K
+TransverselyIsotropic      μ/2 (Ī1 − 3) + η/2 (Ī4 − 1)² + K/2 (J − 1)², Ī4 = a·C̄a ("TI")  mu, K, eta, a
 =========================  ==========================================================  ==============
 """
 
@@ -22,7 +25,7 @@ import math
 from ..errors import MaterialError
 
 __all__ = ["Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
-           "LinearElastic", "lame_from_young"]
+           "LinearElastic", "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "lame_from_young"]
 
 
 def _positive(name: str, value: float, cls: str) -> float:
@@ -43,7 +46,8 @@ def lame_from_young(E: float, nu: float, cls: str = "material") -> tuple[float, 
 
 
 class Material:
-    """Base class: ``kind`` (engine code), ``params`` (4 floats), ``mu``/``lam`` Lamé constants [Pa]."""
+    """Base class: ``kind`` (engine code), ``params`` (up to 8 floats), ``mu``/``lam`` small-strain
+    Lamé constants [Pa]."""
 
     kind: int = -1
     mu: float
@@ -177,3 +181,91 @@ class LinearElastic(_MuLambda):
     """Small-strain linear elasticity, σ = λ tr(ε) I + 2μ ε; for small displacements only."""
 
     kind = 4
+
+
+def _finite(name: str, value, cls: str, minimum: float | None = None) -> float:
+    v = float(value)
+    if not math.isfinite(v) or (minimum is not None and v < minimum):
+        raise MaterialError(f"{cls}: {name} = {value!r}; expected a finite value"
+                            + (f" >= {minimum:g}" if minimum is not None else ""))
+    return v
+
+
+class Polynomial(Material):
+    """Decoupled polynomial of order 2 (NiftySim "PY"): W = C10 (Ī1 − 3) + C01 (Ī2 − 3) +
+    C20 (Ī1 − 3)² + C02 (Ī2 − 3)² + C11 (Ī1 − 3)(Ī2 − 3) + K/2 (J − 1)². Small-strain shear
+    modulus μ = 2 (C10 + C01). ``Polynomial(C10=..., C01=..., C20=..., C02=..., C11=..., K=...)``."""
+
+    kind = 5
+
+    def __init__(self, C10, C01=0.0, C20=0.0, C02=0.0, C11=0.0, *, K):
+        c = "Polynomial"
+        self.C10, self.C01 = _finite("C10", C10, c), _finite("C01", C01, c)
+        self.C20, self.C02, self.C11 = (_finite(n, v, c) for n, v in
+                                        (("C20", C20), ("C02", C02), ("C11", C11)))
+        self.K = _positive("K", K, c)
+        self.mu = 2.0 * (self.C10 + self.C01)
+        if not self.mu > 0:
+            raise MaterialError(f"{c}: 2 (C10 + C01) = {self.mu!r}; expected a positive shear modulus")
+        self.lam = self.K - 2.0 * self.mu / 3.0
+
+    @property
+    def params(self):
+        return (self.C10, self.C01, self.C20, self.C02, self.C11, self.K)
+
+    def __repr__(self):
+        return (f"Polynomial(C10={self.C10:g}, C01={self.C01:g}, C20={self.C20:g}, "
+                f"C02={self.C02:g}, C11={self.C11:g}, K={self.K:g})")
+
+
+class ArrudaBoyce(Material):
+    """Decoupled Arruda–Boyce (eight-chain; NiftySim "AB"): W = μ Σ_{i=1..5} Ci / λm^(2i−2)
+    (Ī1^i − 3^i) + K/2 ((J² − 1)/2 − ln J), Ci = 1/2, 1/20, 11/1050, 19/7000, 519/673750
+    (Arruda & Boyce 1993). ``ArrudaBoyce(mu=..., lambda_m=..., K=...)``: λm the locking stretch
+    (> 1); the small-strain shear modulus is μ (1 + 3/(5 λm²) + 99/(175 λm⁴) + …)."""
+
+    kind = 6
+
+    def __init__(self, mu, lambda_m, K):
+        c = "ArrudaBoyce"
+        self.mu0, self.K = _positive("mu", mu, c), _positive("K", K, c)
+        self.lambda_m = _finite("lambda_m", lambda_m, c)
+        if not self.lambda_m > 1.0:
+            raise MaterialError(f"{c}: lambda_m = {lambda_m!r}; expected a locking stretch > 1")
+        x = 3.0 / self.lambda_m**2  # small-strain shear modulus 2 ∂W/∂Ī1 at Ī1 = 3
+        self.mu = 2 * self.mu0 * (0.5 + x * (2 / 20 + x * (33 / 1050 + x * (76 / 7000 + x * 2595 / 673750))))
+        self.lam = self.K - 2.0 * self.mu / 3.0
+
+    @property
+    def params(self):
+        return (self.mu0, self.lambda_m, self.K)
+
+    def __repr__(self):
+        return f"ArrudaBoyce(mu={self.mu0:g}, lambda_m={self.lambda_m:g}, K={self.K:g})"
+
+
+class TransverselyIsotropic(Material):
+    """Decoupled transversely isotropic (NiftySim "TI"): W = μ/2 (Ī1 − 3) + η/2 (Ī4 − 1)² +
+    K/2 (J − 1)², Ī4 = J^(−2/3) a·Ca, fibres along the unit vector a (normalized here).
+    ``TransverselyIsotropic(mu=..., K=..., eta=..., direction=(a1, a2, a3))``."""
+
+    kind = 7
+
+    def __init__(self, mu, K, eta, direction):
+        c = "TransverselyIsotropic"
+        self.mu, self.K = _positive("mu", mu, c), _positive("K", K, c)
+        self.eta = _finite("eta", eta, c, minimum=0.0)
+        a = [float(v) for v in direction] if hasattr(direction, "__len__") else []
+        n = math.sqrt(sum(v * v for v in a)) if len(a) == 3 else 0.0
+        if not (math.isfinite(n) and n > 0):
+            raise MaterialError(f"{c}: direction = {direction!r}; expected a non-zero 3-vector")
+        self.direction = tuple(v / n for v in a)
+        self.lam = self.K - 2.0 * self.mu / 3.0
+
+    @property
+    def params(self):
+        return (self.mu, self.K, self.eta, *self.direction)
+
+    def __repr__(self):
+        return (f"TransverselyIsotropic(mu={self.mu:g}, K={self.K:g}, eta={self.eta:g}, "
+                f"direction={self.direction})")

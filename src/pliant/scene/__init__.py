@@ -62,7 +62,12 @@ _MATERIALS = {
     "neo-hookean-coupled": (mat.NeoHookeanCoupled, ("mu", "lambda")),
     "st-venant-kirchhoff": (mat.StVenantKirchhoff, ("mu", "lambda")),
     "linear-elastic": (mat.LinearElastic, ("mu", "lambda")),
+    "polynomial": (lambda C10, C01, C20, C02, C11, K: mat.Polynomial(C10, C01, C20, C02, C11, K=K),
+                   ("C10", "C01", "C20", "C02", "C11", "K")),
+    "arruda-boyce": (mat.ArrudaBoyce, ("mu", "lambda_m", "K")),
+    "transversely-isotropic": (mat.TransverselyIsotropic, ("mu", "K", "eta", "direction")),
 }
+_NO_E_NU = ("mooney-rivlin", "polynomial", "arruda-boyce", "transversely-isotropic")
 
 
 def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
@@ -329,19 +334,24 @@ def load_scene(path) -> Scene:
         p = f"material[{i}]"
         check_keys(ctx, m, p, {"type": "str", "region": "table", "density": "number", "E": "number",
                                "nu": "number", "mu": "number", "K": "number", "lambda": "number",
-                               "C10": "number", "C01": "number", "name": "str"}, ("type", "density"))
+                               "C10": "number", "C01": "number", "C20": "number", "C02": "number",
+                               "C11": "number", "lambda_m": "number", "eta": "number",
+                               "direction": "list", "name": "str"}, ("type", "density"))
         if m["type"] not in _MATERIALS:
             raise ctx.error(f"{p}.type", f"unknown material {m['type']!r}; expected one of "
                             f"{', '.join(_MATERIALS)}")
         cls, native = _MATERIALS[m["type"]]
-        given = {k for k in m if k in ("E", "nu", "mu", "K", "lambda", "C10", "C01")}
+        given = {k for k in m if k not in ("type", "region", "density", "name")}
         with ctx.under(p):
-            if given == {"E", "nu"} and m["type"] != "mooney-rivlin":
+            if m["type"] == "polynomial":  # higher-order constants default to 0
+                given |= {"C01", "C20", "C02", "C11"}
+                m = {"C01": 0.0, "C20": 0.0, "C02": 0.0, "C11": 0.0, **m}
+            if given == {"E", "nu"} and m["type"] not in _NO_E_NU:
                 material = cls(E=m["E"], nu=m["nu"])
             elif given == set(native):
                 material = cls(*[m[k] for k in native])
             else:
-                alt = " or (E, nu)" if m["type"] != "mooney-rivlin" else ""
+                alt = " or (E, nu)" if m["type"] not in _NO_E_NU else ""
                 raise ctx.error(p, f"{m['type']} takes ({', '.join(native)}){alt}; got "
                                 f"({', '.join(sorted(given)) or 'nothing'})")
             elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) \

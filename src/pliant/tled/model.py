@@ -134,7 +134,8 @@ class Model:
         self.contact_nodes = cn
         cn_order = np.argsort(node_rank[cn], kind="stable")
         tool_grids = [t.grid() for t in self.tools]
-        params = [p for k in np.nonzero(keep)[0] for p in self.sets[k].material.params]
+        params = [p for k in np.nonzero(keep)[0]
+                  for p in (*self.sets[k].material.params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:8]]
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
         self._engine = Engine(
             np.ascontiguousarray(X[node_order]),

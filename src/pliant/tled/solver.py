@@ -183,11 +183,16 @@ class Solver:
             self.relaxed_tool_forces = [(h[k, :3].copy(), h[k, 3:].copy())
                                         for k in range(len(self.model.tools))]
         if strict and not info.converged:
+            if self.model.dtype == np.float32 and info.residual < 1e-3:
+                hint = "the float32 round-off floor: use float64 for tighter tolerances"
+            else:
+                hint = ("if the residual stays large, the material may stiffen beyond the "
+                        "small-strain modulus that sets the time step (lower the solver's dt or "
+                        "safety) or the load may need more increments")
             raise ConvergenceError(
                 f"dynamic relaxation reached residual {info.residual:.3g} after {info.steps} steps; "
-                f"tolerance {tol:g}. It stops early when the residual no longer falls (the round-off "
-                f"floor of {self.model.dtype.name}: use float64 for tighter tolerances), else raise "
-                "max_steps or tol")
+                f"tolerance {tol:g}. It stops early when the residual no longer falls ({hint}); "
+                "else raise max_steps or tol")
         return info
 
 
