@@ -19,11 +19,12 @@ def timoshenko_tip_deflection():
     return P * L**3 / (3 * E * I) + P * L / (kappa * G * A)
 
 
-def cantilever_tip_deflection(n, material):
+def cantilever_tip_deflection(n, material, nodal_pressure=False):
     X, T = pl.mesh.box_tets((L, H, H), (10 * n, n, n))
     b = pl.ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(material, density=1000.0)
+    b.nodal_pressure = nodal_pressure
     b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
     tip = np.nonzero(X[:, 0] > L - 1e-9)[0]
     # Uniform shear traction on the tip face: trapezoid-rule nodal weights (resultant exactly P).
@@ -33,7 +34,7 @@ def cantilever_tip_deflection(n, material):
         w[edge] *= 0.5
     b.add_force(tip, np.outer(-P * w / w.sum(), [0, 0, 1]), curve=pl.Ramp(1.0))
     sim = pl.Simulation(b.finalize("float64"))
-    sim.solve_static(tol=1e-9)
+    sim.solve_static(tol=1e-9, max_steps=1_000_000)
     return -sim.displacements[tip, 2].mean()
 
 
@@ -57,3 +58,28 @@ def test_neo_hookean_matches_linear_at_small_load():
     mu = E / 2
     d_nh = cantilever_tip_deflection(2, pl.NeoHookeanCoupled(mu=mu, lam=0.0 + 1e-9 * mu))
     assert d_nh == pytest.approx(d_le, rel=1e-3)
+
+
+def test_average_nodal_pressure_relieves_volumetric_locking():
+    """ν = 0.49 (nearly incompressible tissue), 4 elements through the depth: plain linear tets
+    lock (29 % of the Timoshenko deflection measured); the average nodal pressure tetrahedron
+    (T4ANP, Joldes et al. 2009) recovers most of it (83 % measured, 88 % for ν = 0.3 where T4 gives
+    79 %). Bounds: T4ANP within 25 %, and more than twice the deflection of T4."""
+    nu, n = 0.49, 4
+    I, A, G, kappa = H**4 / 12, H * H, E / (2 * (1 + nu)), 5.0 / 6.0
+    ref = P * L**3 / (3 * E * I) + P * L / (kappa * G * A)
+    material = pl.NeoHookean(E=E, nu=nu)
+    t4 = cantilever_tip_deflection(n, material)
+    anp = cantilever_tip_deflection(n, material, nodal_pressure=True)
+    assert abs(anp - ref) < 0.25 * ref
+    assert anp > 2 * t4
+
+
+def test_nodal_pressure_needs_a_decoupled_material():
+    X, T = pl.mesh.box_tets((L, H, H), (4, 1, 1))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.StVenantKirchhoff(E=E, nu=0.3), density=1000.0)
+    b.nodal_pressure = True
+    with pytest.raises(pl.MaterialError, match="decoupled"):
+        b.finalize()

@@ -112,21 +112,34 @@ def test_dt_above_critical_is_refused():
     assert f"{1.5 * model.dt_critical:.4g}" in msg and f"{model.dt_critical:.4g}" in msg
 
 
-@pytest.mark.parametrize("dtype", ["float32", "float64"])
-def test_threads_give_identical_bits(dtype):
+@pytest.mark.parametrize("dtype, extras", [("float32", False), ("float64", False),
+                                           ("float32", True)])
+def test_threads_give_identical_bits(dtype, extras):
     """Same input, same bits: 1 and 2 threads give bitwise equal displacements (gather assembly in a
-    fixed order, no atomics, no thread-dependent reductions)."""
+    fixed order, no atomics, no thread-dependent reductions). `extras`: with average nodal pressure
+    (T4ANP), a follower pressure, a sphere in contact and the newer materials as well."""
+    from pliant.contact import Sphere
+    from pliant.mesh.topology import boundary_faces
+
     results = []
     for threads in (1, 2):
         X, T = pl.mesh.box_tets((0.2, 0.1, 0.1), (12, 6, 6), jitter=0.2, seed=7)
         b = pl.ModelBuilder()
         b.add_mesh(X, T)
         b.set_material(pl.NeoHookean(E=5e4, nu=0.45), density=1000.0, elements=np.arange(len(T) // 2))
-        b.set_material(pl.MooneyRivlin(C10=5e3, C01=2e3, K=2e5), density=1100.0)
+        b.set_material(pl.ArrudaBoyce(1e4, 2.0, 2e5) if extras else
+                       pl.MooneyRivlin(C10=5e3, C01=2e3, K=2e5), density=1100.0)
         b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
         b.set_gravity((0, 0, -9.81), curve=pl.SmoothRamp(0.01))
         b.add_force(np.nonzero(X[:, 0] > 0.2 - 1e-9)[0], (0.0, 0.05, 0.0), curve=pl.Ramp(0.02))
         b.damping = 5.0
+        if extras:
+            b.nodal_pressure = True
+            B, _ = boundary_faces(T)
+            b.add_pressure(B[np.all(X[B][:, :, 2] > 0.1 - 1e-9, axis=1)], 50.0, pl.Ramp(0.02))
+            s = Sphere(0.02)
+            s.at(0.0, (0.1, 0.05, -0.02)).at(0.02, (0.1, 0.05, 0.004))
+            b.add_tool(s)
         model = b.finalize(dtype, threads=threads)
         assert model.threads == threads
         sim = pl.Simulation(model)

@@ -159,7 +159,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 std::vector<double> tool_mu, std::vector<std::vector<double>> tool_keys,
                 std::vector<index_t> tool_grid_dims, std::vector<std::vector<double>> tool_grids,
                 std::vector<index_t> press_nodes, std::vector<double> press_value,
-                std::vector<index_t> press_curve, int threads) {
+                std::vector<index_t> press_curve, bool anp, int threads) {
                  ModelInput in;
                  in.X = X.data();
                  in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -188,6 +188,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  in.press_nodes = std::move(press_nodes);
                  in.press_value = std::move(press_value);
                  in.press_curve = std::move(press_curve);
+                 in.anp = anp;
                  for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                      RigidTool t{};
                      t.kind = static_cast<ToolKind>(tool_kind[k]);
@@ -279,6 +280,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
         })
         .def("enable_cuda", [](E& e, int device) {
 #ifdef PLIANT_WITH_CUDA
+            if (e.model.anp)
+                throw nb::value_error("average nodal pressure (T4ANP) runs on the CPU backend only");
             std::string why;
             const int n = cuda::device_count(why);
             if (n == 0) throw nb::value_error(("no usable CUDA device: " + why).c_str());

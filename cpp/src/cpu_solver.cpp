@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 
 namespace pliant {
@@ -15,6 +16,10 @@ CpuSolver<T>::CpuSolver(const Model<T>& model, int threads)
     const std::size_t S = static_cast<std::size_t>(m_.n_blocks) * kLanes;
     f_elem_.assign(12 * S, T(0));
     J_.assign(S, T(1));
+    if (m_.anp) {
+        elem_p_.assign(S, T(0));
+        node_p_.assign(static_cast<std::size_t>(m_.n_pad), T(0));
+    }
     scratch_.assign(3 * static_cast<std::size_t>(m_.n_pad), T(0));
     f_node_[0] = scratch_;
     f_node_[1] = scratch_;
@@ -83,6 +88,44 @@ void CpuSolver<T>::element_pass(const T* __restrict u) {
         with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
 #pragma omp simd
             for (int l = 0; l < kLanes; ++l) element_forces(b, l, mat, el, u, P, f, J);
+        });
+    }
+}
+
+// Kernel 1, or with T4ANP its three passes (element pressures, nodal averages, forces); inside a
+// parallel region, each pass ending with the implicit barrier of its loop.
+template <class T>
+void CpuSolver<T>::forces_pass(const T* __restrict u) {
+    if (!m_.anp) {
+        element_pass(u);
+        return;
+    }
+    const ElementData<T> el = m_.elements();
+    const index_t P = m_.n_pad;
+    T* __restrict ep = elem_p_.data();
+    T* __restrict np = node_p_.data();
+    T* __restrict f = f_elem_.data();
+    T* __restrict J = J_.data();
+#pragma omp for schedule(static)
+    for (index_t b = 0; b < m_.n_blocks; ++b) {
+        with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
+            if constexpr (std::decay_t<decltype(mat)>::decoupled) {
+#pragma omp simd
+                for (int l = 0; l < kLanes; ++l) element_pressure(b, l, mat, el, u, P, ep);
+            }
+        });
+    }
+#pragma omp for schedule(static)
+    for (index_t n = 0; n < m_.n_nodes; ++n)
+        np[n] = nodal_pressure(n, m_.inc_offsets.data(), m_.inc_index.data(), ep,
+                               m_.node_volume.data());
+#pragma omp for schedule(static)
+    for (index_t b = 0; b < m_.n_blocks; ++b) {
+        with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
+            if constexpr (std::decay_t<decltype(mat)>::decoupled) {
+#pragma omp simd
+                for (int l = 0; l < kLanes; ++l) element_forces_anp(b, l, mat, el, u, P, np, f, J);
+            }
         });
     }
 }
@@ -165,7 +208,7 @@ RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int ch
             for (std::size_t p = 0; p < np; ++p) pf[p] = cnow[m_.pattern_curve[p]];
             const bool master = omp_get_thread_num() == 0;
             const double w0 = master ? omp_get_wtime() : 0.0;
-            element_pass(v[ic]->data());
+            forces_pass(v[ic]->data());
             const double w1 = master ? omp_get_wtime() : 0.0;
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cnext.data(), it,
                       nullptr);
@@ -230,7 +273,7 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
         int ip = 0, ic = 1, in = 2, fc = 0;
         for (long k = 0; k < max_steps && !stop; ++k) {
             const Integrator<T> it = central_difference<T>(dt, alpha);
-            element_pass(v[ic]->data());
+            forces_pass(v[ic]->data());
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cf.data(), it,
                       f_node_[fc].data());
             if (!m_.tools.empty())
@@ -342,7 +385,7 @@ std::vector<T> CpuSolver<T>::internal_forces(const State<T>& s) {
     const std::vector<T> zeros(m_.pattern_curve.size() + 1, T(0));
 #pragma omp parallel num_threads(threads_)
     {
-        element_pass(s.u.data());
+        forces_pass(s.u.data());
 #pragma omp for schedule(static)
         for (index_t n = 0; n < m_.n_nodes; ++n)
             node_update(n, nd, f_elem_.data(), zeros.data(), it, s.u.data(), s.u.data(),

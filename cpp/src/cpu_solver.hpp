@@ -57,6 +57,7 @@ private:
         T* next;
     };
     void element_pass(const T* u);
+    void forces_pass(const T* u);  // kernel 1: element_pass, or the three T4ANP passes
     void node_pass(const Buffers& b, const T* pattern_factors, const T* cons_factors,
                    const Integrator<T>& it, T* f_node);
     bool check(const T* u_cur, double t, double blowup, RunReport& rep) const;
@@ -65,7 +66,7 @@ private:
     const Model<T>& m_;
     int threads_;
     bool relaxing_ = false;  // inside relax(): the dynamic-relaxation masses replace the physical
-    std::vector<T> f_elem_, J_, scratch_, f_node_[2];
+    std::vector<T> f_elem_, J_, scratch_, f_node_[2], elem_p_, node_p_;
     std::vector<double> contact_force_, tool_history_, chunk_hist_;
     std::vector<index_t> contact_tool_;
 };

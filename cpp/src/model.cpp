@@ -33,7 +33,7 @@ Model<T>::Model(const ModelInput& in) {
     elem_vol.assign(S, T(0));
     elem_id.assign(S, -1);
     mass.assign(P, T(0));
-    std::vector<double> mass_d(P, 0.0), stiff_d(P, 0.0);
+    std::vector<double> mass_d(P, 0.0), stiff_d(P, 0.0), vol_d(P, 0.0);
     std::vector<index_t> count(n_nodes + 1, 0);
 
     begin = 0;
@@ -63,6 +63,7 @@ Model<T>::Model(const ModelInput& in) {
             const double rho = in.density[e];
             for (int a = 0; a < 4; ++a) {
                 mass_d[in.tets[4 * e + a]] += rho * vol / 4.0;
+                vol_d[in.tets[4 * e + a]] += vol;
                 stiff_d[in.tets[4 * e + a]] += modulus * vol / (alt * alt) / 4.0;  // ρ' Δt_c⁻²
             }
             const double dt_e = alt / std::sqrt(modulus / rho);
@@ -72,6 +73,15 @@ Model<T>::Model(const ModelInput& in) {
             }
         }
         begin = end;
+    }
+    anp = in.anp;
+    if (anp) {
+        for (const Group<T>& g : groups)
+            if (!with_material(g.material, [](const auto& m) { return m.decoupled; }))
+                throw std::invalid_argument("average nodal pressure (T4ANP) needs decoupled "
+                                            "materials (a separate volumetric term)");
+        node_volume.assign(P, T(0));
+        for (std::size_t n = 0; n < P; ++n) node_volume[n] = T(vol_d[n] > 0.0 ? vol_d[n] : 1.0);
     }
     inv_mass.assign(P, T(0));
     relax_mass.assign(P, T(0));
@@ -190,7 +200,7 @@ std::size_t Model<T>::bytes() const {
     auto b = [](const auto& v) { return v.size() * sizeof(v[0]); };
     return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) +
            b(inc_offsets) + b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) +
-           b(relax_inv_mass) + b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) +
+           b(relax_inv_mass) + b(node_volume) + b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) +
            b(press_slot) + b(press_edges) + b(press_value) +
            b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) + b(cons_offsets);
 }

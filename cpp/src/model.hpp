@@ -50,6 +50,7 @@ struct ModelInput {
     std::vector<index_t> press_nodes;      // follower-pressure triangles, 3 nodes each
     std::vector<double> press_value;       // [Pa] per triangle (positive: against its normal)
     std::vector<index_t> press_curve;      // curve per triangle
+    bool anp = false;                      // average nodal pressure (T4ANP)
 };
 
 template <class T>
@@ -71,6 +72,8 @@ struct Model {
     std::vector<index_t> pattern_curve;
     std::vector<index_t> pface_offsets, pface_index, press_nodes, press_slot;
     std::vector<T> press_edges, press_value;
+    bool anp = false;                  // average nodal pressure tetrahedra (T4ANP)
+    std::vector<T> node_volume;        // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node
     std::vector<T> cons_value;
     std::vector<index_t> cons_offsets;          // node n's constraints: [cons_offsets[n], [n+1])

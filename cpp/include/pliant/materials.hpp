@@ -73,18 +73,28 @@ PLIANT_HD Sym3<T> inverse_cauchy_green(const Kinematics<T>& k) {
     return inverse(add_identity(T(1), scale(T(2), k.E)), k.J * k.J);
 }
 
+/// S of a decoupled material W = W_iso(C̄) + U(J) with the pressure p (U'(J), or an averaged one):
+/// S = S_iso + J p C⁻¹ (Holzapfel 2000, §6.4, eq. 6.89). Materials with `decoupled = true` provide
+/// pk2_iso(k, C⁻¹) and pressure(k).
+template <class M, class T>
+PLIANT_HD Sym3<T> decoupled_pk2(const M& m, const Kinematics<T>& k, T p) {
+    const Sym3<T> Ci = inverse_cauchy_green(k);
+    return axpby(T(1), m.pk2_iso(k, Ci), k.J * p, Ci);
+}
+
 /// Decoupled Neo-Hookean, W = μ/2 (Ī1 − 3) + K/2 (J − 1)²;
 /// S = μ J^(−2/3) (I − I1/3 C⁻¹) + K J (J − 1) C⁻¹ (Taylor et al. 2008, IEEE TMI 27(5), eq. 10;
 /// NiftySim's "NH"), evaluated as 2μ J^(−2/3) C⁻¹ dev E + K J (J − 1) C⁻¹.
 template <class T>
 struct NeoHookean {
     T mu, K;
+    static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(4) / T(3) * mu; }
-    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
-        const Sym3<T> Ci = inverse_cauchy_green(k);
-        const T a = T(2) * mu * inv_cbrt(k.J * k.J);  // 2μ J^(-2/3)
-        return axpby(a, mul_commuting(Ci, dev(k.E)), K * k.J * k.Jm1, Ci);
+    PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }  // U'(J)
+    PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
+        return scale(T(2) * mu * inv_cbrt(k.J * k.J), mul_commuting(Ci, dev(k.E)));
     }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(*this, k, pressure(k)); }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
         const T I1 = T(3) + T(2) * trace(k.E);
@@ -130,16 +140,18 @@ PLIANT_HD void isochoric_invariants(const Kinematics<T>& k, T j23, T& I1b, T& I2
 template <class T>
 struct Polynomial {
     T C10, C01, C20, C02, C11, K;
+    static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * (C10 + C01); }
-    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
-        const Sym3<T> Ci = inverse_cauchy_green(k);
+    PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }
+    PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
         const T j23 = inv_cbrt(k.J * k.J);
         T I1b, I2b;
         isochoric_invariants(k, j23, I1b, I2b);
         const T W1 = C10 + T(2) * C20 * (I1b - T(3)) + C11 * (I2b - T(3));
         const T W2 = C01 + T(2) * C02 * (I2b - T(3)) + C11 * (I1b - T(3));
-        return axpby(T(1), isochoric_pk2(k, Ci, W1, W2, j23), K * k.J * k.Jm1, Ci);
+        return isochoric_pk2(k, Ci, W1, W2, j23);
     }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(*this, k, pressure(k)); }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
         T I1b, I2b;
@@ -169,14 +181,16 @@ struct ArrudaBoyce {
         return mu * (T(0.5) + x * (T(2) / T(20) + x * (T(33) / T(1050) +
                                                       x * (T(76) / T(7000) + x * T(2595) / T(673750)))));
     }
+    static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * W1(T(3)); }
-    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
-        const Sym3<T> Ci = inverse_cauchy_green(k);
-        const T j23 = inv_cbrt(k.J * k.J);
-        const T I1b = j23 * (T(3) + T(2) * trace(k.E));
-        return axpby(T(1), isochoric_pk2(k, Ci, W1(I1b), T(0), j23),
-                     K / T(2) * k.Jm1 * (k.J + T(1)), Ci);
+    PLIANT_HD T pressure(const Kinematics<T>& k) const {  // U'(J) = K/2 (J − 1/J)
+        return K / T(2) * k.Jm1 * (k.J + T(1)) / k.J;
     }
+    PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
+        const T j23 = inv_cbrt(k.J * k.J);
+        return isochoric_pk2(k, Ci, W1(j23 * (T(3) + T(2) * trace(k.E))), T(0), j23);
+    }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(*this, k, pressure(k)); }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
         const T I1b = inv_cbrt(k.J * k.J) * (T(3) + T(2) * trace(k.E));
@@ -198,22 +212,23 @@ struct ArrudaBoyce {
 template <class T>
 struct TransverselyIsotropic {
     T mu, K, eta, a[3];
+    static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(4) / T(3) * mu + T(4) * eta; }
+    PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }
     PLIANT_HD T I4(const Kinematics<T>& k) const {  // a·Ca = 1 + 2 a·Ea
         const Sym3<T>& E = k.E;
         return T(1) + T(2) * (a[0] * (E.xx * a[0] + E.xy * a[1] + E.xz * a[2]) +
                               a[1] * (E.xy * a[0] + E.yy * a[1] + E.yz * a[2]) +
                               a[2] * (E.xz * a[0] + E.yz * a[1] + E.zz * a[2]));
     }
-    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
-        const Sym3<T> Ci = inverse_cauchy_green(k);
+    PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
         const T j23 = inv_cbrt(k.J * k.J);
         const T i4 = I4(k);
         const T g = T(2) * eta * (j23 * i4 - T(1)) * j23;
         const Sym3<T> aa = {a[0] * a[0], a[1] * a[1], a[2] * a[2], a[0] * a[1], a[1] * a[2], a[0] * a[2]};
-        const Sym3<T> S = axpby(T(2) * mu * j23, mul_commuting(Ci, dev(k.E)), K * k.J * k.Jm1, Ci);
-        return axpby(T(1), S, g, axpby(T(1), aa, -i4 / T(3), Ci));
+        return axpby(T(2) * mu * j23, mul_commuting(Ci, dev(k.E)), g, axpby(T(1), aa, -i4 / T(3), Ci));
     }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(*this, k, pressure(k)); }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
         const T j23 = inv_cbrt(k.J * k.J);
@@ -229,6 +244,7 @@ struct TransverselyIsotropic {
 template <class T>
 struct NeoHookeanCoupled {
     T mu, lambda;
+    static constexpr bool decoupled = false;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         const Sym3<T> Ci = inverse_cauchy_green(k);
@@ -246,6 +262,7 @@ struct NeoHookeanCoupled {
 template <class T>
 struct StVenantKirchhoff {
     T mu, lambda;
+    static constexpr bool decoupled = false;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         return add_identity(lambda * trace(k.E), scale(T(2) * mu, k.E));
@@ -263,6 +280,7 @@ struct StVenantKirchhoff {
 template <class T>
 struct LinearElastic {
     T mu, lambda;
+    static constexpr bool decoupled = false;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         const Sym3<T> e = sym(k.H);
@@ -277,6 +295,16 @@ struct LinearElastic {
         const T tr = trace(e);
         return lambda / T(2) * tr * tr + mu * ddot(e);
     }
+};
+
+/// A decoupled material whose pressure is replaced by the element's average of the nodal pressures
+/// (the average nodal pressure tetrahedron, T4ANP: Bonet & Burton 1998, Commun. Numer. Meth. Eng.
+/// 14:437; Joldes, Wittek & Miller 2009, Commun. Numer. Meth. Eng. 25:827): S = S_iso + J p̄ C⁻¹.
+template <class M, class T>
+struct AveragedPressure {
+    const M& m;
+    T p;  // p̄ [Pa]
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, decoupled_pk2(m, k, p)); }
 };
 
 /// Parameters per material (the most any material takes: TransverselyIsotropic's μ, K, η, a).

@@ -82,6 +82,42 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
     J_out[aosoa(b, l, 0, 1)] = k.J;
 }
 
+/// Average nodal pressure tetrahedron (T4ANP; Bonet & Burton 1998, Commun. Numer. Meth. Eng.
+/// 14:437; Joldes, Wittek & Miller 2009, Commun. Numer. Meth. Eng. 25:827), three passes per step:
+/// (1) element_pressure: V0 p(J) per element; (2) nodal_pressure: p̄_a = Σ V0 p / Σ V0 over the
+/// elements of node a; (3) element_forces with p̄ = ¼ Σ p̄_a of the element's corners in place of
+/// its own pressure. Volumetric locking of nearly incompressible tissue is much reduced.
+/// (1) Inputs: decoupled material, element data, u [m] SoA (3, P). Output: ep_out [N·m] (slot).
+template <class T, class Material>
+PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                                const T* u, index_t P, T* ep_out) {
+    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
+    ep_out[aosoa(b, l, 0, 1)] = el.vol[aosoa(b, l, 0, 1)] * mat.pressure(k);
+}
+
+/// (2) Node n's averaged pressure p̄ [Pa] from the element values V0 p (slot layout), gathered
+/// through the node's incidence list (offsets into the 12-wide force layout), over Σ V0 [m³].
+template <class T>
+PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_index,
+                           const T* ep, const T* node_volume) {
+    T sum = T(0);
+    for (index_t k = inc_offsets[n]; k < inc_offsets[n + 1]; ++k) {
+        const index_t o = inc_index[k];  // (b·12 + 3a)·kLanes + l
+        sum += ep[(o / (12 * kLanes)) * kLanes + o % kLanes];
+    }
+    return sum / node_volume[n];
+}
+
+/// (3) Element forces of slot (b, l) with its corners' mean nodal pressure p̄ [Pa] (node_p).
+template <class T, class Material>
+PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                                  const T* u, index_t P, const T* node_p, T* f_out, T* J_out) {
+    T p = T(0);
+    PLIANT_UNROLL
+    for (int a = 0; a < 4; ++a) p += node_p[el.nodes[aosoa(b, l, a, 4)]];
+    element_forces(b, l, AveragedPressure<Material, T>{mat, p / T(4)}, el, u, P, f_out, J_out);
+}
+
 /// Time-integration coefficients of central differences with mass-proportional damping α [1/s]:
 /// u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻, γ1 = 2Δt²/(αΔt + 2), γ2 = 4/(αΔt + 2), γ3 = 1 − γ2
 /// (Taylor et al. 2008, IEEE TMI 27(5), eq. 9; Joldes et al. 2009, CMAME 198:3313, eq. 7).

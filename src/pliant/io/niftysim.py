@@ -1,6 +1,6 @@
-"""NiftySim model import (XML, T4 elements): nodes, elements, element sets with NH and LE materials,
-Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the analytical rigid
-contacts
+"""NiftySim model import (XML, T4 and T4ANP elements): nodes, elements, element sets with their
+materials, Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
+analytical rigid contacts
 (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and motions), Output frequency
 and SystemParams. Anything else is refused by name (``unsupported`` lists what may be skipped
 knowingly).
@@ -92,10 +92,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         raise NiftySimError(f"<Nodes NumNodes={nodes_el.get('NumNodes')}> but {len(X)} nodes "
                             "listed", f, "Nodes")
     etype = elems_el.get("Type")
-    if etype == "T4ANP":  # same connectivity; ignoring it runs plain T4 (stiffer when ν → 0.5)
-        unsupported("Elements Type=T4ANP", "pliant's T4 has no nodal-averaged pressure; "
-                    "ignored, the elements run as plain T4")
-    elif etype != "T4":  # other connectivities cannot be read as tetrahedra: not ignorable
+    if etype not in ("T4", "T4ANP"):  # other connectivities cannot be read as tetrahedra: not ignorable
         raise NiftySimError(f"unsupported NiftySim feature Elements Type={etype}: pliant has "
                             "linear tetrahedra (T4) only", f, "Elements")
     T = _numbers(elems_el, f, "Elements", np.int64)
@@ -129,6 +126,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
     b = ModelBuilder()
     b.add_mesh(X, T, source=f)
     b.damping = damping
+    b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
     for k, es in enumerate(root.findall("ElementSet")):
         key = f"ElementSet[{k}]"
         size = es.get("Size", "")

@@ -290,6 +290,7 @@ def load_scene(path) -> Scene:
     scene = Scene(str(path), b, title=data.get("title", path.stem))
     solver = check_keys(ctx, data.get("solver", {}), "solver", {
         "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
+        "nodal_pressure": "bool",
         "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
         "check_every": "int", "backend": "str"})
     scene.duration = float(solver.get("duration", 1.0))
@@ -323,6 +324,7 @@ def load_scene(path) -> Scene:
     if damping < 0:
         raise ctx.error("solver.damping", "expected damping >= 0 [1/s]")
     b.damping = damping
+    b.nodal_pressure = bool(solver.get("nodal_pressure", False))
 
     X, T, sets = _load_mesh(ctx, data["mesh"], path.parent, scene)
     try:

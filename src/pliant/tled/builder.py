@@ -61,6 +61,10 @@ class ModelBuilder:
         self.tets = np.zeros((0, 4), dtype=np.int64)
         self.sets: list[_ElementSet] = []
         self.damping = 0.0  # mass-proportional damping α [1/s]
+        # Average nodal pressure tetrahedra (T4ANP, NiftySim's element): the pressure of each
+        # element is the mean of its nodes' volume-averaged pressures, which much reduces the
+        # volumetric locking of linear tets in nearly incompressible tissue. Decoupled materials.
+        self.nodal_pressure = False
         self._cons: dict[tuple[int, int], tuple[float, LoadCurve]] = {}
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
@@ -264,6 +268,14 @@ class ModelBuilder:
         if np.any(owner < 0):
             raise MaterialError(f"{self.source}: element {int(np.argmax(owner < 0))} has no material; "
                                 "call set_material() for every element")
+        if self.nodal_pressure:
+            for s in self.sets:
+                if type(s.material).__name__ in ("NeoHookeanCoupled", "StVenantKirchhoff",
+                                                 "LinearElastic"):
+                    raise MaterialError(f"element set {s.name!r}: {type(s.material).__name__} has no "
+                                        "separate volumetric term; average nodal pressure (T4ANP) "
+                                        "needs a decoupled material (NeoHookean, MooneyRivlin, "
+                                        "Polynomial, ArrudaBoyce, TransverselyIsotropic)")
         X = np.ascontiguousarray(self.nodes)
         T32 = np.ascontiguousarray(self.tets.astype(np.int32))
         vol, alt = _core.tet_geometry(X, T32)

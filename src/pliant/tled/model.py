@@ -157,6 +157,7 @@ class Model:
             [t.key_array().tolist() for t in self.tools],
             [d for dims, _ in tool_grids for d in dims], [v.tolist() for _, v in tool_grids],
             [int(v) for v in node_rank[press_F].ravel()], press_p.tolist(), press_c,
+            bool(builder.nodal_pressure),
             int(threads if threads else _auto_threads(M)),
         )
         self.n_nodes, self.n_elements = N, M
