@@ -49,6 +49,20 @@ def test_cuda_without_a_device_is_a_clear_error():
     print("backend='cuda' refused:", why)
 
 
+def test_t4anp_is_refused_on_cuda_by_name():
+    """Average nodal pressure runs on the CPU only for now: asking for CUDA says so (before looking
+    for a device), rather than silently running plain T4."""
+    if not _core.cuda_compiled():
+        pytest.skip("CUDA backend not compiled (no nvcc at build time)")
+    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (5, 1, 1))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=1e4, nu=0.49), density=1000.0)
+    b.nodal_pressure = True
+    with pytest.raises(pl.BackendError, match="T4ANP"):
+        b.finalize(backend="cuda")
+
+
 def test_cpu_and_gpu_agree_over_1000_steps():
     names, why = _core.cuda_devices()
     if not names:
