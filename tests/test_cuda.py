@@ -29,14 +29,28 @@ def test_no_kernel_spills_to_local_memory():
     assert not bad, f"kernels spilling to local memory: {bad}"
 
 
-def _sphere_model(backend="cpu"):
+def _sphere_model(backend="cpu", extras=False):
+    """NiftySim's sphere under gravity; `extras`: T4ANP, a follower pressure on its upper half, a
+    rigid sphere pressing it and an Arruda–Boyce material, so that every kernel runs."""
     X, T, _ = pl.io.read_volume_mesh(Path(__file__).parent / "data" / "niftysim_sphere.vtk")
+    T = pl.mesh.orient_positive(X, T)
     b = pl.ModelBuilder()
-    b.add_mesh(X, pl.mesh.orient_positive(X, T))
-    b.set_material(pl.NeoHookean(mu=1e3, K=2e4), density=1000.0)
+    b.add_mesh(X, T)
+    b.set_material(pl.ArrudaBoyce(1e3, 2.0, 2e4) if extras else pl.NeoHookean(mu=1e3, K=2e4),
+                   density=1000.0)
     b.fix(np.nonzero(X[:, 2] < -0.8)[0])
     b.set_gravity((0.0, 0.0, -9.81), curve=pl.SmoothRamp(0.05))
     b.damping = 5.0
+    if extras:
+        from pliant.contact import Sphere
+        from pliant.mesh.topology import boundary_faces
+
+        b.nodal_pressure = True
+        B, _ = boundary_faces(T)
+        b.add_pressure(B[np.all(X[B][:, :, 2] > 0.5, axis=1)], 200.0, pl.Ramp(0.05))
+        tool = Sphere(0.3)
+        tool.at(0.0, (0.0, 1.32, 0.0)).at(0.1, (0.0, 1.25, 0.0))  # 5 cm into it, slowly
+        b.add_tool(tool)
     return b.finalize("float32", backend=backend)
 
 
@@ -49,25 +63,12 @@ def test_cuda_without_a_device_is_a_clear_error():
     print("backend='cuda' refused:", why)
 
 
-def test_t4anp_is_refused_on_cuda_by_name():
-    """Average nodal pressure runs on the CPU only for now: asking for CUDA says so (before looking
-    for a device), rather than silently running plain T4."""
-    if not _core.cuda_compiled():
-        pytest.skip("CUDA backend not compiled (no nvcc at build time)")
-    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (5, 1, 1))
-    b = pl.ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(pl.NeoHookean(E=1e4, nu=0.49), density=1000.0)
-    b.nodal_pressure = True
-    with pytest.raises(pl.BackendError, match="T4ANP"):
-        b.finalize(backend="cuda")
-
-
-def test_cpu_and_gpu_agree_over_1000_steps():
+@pytest.mark.parametrize("extras", [False, True], ids=["plain", "anp-pressure-contact"])
+def test_cpu_and_gpu_agree_over_1000_steps(extras):
     names, why = _core.cuda_devices()
     if not names:
         pytest.skip(f"no CUDA device here ({why}); this test runs where a GPU is present")
-    cpu, gpu = _sphere_model("cpu"), _sphere_model("cuda")
+    cpu, gpu = _sphere_model("cpu", extras), _sphere_model("cuda", extras)
     assert gpu.backend == "cuda"
     a, b = pl.Simulation(cpu, dt=1e-4), pl.Simulation(gpu, dt=1e-4)
     a.step(1000)

@@ -40,6 +40,35 @@ __global__ void element_kernel(index_t b0, index_t b1, Mat mat, ElementData<T> e
     element_forces(b, static_cast<int>(i % kLanes), mat, el, u, P, f_out, J_out);
 }
 
+/// T4ANP pass 1: V0 p(J) per element slot, for one (decoupled) material group.
+template <class T, class Mat>
+__global__ void element_pressure_kernel(index_t b0, index_t b1, Mat mat, ElementData<T> el,
+                                        const T* u, index_t P, T* ep_out) {
+    const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
+    const index_t b = b0 + static_cast<index_t>(i / kLanes);
+    if (b >= b1) return;
+    element_pressure(b, static_cast<int>(i % kLanes), mat, el, u, P, ep_out);
+}
+
+/// T4ANP pass 2: volume-averaged nodal pressures, one node per thread.
+template <class T>
+__global__ void nodal_pressure_kernel(index_t n_nodes, const index_t* inc_off, const index_t* inc_idx,
+                                      const T* ep, const T* node_volume, T* np_out) {
+    const index_t n = static_cast<index_t>(blockIdx.x * blockDim.x + threadIdx.x);
+    if (n >= n_nodes) return;
+    np_out[n] = nodal_pressure(n, inc_off, inc_idx, ep, node_volume);
+}
+
+/// T4ANP pass 3: element forces with the corners' mean nodal pressure, for one material group.
+template <class T, class Mat>
+__global__ void element_anp_kernel(index_t b0, index_t b1, Mat mat, ElementData<T> el, const T* u,
+                                   index_t P, const T* node_p, T* f_out, T* J_out) {
+    const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
+    const index_t b = b0 + static_cast<index_t>(i / kLanes);
+    if (b >= b1) return;
+    element_forces_anp(b, static_cast<int>(i % kLanes), mat, el, u, P, node_p, f_out, J_out);
+}
+
 /// Load-curve factors at t and t + Δt (t = t0 + step·Δt, read from device memory), pattern factors,
 /// tool poses. One thread.
 template <class T>
@@ -152,7 +181,7 @@ struct CudaEngine<T>::Impl {
     T *elem_grad{}, *elem_vol{}, *mass{}, *inv_mass{}, *patterns{}, *cval{};
     index_t *elem_id{}, *inc_off{}, *inc_idx{}, *co{}, *cdof{}, *ccurve{}, *pcurve{}, *cnodes{},
         *cfree{}, *pf_off{}, *pf_idx{}, *pnodes{}, *pslot{};
-    T *pedges{}, *pvalue{};
+    T *pedges{}, *pvalue{}, *node_vol{}, *elem_p{}, *node_p{};
     LoadCurve* curves{};
     double *tt{}, *tv{}, *X{}, *keys{}, *grid{};
     RigidTool* tools{};
@@ -196,6 +225,7 @@ struct CudaEngine<T>::Impl {
         pslot = upload_vec(m.press_slot);
         pedges = upload_vec(m.press_edges);
         pvalue = upload_vec(m.press_value);
+        node_vol = upload_vec(m.node_volume);
         tools = upload_vec(m.tools);
         keys = upload_vec(m.tool_keys);
         grid = upload_vec(m.tool_grid);
@@ -207,6 +237,8 @@ struct CudaEngine<T>::Impl {
         }
         check(cudaMalloc(&f_elem, 12 * S * sizeof(T)), "cudaMalloc f");
         check(cudaMalloc(&J, S * sizeof(T)), "cudaMalloc J");
+        check(cudaMalloc(&elem_p, (m.anp ? S : 1) * sizeof(T)), "cudaMalloc elem_p");
+        check(cudaMalloc(&node_p, (m.anp ? m.n_pad : 1) * sizeof(T)), "cudaMalloc node_p");
         check(cudaMalloc(&cnext, (m.curves.size() + 1) * sizeof(T)), "cudaMalloc c");
         check(cudaMalloc(&pf, (m.pattern_curve.size() + 1) * sizeof(T)), "cudaMalloc pf");
         const std::size_t nt = m.tools.size(), nc = m.contact_nodes.size();
@@ -224,7 +256,7 @@ struct CudaEngine<T>::Impl {
     ~Impl() {
         void* ptrs[] = {elem_nodes, elem_grad, elem_vol, elem_id, inc_off, inc_idx, mass, inv_mass,
                         patterns, pcurve, co, cdof, cval, ccurve, curves, tt, tv, X, cnodes, cfree, pf_off,
-                        pf_idx, pnodes, pslot, pedges, pvalue, tools,
+                        pf_idx, pnodes, pslot, pedges, pvalue, node_vol, elem_p, node_p, tools,
                         keys, grid, u[0], u[1], u[2], f_elem, J, cnext, pf, pose0, pose1, cforce,
                         ctool, chunk, t0, step, bad, hist};
         for (void* p : ptrs)
@@ -241,9 +273,30 @@ struct CudaEngine<T>::Impl {
         curves_kernel<T><<<1, 1, 0, stream>>>(curves, nc, tt, tv, pcurve, np, tools, nt, keys, t0,
                                              step, dt, cnext, pf, pose0, pose1);
         const ElementData<T> el{elem_nodes, elem_grad, elem_vol};
+        if (m.anp) {  // T4ANP: element pressures, nodal averages, then forces
+            for (const Group<T>& g : m.groups) {
+                const long slots = static_cast<long>(g.block_end - g.block_begin) * kLanes;
+                with_material(g.material, [&](auto mat) {
+                    if constexpr (decltype(mat)::decoupled)
+                        element_pressure_kernel<T, decltype(mat)><<<grid_for(slots), kThreads, 0,
+                                                                     stream>>>(
+                            g.block_begin, g.block_end, mat, el, u[cur], m.n_pad, elem_p);
+                    return 0;
+                });
+            }
+            nodal_pressure_kernel<T><<<grid_for(m.n_nodes), kThreads, 0, stream>>>(
+                m.n_nodes, inc_off, inc_idx, elem_p, node_vol, node_p);
+        }
         for (const Group<T>& g : m.groups) {
             const long slots = static_cast<long>(g.block_end - g.block_begin) * kLanes;
             with_material(g.material, [&](auto mat) {
+                if constexpr (decltype(mat)::decoupled) {
+                    if (m.anp) {
+                        element_anp_kernel<T, decltype(mat)><<<grid_for(slots), kThreads, 0, stream>>>(
+                            g.block_begin, g.block_end, mat, el, u[cur], m.n_pad, node_p, f_elem, J);
+                        return 0;
+                    }
+                }
                 element_kernel<T, decltype(mat)><<<grid_for(slots), kThreads, 0, stream>>>(
                     g.block_begin, g.block_end, mat, el, u[cur], m.n_pad, f_elem, J);
                 return 0;

@@ -280,8 +280,6 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
         })
         .def("enable_cuda", [](E& e, int device) {
 #ifdef PLIANT_WITH_CUDA
-            if (e.model.anp)
-                throw nb::value_error("average nodal pressure (T4ANP) runs on the CPU backend only");
             std::string why;
             const int n = cuda::device_count(why);
             if (n == 0) throw nb::value_error(("no usable CUDA device: " + why).c_str());
