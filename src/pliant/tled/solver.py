@@ -158,7 +158,9 @@ class Solver:
               strict: bool = True) -> RelaxInfo:
         """Quasi-static equilibrium under the loads and prescribed displacements of time ``at_time``
         [s] (default: when every load curve has reached its final value), by dynamic relaxation with
-        adaptive damping (Joldes, Wittek & Miller 2009, CMAME 198:3313).
+        adaptive damping (Joldes, Wittek & Miller 2009, CMAME 198:3313) over fictitious masses
+        that give every element the same critical step (Underwood 1983; docs/engine.md). Rigid
+        tools hold their pose at ``at_time``: relaxing at successive keyframe times load-steps them.
 
         ``increments`` > 1 relaxes in turn at evenly spaced times from the state's time to
         ``at_time`` (load stepping along the load curves: use it for large deformations, where
