@@ -114,3 +114,18 @@ def test_state_save_and_restore(tmp_path):
     assert other.time == pytest.approx(50 * sim.solver.dt)
     other.step(50)
     assert np.array_equal(other.displacements, ref)  # same bits: restart is exact
+
+
+def test_non_finite_element_is_named_as_an_element():
+    """A float32 overflow (absurd force) makes J NaN: the error names the element (it used to be
+    read as a node index, which crashed with an IndexError when the element id exceeded the node
+    count, as on the full liver example)."""
+    X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (2, 2, 2))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=1e4, nu=0.3), density=1000.0)
+    b.add_force([len(X) - 1], (3e38, 0.0, 0.0))
+    sim = pl.Simulation(b.finalize("float32"))
+    with pytest.raises(pl.InstabilityError, match=r"non-finite deformation in element \d+") as err:
+        sim.step(50)
+    assert err.value.element is not None and 0 <= err.value.element < len(T)

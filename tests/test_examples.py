@@ -2,6 +2,7 @@
 benchmarks at full length with `pliant run`)."""
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -19,13 +20,15 @@ def test_there_are_examples():
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.stem)
 def test_example_runs(path, tmp_path):
+    """The whole scene, to its end (a 40-step smoke test once let the liver example ship with an
+    inversion at t = 0.27 s): about 35 s for all of them."""
     scene = load_scene(path)
     model = scene.builder.finalize(scene.dtype)
     dt = scene.dt or scene.safety * model.dt_critical
-    scene.duration = 40 * dt  # a smoke test: 40 steps
     scene.frames = 2
     s = run_scene(scene, tmp_path, progress=False)
-    assert s["steps"] == 40 and s["error"] is None and not s["interrupted"]
+    assert s["error"] is None and not s["interrupted"]
+    assert s["steps"] == math.ceil(scene.duration / dt - 1e-9)
     assert np.isfinite(s["max_displacement"]) and s["max_displacement"] > 0
     assert json.loads((tmp_path / "summary.json").read_text())["frames"] == 3
     assert (tmp_path / "result.png").exists()

@@ -82,6 +82,11 @@ class Solver:
 
     def _raise(self, rep: dict):
         m, t, v = self.model, rep["t"], rep["value"]
+        if rep["status"] == 2 and not math.isfinite(v):
+            e = m.user_element(rep["where"])
+            raise InstabilityError(
+                f"unstable at t = {t:.6g} s: non-finite deformation in element {e} (J = {v}); "
+                f"reduce dt (now {self.dt:.3g} s) or the loads", t, "J", v, element=e)
         if rep["status"] == 2:
             e = m.user_element(rep["where"])
             raise InstabilityError(
