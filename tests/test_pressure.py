@@ -84,3 +84,23 @@ def test_pressure_float32_and_bad_faces():
         b.add_pressure(interior, 1.0)
     with pytest.raises(InputError, match="pressure shape"):
         b.add_pressure(on[0], np.ones(3))
+
+
+def test_hydrostatic_pressure_with_average_nodal_pressure():
+    """T4ANP on a homogeneous state changes nothing: the same stretch, and every element's
+    reported Cauchy stress (computed with the averaged pressure the forces see) is −p I."""
+    material, W = MATERIALS["NeoHookean"]
+    p = 300.0
+    X, b, on = _cube(material)
+    b.nodal_pressure = True
+    b.add_pressure(np.vstack(on), p, curve=pl.Ramp(1.0))
+    model = b.finalize("float64")
+    sim = pl.Simulation(model)
+    sim.solve_static(tol=1e-10, increments=4)
+    lam_ref = brentq(lambda s: nominal(W, (s, s, s), 0) / s**2 + p, 0.5, 1.0, xtol=1e-14)
+    corner = np.argmax(X.sum(axis=1))
+    np.testing.assert_allclose(1 + sim.displacements[corner] / L, lam_ref, rtol=1e-7)
+    sigma = model.element_results(sim.state)["cauchy"]
+    # 1e-5 p: the relaxation tolerance (1e-10 of the loads) amplified by the element stiffness.
+    np.testing.assert_allclose(sigma[:, :3], -p, atol=1e-5 * p)
+    np.testing.assert_allclose(sigma[:, 3:], 0.0, atol=1e-5 * p)

@@ -356,13 +356,42 @@ void CpuSolver<T>::measures(const State<T>& s, T* J_out, T* W_out, T* S_out, T* 
     const ElementData<T> el = m_.elements();
     const index_t P = m_.n_pad;
     const T* u = s.u.data();
+    // T4ANP: the stresses the forces see, with the averaged pressure (passes 1 and 2 first).
+    std::vector<T> ep(m_.anp ? J_.size() : 0), np(m_.anp ? P : 0);
+    if (m_.anp) {
+#pragma omp parallel num_threads(threads_)
+        {
+#pragma omp for schedule(static)
+            for (index_t b = 0; b < m_.n_blocks; ++b)
+                with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
+                    if constexpr (std::decay_t<decltype(mat)>::decoupled)
+                        for (int l = 0; l < kLanes; ++l) element_pressure(b, l, mat, el, u, P, ep.data());
+                });
+#pragma omp for schedule(static)
+            for (index_t n = 0; n < m_.n_nodes; ++n)
+                np[n] = nodal_pressure(n, m_.inc_offsets.data(), m_.inc_index.data(), ep.data(),
+                                       m_.node_volume.data());
+        }
+    }
 #pragma omp parallel for schedule(static) num_threads(threads_)
     for (index_t b = 0; b < m_.n_blocks; ++b) {
         with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
             for (int l = 0; l < kLanes; ++l) {
                 const index_t e = m_.elem_id[b * kLanes + l];
                 if (e < 0) continue;
-                const ElementMeasures<T> q = element_measures(b, l, mat, el, u, P);
+                ElementMeasures<T> q;
+                using M = std::decay_t<decltype(mat)>;
+                if constexpr (M::decoupled) {
+                    if (m_.anp) {
+                        T p = T(0);
+                        for (int a = 0; a < 4; ++a) p += np[el.nodes[aosoa(b, l, a, 4)]];
+                        q = element_measures(b, l, AveragedPressure<M, T>{mat, p / T(4)}, el, u, P);
+                    } else {
+                        q = element_measures(b, l, mat, el, u, P);
+                    }
+                } else {
+                    q = element_measures(b, l, mat, el, u, P);
+                }
                 J_out[e] = q.J;
                 W_out[e] = q.energy;
                 const Sym3<T>* src[3] = {&q.S, &q.sigma, &q.E};

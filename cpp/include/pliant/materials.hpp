@@ -304,7 +304,9 @@ template <class M, class T>
 struct AveragedPressure {
     const M& m;
     T p;  // p̄ [Pa]
-    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, decoupled_pk2(m, k, p)); }
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(m, k, p); }
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const { return m.energy(k); }
 };
 
 /// Parameters per material (the most any material takes: TransverselyIsotropic's μ, K, η, a).
