@@ -1,9 +1,8 @@
 """NiftySim model import (XML, T4 and T4ANP elements): nodes, elements, element sets with their
 materials, Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
-analytical rigid contacts
-(ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and motions), Output frequency
-and SystemParams. Anything else is refused by name (``unsupported`` lists what may be skipped
-knowingly).
+analytical rigid contacts (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and
+motions), fixed closed ContactSurfaces, Output frequency and SystemParams. Anything else is
+refused by name (``unsupported`` lists what may be skipped knowingly).
 
 Format: NiftySim user guide v2.4 (Johnsen et al. 2015). Materials: NH = decoupled Neo-Hookean
 (μ, K) — pliant's NeoHookean; PY, AB and TI (App. A.1) — Polynomial, ArrudaBoyce and
@@ -28,7 +27,7 @@ from ..scene.schema import SceneError
 from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
 
 _KNOWN_TOP = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams", "SubMesh", "Output",
-              "ContactPlate", "ContactCylinder", "ContactUSProbe"}
+              "ContactPlate", "ContactCylinder", "ContactUSProbe", "ContactSurface"}
 _SYSTEM = {"TimeStep", "TotalTime", "DampingCoeff", "Density", "HGKappa", "DoDeformableCollision"}
 
 
@@ -249,6 +248,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
             b.add_force(ids, force, curve)
 
     _rigid_contacts(root, b, total, f, unsupported, warnings)
+    _rigid_surfaces(root, b, path, f, unsupported)
 
     out_every = None
     for o in root.findall("Output"):
@@ -400,3 +400,36 @@ def _pressure(c, b: ModelBuilder, T: np.ndarray, shapes: dict, f: str, key: str,
         b.add_pressure(faces, float(p[0]), shapes[shape](), orient=orient)
     except InputError as e:
         raise NiftySimError(str(e), f, key) from None
+
+
+def _rigid_surfaces(root, b: ModelBuilder, path: Path, f: str, unsupported) -> None:
+    """<ContactSurface> (user guide v2.4 §3.9.2): a fixed rigid triangle surface, inline (<Nodes>,
+    <Elements Type="T3">) or from <VTKSurface Type="T3"> (a path relative to the model file), as a
+    pliant MeshTool (signed-distance grid: the surface must be closed). Frictionless."""
+    from ..contact import MeshTool
+    from ..mesh import check_surface, read_surface
+
+    for k, el in enumerate(root.findall("ContactSurface")):
+        key = f"ContactSurface[{k}]"
+        for child in el:
+            if child.tag not in ("Nodes", "Elements", "VTKSurface"):
+                unsupported(f"ContactSurface/{child.tag}", "pliant imports fixed rigid surfaces")
+                return
+        vtk = el.find("VTKSurface")
+        try:
+            if vtk is not None:
+                p = Path((vtk.text or "").strip())
+                V, F = read_surface(p if p.is_absolute() else path.parent / p)
+            else:
+                ne, ee = el.find("Nodes"), el.find("Elements")
+                if ne is None or ee is None:
+                    raise NiftySimError("ContactSurface needs <VTKSurface> or <Nodes> and <Elements>",
+                                        f, key)
+                V = _numbers(ne, f, f"{key}/Nodes").reshape(-1, 3)
+                F = _numbers(ee, f, f"{key}/Elements", np.int64).reshape(-1, 3)
+        except (InputError, ValueError) as e:
+            raise NiftySimError(f"ContactSurface: {e}", f, key) from None
+        if not check_surface(V, F).watertight:
+            raise NiftySimError("ContactSurface: the surface is not closed; pliant's mesh tools "
+                                "keep nodes out of a closed volume", f, key)
+        b.add_tool(MeshTool(V, F, name=f"niftysim {key}"))
