@@ -63,6 +63,18 @@ def test_cuda_without_a_device_is_a_clear_error():
     print("backend='cuda' refused:", why)
 
 
+def test_viscoelastic_is_refused_on_cuda_by_name():
+    """Prony state lives on the CPU only for now: asking for CUDA says so, before any device."""
+    if not _core.cuda_compiled():
+        pytest.skip("CUDA backend not compiled (no nvcc at build time)")
+    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (5, 1, 1))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.Viscoelastic(pl.NeoHookean(E=1e4, nu=0.45), iso=[(0.3, 0.1)]), density=1000.0)
+    with pytest.raises(pl.BackendError, match="viscoelastic"):
+        b.finalize(backend="cuda")
+
+
 @pytest.mark.parametrize("extras", [False, True], ids=["plain", "anp-pressure-contact"])
 def test_cpu_and_gpu_agree_over_1000_steps(extras):
     names, why = _core.cuda_devices()

@@ -93,8 +93,8 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path, etyp
 
 @pytest.mark.parametrize("kwargs, name", [
     (dict(elements_type="H8"), "Elements Type=H8"),
-    (dict(material='<Material Type="NHV"><ElasticParams NumParams="2">1 2</ElasticParams></Material>'),
-     "Material Type=NHV"),
+    (dict(material='<Material Type="HGO"><ElasticParams NumParams="2">1 2</ElasticParams></Material>'),
+     "Material Type=HGO"),
     (dict(extra_constraint='<Constraint DOF="0" LoadShape="SINE" NumNodes="1" Type="Disp">'
           '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'), "LoadShape=SINE"),
     (dict(extra_constraint='<Constraint Type="Traction" NumFaces="all" LoadShape="RAMP"/>'),
@@ -310,4 +310,29 @@ def test_contact_surface_inline_and_vtk(tmp_path):
     p = tmp_path / "open.xml"
     p.write_text(text)
     with pytest.raises(NiftySimError, match="not closed"):
+        load_niftysim(p)
+
+
+def test_viscoelastic_nhv_and_tiv(tmp_path):
+    """NHV / TIV: the NH / TI elastic parameters and <ViscoParams> (α, τ pairs, isochoric terms
+    first; user guide §3.4.4) → pliant.Viscoelastic; a wrong count is a named error."""
+    nhv = ('<Material Type="NHV"><ElasticParams NumParams="2">1000 10000</ElasticParams>'
+           '<ViscoParams NumIsoTerms="2" NumVolTerms="1">0.3 0.1 0.2 1.0 0.1 0.5</ViscoParams>'
+           '</Material>')
+    tiv = ('<Material Type="TIV"><ElasticParams NumParams="6">1000 10000 500 1 0 0</ElasticParams>'
+           '<ViscoParams NumIsoTerms="1" NumVolTerms="0">0.4 0.05</ViscoParams></Material>')
+    expect = [pl.Viscoelastic(pl.NeoHookean(mu=1000, K=10000), iso=[(0.3, 0.1), (0.2, 1.0)],
+                              vol=[(0.1, 0.5)]),
+              pl.Viscoelastic(pl.TransverselyIsotropic(1000, 10000, 500, (1, 0, 0)),
+                              iso=[(0.4, 0.05)])]
+    for k, (xml, e) in enumerate(zip((nhv, tiv), expect)):
+        *_, text = _cube_xml(material=xml)
+        p = tmp_path / f"v{k}.xml"
+        p.write_text(text)
+        (s,) = load_niftysim(p).builder.sets
+        assert s.material == e
+    *_, text = _cube_xml(material=nhv.replace("0.1 0.5</Visco", "0.1</Visco"))
+    p = tmp_path / "bad.xml"
+    p.write_text(text)
+    with pytest.raises(NiftySimError, match="ViscoParams"):
         load_niftysim(p)

@@ -249,3 +249,14 @@ def test_scene_other_materials(tmp_path, table, expect):
     bad = text.replace("K = 10000.0", "E = 3000.0")
     with pytest.raises(SceneError, match="takes"):
         load_scene(_write(tmp_path, bad, "b.toml"))
+
+
+def test_scene_viscoelastic_material(tmp_path):
+    text = TENSION.replace('mu = 1000.0\nK = 10000.0', 'mu = 1000.0\nK = 10000.0\n'
+                           'prony_iso = [[0.3, 0.1]]\nprony_vol = [[0.1, 0.5]]')
+    (s,) = load_scene(_write(tmp_path, text)).builder.sets
+    assert s.material == pl.Viscoelastic(pl.NeoHookean(mu=1000.0, K=10000.0), iso=[(0.3, 0.1)],
+                                         vol=[(0.1, 0.5)])
+    bad = text.replace("[[0.3, 0.1]]", "[[0.9, 0.1], [0.3, 1.0]]")
+    with pytest.raises(SceneError, match="sum"):
+        load_scene(_write(tmp_path, bad, "b.toml"))

@@ -139,6 +139,17 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
             scatter_nodes(a, s.s.u_prev, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
             ++s.version;
         })
+        .def("get_q", [](const S& s) {  // viscoelastic state, raw engine layout (save/restore)
+            std::vector<double> q(s.s.q.begin(), s.s.q.end());
+            return q;
+        })
+        .def("set_q", [](S& s, std::vector<double> q) {
+            if (q.size() != s.s.q.size())
+                throw nb::value_error(("viscoelastic state: " + std::to_string(q.size()) +
+                                       " values, expected " + std::to_string(s.s.q.size())).c_str());
+            for (std::size_t i = 0; i < q.size(); ++i) s.s.q[i] = T(q[i]);
+            ++s.version;
+        })
         .def("copy", [](const S& s) { S c(s); c.version = 0; return c; })
         .def("assign", [](S& s, const S& o) { const auto v = s.version; s = o; s.version = v + 1; });
 
@@ -159,7 +170,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 std::vector<double> tool_mu, std::vector<std::vector<double>> tool_keys,
                 std::vector<index_t> tool_grid_dims, std::vector<std::vector<double>> tool_grids,
                 std::vector<index_t> press_nodes, std::vector<double> press_value,
-                std::vector<index_t> press_curve, bool anp, int threads) {
+                std::vector<index_t> press_curve, bool anp, std::vector<double> group_visco,
+                int threads) {
                  ModelInput in;
                  in.X = X.data();
                  in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -189,6 +201,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  in.press_value = std::move(press_value);
                  in.press_curve = std::move(press_curve);
                  in.anp = anp;
+                 in.group_visco = std::move(group_visco);
                  for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                      RigidTool t{};
                      t.kind = static_cast<ToolKind>(tool_kind[k]);
@@ -212,7 +225,11 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
         .def_prop_ro("dt_critical_element", [](const E& e) { return e.model.dt_critical_elem; })
         .def_prop_ro("bytes", [](const E& e) { return e.model.bytes(); })
         .def_prop_ro("threads", [](const E& e) { return e.solver.threads(); })
-        .def("new_state", [](const E& e) { return S{State<T>(e.model.n_pad), e.model.n_nodes}; })
+        .def("new_state", [](const E& e) {
+            const std::size_t q = static_cast<std::size_t>(e.model.n_blocks) * kLanes * 6 *
+                                  static_cast<std::size_t>(e.model.visco_terms);
+            return S{State<T>(e.model.n_pad, q), e.model.n_nodes};
+        })
         .def("mass", [](const E& e) {
             std::vector<T> m(e.model.mass.begin(), e.model.mass.begin() + e.model.n_nodes);
             return to_numpy(std::move(m), {size_t(e.model.n_nodes)});
@@ -280,6 +297,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
         })
         .def("enable_cuda", [](E& e, int device) {
 #ifdef PLIANT_WITH_CUDA
+            if (e.model.visco_terms > 0)
+                throw nb::value_error("viscoelastic materials run on the CPU backend only for now");
             std::string why;
             const int n = cuda::device_count(why);
             if (n == 0) throw nb::value_error(("no usable CUDA device: " + why).c_str());

@@ -78,14 +78,27 @@ void CpuSolver<T>::contact_pass(const T* u_cur, T* u_next, double t0, double t1,
 
 // Kernel 1 over all blocks; called inside a parallel region (implicit barrier at the end).
 template <class T>
-void CpuSolver<T>::element_pass(const T* __restrict u) {
+void CpuSolver<T>::element_pass(const T* __restrict u, T* q, double dt, int visco_mode) {
     const ElementData<T> el = m_.elements();
     T* __restrict f = f_elem_.data();
     T* __restrict J = J_.data();
     const index_t P = m_.n_pad;
+    const int W = 6 * m_.visco_terms;  // viscoelastic state width per slot
 #pragma omp for schedule(static)
     for (index_t b = 0; b < m_.n_blocks; ++b) {
-        with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
+        const Group<T>& g = m_.groups[m_.block_group[b]];
+        with_material(g.material, [&](const auto& mat) {
+            using M = std::decay_t<decltype(mat)>;
+            if constexpr (M::decoupled) {
+                if (g.visco.n_iso + g.visco.n_vol > 0) {
+                    for (int l = 0; l < kLanes; ++l)
+                        element_forces(b, l,
+                                       ViscoMaterial<M, T>{mat, g.visco, T(dt), q + aosoa(b, l, 0, W),
+                                                           kLanes, visco_mode},
+                                       el, u, P, f, J);
+                    return;
+                }
+            }
 #pragma omp simd
             for (int l = 0; l < kLanes; ++l) element_forces(b, l, mat, el, u, P, f, J);
         });
@@ -95,9 +108,9 @@ void CpuSolver<T>::element_pass(const T* __restrict u) {
 // Kernel 1, or with T4ANP its three passes (element pressures, nodal averages, forces); inside a
 // parallel region, each pass ending with the implicit barrier of its loop.
 template <class T>
-void CpuSolver<T>::forces_pass(const T* __restrict u) {
+void CpuSolver<T>::forces_pass(const T* __restrict u, T* q, double dt, int visco_mode) {
     if (!m_.anp) {
-        element_pass(u);
+        element_pass(u, q, dt, visco_mode);
         return;
     }
     const ElementData<T> el = m_.elements();
@@ -208,7 +221,7 @@ RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int ch
             for (std::size_t p = 0; p < np; ++p) pf[p] = cnow[m_.pattern_curve[p]];
             const bool master = omp_get_thread_num() == 0;
             const double w0 = master ? omp_get_wtime() : 0.0;
-            forces_pass(v[ic]->data());
+            forces_pass(v[ic]->data(), s.q.data(), dt, 0);
             const double w1 = master ? omp_get_wtime() : 0.0;
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cnext.data(), it,
                       nullptr);
@@ -273,7 +286,7 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
         int ip = 0, ic = 1, in = 2, fc = 0;
         for (long k = 0; k < max_steps && !stop; ++k) {
             const Integrator<T> it = central_difference<T>(dt, alpha);
-            forces_pass(v[ic]->data());
+            forces_pass(v[ic]->data(), s.q.data(), dt, 2);
             node_pass({v[ip]->data(), v[ic]->data(), v[in]->data()}, pf.data(), cf.data(), it,
                       f_node_[fc].data());
             if (!m_.tools.empty())
@@ -341,6 +354,10 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
         }
     }
     relaxing_ = false;
+    if (m_.visco_terms > 0) {  // the viscous state of the equilibrium: fully relaxed
+#pragma omp parallel num_threads(threads_)
+        forces_pass(s.u.data(), s.q.data(), dt, 3);
+    }
     s.u_prev = s.u;  // equilibrium: at rest
     s.t = t_eval;
     s.dt = dt;
@@ -381,8 +398,13 @@ void CpuSolver<T>::measures(const State<T>& s, T* J_out, T* W_out, T* S_out, T* 
                 if (e < 0) continue;
                 ElementMeasures<T> q;
                 using M = std::decay_t<decltype(mat)>;
+                const Group<T>& g = m_.groups[m_.block_group[b]];
                 if constexpr (M::decoupled) {
-                    if (m_.anp) {
+                    if (g.visco.n_iso + g.visco.n_vol > 0) {
+                        T* qs = const_cast<T*>(s.q.data()) + aosoa(b, l, 0, 6 * m_.visco_terms);
+                        q = element_measures(b, l, ViscoMaterial<M, T>{mat, g.visco, T(s.dt), qs,
+                                                                       kLanes, 1}, el, u, P);
+                    } else if (m_.anp) {
                         T p = T(0);
                         for (int a = 0; a < 4; ++a) p += np[el.nodes[aosoa(b, l, a, 4)]];
                         q = element_measures(b, l, AveragedPressure<M, T>{mat, p / T(4)}, el, u, P);
@@ -414,7 +436,7 @@ std::vector<T> CpuSolver<T>::internal_forces(const State<T>& s) {
     const std::vector<T> zeros(m_.pattern_curve.size() + 1, T(0));
 #pragma omp parallel num_threads(threads_)
     {
-        forces_pass(s.u.data());
+        forces_pass(s.u.data(), const_cast<T*>(s.q.data()), s.dt, 1);
 #pragma omp for schedule(static)
         for (index_t n = 0; n < m_.n_nodes; ++n)
             node_update(n, nd, f_elem_.data(), zeros.data(), it, s.u.data(), s.u.data(),

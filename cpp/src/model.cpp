@@ -21,6 +21,16 @@ Model<T>::Model(const ModelInput& in) {
         Group<T> grp{blocks, blocks + nb, {static_cast<MaterialKind>(in.group_kind[g]), {}}};
         for (int k = 0; k < kMaterialParams; ++k)
             grp.material.p[k] = T(in.group_params[kMaterialParams * g + k]);
+        if (!in.group_visco.empty()) {
+            const double* v = &in.group_visco[(2 + 2 * kPronyMax) * g];
+            grp.visco.n_iso = static_cast<int>(v[0]);
+            grp.visco.n_vol = static_cast<int>(v[1]);
+            for (int k = 0; k < kPronyMax; ++k) {
+                grp.visco.alpha[k] = T(v[2 + 2 * k]);
+                grp.visco.tau[k] = T(v[3 + 2 * k]);
+            }
+            visco_terms = std::max(visco_terms, grp.visco.n_iso + grp.visco.n_vol);
+        }
         groups.push_back(grp);
         for (index_t b = 0; b < nb; ++b) block_group.push_back(static_cast<index_t>(g));
         blocks += nb;
@@ -75,6 +85,9 @@ Model<T>::Model(const ModelInput& in) {
         begin = end;
     }
     anp = in.anp;
+    if (anp && visco_terms > 0)
+        throw std::invalid_argument("average nodal pressure (T4ANP) and viscoelastic materials "
+                                    "cannot be combined yet");
     if (anp) {
         for (const Group<T>& g : groups)
             if (!with_material(g.material, [](const auto& m) { return m.decoupled; }))

@@ -17,6 +17,7 @@ template <class T>
 struct Group {
     index_t block_begin, block_end;
     MaterialParams<T> material;
+    Prony<T> visco;  // n_iso = n_vol = 0: elastic
 };
 
 /// Raw description of a model handed over by the builder (all in SI units, user-facing node and
@@ -30,6 +31,8 @@ struct ModelInput {
     std::vector<index_t> group_end;        // element index one past each group, ascending
     std::vector<int> group_kind;           // MaterialKind per group
     std::vector<double> group_params;      // kMaterialParams per group
+    std::vector<double> group_visco;       // per group: n_iso, n_vol, then (α, τ) × kPronyMax; or
+                                           // empty (no viscoelasticity)
     const double* patterns;   // load patterns [N], (K, N, 3)
     int n_patterns;
     std::vector<index_t> pattern_curve;    // curve per pattern
@@ -73,6 +76,7 @@ struct Model {
     std::vector<index_t> pface_offsets, pface_index, press_nodes, press_slot;
     std::vector<T> press_edges, press_value;
     bool anp = false;                  // average nodal pressure tetrahedra (T4ANP)
+    int visco_terms = 0;               // max Prony terms of any group: the State's q holds 6 each
     std::vector<T> node_volume;        // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node
     std::vector<T> cons_value;
@@ -109,9 +113,11 @@ struct Model {
 template <class T>
 struct State {
     std::vector<T> u, u_prev;
+    std::vector<T> q;  // viscoelastic state: 6 × visco_terms per element slot, AoSoA (may be empty)
     double t = 0.0, dt = 0.0;
     long step = 0;
-    explicit State(index_t n_pad) : u(3 * static_cast<std::size_t>(n_pad), T(0)), u_prev(u) {}
+    explicit State(index_t n_pad, std::size_t q_size = 0)
+        : u(3 * static_cast<std::size_t>(n_pad), T(0)), u_prev(u), q(q_size, T(0)) {}
 };
 
 /// Central differences assume equal steps: when Δt changes from s.dt to dt, rescale u⁻ so that the

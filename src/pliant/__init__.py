@@ -11,7 +11,8 @@ from . import _core, contact, io, mesh
 from .errors import (BackendError, ConvergenceError, DegenerateElementError, InputError, InstabilityError,
                      InvertedElementError, MaterialError, MeshError, PliantError, TimeStepError)
 from .materials import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoHookean,
-                        NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic)
+                        NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic,
+                        Viscoelastic)
 from .tled import (Constant, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo, Simulation,
                    SmoothRamp, Hilly, Solver, State, Step, Table)
 
@@ -21,7 +22,7 @@ __all__ = [
     "ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
     "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table",
     "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
-    "Polynomial", "ArrudaBoyce", "TransverselyIsotropic",
+    "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "Viscoelastic",
     "LinearElastic",
     "PliantError", "InputError", "BackendError", "MaterialError", "MeshError", "InvertedElementError",
     "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError",

@@ -309,6 +309,64 @@ struct AveragedPressure {
     PLIANT_HD T energy(const Kinematics<T>& k) const { return m.energy(k); }
 };
 
+/// Prony series of a visco-hyperelastic material: isochoric terms (α_i, τ_i [s]), i < n_iso, then
+/// volumetric ones at [kPronyMax/2 + i], i < n_vol (NiftySim user guide v2.4, App. A.2, eqs. 9-10).
+constexpr int kPronyMax = 8;
+template <class T>
+struct Prony {
+    int n_iso = 0, n_vol = 0;
+    T alpha[kPronyMax] = {}, tau[kPronyMax] = {};
+};
+
+/// Visco-hyperelastic response of a decoupled material (Taylor et al. 2009, "Modelling anisotropic
+/// viscoelasticity for real-time soft tissue simulation", MICCAI, eqs. 9-12; NiftySim's NHV): each
+/// Prony term keeps a stress-like state D_i, advanced per step by backward Euler,
+/// D_i ← τ_i/(Δt + τ_i) D_i + Δt α_i/(Δt + τ_i) S_e (S_e its isochoric or volumetric elastic part),
+/// and S = S_e,iso + S_e,vol − Σ D_i. mode 0: advance the state (a time step); 1: use the stored
+/// state (outputs, reactions); 2: fully relaxed, D_i = α_i S_e (quasi-static solutions); 3: the
+/// same, and store it (the state after a quasi-static solution).
+/// q: the element's 6·(n_iso + n_vol) state values, stride `stride` between components.
+template <class M, class T>
+struct ViscoMaterial {
+    const M& m;
+    const Prony<T>& pr;
+    T dt;
+    T* q;
+    int stride, mode;
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const Sym3<T> Ci = inverse_cauchy_green(k);
+        const Sym3<T> Se[2] = {m.pk2_iso(k, Ci), scale(k.J * m.pressure(k), Ci)};
+        Sym3<T> S = axpby(T(1), Se[0], T(1), Se[1]);
+        int slot = 0;
+        for (int part = 0; part < 2; ++part) {
+            const int n = part == 0 ? pr.n_iso : pr.n_vol;
+            for (int i = 0; i < n; ++i, ++slot) {
+                const int t = part * (kPronyMax / 2) + i;
+                T* d = q + 6 * slot * stride;
+                const T e[6] = {Se[part].xx, Se[part].yy, Se[part].zz, Se[part].xy, Se[part].yz,
+                                Se[part].xz};
+                T D[6];
+                for (int c = 0; c < 6; ++c) {
+                    if (mode >= 2) {
+                        D[c] = pr.alpha[t] * e[c];
+                        if (mode == 3) d[c * stride] = D[c];
+                    } else if (mode == 1) {
+                        D[c] = d[c * stride];
+                    } else {
+                        const T den = dt + pr.tau[t];
+                        D[c] = pr.tau[t] / den * d[c * stride] + dt * pr.alpha[t] / den * e[c];
+                        d[c * stride] = D[c];
+                    }
+                }
+                S = axpby(T(1), S, T(-1), Sym3<T>{D[0], D[1], D[2], D[3], D[4], D[5]});
+            }
+        }
+        return S;
+    }
+    PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
+    PLIANT_HD T energy(const Kinematics<T>& k) const { return m.energy(k); }
+};
+
 /// Parameters per material (the most any material takes: TransverselyIsotropic's μ, K, η, a).
 constexpr int kMaterialParams = 8;
 

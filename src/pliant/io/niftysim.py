@@ -33,6 +33,7 @@ _SYSTEM = {"TimeStep", "TotalTime", "DampingCoeff", "Density", "HGKappa", "DoDef
 
 # NiftySim user guide v2.4, App. A.1: material code → (pliant class, parameters in file order).
 _MATERIALS = {
+    "NH": (lambda mu, k: NeoHookean(mu=mu, K=k), ("mu", "kappa")),
     "PY": (lambda c10, c01, c20, c02, c11, k: Polynomial(c10, c01, c20, c02, c11, K=k),
            ("C10", "C01", "C20", "C02", "C11", "kappa")),
     "AB": (lambda mu, lm, k: ArrudaBoyce(mu, lm, k), ("mu", "lambda_m", "kappa")),
@@ -157,22 +158,20 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         if rho is None:
             raise NiftySimError("no density: give <Density> in the material or SystemParams", f, key)
         try:
-            if mtype == "NH":
-                if vals.size != 2:
-                    raise NiftySimError(f"NH takes 2 parameters (mu, K); got {vals.size}", f, key)
-                material = NeoHookean(mu=vals[0], K=vals[1])
-            elif mtype == "LE":
+            if mtype == "LE":
                 if vals.size != 2:
                     raise NiftySimError(f"LE takes 2 parameters (E, nu); got {vals.size}", f, key)
                 material = StVenantKirchhoff(E=vals[0], nu=vals[1])
-            elif mtype in _MATERIALS:
-                cls, names = _MATERIALS[mtype]
+            elif mtype in _MATERIALS or mtype in ("NHV", "TIV"):
+                cls, names = _MATERIALS[mtype[:-1] if mtype in ("NHV", "TIV") else mtype]
                 if vals.size != len(names):
                     raise NiftySimError(f"{mtype} takes {len(names)} parameters ({', '.join(names)}); "
                                         f"got {vals.size}", f, key)
                 material = cls(*vals)
+                if mtype in ("NHV", "TIV"):
+                    material = _visco(m, material, f, key)
             else:
-                unsupported(f"Material Type={mtype}", "pliant imports NH, LE, PY, AB and TI")
+                unsupported(f"Material Type={mtype}", "pliant imports NH, LE, PY, AB, TI, NHV and TIV")
                 continue
             b.set_material(material, rho, elements=elems, name=key)
         except SceneError:
@@ -433,3 +432,23 @@ def _rigid_surfaces(root, b: ModelBuilder, path: Path, f: str, unsupported) -> N
             raise NiftySimError("ContactSurface: the surface is not closed; pliant's mesh tools "
                                 "keep nodes out of a closed volume", f, key)
         b.add_tool(MeshTool(V, F, name=f"niftysim {key}"))
+
+
+def _visco(m, material, f: str, key: str):
+    """<ViscoParams NumIsoTerms NumVolTerms>: α1 τ1 α2 τ2 … for the isochoric terms, then the
+    volumetric ones (user guide v2.4, §3.4.4) → pliant.Viscoelastic."""
+    from ..materials import Viscoelastic
+
+    vp = m.find("ViscoParams")
+    if vp is None:
+        raise NiftySimError(f"{m.get('Type')} needs <ViscoParams>", f, key)
+    try:
+        ni, nv = int(vp.get("NumIsoTerms", "0")), int(vp.get("NumVolTerms", "0"))
+    except ValueError:
+        raise NiftySimError("<ViscoParams NumIsoTerms/NumVolTerms>: expected integers", f, key) from None
+    v = _numbers(vp, f, f"{key}/ViscoParams")
+    if v.size != 2 * (ni + nv):
+        raise NiftySimError(f"<ViscoParams>: {v.size} values for {ni} + {nv} terms (expected "
+                            f"{2 * (ni + nv)})", f, key)
+    pairs = v.reshape(-1, 2).tolist()
+    return Viscoelastic(material, iso=pairs[:ni], vol=pairs[ni:])

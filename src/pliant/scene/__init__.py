@@ -338,12 +338,14 @@ def load_scene(path) -> Scene:
                                "nu": "number", "mu": "number", "K": "number", "lambda": "number",
                                "C10": "number", "C01": "number", "C20": "number", "C02": "number",
                                "C11": "number", "lambda_m": "number", "eta": "number",
-                               "direction": "list", "name": "str"}, ("type", "density"))
+                               "direction": "list", "prony_iso": "list", "prony_vol": "list",
+                               "name": "str"}, ("type", "density"))
         if m["type"] not in _MATERIALS:
             raise ctx.error(f"{p}.type", f"unknown material {m['type']!r}; expected one of "
                             f"{', '.join(_MATERIALS)}")
         cls, native = _MATERIALS[m["type"]]
-        given = {k for k in m if k not in ("type", "region", "density", "name")}
+        given = {k for k in m if k not in ("type", "region", "density", "name", "prony_iso",
+                                           "prony_vol")}
         with ctx.under(p):
             if m["type"] == "polynomial":  # higher-order constants default to 0
                 given |= {"C01", "C20", "C02", "C11"}
@@ -356,6 +358,8 @@ def load_scene(path) -> Scene:
                 alt = " or (E, nu)" if m["type"] not in _NO_E_NU else ""
                 raise ctx.error(p, f"{m['type']} takes ({', '.join(native)}){alt}; got "
                                 f"({', '.join(sorted(given)) or 'nothing'})")
+            if "prony_iso" in m or "prony_vol" in m:  # visco-hyperelastic: (alpha, tau [s]) pairs
+                material = mat.Viscoelastic(material, m.get("prony_iso", []), m.get("prony_vol", []))
             elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) \
                 if "region" in m else None
             b.set_material(material, m["density"], elements=elems, name=m.get("name", p))

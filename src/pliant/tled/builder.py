@@ -270,6 +270,9 @@ class ModelBuilder:
                                 "call set_material() for every element")
         if self.nodal_pressure:
             for s in self.sets:
+                if getattr(s.material, "prony", None):
+                    raise MaterialError(f"element set {s.name!r}: viscoelastic materials and "
+                                        "average nodal pressure (T4ANP) cannot be combined yet")
                 if type(s.material).__name__ in ("NeoHookeanCoupled", "StVenantKirchhoff",
                                                  "LinearElastic"):
                     raise MaterialError(f"element set {s.name!r}: {type(s.material).__name__} has no "

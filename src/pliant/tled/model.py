@@ -134,6 +134,16 @@ class Model:
         self.contact_nodes = cn
         cn_order = np.argsort(node_rank[cn], kind="stable")
         tool_grids = [t.grid() for t in self.tools]
+        visco = []  # per group: n_iso, n_vol, (α, τ) × 8 (isochoric in 0..3, volumetric in 4..7)
+        if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
+            for k in np.nonzero(keep)[0]:
+                iso, vol = getattr(self.sets[k].material, "prony", None) or ((), ())
+                row = [float(len(iso)), float(len(vol))] + [0.0] * 16
+                for i, (a, tau) in enumerate(iso):
+                    row[2 + 2 * i], row[3 + 2 * i] = a, tau
+                for i, (a, tau) in enumerate(vol):
+                    row[2 + 2 * (4 + i)], row[3 + 2 * (4 + i)] = a, tau
+                visco.extend(row)
         params = [p for k in np.nonzero(keep)[0]
                   for p in (*self.sets[k].material.params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:8]]
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
@@ -157,7 +167,7 @@ class Model:
             [t.key_array().tolist() for t in self.tools],
             [d for dims, _ in tool_grids for d in dims], [v.tolist() for _, v in tool_grids],
             [int(v) for v in node_rank[press_F].ravel()], press_p.tolist(), press_c,
-            bool(builder.nodal_pressure),
+            bool(builder.nodal_pressure), visco,
             int(threads if threads else _auto_threads(M)),
         )
         self.n_nodes, self.n_elements = N, M
@@ -341,7 +351,8 @@ class State:
         """Save to a .npz file (u, u⁻ in user order, t, Δt, step count)."""
         u_prev = self.model.to_user_nodes(np.asarray(self._s.get_u_prev(), dtype=float))
         np.savez(path, u=self.displacements, u_prev=u_prev, t=self.time, dt=self.dt,
-                 step=self.steps, n_nodes=self.model.n_nodes, n_elements=self.model.n_elements)
+                 step=self.steps, n_nodes=self.model.n_nodes, n_elements=self.model.n_elements,
+                 visco=np.asarray(self._s.get_q(), dtype=float))  # engine layout, same model
 
     def load(self, path):
         """Restore from a file written by :meth:`save` (same model)."""
@@ -353,3 +364,8 @@ class State:
             self._s.set_u(self.model.to_engine_nodes(self._check(d["u"], f"{path}: u")))
             self._s.set_u_prev(self.model.to_engine_nodes(self._check(d["u_prev"], f"{path}: u_prev")))
             self._s.t, self._s.dt, self._s.step = float(d["t"]), float(d["dt"]), int(d["step"])
+            if "visco" in d.files:
+                try:
+                    self._s.set_q(d["visco"].tolist())
+                except ValueError as e:
+                    raise InputError(f"{path}: {e}") from None

@@ -1,0 +1,86 @@
+"""Viscoelastic (Prony series) materials against the closed form of linear viscoelasticity."""
+
+import math
+
+import numpy as np
+import pytest
+
+import pliant as pl
+from test_uniaxial import K, MU, W_nh, uniaxial_reference
+
+
+def test_stress_relaxation_after_a_ramp_follows_the_prony_series():
+    """Uniaxial stretch 1.001 ramped in t_r = 2 ms, then held. With the same Prony term (α, τ) on
+    the isochoric and the volumetric stress, every stress component relaxes by the same factor, so
+    the held deformation stays homogeneous and the nominal stress is P_e (1 − D/(α P_e)·α):
+    D(t) = α P_e [1 − (τ/t_r)(e^(−(t−t_r)/τ) − e^(−t/τ))] for t > t_r (the Prony convolution of the
+    ramp; NiftySim user guide App. A.2, eq. 9). P_e: the elastic (instantaneous) response."""
+    alpha, tau, t_r, stretch, L = 0.4, 0.05, 0.002, 1.001, 0.01
+    material = pl.Viscoelastic(pl.NeoHookean(mu=MU, K=K), iso=[(alpha, tau)], vol=[(alpha, tau)])
+    sim = pl.Simulation(_cube(material, stretch, L, t_r), dt=2e-6)
+    P_e = uniaxial_reference(W_nh, stretch)[0] * L * L   # [N] on the face of area L²
+    for t in (0.03, 0.05, 0.1, 0.2):
+        sim.run_to(t)
+        F = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
+        tt = sim.time
+        D = alpha * P_e * (1 - tau / t_r * (math.exp(-(tt - t_r) / tau) - math.exp(-tt / tau)))
+        # 1 %: backward-Euler integration of the state (Δt/τ = 4e-5), the elastic waves left by
+        # the ramp (damped by α_d = 1000/s: e^(−15) by 0.03 s) and the nonlinearity at strain 1e-3.
+        assert abs(F - (P_e - D)) <= 0.01 * P_e, (tt, F, P_e - D)
+
+
+def _cube(material, stretch, L, t_r):
+    X, T = pl.mesh.box_tets((L, L, L), (3, 3, 3), jitter=0.25, seed=1)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(material, density=1000.0)
+    for d in range(3):
+        b.fix(np.nonzero(X[:, d] < 1e-9 * L)[0], "xyz"[d])
+    b.prescribe(np.nonzero(X[:, 0] > L * (1 - 1e-9))[0], (stretch - 1) * L, "x", curve=pl.Ramp(t_r))
+    b.damping = 1000.0  # about critical for the slowest mode (ω ≈ πc/(2L) ≈ 500/s)
+    return b.finalize("float64")
+
+
+def _right(sim):
+    X = sim.model.reference_positions
+    return np.nonzero(X[:, 0] > X[:, 0].max() * (1 - 1e-9))[0]
+
+
+def test_quasi_static_solution_is_the_fully_relaxed_one_and_state_round_trips(tmp_path):
+    """Dynamic relaxation is infinitely slow loading: the stress is the long-term one, (1 − α) P_e
+    with the same α on both parts; the stored viscous state is then the relaxed one, so a dynamic
+    run continuing from it stays put; save/load carries the state (same bits after more steps)."""
+    alpha, stretch, L = 0.3, 1.001, 0.01
+    material = pl.Viscoelastic(pl.NeoHookean(mu=MU, K=K), iso=[(alpha, 0.05)], vol=[(alpha, 0.05)])
+    sim = pl.Simulation(_cube(material, stretch, L, 0.002), dt=2e-6)
+    sim.solve_static(tol=1e-10)
+    P_e = uniaxial_reference(W_nh, stretch)[0] * L * L
+    F = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
+    assert abs(F - (1 - alpha) * P_e) <= 1e-6 * P_e     # relaxation tolerance, exact FE space
+    sim.step(2000)
+    F2 = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
+    assert abs(F2 - F) <= 1e-6 * P_e
+    sim.state.save(tmp_path / "s.npz")
+    sim.step(500)
+    u_ref = sim.displacements.copy()
+    other = pl.Simulation(sim.model, dt=2e-6)
+    other.state.load(tmp_path / "s.npz")
+    other.step(500)
+    assert np.array_equal(other.displacements, u_ref)
+
+
+def test_viscoelastic_inputs_are_checked():
+    nh = pl.NeoHookean(mu=MU, K=K)
+    with pytest.raises(pl.MaterialError, match="decoupled"):
+        pl.Viscoelastic(pl.StVenantKirchhoff(mu=MU, lam=K), iso=[(0.3, 0.1)])
+    with pytest.raises(pl.MaterialError, match="sum"):
+        pl.Viscoelastic(nh, iso=[(0.6, 0.1), (0.5, 1.0)])
+    with pytest.raises(pl.MaterialError, match="tau"):
+        pl.Viscoelastic(nh, vol=[(0.2, 0.0)])
+    X, T = pl.mesh.box_tets((L0 := 0.01, L0, L0), (2, 2, 2))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.Viscoelastic(nh, iso=[(0.3, 0.1)]), density=1000.0)
+    b.nodal_pressure = True
+    with pytest.raises(pl.MaterialError, match="cannot be combined"):
+        b.finalize()
