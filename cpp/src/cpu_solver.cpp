@@ -90,7 +90,7 @@ void CpuSolver<T>::element_pass(const T* __restrict u, T* q, double dt, int visc
         with_material(g.material, [&](const auto& mat) {
             using M = std::decay_t<decltype(mat)>;
             if constexpr (M::decoupled) {
-                if (g.visco.n_iso + g.visco.n_vol > 0) {
+                if (g.visco.terms() > 0) {
                     for (int l = 0; l < kLanes; ++l)
                         element_forces(b, l,
                                        ViscoMaterial<M, T>{mat, g.visco, T(dt), q + aosoa(b, l, 0, W),
@@ -105,20 +105,12 @@ void CpuSolver<T>::element_pass(const T* __restrict u, T* q, double dt, int visc
     }
 }
 
-// Kernel 1, or with T4ANP its three passes (element pressures, nodal averages, forces); inside a
-// parallel region, each pass ending with the implicit barrier of its loop.
+// T4ANP passes 1 and 2: V0 p(J) per element slot into ep, then the nodes' volume averages into
+// np; inside a parallel region (two implicit barriers).
 template <class T>
-void CpuSolver<T>::forces_pass(const T* __restrict u, T* q, double dt, int visco_mode) {
-    if (!m_.anp) {
-        element_pass(u, q, dt, visco_mode);
-        return;
-    }
+void CpuSolver<T>::anp_nodal_pressures(const T* __restrict u, T* ep, T* np) const {
     const ElementData<T> el = m_.elements();
     const index_t P = m_.n_pad;
-    T* __restrict ep = elem_p_.data();
-    T* __restrict np = node_p_.data();
-    T* __restrict f = f_elem_.data();
-    T* __restrict J = J_.data();
 #pragma omp for schedule(static)
     for (index_t b = 0; b < m_.n_blocks; ++b) {
         with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
@@ -132,6 +124,22 @@ void CpuSolver<T>::forces_pass(const T* __restrict u, T* q, double dt, int visco
     for (index_t n = 0; n < m_.n_nodes; ++n)
         np[n] = nodal_pressure(n, m_.inc_offsets.data(), m_.inc_index.data(), ep,
                                m_.node_volume.data());
+}
+
+// Kernel 1, or with T4ANP its three passes (element pressures, nodal averages, forces); inside a
+// parallel region, each pass ending with the implicit barrier of its loop.
+template <class T>
+void CpuSolver<T>::forces_pass(const T* __restrict u, T* q, double dt, int visco_mode) {
+    if (!m_.anp) {
+        element_pass(u, q, dt, visco_mode);
+        return;
+    }
+    const ElementData<T> el = m_.elements();
+    const index_t P = m_.n_pad;
+    T* __restrict np = node_p_.data();
+    T* __restrict f = f_elem_.data();
+    T* __restrict J = J_.data();
+    anp_nodal_pressures(u, elem_p_.data(), np);
 #pragma omp for schedule(static)
     for (index_t b = 0; b < m_.n_blocks; ++b) {
         with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
@@ -377,18 +385,7 @@ void CpuSolver<T>::measures(const State<T>& s, T* J_out, T* W_out, T* S_out, T* 
     std::vector<T> ep(m_.anp ? J_.size() : 0), np(m_.anp ? P : 0);
     if (m_.anp) {
 #pragma omp parallel num_threads(threads_)
-        {
-#pragma omp for schedule(static)
-            for (index_t b = 0; b < m_.n_blocks; ++b)
-                with_material(m_.groups[m_.block_group[b]].material, [&](const auto& mat) {
-                    if constexpr (std::decay_t<decltype(mat)>::decoupled)
-                        for (int l = 0; l < kLanes; ++l) element_pressure(b, l, mat, el, u, P, ep.data());
-                });
-#pragma omp for schedule(static)
-            for (index_t n = 0; n < m_.n_nodes; ++n)
-                np[n] = nodal_pressure(n, m_.inc_offsets.data(), m_.inc_index.data(), ep.data(),
-                                       m_.node_volume.data());
-        }
+        anp_nodal_pressures(u, ep.data(), np.data());
     }
 #pragma omp parallel for schedule(static) num_threads(threads_)
     for (index_t b = 0; b < m_.n_blocks; ++b) {
@@ -400,7 +397,7 @@ void CpuSolver<T>::measures(const State<T>& s, T* J_out, T* W_out, T* S_out, T* 
                 using M = std::decay_t<decltype(mat)>;
                 const Group<T>& g = m_.groups[m_.block_group[b]];
                 if constexpr (M::decoupled) {
-                    if (g.visco.n_iso + g.visco.n_vol > 0) {
+                    if (g.visco.terms() > 0) {
                         T* qs = const_cast<T*>(s.q.data()) + aosoa(b, l, 0, 6 * m_.visco_terms);
                         q = element_measures(b, l, ViscoMaterial<M, T>{mat, g.visco, T(s.dt), qs,
                                                                        kLanes, 1}, el, u, P);

@@ -59,6 +59,7 @@ private:
     // Kernel 1; q: the state's viscoelastic values, visco_mode: 0 advance by dt, 1 stored, 2 relaxed.
     void element_pass(const T* u, T* q, double dt, int visco_mode);
     void forces_pass(const T* u, T* q, double dt, int visco_mode);  // or the three T4ANP passes
+    void anp_nodal_pressures(const T* u, T* ep, T* np) const;       // T4ANP passes 1 and 2
     void node_pass(const Buffers& b, const T* pattern_factors, const T* cons_factors,
                    const Integrator<T>& it, T* f_node);
     bool check(const T* u_cur, double t, double blowup, RunReport& rep) const;

@@ -29,7 +29,7 @@ Model<T>::Model(const ModelInput& in) {
                 grp.visco.alpha[k] = T(v[2 + 2 * k]);
                 grp.visco.tau[k] = T(v[3 + 2 * k]);
             }
-            visco_terms = std::max(visco_terms, grp.visco.n_iso + grp.visco.n_vol);
+            visco_terms = std::max(visco_terms, grp.visco.terms());
         }
         groups.push_back(grp);
         for (index_t b = 0; b < nb; ++b) block_group.push_back(static_cast<index_t>(g));

@@ -316,6 +316,7 @@ template <class T>
 struct Prony {
     int n_iso = 0, n_vol = 0;
     T alpha[kPronyMax] = {}, tau[kPronyMax] = {};
+    PLIANT_HD int terms() const { return n_iso + n_vol; }  // 0: elastic
 };
 
 /// Visco-hyperelastic response of a decoupled material (Taylor et al. 2009, "Modelling anisotropic
