@@ -351,6 +351,7 @@ NB_MODULE(_core, m) {
     bind_engine<double>(m, "EngineF64", "StateF64");
     m.attr("lanes") = kLanes;
     m.def("max_threads", []() { return omp_get_max_threads(); });
+    m.def("thread_limit", &pliant::thread_limit, "Most CPU threads a solver accepts.");
     m.def("cuda_compiled", []() {
 #ifdef PLIANT_WITH_CUDA
         return true;

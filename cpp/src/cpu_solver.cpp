@@ -5,14 +5,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 
 namespace pliant {
 
+int thread_limit() { return std::max(64, 4 * omp_get_num_procs()); }
+
 template <class T>
 CpuSolver<T>::CpuSolver(const Model<T>& model, int threads)
     : m_(model), threads_(threads > 0 ? threads : omp_get_max_threads()) {
+    if (threads_ > thread_limit())
+        throw std::invalid_argument("threads = " + std::to_string(threads_) + ": expected 1 to " +
+                                    std::to_string(thread_limit()));
     const std::size_t S = static_cast<std::size_t>(m_.n_blocks) * kLanes;
     f_elem_.assign(12 * S, T(0));
     J_.assign(S, T(1));

@@ -8,6 +8,11 @@
 #include "model.hpp"
 
 namespace pliant {
+// Most CPU threads a solver accepts: 4 per processor, at least 64.
+int thread_limit();
+}  // namespace pliant
+
+namespace pliant {
 
 /// Outcome of a run: status 0 ok, 1 non-finite value, 2 inverted element (J ≤ 0), 3 blow-up
 /// (|u| above the limit). `where` is the builder's element (status 2) or node (1, 3) index,
@@ -27,6 +32,8 @@ struct RunReport {
 template <class T>
 class CpuSolver {
 public:
+    // threads: 1 .. thread_limit(), or <= 0 for OpenMP's default. More threads than that cannot
+    // help and, far beyond, make OpenMP fail to create them (a crash): refused with an exception.
     CpuSolver(const Model<T>& model, int threads);
 
     /// One central-difference step from `in` to `out` (distinct states), Δt [s], damping α [1/s].

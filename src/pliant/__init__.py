@@ -9,7 +9,8 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
 
 from . import _core, contact, io, mesh
 from .errors import (BackendError, ConvergenceError, DegenerateElementError, InputError, InstabilityError,
-                     InvertedElementError, MaterialError, MeshError, PliantError, TimeStepError)
+                     InvertedElementError, MaterialError, MeshError, PliantError, PliantWarning,
+                     TimeStepError)
 from .materials import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoHookean,
                         NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic,
                         Viscoelastic)
@@ -25,5 +26,5 @@ __all__ = [
     "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "Viscoelastic",
     "LinearElastic",
     "PliantError", "InputError", "BackendError", "MaterialError", "MeshError", "InvertedElementError",
-    "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError",
+    "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError", "PliantWarning",
 ]

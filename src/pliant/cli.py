@@ -1,4 +1,9 @@
-"""Command line: ``pliant demo | bench | info``. Bad input exits with code 2 and one clear line."""
+"""Command line: ``pliant run | demo | view | mesh | bench | info``.
+
+Exit codes: 0 success; 1 the simulation failed (instability, no convergence) or ``mesh check``
+found problems; 2 bad input (one line naming the file, key or element and what was expected);
+3 an internal error (a bug: one line says where the full traceback was written); 130 interrupted.
+"""
 
 from __future__ import annotations
 
@@ -11,12 +16,14 @@ from typing import Optional
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from . import __version__, _core
 from .errors import InputError, PliantError
+from .guard import one_line
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra.")
 console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
@@ -32,7 +39,7 @@ _add_mesh_commands()
 
 
 def _fail(e: Exception, code: int) -> None:
-    err_console.print(f"[bold red]error:[/] {e}", highlight=False)
+    err_console.print(f"[bold red]error:[/] {escape(one_line(str(e)))}", highlight=False)
     raise typer.Exit(code)
 
 
@@ -62,7 +69,7 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
     try:
         sc = load_any(scene, ignore)
         for w in sc.warnings:
-            err_console.print(f"[yellow]warning:[/] {w}", highlight=False)
+            err_console.print(f"[yellow]warning:[/] {escape(one_line(w))}", highlight=False)
         summary = run_scene(sc, out, progress=progress, allow_unstable=allow_unstable,
                             threads=threads, echo=console.print, backend=backend)
     except InputError as e:
@@ -74,8 +81,9 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
                           f"{summary['frames']} frames kept in {out}")
         raise typer.Exit(130)
     console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.4g} s in "
-                  f"{summary['wall_time']:.2f} s; results in [bold]{out}[/] (result.pvd for "
-                  "ParaView, summary.json, result.png)")
+                  f"{summary['wall_time']:.2f} s; results in [bold]{escape(str(out))}[/] (result.pvd for "
+                  f"ParaView, {', '.join(f for f in summary['files'] if f != 'result.pvd')})",
+                  highlight=False)
 
 
 @app.command()
@@ -94,7 +102,7 @@ def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Outp
     except PliantError as e:
         _fail(e, 1)
     console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.3g} s in "
-                  f"{summary['wall_time']:.1f} s. Results in [bold]{out}[/]: result.pvd (open it "
+                  f"{summary['wall_time']:.1f} s. Results in [bold]{escape(str(out))}[/]: result.pvd (open it "
                   "in ParaView), result.png, summary.json")
 
 
@@ -208,5 +216,9 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
         console.print(f"  cuda: compiled, no device present ({c['reason']})")
 
 
-def main():  # pragma: no cover
-    app()
+def main(argv: list[str] | None = None) -> None:
+    """The ``pliant`` program: runs the app and turns every outcome into one line and an exit code
+    (module docstring); never a traceback on the terminal."""
+    from .guard import run_guarded
+
+    sys.exit(run_guarded(app, argv, err_console))

@@ -10,12 +10,14 @@ from typing import Optional
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from .errors import InputError, PliantError
+from .guard import one_line
 
 mesh_app = typer.Typer(no_args_is_help=True, add_completion=False,
                        help="Mesh pipeline: simplify, subdivide, repair, check, tetrahedralize, quality.")
-console = Console(soft_wrap=True)
+console = Console(soft_wrap=True, markup=False, highlight=False)
 err = Console(stderr=True, soft_wrap=True)
 
 
@@ -27,10 +29,10 @@ def _guard(fn):
         try:
             return fn(*a, **k)
         except InputError as e:
-            err.print(f"[bold red]error:[/] {e}", highlight=False)
+            err.print(f"[bold red]error:[/] {escape(one_line(str(e)))}", highlight=False)
             raise typer.Exit(2)
         except PliantError as e:
-            err.print(f"[bold red]error:[/] {e}", highlight=False)
+            err.print(f"[bold red]error:[/] {escape(one_line(str(e)))}", highlight=False)
             raise typer.Exit(1)
     return wrapper
 
@@ -41,8 +43,10 @@ def simplify_cmd(inp: Path, out: Path,
                  target_faces: Optional[int] = typer.Option(None, "--target-faces", help="Faces to keep."),
                  ratio: Optional[float] = typer.Option(None, "--ratio", help="Fraction of faces to keep.")):
     """QEM simplification (Garland–Heckbert, via fast-simplification)."""
+    from .io import check_output_file
     from .mesh import read_surface, simplify, write_surface
 
+    check_output_file(out, "surface mesh", mesh_format=True)
     V, F = read_surface(inp)
     t = time.perf_counter()
     Vs, Fs = simplify(V, F, target_faces=target_faces, ratio=ratio)
@@ -54,9 +58,13 @@ def simplify_cmd(inp: Path, out: Path,
 @mesh_app.command("subdivide")
 @_guard
 def subdivide_cmd(inp: Path, out: Path, levels: int = typer.Option(1, "--levels", help="Levels.")):
-    """Loop subdivision (with Loop's boundary rules, via trimesh)."""
+    """Loop subdivision (with Loop's boundary rules)."""
+    from .io import check_output_file
     from .mesh import read_surface, subdivide_loop, write_surface
 
+    check_output_file(out, "surface mesh", mesh_format=True)
+    if not 0 <= levels <= 6:
+        raise InputError(f"--levels {levels}: expected 0 to 6 (each level multiplies the faces by 4)")
     V, F = read_surface(inp)
     Vs, Fs = subdivide_loop(V, F, levels)
     write_surface(out, Vs, Fs)
@@ -83,12 +91,17 @@ def check_cmd(inp: Path, as_json: bool = typer.Option(False, "--json")):
 @mesh_app.command("repair")
 @_guard
 def repair_cmd(inp: Path, out: Path,
-               keep_largest: bool = typer.Option(False, help="Keep only the largest body.")):
+               keep_largest: bool = typer.Option(False, help="Keep only the largest body."),
+               bodies: str = typer.Option("all", help="Several closed bodies: all (keep each, "
+                                                      "closed and outward), largest, or one "
+                                                      "(refuse).")):
     """Fill holes, fix winding, drop fragments; refuse with the reason where it cannot."""
+    from .io import check_output_file
     from .mesh import check_surface, read_surface, repair_surface, write_surface
 
+    check_output_file(out, "surface mesh", mesh_format=True)
     V, F = read_surface(inp)
-    Vr, Fr, actions = repair_surface(V, F, keep_largest=keep_largest)
+    Vr, Fr, actions = repair_surface(V, F, keep_largest=keep_largest, bodies=bodies)
     write_surface(out, Vr, Fr)
     rep = check_surface(Vr, Fr)
     console.print(f"{out}: " + ("; ".join(actions) or "nothing to repair"))
@@ -105,20 +118,29 @@ def tetrahedralize_cmd(inp: Path, out: Path,
                        target_tets: int = typer.Option(20000, help="Tets wanted when no size is given."),
                        quality: Optional[float] = typer.Option(
                            None, help="Refuse if the worst radius–edge ratio exceeds this."),
-                       repair: bool = typer.Option(True, help="Repair the surface first.")):
+                       repair: bool = typer.Option(True, help="Repair the surface first."),
+                       bodies: str = typer.Option(
+                           "union", help="Several closed bodies: union (one mesh of their union, "
+                                         "overlaps merged), separate (a mesh per body), largest, "
+                                         "or one (refuse).")):
     """Surface → positively oriented tet mesh (.vtu) with surface nodes and faces marked."""
     import meshio
 
+    from .io import atomic_write, check_output_file
     from .mesh import read_surface, surface_to_tets, tet_quality
-    from .view.png import boundary_faces
+    from .mesh.topology import boundary_faces
 
+    check_output_file(out, "volume mesh", mesh_format=True)
+    for name, v in (("--edge-length", edge_length), ("--max-volume", max_volume)):
+        if v is not None and not (np.isfinite(v) and v > 0):
+            raise InputError(f"{name} {v}: expected a finite value > 0 (SI units)")
+    if target_tets < 1:
+        raise InputError(f"--target-tets {target_tets}: expected >= 1")
     V, F = read_surface(inp)
     if max_volume is not None:
-        if not max_volume > 0:
-            raise InputError("--max-volume must be > 0 [m^3]")
         edge_length = (6 * np.sqrt(2) * max_volume) ** (1 / 3)  # regular tet of that volume
     X, T, info = surface_to_tets(V, F, edge_length=edge_length, target_tets=target_tets,
-                                 repair=repair, log=console.print)
+                                 repair=repair, bodies=bodies, log=console.print)
     q = tet_quality(X, T)
     if quality is not None and q["radius_edge"].max() > quality:
         raise PliantError(f"worst radius–edge ratio {q['radius_edge'].max():.2f} exceeds --quality "
@@ -126,12 +148,10 @@ def tetrahedralize_cmd(inp: Path, out: Path,
     faces, _ = boundary_faces(T)
     surf = np.zeros(len(X), np.int8)
     surf[np.unique(faces)] = 1
-    tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
-    meshio.write(tmp, meshio.Mesh(X, [("tetra", T), ("triangle", faces)],
-                                  point_data={"surface_node": surf},
-                                  cell_data={"surface_face": [np.zeros(len(T), np.int8),
-                                                              np.ones(len(faces), np.int8)]}))
-    tmp.replace(out)
+    mesh = meshio.Mesh(X, [("tetra", T), ("triangle", faces)], point_data={"surface_node": surf},
+                       cell_data={"surface_face": [np.zeros(len(T), np.int8),
+                                                   np.ones(len(faces), np.int8)]})
+    atomic_write(out, lambda tmp: meshio.write(tmp, mesh), "volume mesh")
     console.print(f"{out}: {len(X):,} nodes, {len(T):,} tets, {len(faces):,} surface faces")
 
 
@@ -144,11 +164,17 @@ def quality_cmd(inp: Path,
                 density: float = typer.Option(1000.0, help="Density for Δt [kg/m³]."),
                 as_json: bool = typer.Option(False, "--json")):
     """Per-tet radius–edge ratio, dihedral angles, volume and critical time step: summary + PNG."""
+    from .io import check_output_file
     from .io.mesh import read_volume_mesh
     from .materials import LinearElastic
     from .mesh import critical_time_steps, quality_summary, tet_quality
     from .mesh.quality import quality_histogram
 
+    if png:
+        check_output_file(png, "picture")
+    for name, v in (("--E", E), ("--density", density)):
+        if not (np.isfinite(v) and v > 0):
+            raise InputError(f"{name} {v}: expected a finite value > 0 (SI units)")
     X, T, _ = read_volume_mesh(inp)
     q = tet_quality(X, T)
     dt = critical_time_steps(X, T, LinearElastic(E=E, nu=nu), density)
@@ -158,11 +184,18 @@ def quality_cmd(inp: Path,
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return
-    console.print(f"{inp}: {s['tets']:,} tets, {s['inverted']} inverted, "
-                  f"{s['slivers_min_dihedral_below_5deg']} slivers (min dihedral < 5°)")
+    console.print(f"{inp}: {s['tets']:,} tets, {s['inverted']} inverted, {s['degenerate']} "
+                  f"degenerate (zero volume), {s['slivers_min_dihedral_below_5deg']} slivers (min "
+                  "dihedral < 5°)")
     for k in ("radius_edge", "min_dihedral", "max_dihedral", "volume"):
         v = s[k]
         console.print(f"  {k:13s} min {v['min']:.4g}  median {v['median']:.4g}  max {v['max']:.4g}")
     d = s["dt_critical"]
+    if d is None:
+        console.print("  critical Δt: none: no element has a positive volume")
+        return
     console.print(f"  critical Δt: {d['min']:.3g} s (element {d['element']}), median {d['median']:.3g}"
                   f" s: the worst element costs {d['cost_factor']:.1f}× the steps")
+    if s["inverted"] or s["degenerate"]:
+        console.print(f"  (over the {s['tets'] - s['inverted'] - s['degenerate']:,} valid elements: "
+                      "inverted and degenerate elements have no stable step and must be fixed)")

@@ -63,3 +63,8 @@ class InstabilityError(PliantError):
 
 class ConvergenceError(PliantError):
     """A quasi-static solve did not reach its residual tolerance."""
+
+
+class PliantWarning(UserWarning):
+    """A warning about the user's input that does not stop the run (an orphan node, an element that
+    limits the time step far below the others...). The command line prints it as one line."""

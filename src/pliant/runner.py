@@ -11,10 +11,11 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .errors import InstabilityError
-from .io import ResultWriter, atomic_write_text
+from .errors import InputError, InstabilityError
+from .io import ResultWriter, atomic_write_text, check_output_dir
 from .scene import Scene
 from .tled import Solver
+from .tled.solver import MAX_STEPS
 
 
 def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
@@ -33,13 +34,18 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
     from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
                                TimeRemainingColumn)
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_output_dir(out_dir)  # checked first, created only once the model is valid
     t_build = time.perf_counter()
-    model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads,
+    model = scene.builder.finalize(scene.dtype, threads=scene.threads if threads is None else threads,
                                    backend=backend or scene.backend)
     solver = Solver(model, dt=scene.dt, safety=scene.safety, allow_unstable=allow_unstable,
                     check_every=scene.check_every)
+    total = math.ceil(scene.duration / solver.dt - 1e-9)
+    if total > MAX_STEPS:
+        raise InputError(f"{scene.source}: duration {scene.duration:g} s takes {total:.3g} steps of "
+                         f"{solver.dt:.3g} s; expected at most {MAX_STEPS:.0e} steps (shorten the "
+                         "duration, or use a quasi-static solve)")
+    total = max(1, total)
     state = model.state()
     embedding = None
     if scene.meta.get("embed_surface"):
@@ -50,13 +56,13 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
     writer = ResultWriter(out, model, fields=scene.fields, embedding=embedding)
     writer.write(state)
     build_s = time.perf_counter() - t_build
-    total = max(1, math.ceil(scene.duration / solver.dt - 1e-9))
     summary = {"pliant": __version__, "scene": scene.source, "title": scene.title,
                "mode": "static" if scene.static else "dynamic", "steps": 0, "dt": solver.dt,
                "dt_critical": model.dt_critical, "simulated_time": 0.0, "wall_time": 0.0,
                "setup_time": build_s, "backend": model.backend, "threads": model.threads,
                "dtype": scene.dtype, "elements": model.n_elements, "nodes": model.n_nodes,
-               "interrupted": False, "error": None, "warnings": list(scene.warnings)}
+               "interrupted": False, "error": None, "warnings": list(scene.warnings),
+               "files": ["result.pvd", "summary.json"]}
     t0 = time.perf_counter()
     try:
         if scene.static:
@@ -106,7 +112,8 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
                 from .view import render_png
 
                 render_png(out / "result.png", state.positions, model.tets, res["von_mises"],
-                           title=f"{scene.title}: t = {state.time:.4g} s")
+                           title=f"{scene.title[:200]}: t = {state.time:.4g} s")
+                summary["files"].append("result.png")
         if model.tools:
             summary["tools"] = []
             hist = {}
@@ -123,5 +130,6 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
                     hist[tool.name] = {"time": H.time.tolist(), "force": H.force.tolist(),
                                        "torque": H.torque.tolist()}
             atomic_write_text(out / "tools.json", json.dumps(hist))
+            summary["files"].append("tools.json")
         atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
     return summary

@@ -85,7 +85,13 @@ class RigidTool:
         p = np.asarray(position, float).ravel()
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise InputError(f"{self.name}: position {position!r}; expected 3 finite numbers [m]")
-        key = np.concatenate([[float(t)], p, _quat(rotation)])
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise InputError(f"{self.name}: keyframe time {t!r}; expected a time [s]") from None
+        if not math.isfinite(t):
+            raise InputError(f"{self.name}: keyframe time {t}; expected a finite time [s]")
+        key = np.concatenate([[t], p, _quat(rotation)])
         if getattr(self, "_fixed", False):  # the first explicit keyframe replaces the initial pose
             self.keys, self._fixed = [], False
         if self.keys and t <= self.keys[-1][0]:

@@ -7,20 +7,14 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
+from .files import read_meshio
 
 
 def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """Read a tetrahedral mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
     {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds'."""
-    import meshio
-
     path = Path(path)
-    if not path.is_file():
-        raise MeshError(f"{path}: no such file")
-    try:
-        mesh = meshio.read(path)
-    except Exception as e:  # meshio raises many types for unreadable input
-        raise MeshError(f"{path}: cannot read as a volume mesh ({type(e).__name__}: {e})") from None
+    mesh = read_meshio(path, "volume mesh")
     blocks = [(i, c) for i, c in enumerate(mesh.cells) if c.type == "tetra"]
     if not blocks:
         kinds = sorted({c.type for c in mesh.cells}) or ["none"]

@@ -14,6 +14,8 @@ hold; tledConstraint::ComputeAmplitude).
 
 from __future__ import annotations
 
+import contextlib
+import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -47,11 +49,53 @@ class NiftySimError(SceneError):
 
 
 def _numbers(el, path, what, dtype=float):
+    """The whitespace-separated numbers of an element: finite floats, or integers."""
+    if el is None:
+        raise NiftySimError(f"<{what}> is missing", str(path), what)
+    words = (el.text or "").split()
     try:
-        return np.array((el.text or "").split(), dtype=dtype)
-    except ValueError:
-        raise NiftySimError(f"<{what}>: expected numbers", str(path), what,
-                            getattr(el, "sourceline", None)) from None
+        a = np.array(words, dtype=np.float64 if dtype is float else dtype)
+    except (ValueError, OverflowError):
+        bad = next((w for w in words if not _parses(w, dtype)), "?")
+        raise NiftySimError(f"<{what}>: {bad[:40]!r} is not {'an integer' if dtype is not float else 'a number'}",
+                            str(path), what) from None
+    if dtype is float and not np.all(np.isfinite(a)):
+        i = int(np.argmax(~np.isfinite(a)))
+        raise NiftySimError(f"<{what}>: value {i} is {a[i]}; expected finite numbers", str(path), what)
+    return a
+
+
+def _parses(word: str, dtype) -> bool:
+    try:
+        np.array([word], dtype=np.float64 if dtype is float else dtype)
+        return True
+    except (ValueError, OverflowError):
+        return False
+
+
+def _scalar(text, f: str, key: str, kind=float, low: float | None = None, strict: bool = True):
+    """One number from an element's text or an attribute, checked finite and above ``low``
+    (strictly, or >= with ``strict=False``); NiftySimError naming the file and key otherwise."""
+    try:
+        v = kind(str(text).strip())
+    except (TypeError, ValueError, OverflowError):
+        raise NiftySimError(f"<{key}> = {str(text)[:40]!r}: expected "
+                            f"{'an integer' if kind is int else 'a number'}", f, key) from None
+    if not math.isfinite(v) or (low is not None and (v <= low if strict else v < low)):
+        bound = "" if low is None else f" {'>' if strict else '>='} {low:g}"
+        raise NiftySimError(f"<{key}> = {v}: expected a finite value{bound}", f, key)
+    return v
+
+
+@contextlib.contextmanager
+def _named(f: str, key: str):
+    """Builder errors inside become NiftySimErrors naming the file and the XML element."""
+    try:
+        yield
+    except SceneError:
+        raise
+    except InputError as e:
+        raise NiftySimError(str(e), f, key) from None
 
 
 def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
@@ -88,7 +132,8 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
     if X.size % 3:
         raise NiftySimError(f"<Nodes>: {X.size} coordinates, not a multiple of 3", f, "Nodes")
     X = X.reshape(-1, 3)
-    if "NumNodes" in nodes_el.attrib and int(nodes_el.get("NumNodes")) != len(X):
+    if "NumNodes" in nodes_el.attrib and \
+            _scalar(nodes_el.get("NumNodes"), f, "Nodes NumNodes", int, 0) != len(X):
         raise NiftySimError(f"<Nodes NumNodes={nodes_el.get('NumNodes')}> but {len(X)} nodes "
                             "listed", f, "Nodes")
     etype = elems_el.get("Type")
@@ -100,6 +145,10 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         raise NiftySimError(f"<Elements>: {T.size} indices, not a multiple of 4", f, "Elements")
     T = T.reshape(-1, 4)
     M = len(T)
+    if "NumEls" in elems_el.attrib and _scalar(elems_el.get("NumEls"), f, "Elements NumEls", int,
+                                               0) != M:
+        raise NiftySimError(f"<Elements NumEls={elems_el.get('NumEls')}> but {M} elements listed",
+                            f, "Elements")
 
     sp = root.find("SystemParams")
     if sp is None:
@@ -113,18 +162,19 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
     for req in ("TimeStep", "TotalTime", "DampingCoeff"):
         if req not in params:
             raise NiftySimError(f"<SystemParams> lacks <{req}>", f, f"SystemParams/{req}")
-    try:
-        dt, total, damping = (float(params[k]) for k in ("TimeStep", "TotalTime", "DampingCoeff"))
-        default_rho = float(params["Density"]) if "Density" in params else None
-    except ValueError:
-        raise NiftySimError("<SystemParams>: non-numeric value", f, "SystemParams") from None
+    dt = _scalar(params["TimeStep"], f, "SystemParams/TimeStep", float, 0.0)
+    total = _scalar(params["TotalTime"], f, "SystemParams/TotalTime", float, 0.0)
+    damping = _scalar(params["DampingCoeff"], f, "SystemParams/DampingCoeff", float, 0.0, False)
+    default_rho = _scalar(params["Density"], f, "SystemParams/Density", float, 0.0) \
+        if "Density" in params else None
     if params.get("DoDeformableCollision", "0").strip() not in ("0", ""):
         unsupported("DoDeformableCollision", "contact between deformable bodies is not yet in pliant")
     if "HGKappa" in params:
         warnings.append(f"{f}: HGKappa ignored (hourglass control applies to H8 elements only)")
 
     b = ModelBuilder()
-    b.add_mesh(X, T, source=f)
+    with _named(f, "Elements"):
+        b.add_mesh(X, T, source=f)
     b.damping = damping
     b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
     for k, es in enumerate(root.findall("ElementSet")):
@@ -154,7 +204,8 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         ep = m.find("ElasticParams")
         vals = _numbers(ep, f, f"{key}/ElasticParams") if ep is not None else np.zeros(0)
         rho_el = m.find("Density")
-        rho = float(rho_el.text) if rho_el is not None else default_rho
+        rho = _scalar(rho_el.text, f, f"{key}/Material/Density", float, 0.0) \
+            if rho_el is not None else default_rho
         if rho is None:
             raise NiftySimError("no density: give <Density> in the material or SystemParams", f, key)
         try:
@@ -184,83 +235,92 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
               "RAMPHOLD": lambda: Ramp(0.1 * total)}  # NiftySim: ramp over 10 % of T, then hold
     for k, c in enumerate(root.findall("Constraint")):
         key = f"Constraint[{k}]"
-        ctype = c.get("Type")
-        if ctype == "Pressure":
-            _pressure(c, b, T, shapes, f, key, unsupported)
-            continue
-        if c.get("SpecType", "NODES") != "NODES":
-            unsupported(f"Constraint SpecType={c.get('SpecType')}", "only node lists")
-            continue
-        if ctype not in ("Fix", "Disp", "Force", "Gravity"):
-            unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity and "
-                        "Pressure")
-            continue
-        dof = c.get("DOF", "all")
-        dofs = "xyz" if dof == "all" else {"0": "x", "1": "y", "2": "z"}.get(dof)
-        if dofs is None:
-            raise NiftySimError(f"DOF={dof!r}: expected 0, 1, 2 or all", f, key)
-        curve = Constant()
-        if ctype != "Fix":
-            shape = c.get("LoadShape")
-            if shape not in shapes:
-                unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and "
-                            "RAMPHOLD")
-                continue
-            curve = shapes[shape]()
-        if ctype == "Gravity":
-            try:
-                g = float(c.find("AccelerationMagnitude").text)
-                d = _numbers(c.find("AccelerationDirection"), f, key)
-            except (AttributeError, ValueError, TypeError):
-                raise NiftySimError("Gravity needs <AccelerationMagnitude> and "
-                                    "<AccelerationDirection>", f, key) from None
-            b.set_gravity(g * d / np.linalg.norm(d), curve)
-            continue
-        nodes_el = c.find("Nodes")
-        if nodes_el is None:
-            raise NiftySimError("<Constraint> without <Nodes>", f, key)
-        ids = _numbers(nodes_el, f, f"{key}/Nodes", np.int64)
-        if ctype == "Fix":
-            b.fix(ids, dofs)
-            continue
-        mag = c.find("Magnitudes")
-        if mag is None:
-            raise NiftySimError(f"{ctype} needs <Magnitudes>", f, key)
-        mtype = mag.get("Type", "UNIFORM")
-        vals = _numbers(mag, f, f"{key}/Magnitudes")
-        if mtype == "UNIFORM" and vals.size == 1:
-            v = np.full(ids.size, vals[0])
-        elif mtype == "DIFFORM" and vals.size == ids.size:
-            v = vals
-        elif mtype in ("UNIFORM", "DIFFORM"):
-            raise NiftySimError(f"Magnitudes {mtype}: {vals.size} values for {ids.size} nodes", f, key)
-        else:
-            unsupported(f"Magnitudes Type={mtype}", "pliant imports UNIFORM and DIFFORM")
-            continue
-        ndof = len(dofs)
-        if ctype == "Disp":
-            b.prescribe(ids, np.repeat(v[:, None], ndof, axis=1), dofs, curve)
-        else:
-            force = np.zeros((ids.size, 3))
-            for d in dofs:
-                force[:, "xyz".index(d)] = v
-            b.add_force(ids, force, curve)
+        with _named(f, key):
+            _constraint(c, b, T, shapes, f, key, unsupported)
 
-    _rigid_contacts(root, b, total, f, unsupported, warnings)
-    _rigid_surfaces(root, b, path, f, unsupported)
+    with _named(f, "ContactPlate/ContactCylinder/ContactUSProbe"):
+        _rigid_contacts(root, b, total, f, unsupported, warnings)
+    with _named(f, "ContactSurface"):
+        _rigid_surfaces(root, b, path, f, unsupported)
 
     out_every = None
     for o in root.findall("Output"):
-        try:
-            out_every = int(o.get("Freq"))
-        except (TypeError, ValueError):
-            raise NiftySimError("<Output Freq=...>: expected an integer", f, "Output") from None
+        out_every = _scalar(o.get("Freq"), f, "Output Freq", int, 1, False)
     steps = int(round(total / dt))
     scene = Scene(f, b, duration=total, dt=dt, dtype="float32", output_every=out_every,
                   frames=20, title=path.stem, warnings=warnings)
     scene.meta["mesh_source"] = f
     scene.meta["niftysim_steps"] = steps
     return scene
+
+
+def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupported) -> None:
+    """One <Constraint>: Pressure, Fix, Disp, Force or Gravity."""
+    ctype = c.get("Type")
+    if ctype == "Pressure":
+        _pressure(c, b, T, shapes, f, key, unsupported)
+        return
+    if c.get("SpecType", "NODES") != "NODES":
+        unsupported(f"Constraint SpecType={c.get('SpecType')}", "only node lists")
+        return
+    if ctype not in ("Fix", "Disp", "Force", "Gravity"):
+        unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity and "
+                    "Pressure")
+        return
+    dof = c.get("DOF", "all")
+    dofs = "xyz" if dof == "all" else {"0": "x", "1": "y", "2": "z"}.get(dof)
+    if dofs is None:
+        raise NiftySimError(f"DOF={dof!r}: expected 0, 1, 2 or all", f, key)
+    curve = Constant()
+    if ctype != "Fix":
+        shape = c.get("LoadShape")
+        if shape not in shapes:
+            unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and "
+                        "RAMPHOLD")
+            return
+        curve = shapes[shape]()
+    if ctype == "Gravity":
+        mag_el, dir_el = c.find("AccelerationMagnitude"), c.find("AccelerationDirection")
+        if mag_el is None or dir_el is None:
+            raise NiftySimError("Gravity needs <AccelerationMagnitude> and "
+                                "<AccelerationDirection>", f, key)
+        g = _scalar(mag_el.text, f, f"{key}/AccelerationMagnitude")
+        d = _numbers(dir_el, f, f"{key}/AccelerationDirection")
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.linalg.norm(d) > 0:
+            raise NiftySimError(f"<AccelerationDirection> {d.tolist()}: expected 3 finite numbers, "
+                                "not all zero", f, key)
+        b.set_gravity(g * d / np.linalg.norm(d), curve)
+        return
+    nodes_el = c.find("Nodes")
+    if nodes_el is None:
+        raise NiftySimError("<Constraint> without <Nodes>", f, key)
+    ids = _numbers(nodes_el, f, f"{key}/Nodes", np.int64)
+    if ctype == "Fix":
+        b.fix(ids, dofs)
+        return
+    mag = c.find("Magnitudes")
+    if mag is None:
+        raise NiftySimError(f"{ctype} needs <Magnitudes>", f, key)
+    mtype = mag.get("Type", "UNIFORM")
+    vals = _numbers(mag, f, f"{key}/Magnitudes")
+    if mtype == "UNIFORM" and vals.size == 1:
+        v = np.full(ids.size, vals[0])
+    elif mtype == "DIFFORM" and vals.size == ids.size:
+        v = vals
+    elif mtype in ("UNIFORM", "DIFFORM"):
+        raise NiftySimError(f"Magnitudes {mtype}: {vals.size} values for {ids.size} nodes", f, key)
+    else:
+        unsupported(f"Magnitudes Type={mtype}", "pliant imports UNIFORM and DIFFORM")
+        return
+    ndof = len(dofs)
+    if ctype == "Disp":
+        b.prescribe(ids, np.repeat(v[:, None], ndof, axis=1), dofs, curve)
+    else:
+        force = np.zeros((ids.size, 3))
+        for d in dofs:
+            force[:, "xyz".index(d)] = v
+        b.add_force(ids, force, curve)
+
 
 
 def _vector(el, tag, f, key, n=3):

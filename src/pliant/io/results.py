@@ -3,25 +3,9 @@ temporary name and renamed into place, so a crash or Ctrl-C never leaves a trunc
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
-import numpy as np
-
-
-def atomic_write_text(path, text: str) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+from .files import atomic_write, atomic_write_text, deferred_interrupt, make_output_dir
 
 
 FIELDS = ("displacement", "velocity", "von_mises", "J", "strain_energy_density", "cauchy",
@@ -37,8 +21,7 @@ class ResultWriter:
     frame."""
 
     def __init__(self, out_dir, model, fields=FIELDS[:5], embedding=None):
-        self.dir = Path(out_dir)
-        self.dir.mkdir(parents=True, exist_ok=True)
+        self.dir = make_output_dir(out_dir)
         self.model = model
         unknown = set(fields) - set(FIELDS)
         if unknown:
@@ -69,19 +52,19 @@ class ResultWriter:
         mesh = meshio.Mesh(self.model.reference_positions, [("tetra", self.model.tets)],
                            point_data=point,
                            cell_data={k: [v] for k, v in cell_src.items() if k in f})
-        if self.embedding is not None:
-            emb = self.embedding
-            sname = f"surface_{len(self.frames):05d}.vtu"
-            Vs = emb.positions(self.model.tets, state.positions)
-            tmp = self.dir / f".{sname}.tmp.vtu"
-            meshio.write(tmp, meshio.Mesh(Vs, [("triangle", emb.faces)]), binary=True)
-            os.replace(tmp, self.dir / sname)
-        final = self.dir / name
-        tmp = self.dir / f".{name}.tmp.vtu"
-        meshio.write(tmp, mesh, binary=True)
-        os.replace(tmp, final)
-        self.frames.append((state.time, name))
-        self._pvd("result.pvd", self.frames)
-        if self.embedding is not None:
-            self._pvd("surface.pvd", [(t, n.replace("frame_", "surface_")) for t, n in self.frames])
+        # Ctrl-C is held from the first file of the frame to the last index, so that result.pvd
+        # always lists exactly the frames on disk.
+        with deferred_interrupt():
+            if self.embedding is not None:
+                emb = self.embedding
+                Vs = emb.positions(self.model.tets, state.positions)
+                atomic_write(self.dir / name.replace("frame_", "surface_"), lambda tmp: meshio.write(
+                    tmp, meshio.Mesh(Vs, [("triangle", emb.faces)]), binary=True), "surface frame")
+            final = atomic_write(self.dir / name, lambda tmp: meshio.write(tmp, mesh, binary=True),
+                                 "result frame")
+            self.frames.append((state.time, name))
+            self._pvd("result.pvd", self.frames)
+            if self.embedding is not None:
+                self._pvd("surface.pvd", [(t, n.replace("frame_", "surface_"))
+                                          for t, n in self.frames])
         return final

@@ -9,8 +9,10 @@ import time
 import numpy as np
 
 from ..errors import MeshError
-from .repair import repair_surface, simplify
+from .repair import enclosed_volume_problem, repair_surface, simplify
 from .tetra import tetrahedralize
+
+BODIES = ("union", "separate", "largest", "one")
 
 
 def default_edge_length(V: np.ndarray, F: np.ndarray, target_tets: int = 20000) -> float:
@@ -30,7 +32,7 @@ def default_edge_length(V: np.ndarray, F: np.ndarray, target_tets: int = 20000) 
 def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = None,
                     target_tets: int = 10000, target_faces: int | None = None,
                     epsilon: float | None = None, repair: bool = True, keep_largest: bool = False,
-                    log=None) -> tuple[np.ndarray, np.ndarray, dict]:
+                    bodies: str = "union", log=None) -> tuple[np.ndarray, np.ndarray, dict]:
     """Tet mesh [m] of a triangle surface. Steps (each timed in the returned info): repair (holes,
     winding, fragments), QEM simplification to ``target_faces`` (default: what the tet size can
     resolve, area / (√3/4 · edge²), i.e. surface triangles of the tet edge), fTetWild with envelope
@@ -38,13 +40,37 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
     fill the surface's volume (within 10 %); on failure fTetWild runs again with half the envelope
     (a large envelope can swallow thin features), and a second failure is an error.
     ``target_tets`` is the count of regular tets the default edge aims at: fTetWild's tets, less
-    regular, come out about 1.5–4 times as many. Returns nodes, tets and an info dict."""
-    info: dict = {"input_vertices": int(len(V)), "input_faces": int(len(F)), "seconds": {}}
+    regular, come out about 1.5–4 times as many. Returns nodes, tets and an info dict.
+
+    ``bodies``, for a surface of several closed bodies (they may overlap, as a teapot's body, lid,
+    handle and spout do): "union" (default) meshes the union of the bodies, overlaps merged, as one
+    conforming tet mesh (fTetWild's winding-number filter); "separate" meshes each body on its own
+    (the meshes share no nodes, and overlap where the bodies do); "largest" keeps the largest body;
+    "one" refuses several bodies. ``info["bodies"]`` says how many there were."""
+    if bodies not in BODIES:
+        raise MeshError(f"bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
+    if keep_largest:
+        bodies = "largest"
+    info: dict = {"input_vertices": int(len(V)), "input_faces": int(len(F)), "seconds": {},
+                  "bodies_mode": bodies}
     t = time.perf_counter()
+    flat = enclosed_volume_problem(V, F, closed=False)
+    if flat:
+        raise MeshError(f"the surface encloses no volume: {flat}; expected a closed surface "
+                        "around a solid")
     if repair:
-        V, F, actions = repair_surface(V, F, keep_largest=keep_largest)
+        V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(
+            bodies, bodies))
         info["repair"] = actions
     info["seconds"]["repair"] = time.perf_counter() - t
+    why = enclosed_volume_problem(V, F)
+    if why:
+        raise MeshError(f"the surface encloses no volume: {why}; expected a closed surface "
+                        "around a solid")
+    parts = _bodies(V, F)
+    info["bodies"] = len(parts)
+    if bodies == "separate" and len(parts) > 1:
+        return _separate(parts, edge_length, target_tets, epsilon, info, log)
     el = float(edge_length) if edge_length else default_edge_length(V, F, target_tets)
     if not el > 0:
         raise MeshError(f"edge length {el!r}: expected > 0 [m]")
@@ -64,26 +90,61 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
 
     surf = trimesh.Trimesh(V, F, process=False)
     ref_vol = abs(float(surf.volume)) if surf.is_watertight else None
+    # Overlapping bodies: the union's volume lies between the largest body's and the sum.
+    low = max(abs(float(p.volume)) for p in parts) if len(parts) > 1 else ref_vol
     eps = 2e-3 if epsilon is None else float(epsilon)
     for attempt in range(2):
-        X, T = tetrahedralize(V, F, edge_length=el, epsilon=eps)
+        X, T = tetrahedralize(V, F, edge_length=el, epsilon=eps, keep_all=len(parts) > 1)
         e = X[T]
         vol = float(np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]),
                               e[:, 3] - e[:, 0]).sum() / 6)
         ratio = vol / ref_vol if ref_vol else 1.0
         info["volume_ratio"] = ratio
-        if 0.9 <= ratio <= 1.1:
+        if ref_vol is None or 0.9 * low <= vol <= 1.1 * ref_vol:
             break
         if attempt == 1:
             raise MeshError(f"tetrahedralize: the tets fill {100 * ratio:.0f} % of the surface's "
                             f"volume (envelope {eps:g}); repair the surface or give a smaller "
                             "edge length")
+    if len(parts) > 1:
+        info["union_volume"] = vol
+        info["bodies_volume"] = ref_vol
         eps /= 2
     info["epsilon"] = eps
     info["seconds"]["tetrahedralize"] = time.perf_counter() - t
     info["nodes"], info["tets"] = int(len(X)), int(len(T))
     if log:
+        if len(parts) > 1:
+            log(f"{len(parts)} bodies meshed as their union: {vol:.4g} m^3 of tets for "
+                f"{ref_vol:.4g} m^3 of bodies ({ref_vol - vol:.3g} m^3 of overlap merged)")
         log(f"repair {info['seconds']['repair']:.1f} s, simplify to {len(F):,} faces "
             f"{info['seconds']['simplify']:.1f} s, tetrahedralize {info['seconds']['tetrahedralize']:.1f} s:"
             f" {len(X):,} nodes, {len(T):,} tets")
+    return X, T, info
+
+
+def _bodies(V: np.ndarray, F: np.ndarray) -> list:
+    """The connected bodies of a surface, as trimesh meshes."""
+    import trimesh
+
+    return trimesh.Trimesh(V, F, process=False).split(only_watertight=False)
+
+
+def _separate(parts, edge_length, target_tets, epsilon, info, log):
+    """Each body tetrahedralized on its own (one edge length for all), concatenated."""
+    V = np.concatenate([p.vertices for p in parts])
+    offs = np.cumsum([0] + [len(p.vertices) for p in parts])
+    F = np.concatenate([np.asarray(p.faces) + o for p, o in zip(parts, offs)])
+    el = float(edge_length) if edge_length else default_edge_length(V, F, target_tets)
+    Xs, Ts, n = [], [], 0
+    for p in parts:
+        X, T, _ = surface_to_tets(np.asarray(p.vertices), np.asarray(p.faces), edge_length=el,
+                                  epsilon=epsilon, repair=False, bodies="one")
+        Xs.append(X)
+        Ts.append(T + n)
+        n += len(X)
+    X, T = np.concatenate(Xs), np.concatenate(Ts)
+    info.update(edge_length=el, nodes=int(len(X)), tets=int(len(T)))
+    if log:
+        log(f"{len(parts)} bodies meshed separately: {len(X):,} nodes, {len(T):,} tets")
     return X, T, info

@@ -65,17 +65,29 @@ def graded_coordinates(h: float, fine_to: float, ratio: float, length: float) ->
     return np.array(xs)
 
 
+MAX_BOX_TETS = 2e8  # ~50 GB of engine arrays: beyond any workstation
+
+
 def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitter: float = 0.0,
              seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Box [origin, origin + size] [m] split into nx·ny·nz hexahedra of 6 tetrahedra each (Kuhn
     triangulation, conforming). ``jitter`` moves interior nodes randomly by up to that fraction of
     a cell, making the mesh unstructured. Returns nodes (N, 3) [m] and tets (M, 4)."""
-    nx, ny, nz = (int(c) for c in cells)
+    try:
+        nx, ny, nz = (int(c) for c in cells)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"cells = {cells!r}; expected three integers >= 1") from None
     if min(nx, ny, nz) < 1:
-        raise InputError(f"cells = {cells!r}; expected three integers >= 1")
+        raise InputError(f"cells = {list(cells)}; expected three integers >= 1")
+    if 6 * nx * ny * nz > MAX_BOX_TETS:
+        raise InputError(f"cells = {[nx, ny, nz]} make {6 * nx * ny * nz:.3g} tets; expected at most "
+                         f"{MAX_BOX_TETS:.0e}")
     size = np.asarray(size, float)
-    if size.shape != (3,) or np.any(size <= 0):
-        raise InputError(f"size = {size!r}; expected three lengths > 0 [m]")
+    if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
+        raise InputError(f"size = {np.asarray(size).tolist()}; expected three finite lengths > 0 [m]")
+    if not (0 <= jitter < 0.5):
+        raise InputError(f"jitter = {float(jitter)}; expected 0 <= jitter < 0.5 (a fraction of a "
+                         "cell: half a cell or more can turn elements inside out)")
     X, T = grid_tets(*(np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))))
     if jitter > 0:
         h = size / np.array([nx, ny, nz])

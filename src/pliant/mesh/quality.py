@@ -49,26 +49,42 @@ def critical_time_steps(nodes, tets, material, density: float) -> np.ndarray:
     return q["min_altitude"] / c
 
 
+def valid_elements(q: dict[str, np.ndarray]) -> np.ndarray:
+    """Elements with a positive volume that is not negligible (relative volume V / h³ above
+    1e-8, h the element's size from its altitude): the others are inverted or degenerate."""
+    h = np.maximum(np.abs(q["min_altitude"]), np.finfo(float).tiny)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return (q["volume"] > 0) & (q["volume"] > 1e-8 * h**3) & np.isfinite(q["radius_edge"])
+
+
 def quality_summary(q: dict[str, np.ndarray], dt: np.ndarray | None = None) -> dict:
-    out = {"tets": int(len(q["volume"]))}
+    """Statistics of :func:`tet_quality` (min, 5th percentile, median, 95th, max) over the valid
+    elements, the counts of inverted, degenerate (zero-volume) and sliver elements, and, with
+    per-element critical steps ``dt`` [s], the worst valid element and its cost factor (median /
+    worst step). Every number is finite (JSON-safe); ``dt_critical`` is None without a valid
+    element."""
+    ok = valid_elements(q)
+    out = {"tets": int(len(q["volume"])), "inverted": int((q["volume"] < 0).sum())}
+    out["degenerate"] = int((~ok).sum()) - out["inverted"]
     for k in ("volume", "radius_edge", "min_dihedral", "max_dihedral", "min_altitude"):
-        v = q[k]
+        v = q[k][ok] if ok.any() else np.zeros(1)
         out[k] = {"min": float(np.min(v)), "p5": float(np.percentile(v, 5)),
                   "median": float(np.median(v)), "p95": float(np.percentile(v, 95)),
                   "max": float(np.max(v))}
-    out["inverted"] = int((q["volume"] <= 0).sum())
-    out["slivers_min_dihedral_below_5deg"] = int((q["min_dihedral"] < 5).sum())
+    out["slivers_min_dihedral_below_5deg"] = int((q["min_dihedral"][ok] < 5).sum())
     if dt is not None:
-        worst = int(np.argmin(dt))
-        out["dt_critical"] = {"min": float(dt[worst]), "element": worst,
-                              "median": float(np.median(dt)),
-                              "cost_factor": float(np.median(dt) / dt[worst])}
+        out["dt_critical"] = None
+        if ok.any():
+            idx = np.nonzero(ok)[0]
+            worst = int(idx[np.argmin(dt[idx])])
+            out["dt_critical"] = {"min": float(dt[worst]), "element": worst,
+                                  "median": float(np.median(dt[idx])),
+                                  "cost_factor": float(np.median(dt[idx]) / dt[worst])}
     return out
 
 
 def quality_histogram(path, q: dict[str, np.ndarray], dt: np.ndarray | None = None) -> None:
     """PNG with histograms of radius–edge ratio, dihedral angles and (optionally) critical steps."""
-    import os
     from pathlib import Path
 
     import matplotlib
@@ -76,6 +92,9 @@ def quality_histogram(path, q: dict[str, np.ndarray], dt: np.ndarray | None = No
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    ok = valid_elements(q)
+    q = {k: v[ok] for k, v in q.items()}
+    dt = dt[ok] if dt is not None else None
     n = 3 if dt is not None else 2
     fig, ax = plt.subplots(1, n, figsize=(5 * n, 4))
     ax[0].hist(np.clip(q["radius_edge"], 0, 5), bins=60, color="tab:blue")
@@ -92,8 +111,9 @@ def quality_histogram(path, q: dict[str, np.ndarray], dt: np.ndarray | None = No
     for a in ax:
         a.set_ylabel("tets")
     fig.tight_layout()
-    path = Path(path)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=90)
-    plt.close(fig)
-    os.replace(tmp, path)
+    from ..io.files import atomic_write
+
+    try:
+        atomic_write(Path(path), lambda tmp: fig.savefig(tmp, dpi=90, format="png"), "picture")
+    finally:
+        plt.close(fig)

@@ -228,13 +228,27 @@ def fill_loop(V: np.ndarray, loop: np.ndarray, existing_edges: set | None = None
     return np.array(faces, dtype=np.int64)
 
 
+BODIES = ("one", "all", "largest")
+
+
 def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
-                   keep_largest: bool = False) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """Merge duplicate vertices, drop degenerate and duplicate faces, fill holes (centroid fans),
-    make winding consistent and outward. Returns (V, F, actions). Raises MeshError naming the
-    reason when the result is still not a closed manifold (e.g. non-manifold edges)."""
+                   keep_largest: bool = False, bodies: str = "one"
+                   ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Merge duplicate vertices, drop degenerate and duplicate faces and fragments (bodies with
+    under 1 % of the faces), fill holes (minimum-area triangulation), make winding consistent and
+    each body's faces point outward. Returns (V, F, actions).
+
+    ``bodies``: what to do with a surface of several closed bodies (a teapot's body, lid, handle
+    and spout; two organs): "one" refuses it, "all" keeps every body (each closed and outward;
+    they may overlap: tetrahedralization then meshes their union), "largest" keeps the largest
+    (``keep_largest=True`` is the same). Raises MeshError naming the reason when the result is
+    still not closed (e.g. non-manifold edges) or encloses no volume."""
     import trimesh
 
+    if keep_largest:
+        bodies = "largest"
+    if bodies not in BODIES:
+        raise MeshError(f"repair: bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
     actions = []
     m = trimesh.Trimesh(np.asarray(V, float), np.asarray(F, np.int64), process=True, validate=True)
     if len(m.vertices) < len(V):
@@ -242,26 +256,41 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
     if len(m.faces) < len(F):
         actions.append(f"removed {len(F) - len(m.faces)} degenerate/duplicate faces")
     if len(m.faces) == 0:
-        raise MeshError("repair: no valid faces left")
+        raise MeshError("repair: no valid faces left (every face is degenerate or a duplicate)")
     parts = m.split(only_watertight=False)
-    if len(parts) > 1:  # drop fragments: bodies with under 1 % of the faces
+    if len(parts) > 1:
         big = [p for p in parts if len(p.faces) >= 0.01 * len(m.faces)]
         if len(big) < len(parts):
             actions.append(f"dropped {len(parts) - len(big)} fragment(s) of "
                            f"{sum(len(p.faces) for p in parts) - sum(len(p.faces) for p in big)} faces")
         parts = big
-        m = trimesh.util.concatenate(parts) if len(parts) > 1 else parts[0]
-        m.merge_vertices()
-    _, count = _edges(np.asarray(m.faces))
-    if (count > 2).any():
-        raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than two "
-                        "faces); cannot repair automatically")
-    if len(parts) > 1:
-        if not keep_largest:
-            raise MeshError(f"repair: {len(parts)} separate bodies; simulate them as separate "
-                            "meshes, or keep the largest (--keep-largest)")
-        m = max(parts, key=lambda p: len(p.faces))
-        actions.append(f"kept the largest of {len(parts)} bodies")
+    for p in parts:
+        _, count = _edges(np.asarray(p.faces))
+        if (count > 2).any():
+            raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than "
+                            "two faces); cannot repair automatically")
+    if len(parts) > 1 and bodies == "one":
+        raise MeshError(f"repair: {len(parts)} separate bodies; keep them all (bodies='all', "
+                        "--bodies all: their union is meshed), or the largest (--bodies largest)")
+    if len(parts) > 1 and bodies == "largest":
+        n = len(parts)
+        parts = [max(parts, key=lambda p: len(p.faces))]
+        actions.append(f"kept the largest of {n} bodies")
+    closed = [_close_body(p, fill_holes, actions) for p in parts]
+    if len(closed) > 1:
+        actions.append(f"kept {len(closed)} bodies")
+    m = trimesh.util.concatenate(closed) if len(closed) > 1 else closed[0]
+    rep = check_surface(m.vertices, m.faces, self_intersections=False)
+    if not rep.watertight or not rep.winding_consistent:
+        raise MeshError(f"repair: still not a closed, consistently oriented surface after "
+                        f"repair ({'; '.join(rep.problems)})")
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64), actions
+
+
+def _close_body(m, fill_holes: bool, actions: list[str]):
+    """One connected body: holes filled, winding consistent, faces outward."""
+    import trimesh
+
     Vr, Fr = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
     if fill_holes:
         loops = boundary_loops(Fr)
@@ -278,11 +307,30 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
     if m.is_watertight and m.volume < 0:
         m.invert()
         actions.append("flipped faces outward")
-    rep = check_surface(m.vertices, m.faces, self_intersections=False)
-    if not rep.watertight or not rep.winding_consistent:
-        raise MeshError(f"repair: still not a closed, consistently oriented surface after "
-                        f"repair ({'; '.join(rep.problems)})")
-    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64), actions
+    return m
+
+
+def enclosed_volume_problem(V: np.ndarray, F: np.ndarray, closed: bool = True) -> str | None:
+    """Why a surface encloses no volume (flat: all vertices on a plane or a line; or, for a closed
+    surface, a signed volume ~0, as in a sheet folded onto itself), or None. Tetrahedralizers crash
+    or loop on such input, so it is refused first."""
+    V = np.asarray(V, float)
+    if len(V) < 4 or (closed and len(F) < 4):
+        return f"{len(V)} vertices and {len(F)} faces cannot enclose a volume"
+    c = V - V.mean(axis=0)
+    sv = np.linalg.svd(c, compute_uv=False)
+    if not sv[0] > 0:
+        return "all vertices coincide"
+    if sv[2] <= 1e-9 * sv[0]:
+        return "all vertices lie on one plane (a flat sheet)"
+    if not closed:
+        return None
+    P = V[np.asarray(F, np.int64)]
+    vol = float(np.einsum("ij,ij->i", P[:, 0], np.cross(P[:, 1], P[:, 2])).sum() / 6)
+    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+    if abs(vol) <= 1e-9 * diag**3:
+        return f"its faces enclose a signed volume of {vol:.3g} m^3 (a zero-thickness shell)"
+    return None
 
 
 def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,

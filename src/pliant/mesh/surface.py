@@ -44,12 +44,9 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
     if path.suffix.lower() == ".obj":
         V, F = _read_obj(path)
     else:
-        import meshio
+        from ..io.files import read_meshio
 
-        try:
-            m = meshio.read(path)
-        except Exception as e:
-            raise MeshError(f"{path}: cannot read as a surface mesh ({type(e).__name__}: {e})") from None
+        m = read_meshio(path, "surface mesh")
         tris = [c.data for c in m.cells if c.type == "triangle"]
         quads = [c.data for c in m.cells if c.type == "quad"]
         parts = tris + [q[:, [0, 1, 2]] for q in quads] + [q[:, [0, 2, 3]] for q in quads]
@@ -67,15 +64,15 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def write_surface(path, V: np.ndarray, F: np.ndarray) -> None:
-    """Write a triangle surface in any meshio format (by extension), atomically."""
-    import os
-
+    """Write a triangle surface in any meshio format (by extension), atomically. An unwritable
+    path or an unknown extension raises InputError naming the path."""
     import meshio
 
-    path = Path(path)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    meshio.write(tmp, meshio.Mesh(np.asarray(V, float), [("triangle", np.asarray(F))]))
-    os.replace(tmp, path)
+    from ..io.files import atomic_write, check_output_file
+
+    path = check_output_file(path, "surface mesh", mesh_format=True)
+    atomic_write(path, lambda tmp: meshio.write(
+        tmp, meshio.Mesh(np.asarray(V, float), [("triangle", np.asarray(F))])), "surface mesh")
 
 
 def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import glob
 import hashlib
+import math
 import importlib.machinery
 import importlib.util
 import os
@@ -21,6 +22,9 @@ import numpy as np
 
 from ..errors import MeshError
 from .primitives import orient_positive
+
+
+MAX_TETS = 2e7  # beyond this fTetWild runs for hours and exhausts a workstation's memory
 
 
 def _ftetwild():
@@ -45,9 +49,10 @@ def _ftetwild():
     return mod
 
 
-def largest_component(tets: np.ndarray) -> np.ndarray:
+def largest_component(tets: np.ndarray, keep_all: bool = False, island: float = 0.01) -> np.ndarray:
     """The tets of the largest face-connected component (fTetWild can leave small islands of tets
-    inside thin or self-intersecting regions of a scan)."""
+    inside thin or self-intersecting regions of a scan); with ``keep_all``, every component of at
+    least ``island`` × the tet count (separate bodies meshed together)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -64,7 +69,10 @@ def largest_component(tets: np.ndarray) -> np.ndarray:
                                     directed=False)
     if n == 1:
         return tets
-    return tets[label == np.argmax(np.bincount(label))]
+    sizes = np.bincount(label)
+    if keep_all:
+        return tets[sizes[label] >= island * M]
+    return tets[label == np.argmax(sizes)]
 
 
 def cache_dir() -> Path:
@@ -75,24 +83,41 @@ def cache_dir() -> Path:
 
 def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = None,
                    edge_length_fac: float = 0.05, epsilon: float = 1e-3, optimize: bool = True,
-                   threads: int = 0, cache: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                   threads: int = 0, cache: bool = True, keep_all: bool = False
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """Tet mesh of the volume bounded by a triangle surface V [m] (n, 3), F (f, 3).
 
     edge_length: target tet edge [m] (default: ``edge_length_fac`` × bounding-box diagonal).
     epsilon: allowed surface deviation, relative to the bounding-box diagonal.
     Returns nodes [m] (N, 3) and positively oriented tets (M, 4). Results are cached on disk
-    (``$PLIANT_CACHE`` or ~/.cache/pliant) keyed by the input and the parameters."""
+    (``$PLIANT_CACHE`` or ~/.cache/pliant) keyed by the input and the parameters. Only the largest
+    connected piece of the result is kept, or with ``keep_all`` every piece of at least 1 % of the
+    tets (several bodies). A surface that encloses no volume is refused before fTetWild sees it
+    (fTetWild crashes on flat input)."""
+    from .repair import enclosed_volume_problem
+
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.uint32)
     if V.ndim != 2 or V.shape[1] != 3 or len(V) < 4 or F.ndim != 2 or F.shape[1] != 3 or len(F) < 4:
         raise MeshError(f"tetrahedralize: need a closed triangle surface, got {V.shape} vertices, "
                         f"{F.shape} faces")
+    why = enclosed_volume_problem(V, F)
+    if why:
+        raise MeshError(f"tetrahedralize: the surface encloses no volume: {why}; expected a closed "
+                        "surface around a solid")
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
-    if not diag > 0:
-        raise MeshError("tetrahedralize: the surface has zero extent")
     el = float(edge_length) if edge_length else edge_length_fac * diag
+    if not (math.isfinite(el) and el > 0):
+        raise MeshError(f"tetrahedralize: edge length {el!r}; expected a finite length > 0 [m]")
+    P = V[F.astype(np.int64)]
+    volume = abs(float(np.einsum("ij,ij->i", P[:, 0], np.cross(P[:, 1], P[:, 2])).sum() / 6))
+    expected = volume / (el**3 / (6 * math.sqrt(2)))  # regular tets of edge el
+    if expected > MAX_TETS:
+        raise MeshError(f"tetrahedralize: edge length {el:.3g} m would make about {expected:.3g} "
+                        f"tets in the surface's {volume:.3g} m^3; expected at most {MAX_TETS:.0e} "
+                        "(give a larger edge length)")
     key = hashlib.sha256(V.tobytes() + F.tobytes() +
-                         repr((el, epsilon, optimize, 2)).encode()).hexdigest()[:24]
+                         repr((el, epsilon, optimize, keep_all, 3)).encode()).hexdigest()[:24]
     path = cache_dir() / f"tet-{key}.npz"
     if cache and path.exists():
         with np.load(path) as d:
@@ -120,7 +145,7 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
     e = nodes[tets]
     vol = np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]) / 6
     tets = tets[vol > 1e-9 * el**3]
-    tets = largest_component(tets)
+    tets = largest_component(tets, keep_all)
     used = np.unique(tets)
     remap = np.full(len(nodes), -1, dtype=np.int64)
     remap[used] = np.arange(used.size)

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _core
 from .. import materials as mat
 from ..errors import InputError, MeshError
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
@@ -277,11 +278,16 @@ def load_scene(path) -> Scene:
     path = Path(path)
     if not path.is_file():
         raise SceneError(f"no such scene file: {path}", str(path))
-    text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        raise SceneError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"not valid TOML: {e}", str(path)) from None
+    except RecursionError:
+        raise SceneError("not a usable scene: tables or arrays nested too deeply", str(path)) from None
     ctx = Ctx(str(path), text)
     check_keys(ctx, data, "", {"title": "str", "mesh": "table", "material": "list",
                                "solver": "table", "constraint": "list", "load": "list",
@@ -313,7 +319,10 @@ def load_scene(path) -> Scene:
     scene.backend = solver.get("backend", "cpu")
     if scene.backend not in ("cpu", "cuda"):
         raise ctx.error("solver.backend", f"backend = {scene.backend!r}: expected 'cpu' or 'cuda'")
-    scene.threads = solver.get("threads") or None
+    scene.threads = solver.get("threads")
+    if scene.threads is not None and not 1 <= scene.threads <= _core.thread_limit():
+        raise ctx.error("solver.threads", f"threads = {scene.threads}; expected 1 to "
+                        f"{_core.thread_limit()} on this machine (leave it out for automatic)")
     scene.static = bool(solver.get("static", False))
     scene.tol = float(solver.get("tol", 1e-5))
     scene.increments = int(solver.get("increments", 1))

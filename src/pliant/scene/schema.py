@@ -85,6 +85,12 @@ _TYPES = {"number": (int, float), "int": (int,), "str": (str,), "bool": (bool,),
           "list": (list,)}
 
 
+def key_path(path: str, key: str) -> str:
+    """'solver' + 'dt' -> 'solver.dt'; keys that are not bare TOML keys are quoted ('solver.""')."""
+    k = key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else '"' + key.replace('"', '\\"')[:40] + '"'
+    return f"{path}.{k}" if path else k
+
+
 def check_keys(ctx: Ctx, table: Any, path: str, allowed: dict[str, str],
                required: tuple[str, ...] = ()) -> dict:
     """Check that ``table`` is a table whose keys are among ``allowed`` (key → type name; '|' for
@@ -92,9 +98,10 @@ def check_keys(ctx: Ctx, table: Any, path: str, allowed: dict[str, str],
     if not isinstance(table, dict):
         raise ctx.error(path, f"expected a table, got {type(table).__name__}")
     for k, v in table.items():
+        kp = key_path(path, k)
         if k not in allowed:
-            raise ctx.error(f"{path}.{k}" if path else k,
-                            f"unknown key {k!r}; expected one of: {', '.join(sorted(allowed))}")
+            raise ctx.error(kp, f"unknown key {_short(k, 40)}; expected one of: "
+                            f"{', '.join(sorted(allowed))}")
         kinds = allowed[k].split("|")
         ok = False
         for kind in kinds:
@@ -102,19 +109,24 @@ def check_keys(ctx: Ctx, table: Any, path: str, allowed: dict[str, str],
             if isinstance(v, types) and not (kind in ("number", "int") and isinstance(v, bool)):
                 ok = True
         if not ok:
-            raise ctx.error(f"{path}.{k}" if path else k,
-                            f"{k} = {v!r}: expected {' or '.join(kinds)}")
+            raise ctx.error(kp, f"{k} = {_short(v)}: expected {' or '.join(kinds)}")
         if isinstance(v, float) and not math.isfinite(v):
-            raise ctx.error(f"{path}.{k}" if path else k, f"{k} = {v!r}: expected a finite number")
+            raise ctx.error(kp, f"{k} = {v!r}: expected a finite number")
     for k in required:
         if k not in table:
             raise ctx.error(path, f"missing key {k!r}")
     return table
 
 
+def _short(v, limit: int = 80) -> str:
+    """repr of a value, cut to ``limit`` characters (hostile files hold megabyte strings)."""
+    r = repr(v)
+    return r if len(r) <= limit else r[:limit] + f"... ({len(r)} characters)"
+
+
 def vector(ctx: Ctx, value, path: str, n: int = 3) -> list[float]:
     if not (isinstance(value, list) and len(value) == n and
             all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
                 for x in value)):
-        raise ctx.error(path, f"{value!r}: expected a list of {n} finite numbers")
+        raise ctx.error(path, f"{_short(value)}: expected a list of {n} finite numbers")
     return [float(x) for x in value]

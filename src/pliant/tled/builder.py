@@ -137,7 +137,19 @@ class ModelBuilder:
 
     # --- constraints and loads --------------------------------------------------------------
     def _node_ids(self, nodes, what: str) -> np.ndarray:
-        ids = np.asarray(nodes, dtype=np.int64).ravel()
+        """Node ids as int64: integers, or floats with integral values; anything else (1.5,
+        strings, booleans) raises InputError naming ``what``."""
+        a = np.asarray(nodes)
+        if a.dtype == bool or not (np.issubdtype(a.dtype, np.integer) or
+                                   np.issubdtype(a.dtype, np.floating)):
+            raise InputError(f"{what}: node ids of type {a.dtype}; expected integers")
+        if np.issubdtype(a.dtype, np.floating):
+            if not np.all(np.isfinite(a)) or np.any(a != np.round(a)):
+                bad = a[~np.isfinite(a) | (a != np.round(a))].ravel()[0]
+                raise InputError(f"{what}: node id {float(bad)}; expected integers")
+            if a.size and np.abs(a).max() >= 2**62:
+                raise InputError(f"{what}: node id {float(np.abs(a).max())}; out of range")
+        ids = a.astype(np.int64).ravel()
         if ids.size and (ids.min() < 0 or ids.max() >= self.n_nodes):
             bad = ids[(ids < 0) | (ids >= self.n_nodes)][0]
             raise InputError(f"{what}: node {int(bad)} out of range; expected 0..{self.n_nodes - 1}")

@@ -7,12 +7,15 @@ array back, so users never see that order.
 
 from __future__ import annotations
 
+import hashlib
+import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 
 from .. import _core
-from ..errors import InputError
+from ..errors import InputError, PliantWarning
 from .curves import Constant, LoadCurve
 
 __all__ = ["Model", "State"]
@@ -27,6 +30,51 @@ def _morton_order(points: np.ndarray) -> np.ndarray:
         for d in range(3):
             code |= ((q[:, d] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + d)
     return np.argsort(code, kind="stable")
+
+
+def _check_threads(threads) -> None:
+    """None (automatic) or an integer from 1 to the engine's limit (4 per processor, at least 64;
+    far more threads than processors make OpenMP fail)."""
+    if threads is None:
+        return
+    limit = int(_core.thread_limit())
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) \
+            or not 1 <= threads <= limit:
+        raise InputError(f"threads = {threads!r}; expected an integer from 1 to {limit} on this "
+                         "machine, or None for automatic")
+
+
+def _fingerprint(X, T, sets, dtype, constraints) -> str:
+    """A short hash of what makes a state meaningful for a model: mesh, materials, densities,
+    element sets, constrained DOFs and precision (saved states carry it)."""
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(X, float).tobytes())
+    h.update(np.ascontiguousarray(T, np.int64).tobytes())
+    for s in sets:
+        h.update(repr((type(s.material).__name__, s.material.params, s.density)).encode())
+        h.update(np.ascontiguousarray(s.elements, np.int64).tobytes())
+    h.update(repr((str(np.dtype(dtype)), sorted(map(tuple, constraints)))).encode())
+    return h.hexdigest()[:16]
+
+
+SLOW_ELEMENT_FACTOR = 20.0  # warn when one element makes a run this many times longer
+
+
+def _warn_slow_element(source: str, sets, owner: np.ndarray, altitude: np.ndarray) -> None:
+    """Warn when the worst element's stable step h/c (h its smallest altitude, c the dilatational
+    wave speed √((λ + 2μ)/ρ); Belytschko et al. 2000, §6.3) is SLOW_ELEMENT_FACTOR or more times
+    below the median element's: that one element multiplies the steps of every run (a sliver from a
+    mesher, a node jittered almost onto a face)."""
+    c = np.array([math.sqrt((s.material.lam + 2.0 * s.material.mu) / s.density) for s in sets])
+    dt = altitude / c[owner]
+    worst = int(np.argmin(dt))
+    factor = float(np.median(dt) / dt[worst])
+    if factor >= SLOW_ELEMENT_FACTOR:
+        warnings.warn(PliantWarning(
+            f"{source}: element {worst} limits the stable time step to {dt[worst]:.3g} s, "
+            f"{factor:.0f}x below the median element's {np.median(dt):.3g} s: every run takes "
+            f"{factor:.0f}x the steps a uniform mesh would (smallest altitude {altitude[worst]:.3g} "
+            "m); check the mesh (pliant mesh quality)"), stacklevel=4)
 
 
 def _auto_threads(n_elements: int) -> int:
@@ -47,6 +95,7 @@ class Model:
     def __init__(self, builder, owner: np.ndarray, dtype: np.dtype, threads: int | None,
                  geometry: tuple[np.ndarray, np.ndarray]):
         X, T = builder.nodes, builder.tets
+        _check_threads(threads)
         self.reference_positions = X.copy()
         self.tets = T.copy()
         self.dtype = dtype
@@ -68,9 +117,10 @@ class Model:
         used = flat[np.sort(first)]
         orphans = np.setdiff1d(np.arange(N), used)
         if orphans.size:
-            warnings.warn(f"{builder.source}: {orphans.size} node(s) belong to no element (first: "
-                          f"{int(orphans[0])}); they carry no mass and never move unless prescribed",
-                          stacklevel=3)
+            warnings.warn(PliantWarning(
+                f"{builder.source}: {orphans.size} node(s) belong to no element (first: "
+                f"{int(orphans[0])}); they carry no mass and never move unless prescribed"),
+                stacklevel=3)
         node_order = np.concatenate([used, orphans])  # engine node i is user node node_order[i]
         node_rank = np.empty(N, dtype=np.int64)
         node_rank[node_order] = np.arange(N)
@@ -171,10 +221,12 @@ class Model:
             int(threads if threads else _auto_threads(M)),
         )
         self.n_nodes, self.n_elements = N, M
+        self.fingerprint = _fingerprint(X, T, self.sets, dtype, self._cons_user)
         self.dt_critical = float(self._engine.dt_critical)
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
+        _warn_slow_element(builder.source, self.sets, owner, np.asarray(geometry[1], float))
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)
         self.constrained = np.zeros((N, 3), dtype=bool)
@@ -321,10 +373,19 @@ class State:
         return (self.displacements - u_prev) / self._s.dt
 
     def _check(self, a, name) -> np.ndarray:
-        a = np.asarray(a, dtype=float)
-        if a.shape != (self.model.n_nodes, 3) or not np.all(np.isfinite(a)):
-            raise InputError(f"{name}: expected finite values of shape ({self.model.n_nodes}, 3), "
-                             f"got shape {a.shape}")
+        """A finite (N, 3) array in user order, or InputError saying what is wrong with it."""
+        try:
+            a = np.asarray(a, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"{name}: expected numbers of shape ({self.model.n_nodes}, 3); {e}") \
+                from None
+        if a.shape != (self.model.n_nodes, 3):
+            raise InputError(f"{name}: expected shape ({self.model.n_nodes}, 3), got {a.shape}")
+        bad = np.argwhere(~np.isfinite(a))
+        if bad.size:
+            i = int(bad[0, 0])
+            raise InputError(f"{name}: {len(bad)} non-finite value(s), first at node {i}: "
+                             f"{a[i].tolist()}; expected finite values")
         return a
 
     def set_displacements(self, u, velocities=None, dt: float | None = None):
@@ -348,24 +409,60 @@ class State:
         self._s.assign(other._s)
 
     def save(self, path):
-        """Save to a .npz file (u, u⁻ in user order, t, Δt, step count)."""
+        """Save to a .npz file (u, u⁻ in user order, t, Δt, step count, the model's fingerprint),
+        atomically. ``.npz`` is appended to a name without it."""
+        from ..io.files import atomic_write, check_output_file
+
+        path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_name(path.name + ".npz")
+        check_output_file(path, "state file")
         u_prev = self.model.to_user_nodes(np.asarray(self._s.get_u_prev(), dtype=float))
-        np.savez(path, u=self.displacements, u_prev=u_prev, t=self.time, dt=self.dt,
-                 step=self.steps, n_nodes=self.model.n_nodes, n_elements=self.model.n_elements,
-                 visco=np.asarray(self._s.get_q(), dtype=float))  # engine layout, same model
+        data = dict(u=self.displacements, u_prev=u_prev, t=self.time, dt=self.dt, step=self.steps,
+                    n_nodes=self.model.n_nodes, n_elements=self.model.n_elements,
+                    fingerprint=self.model.fingerprint,
+                    visco=np.asarray(self._s.get_q(), dtype=float))  # engine layout, same model
+        atomic_write(path, lambda tmp: np.savez(tmp, **data), "state file")
 
     def load(self, path):
-        """Restore from a file written by :meth:`save` (same model)."""
-        with np.load(path) as d:
-            if int(d["n_nodes"]) != self.model.n_nodes or int(d["n_elements"]) != self.model.n_elements:
-                raise InputError(f"{path}: state of a model with {int(d['n_nodes'])} nodes / "
-                                 f"{int(d['n_elements'])} elements; this model has "
-                                 f"{self.model.n_nodes} / {self.model.n_elements}")
-            self._s.set_u(self.model.to_engine_nodes(self._check(d["u"], f"{path}: u")))
-            self._s.set_u_prev(self.model.to_engine_nodes(self._check(d["u_prev"], f"{path}: u_prev")))
-            self._s.t, self._s.dt, self._s.step = float(d["t"]), float(d["dt"]), int(d["step"])
-            if "visco" in d.files:
-                try:
-                    self._s.set_q(d["visco"].tolist())
-                except ValueError as e:
-                    raise InputError(f"{path}: {e}") from None
+        """Restore from a file written by :meth:`save` of the same model. A missing, corrupt,
+        truncated or foreign file, or one saved from another model, raises InputError naming it."""
+        path = Path(path)
+        if not path.is_file():
+            raise InputError(f"{path}: no such state file")
+        try:
+            with np.load(path, allow_pickle=False) as d:
+                data = {k: d[k] for k in d.files}
+        except Exception as e:  # zip, zlib, format and OS errors alike
+            raise InputError(f"{path}: not a readable pliant state file ({type(e).__name__}: "
+                             f"{str(e)[:200]})") from None
+        missing = [k for k in ("u", "u_prev", "t", "dt", "step", "n_nodes", "n_elements")
+                   if k not in data]
+        if missing:
+            raise InputError(f"{path}: not a pliant state file (no {', '.join(missing)})")
+        try:
+            nn, ne = int(data["n_nodes"]), int(data["n_elements"])
+            t, dt, step = float(data["t"]), float(data["dt"]), int(data["step"])
+        except (TypeError, ValueError) as e:
+            raise InputError(f"{path}: not a pliant state file ({e})") from None
+        if nn != self.model.n_nodes or ne != self.model.n_elements:
+            raise InputError(f"{path}: state of a model with {nn} nodes / {ne} elements; this model "
+                             f"has {self.model.n_nodes} / {self.model.n_elements}")
+        fp = str(data["fingerprint"]) if "fingerprint" in data else None
+        if fp is not None and fp != self.model.fingerprint:
+            raise InputError(f"{path}: state saved from a different model (same sizes, different "
+                             f"mesh, materials or constraints: fingerprint {fp}, this model "
+                             f"{self.model.fingerprint})")
+        if not (np.isfinite(t) and np.isfinite(dt) and dt >= 0 and step >= 0):
+            raise InputError(f"{path}: bad time data t = {t}, dt = {dt}, step = {step}; expected "
+                             "finite t, dt >= 0 and step >= 0")
+        u = self.model.to_engine_nodes(self._check(data["u"], f"{path}: u"))
+        u_prev = self.model.to_engine_nodes(self._check(data["u_prev"], f"{path}: u_prev"))
+        if "visco" in data:
+            try:
+                self._s.set_q(data["visco"].ravel().tolist())
+            except (TypeError, ValueError) as e:
+                raise InputError(f"{path}: {e}") from None
+        self._s.set_u(u)
+        self._s.set_u_prev(u_prev)
+        self._s.t, self._s.dt, self._s.step = t, dt, step

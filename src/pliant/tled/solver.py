@@ -15,7 +15,27 @@ import numpy as np
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
 
-__all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation"]
+__all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation", "MAX_STEPS"]
+
+# Most steps one call may take: a billion steps is days of computing even on a small mesh; above it
+# a duration is almost surely a typo (1e20 s), and tool histories would not fit in memory.
+MAX_STEPS = 10**9
+
+
+def _step_count(steps, what: str = "steps") -> int:
+    """A step count: an integer (not a bool, not a float with a fraction) from 0 to MAX_STEPS."""
+    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer, float)) \
+            or (isinstance(steps, float) and not steps.is_integer()):
+        raise InputError(f"{what} = {steps!r}; expected a whole number of steps")
+    if not 0 <= steps <= MAX_STEPS:
+        raise InputError(f"{what} = {int(steps)}; expected 0 to {MAX_STEPS:.0e} steps in one call")
+    return int(steps)
+
+
+def _check_model(model, who: str) -> None:
+    if not isinstance(model, Model):
+        hint = "; call builder.finalize() first" if type(model).__name__ == "ModelBuilder" else ""
+        raise InputError(f"{who}: got a {type(model).__name__}; expected a pliant Model{hint}")
 
 
 @dataclass
@@ -55,6 +75,7 @@ class Solver:
 
     def __init__(self, model: Model, dt: float | None = None, safety: float = 0.8,
                  damping: float | None = None, allow_unstable: bool = False, check_every: int = 16):
+        _check_model(model, "Solver(model)")
         self.model = model
         if not (0 < safety <= 1):
             raise InputError(f"safety = {safety!r}; expected 0 < safety <= 1")
@@ -111,6 +132,8 @@ class Solver:
         if state_in is state_out:
             raise InputError("step(state_in, state_out): states must be distinct; use run() in place")
         dt = self.dt if dt is None else float(dt)
+        if not (math.isfinite(dt) and dt > 0):
+            raise TimeStepError(f"dt = {dt!r}; expected a finite time step > 0 [s]")
         if dt > self.model.dt_critical and self.dt <= self.model.dt_critical:
             raise TimeStepError(f"dt = {dt:.4g} s exceeds the critical time step "
                                 f"{self.model.dt_critical:.4g} s")
@@ -124,10 +147,18 @@ class Solver:
         if (steps is None) == (until is None):
             raise InputError("run: give exactly one of steps= or until=")
         if steps is None:
-            steps = max(0, int(math.ceil((float(until) - state.time) / self.dt - 1e-9)))
-        steps = int(steps)
-        if steps < 0:
-            raise InputError(f"steps = {steps}; expected >= 0")
+            try:
+                until = float(until)
+            except (TypeError, ValueError):
+                raise InputError(f"until = {until!r}; expected a time [s]") from None
+            if not math.isfinite(until):
+                raise InputError(f"until = {until!r}; expected a finite time [s]")
+            n = math.ceil((until - state.time) / self.dt - 1e-9)
+            if n > MAX_STEPS:
+                raise InputError(f"until = {until:g} s is {n:.3g} steps of {self.dt:.3g} s away; "
+                                 f"expected at most {MAX_STEPS:.0e} steps in one call")
+            steps = max(0, n)
+        steps = _step_count(steps)
         if steps == 0:
             return RunInfo(0, state.time)
         t0 = state.time
@@ -151,9 +182,16 @@ class Solver:
             H.force = np.concatenate([H.force, h[:, k, :3]])
             H.torque = np.concatenate([H.torque, h[:, k, 3:]])
 
+    def _tool_index(self, k) -> int:
+        n = len(self.model.tools)
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < n:
+            raise InputError(f"tool index {k!r}; expected an integer from 0 to {n - 1}" if n else
+                             f"tool index {k!r}: this model has no tools")
+        return int(k)
+
     def tool_force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """Force [N] and torque [N·m] tool k received at the last step (zeros before any step)."""
-        H = self.tool_histories.get(k)
+        H = self.tool_histories.get(self._tool_index(k))
         if H is None or len(H.time) == 0:
             return np.zeros(3), np.zeros(3)
         return H.force[-1].copy(), H.torque[-1].copy()
@@ -210,12 +248,13 @@ class Simulation:
     """
 
     def __init__(self, model: Model, **solver_options):
+        _check_model(model, "Simulation(model)")
         self.model = model
         self.solver = Solver(model, **solver_options)
         self.state = model.state()
 
     def step(self, n: int = 1) -> RunInfo:
-        return self.solver.run(self.state, steps=n)
+        return self.solver.run(self.state, steps=_step_count(n, "n"))
 
     def run_to(self, t: float) -> RunInfo:
         return self.solver.run(self.state, until=t)
@@ -253,12 +292,14 @@ class Simulation:
         this one, then stays. The move takes at least one step, and longer if needed to keep the
         tool's speed under 0.1 × the smallest element altitude per step (a sudden jump deeper than
         an element would invert it)."""
-        tool = self.model.tools[k]
+        tool = self.model.tools[self.solver._tool_index(k)]
         R, p = tool.pose(self.state.time)
         from ..contact import quat_from_matrix
 
         t, dt = self.state.time, self.solver.dt
-        target = np.asarray(position, float)
+        target = np.asarray(position, float).ravel()
+        if target.shape != (3,) or not np.all(np.isfinite(target)):
+            raise InputError(f"set_tool_pose: position {position!r}; expected 3 finite numbers [m]")
         v_max = 0.1 * self.model.min_altitude / dt
         duration = max(dt, float(np.linalg.norm(target - p)) / v_max)
         tool.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]

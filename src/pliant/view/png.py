@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -51,12 +50,21 @@ def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
-    ax.set_title(title)
+    ax.set_title(plain_title(title))
     sm = matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(sm, ax=ax, shrink=0.7, extend="both", label=f"{label} (1st–99th percentile)")
-    path = Path(path)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    os.replace(tmp, path)
-    return path
+    from ..io.files import atomic_write
+
+    try:
+        return atomic_write(Path(path), lambda tmp: fig.savefig(tmp, format="png"), "picture")
+    finally:
+        plt.close(fig)
+
+
+def plain_title(title: str, limit: int = 100) -> str:
+    """A title matplotlib draws as plain text in bounded time: one line, control characters
+    dropped, ``$`` escaped (no mathtext), at most ``limit`` characters (text layout is slow in the
+    length)."""
+    t = " ".join("".join(c if c.isprintable() else " " for c in str(title)[: 4 * limit]).split())
+    t = t if len(t) <= limit else t[: limit - 1] + "…"
+    return t.replace("$", r"\$")

@@ -1,0 +1,144 @@
+"""Files in and out, safely: meshio reads that fail with a named :class:`~pliant.errors.MeshError`
+(meshio itself prints and calls ``sys.exit`` on some unreadable files), output paths checked before
+any long computation, and writes that are atomic (a temporary name renamed into place) and that
+report an unwritable path as an :class:`~pliant.errors.InputError` naming it."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import signal
+import tempfile
+import threading
+from pathlib import Path
+
+from ..errors import InputError, MeshError
+
+
+def read_meshio(path, what: str = "mesh"):
+    """``meshio.read(path)`` with every failure (exceptions, meshio's printed errors and its
+    ``sys.exit``) turned into one MeshError naming the file and the reason."""
+    import meshio
+
+    path = Path(path)
+    if not path.is_file():
+        raise MeshError(f"{path}: no such file")
+    sink = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+            return meshio.read(path)
+    except (Exception, SystemExit) as e:
+        said = " ".join(sink.getvalue().split())
+        reason = f"{type(e).__name__}: {e}" if str(e) and not isinstance(e, SystemExit) else \
+            (said or type(e).__name__)
+        raise MeshError(f"{path}: cannot read as a {what} ({reason[:300]})") from None
+
+
+def check_output_file(path, what: str = "output file", mesh_format: bool = False) -> Path:
+    """Check, before any work, that a file can be written at ``path``: its folder exists, is a
+    folder and is writable, and ``path`` is not a folder; with ``mesh_format``, that meshio knows
+    the format of its extension. Raises InputError naming the path."""
+    path = Path(path)
+    if mesh_format:
+        import meshio
+
+        if path.suffix.lower() not in meshio.extension_to_filetypes:
+            raise InputError(f"{path}: unknown {what} format {path.suffix!r}; expected an extension "
+                             "meshio writes (.obj, .stl, .ply, .off, .vtk, .vtu, .msh...)")
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise InputError(f"{path}: the {what} is a folder; expected a file name")
+    if not parent.exists():
+        raise InputError(f"{path}: cannot write the {what}: folder {parent} does not exist")
+    if not parent.is_dir():
+        raise InputError(f"{path}: cannot write the {what}: {parent} is not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: cannot write the {what}: folder {parent} is not writable")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise InputError(f"{path}: cannot write the {what}: the file is read-only")
+    return path
+
+
+def check_output_dir(path, what: str = "output folder") -> Path:
+    """Check that ``path`` is, or can be made, a writable folder (nothing is created). Raises
+    InputError naming the path and the reason."""
+    path = Path(path)
+    if path.exists():
+        if not path.is_dir():
+            raise InputError(f"{path}: the {what} is a file; expected a folder")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise InputError(f"{path}: the {what} is not writable")
+        return path
+    up = path.parent
+    while not up.exists() and up != up.parent:
+        up = up.parent
+    if not up.is_dir():
+        raise InputError(f"{path}: cannot create the {what}: {up} is a file")
+    if not os.access(up, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: cannot create the {what}: {up} is not writable")
+    return path
+
+
+def make_output_dir(path, what: str = "output folder") -> Path:
+    """Create the folder (and its parents); OSError becomes InputError naming it."""
+    path = check_output_dir(path, what)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"{path}: cannot create the {what}: {e.strerror or e}") from None
+    return path
+
+
+@contextlib.contextmanager
+def deferred_interrupt():
+    """Hold Ctrl-C (SIGINT) while a group of files is committed, so that an index never lists one
+    frame fewer than was written; the interrupt is raised when the block ends. Main thread only
+    (elsewhere a plain block)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    old = signal.signal(signal.SIGINT, lambda s, f: got.append(s))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+        if got:
+            raise KeyboardInterrupt
+
+
+def atomic_write(path, write, what: str = "file") -> Path:
+    """Write a file atomically: ``write(tmp_path)`` writes a temporary file in the same folder,
+    which is then renamed to ``path``. On failure nothing is left behind; OSError becomes an
+    InputError naming ``path``."""
+    path = Path(path)
+    suffix = "".join(path.suffixes[-1:])
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
+                                   prefix=f".{path.stem}.", suffix=f".tmp{suffix}")
+        os.close(fd)
+    except OSError as e:
+        raise InputError(f"{path}: cannot write the {what}: {e.strerror or e}") from None
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as e:
+        Path(tmp).unlink(missing_ok=True)
+        raise InputError(f"{path}: cannot write the {what}: {e.strerror or e}") from None
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def atomic_write_text(path, text: str, what: str = "file") -> Path:
+    """Write ``text`` to ``path`` atomically (fsync'd before the rename)."""
+
+    def write(tmp):
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+
+    return atomic_write(path, write, what)
