@@ -40,24 +40,34 @@ def check_output_file(path, what: str = "output file", mesh_format: bool = False
     folder and is writable, and ``path`` is not a folder; with ``mesh_format``, that meshio knows
     the format of its extension. Raises InputError naming the path."""
     path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise InputError(f"{path}: the {what} is a folder; expected a file name")
     if mesh_format:
         import meshio
 
         if path.suffix.lower() not in meshio.extension_to_filetypes:
             raise InputError(f"{path}: unknown {what} format {path.suffix!r}; expected an extension "
                              "meshio writes (.obj, .stl, .ply, .off, .vtk, .vtu, .msh...)")
-    parent = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise InputError(f"{path}: the {what} is a folder; expected a file name")
     if not parent.exists():
         raise InputError(f"{path}: cannot write the {what}: folder {parent} does not exist")
     if not parent.is_dir():
         raise InputError(f"{path}: cannot write the {what}: {parent} is not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{path}: cannot write the {what}: folder {parent} is not writable")
+    _probe_folder(parent, path, what)
     if path.exists() and not os.access(path, os.W_OK):
         raise InputError(f"{path}: cannot write the {what}: the file is read-only")
     return path
+
+
+def _probe_folder(folder: Path, path: Path, what: str) -> None:
+    """Create and remove a scratch file in ``folder``: the only test of writability that holds for
+    root, read-only file systems and pseudo file systems alike."""
+    try:
+        with tempfile.TemporaryFile(dir=folder, prefix=".pliant-probe-"):
+            pass
+    except OSError as e:
+        raise InputError(f"{path}: cannot write the {what}: folder {folder} is not writable "
+                         f"({e.strerror or e})") from None
 
 
 def check_output_dir(path, what: str = "output folder") -> Path:
@@ -67,16 +77,14 @@ def check_output_dir(path, what: str = "output folder") -> Path:
     if path.exists():
         if not path.is_dir():
             raise InputError(f"{path}: the {what} is a file; expected a folder")
-        if not os.access(path, os.W_OK | os.X_OK):
-            raise InputError(f"{path}: the {what} is not writable")
+        _probe_folder(path, path, what)
         return path
     up = path.parent
     while not up.exists() and up != up.parent:
         up = up.parent
     if not up.is_dir():
         raise InputError(f"{path}: cannot create the {what}: {up} is a file")
-    if not os.access(up, os.W_OK | os.X_OK):
-        raise InputError(f"{path}: cannot create the {what}: {up} is not writable")
+    _probe_folder(up, path, what)
     return path
 
 

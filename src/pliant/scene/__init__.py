@@ -335,7 +335,8 @@ def load_scene(path) -> Scene:
     b.damping = damping
     b.nodal_pressure = bool(solver.get("nodal_pressure", False))
 
-    X, T, sets = _load_mesh(ctx, data["mesh"], path.parent, scene)
+    with ctx.under("mesh"):
+        X, T, sets = _load_mesh(ctx, data["mesh"], path.parent, scene)
     try:
         b.add_mesh(X, T, source=scene.meta["mesh_source"])
     except MeshError as e:
@@ -398,38 +399,51 @@ def load_scene(path) -> Scene:
         check_keys(ctx, ld, p, {"type": "str", "nodes": "table", "force": "list",
                                 "total_force": "list", "g": "list", "value": "number",
                                 "curve": "str|table"}, ("type",))
-        curve = make_curve(ctx, ld.get("curve"), f"{p}.curve", scene.duration)
-        if ld["type"] == "gravity":
-            b.set_gravity(vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g"), curve)
-        elif ld["type"] == "force":
-            if "nodes" not in ld or (("force" in ld) == ("total_force" in ld)):
-                raise ctx.error(p, "a 'force' load needs 'nodes' and one of 'force' (per node [N]) "
-                                "or 'total_force' (shared equally [N])")
-            ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
-            if "force" in ld:
-                f = np.array(vector(ctx, ld["force"], f"{p}.force"))
-            else:
-                f = np.array(vector(ctx, ld["total_force"], f"{p}.total_force")) / ids.size
-            b.add_force(ids, f, curve)
-        elif ld["type"] == "pressure":
-            if "nodes" not in ld or "value" not in ld:
-                raise ctx.error(p, "a 'pressure' load needs 'value' [Pa] and 'nodes' (the boundary "
-                                "triangles whose three nodes are all selected)")
-            ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
-            B, _ = boundary_faces(T)
-            faces = B[np.all(np.isin(B, ids), axis=1)]
-            if len(faces) == 0:
-                raise ctx.error(f"{p}.nodes", f"the {ids.size} selected nodes hold no whole boundary "
-                                "triangle: select a surface patch")
-            b.add_pressure(faces, float(ld["value"]), curve)
-        else:
-            raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force', "
-                            "'pressure' or 'gravity'")
+        with ctx.under(p):
+            _add_load(ctx, b, ld, p, X, T, scene)
 
     for i, t in enumerate(data.get("tool", [])):
-        only = select_nodes(ctx, t["nodes"], f"tool[{i}].nodes", X, T) if "nodes" in t else None
-        b.add_tool(_make_tool(ctx, t, f"tool[{i}]", path.parent), nodes=only)
+        with ctx.under(f"tool[{i}]"):
+            only = select_nodes(ctx, t["nodes"], f"tool[{i}].nodes", X, T) if "nodes" in t else None
+            b.add_tool(_make_tool(ctx, t, f"tool[{i}]", path.parent), nodes=only)
 
+    _output(ctx, data, scene)
+    return scene
+
+
+def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -> None:
+    """One [[load]] table: gravity, force or pressure."""
+    curve = make_curve(ctx, ld.get("curve"), f"{p}.curve", scene.duration)
+    if ld["type"] == "gravity":
+        b.set_gravity(vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g"), curve)
+    elif ld["type"] == "force":
+        if "nodes" not in ld or (("force" in ld) == ("total_force" in ld)):
+            raise ctx.error(p, "a 'force' load needs 'nodes' and one of 'force' (per node [N]) "
+                            "or 'total_force' (shared equally [N])")
+        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+        if "force" in ld:
+            f = np.array(vector(ctx, ld["force"], f"{p}.force"))
+        else:
+            f = np.array(vector(ctx, ld["total_force"], f"{p}.total_force")) / ids.size
+        b.add_force(ids, f, curve)
+    elif ld["type"] == "pressure":
+        if "nodes" not in ld or "value" not in ld:
+            raise ctx.error(p, "a 'pressure' load needs 'value' [Pa] and 'nodes' (the boundary "
+                            "triangles whose three nodes are all selected)")
+        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+        B, _ = boundary_faces(T)
+        faces = B[np.all(np.isin(B, ids), axis=1)]
+        if len(faces) == 0:
+            raise ctx.error(f"{p}.nodes", f"the {ids.size} selected nodes hold no whole boundary "
+                            "triangle: select a surface patch")
+        b.add_pressure(faces, float(ld["value"]), curve)
+    else:
+        raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force', "
+                        "'pressure' or 'gravity'")
+
+
+def _output(ctx: Ctx, data: dict, scene: Scene) -> None:
+    """The [output] table."""
     out = check_keys(ctx, data.get("output", {}), "output",
                      {"every": "int", "interval": "number", "frames": "int", "png": "bool",
                       "fields": "list"})
@@ -449,4 +463,3 @@ def load_scene(path) -> Scene:
     scene.output_interval = out.get("interval")
     scene.frames = int(out.get("frames", 20))
     scene.png = bool(out.get("png", True))
-    return scene

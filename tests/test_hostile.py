@@ -1,0 +1,293 @@
+"""Hostile input on the command line, one test per defect class (issue 11): every bad input gives
+exit code 2 and one line on stderr that names the culprit, no traceback, no signal, no hang, no
+Python warning, nothing half-written. Runs the installed ``pliant`` program of this environment,
+as a user would."""
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+from test_niftysim import _cube_xml
+
+PLIANT = Path(sys.executable).with_name("pliant")
+ROOT = Path(__file__).parents[1]
+
+SCENE = """title = "bar"
+[mesh]
+primitive = "box"
+size = [0.1, 0.02, 0.02]
+cells = [5, 2, 2]
+[[material]]
+type = "neo-hookean"
+E = 5e5
+nu = 0.45
+density = 1000.0
+[solver]
+duration = 0.001
+[[constraint]]
+type = "fix"
+nodes = { plane = { point = [-0.05, 0, 0], normal = [1, 0, 0] } }
+"""
+
+
+def cli(*args, cwd=None, timeout=120):
+    """Run the installed program; a hang is a failure (TimeoutExpired propagates)."""
+    assert PLIANT.exists(), f"the pliant program is not installed in this environment ({PLIANT})"
+    env = {**os.environ, "PYTHONWARNINGS": "default"}  # warnings would show if not routed
+    env.pop("PLIANT_DEBUG", None)
+    return subprocess.run([str(PLIANT), *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, cwd=cwd, env=env)
+
+
+def refused(r, *words):
+    """Exit code 2 and exactly one stderr line, 'error: ...', naming each of ``words``."""
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2, (r.returncode, r.stdout[-2000:], r.stderr[-2000:])
+    assert len(lines) == 1 and lines[0].startswith("error: "), r.stderr[-3000:]
+    assert "Traceback" not in r.stderr + r.stdout
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    return lines[0]
+
+
+def scene(tmp_path, text=SCENE, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+# --- resources: threads, steps, sizes ---------------------------------------------------------
+@pytest.mark.parametrize("value", ["100000", "0", "-3"])
+def test_thread_counts_out_of_range_are_refused_in_scenes(tmp_path, value):
+    """100,000 threads crashed OpenMP (segmentation fault); 0 and negatives were taken silently."""
+    p = scene(tmp_path, SCENE.replace("duration = 0.001", f"duration = 0.001\nthreads = {value}"))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "solver.threads", value)
+    assert not (tmp_path / "o").exists()  # a refused run leaves no folder behind
+
+
+@pytest.mark.parametrize("value", ["100000", "0", "-1"])
+def test_thread_counts_out_of_range_are_refused_on_the_command_line(tmp_path, value):
+    refused(cli("run", scene(tmp_path), "-o", tmp_path / "o", "--threads", value), "threads",
+            value)
+
+
+def test_thread_limit_in_the_api_and_the_engine():
+    import pliant as pl
+    from pliant import _core
+
+    X, T = pl.mesh.box_tets((1, 1, 1), (1, 1, 1))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=1e3, nu=0.3), 1000.0)
+    for bad in (100000, 0, -1, 2.5, True):
+        with pytest.raises(pl.InputError, match="threads"):
+            b.finalize(threads=bad)
+    assert b.finalize(threads=_core.thread_limit()).threads == _core.thread_limit()
+
+
+def test_huge_duration_is_refused_before_anything_runs(tmp_path):
+    p = scene(tmp_path, SCENE.replace("duration = 0.001", "duration = 1e20"))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "duration", "steps")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("patch, key", [
+    (("<TotalTime>0.05</TotalTime>", "<TotalTime>1e30</TotalTime>"), "steps"),
+    (("<TimeStep>1e-4</TimeStep>", "<TimeStep>nan</TimeStep>"), "TimeStep"),
+    (("<TimeStep>1e-4</TimeStep>", "<TimeStep>-1</TimeStep>"), "TimeStep"),
+    (("<DampingCoeff>20</DampingCoeff>", "<DampingCoeff>fast</DampingCoeff>"), "DampingCoeff"),
+    (("<Density>1000</Density>", "<Density>inf</Density>"), "Density"),
+    (('NumEls="48"', 'NumEls="53"'), "NumEls"),
+    (('NumNodes="27"', 'NumNodes="x"'), "NumNodes"),
+    (('<Nodes>0 ', '<Nodes>99999 '), "node 99999"),
+    (("0.01</Magnitudes>", "nan</Magnitudes>"), "Magnitudes"),
+])
+def test_niftysim_bad_values_are_named(tmp_path, patch, key):
+    """Each NiftySim value that used to crash or pass silently (TotalTime 1e30, TimeStep nan,
+    NumEls larger than the list, a constraint on node 99999 reported without the file)."""
+    *_, xml = _cube_xml()
+    assert patch[0] in xml
+    p = tmp_path / "m.xml"
+    p.write_text(xml.replace(*patch, 1))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), key)
+    assert not (tmp_path / "o").exists()
+
+
+def test_deeply_nested_toml_is_refused(tmp_path):
+    p = scene(tmp_path, "a = " + "[" * 5000 + "]" * 5000 + "\n")
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "nested")
+
+
+def test_huge_title_does_not_hang(tmp_path):
+    """A 2-million-character title made the PNG title layout run for minutes."""
+    p = scene(tmp_path, SCENE.replace('"bar"', '"' + "x" * 2_000_000 + '$\\\\frac{"'))
+    t = time.perf_counter()
+    r = cli("run", p, "-o", tmp_path / "o", "--no-progress", timeout=60)
+    assert r.returncode == 0 and r.stderr == "", r.stderr[-2000:]
+    assert (tmp_path / "o" / "result.png").stat().st_size > 10_000
+    assert time.perf_counter() - t < 60
+
+
+def test_box_sizes_and_jitter_are_bounded(tmp_path):
+    p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [100000, 100000, 100000]"))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "tets")
+    p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [5, 2, 2]\njitter = 0.7"))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "jitter")
+
+
+def test_an_element_that_ruins_the_time_step_is_named(tmp_path):
+    """A jitter of 0.499 leaves an element 18,000 times slower than the median: the run works, but
+    the user is told which element costs the steps (it used to be silent)."""
+    p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [5, 2, 2]\njitter = 0.499"))
+    r = cli("run", p, "-o", tmp_path / "o", "--no-progress")
+    warn = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 0 and len(warn) == 1 and warn[0].startswith("warning: "), r.stderr
+    assert re.search(r"element \d+ limits the stable time step", warn[0])
+
+
+# --- files: unreadable input, unwritable output ----------------------------------------------
+def _bad_outputs(tmp_path):
+    (tmp_path / "file").write_text("x")
+    return {"missing folder": (tmp_path / "no" / "such" / "out.{ext}", "does not exist"),
+            "under a file": (tmp_path / "file" / "out.{ext}", "not a folder"),
+            "read-only folder": (Path("/proc") / "out.{ext}", "/proc/out"),
+            "a folder": (tmp_path, "folder")}
+
+
+@pytest.mark.parametrize("case", ["missing folder", "under a file", "read-only folder", "a folder"])
+@pytest.mark.parametrize("command", ["simplify", "subdivide", "repair", "tetrahedralize"])
+def test_unwritable_mesh_outputs_are_named(tmp_path, command, case):
+    out, words = _bad_outputs(tmp_path)[case]
+    ext = "vtu" if command == "tetrahedralize" else "stl"
+    out = Path(str(out).format(ext=ext))
+    extra = ["--ratio", "0.5"] if command == "simplify" else []
+    r = cli("mesh", command, ROOT / "examples" / "data" / "kidney.obj", out, *extra)
+    refused(r, str(out).rstrip("/") if case != "a folder" else str(out), words)
+
+
+def test_unknown_output_format_is_named(tmp_path):
+    refused(cli("mesh", "repair", ROOT / "examples" / "data" / "kidney.obj", tmp_path / "k.xyz"),
+            "k.xyz", "format")
+
+
+def test_results_folder_that_cannot_be_made(tmp_path):
+    (tmp_path / "file").write_text("x")
+    refused(cli("run", scene(tmp_path), "-o", tmp_path / "file" / "o"), "file", "o")
+
+
+@pytest.mark.parametrize("content", [b"<VTKFile garbage", b"", b"\x00\xff" * 100])
+def test_unreadable_volume_meshes_are_named(tmp_path, content):
+    """meshio prints 'Error: ...' and calls sys.exit(1) on some files: it was exit 1 with a blank
+    error line."""
+    p = tmp_path / "bad.vtu"
+    p.write_bytes(content)
+    refused(cli("mesh", "quality", p), str(p), "cannot read")
+    s = scene(tmp_path, SCENE.replace('primitive = "box"', f'file = "{p}"'))
+    refused(cli("run", s, "-o", tmp_path / "o"), str(s), "mesh.file", str(p))
+
+
+def test_flat_surface_is_refused_as_enclosing_no_volume(tmp_path):
+    """Four coplanar vertices, both sides: fTetWild crashed (segmentation fault)."""
+    p = tmp_path / "flat.obj"
+    p.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\nf 1 3 2\nf 2 3 4\n")
+    refused(cli("mesh", "tetrahedralize", p, tmp_path / "flat.vtu"), "encloses no volume", "plane")
+    assert not (tmp_path / "flat.vtu").exists()
+
+
+def test_quality_of_degenerate_tets_prints_no_nan(tmp_path):
+    """A zero-volume tet made 'the worst element costs nan× the steps'."""
+    X = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0], [1, 1, 0]])
+    p = tmp_path / "d.vtu"
+    meshio.write(p, meshio.Mesh(X, [("tetra", np.array([[0, 1, 2, 3], [0, 1, 2, 4]]))]))
+    r = cli("mesh", "quality", p)
+    assert r.returncode == 0 and "1 degenerate" in r.stdout, r.stdout + r.stderr
+    assert not re.search(r"\b(nan|inf)\b", r.stdout), r.stdout
+    r = cli("mesh", "quality", p, "--json")
+    import json
+
+    s = json.loads(r.stdout)  # strict JSON: no NaN or Infinity tokens
+    assert s["degenerate"] == 1 and s["dt_critical"]["element"] == 0
+
+
+# --- messages ---------------------------------------------------------------------------------
+def test_empty_key_is_quoted_in_the_message(tmp_path):
+    p = scene(tmp_path, SCENE + '"" = 1\n')
+    line = refused(cli("run", p, "-o", tmp_path / "o"), str(p), 'constraint[0].""')
+    assert ": :" not in line
+
+
+def test_png_false_does_not_announce_a_picture(tmp_path):
+    p = scene(tmp_path, SCENE + "[output]\npng = false\n")
+    r = cli("run", p, "-o", tmp_path / "o", "--no-progress")
+    assert r.returncode == 0 and "result.png" not in r.stdout and "summary.json" in r.stdout
+    assert not (tmp_path / "o" / "result.png").exists()
+
+
+def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path):
+    """Ctrl-C between a frame's file and the index left result.pvd one frame short."""
+    p = scene(tmp_path, SCENE.replace("duration = 0.001", "duration = 100.0") +
+              "[output]\nevery = 1\npng = false\n")
+    proc = subprocess.Popen([str(PLIANT), "run", str(p), "-o", str(tmp_path / "o"),
+                             "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    deadline = time.time() + 60
+    while time.time() < deadline and len(list((tmp_path / "o").glob("frame_*.vtu"))) < 20:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, (out, err)
+    assert "Traceback" not in err
+    frames = sorted(f.name for f in (tmp_path / "o").glob("frame_*.vtu"))
+    listed = re.findall(r'file="([^"]+)"', (tmp_path / "o" / "result.pvd").read_text())
+    assert len(frames) >= 20 and listed == frames
+    assert not list((tmp_path / "o").glob(".*tmp*"))  # nothing half-written left behind
+
+
+# --- the guard itself --------------------------------------------------------------------------
+def test_internal_errors_give_one_line_a_log_and_exit_3(tmp_path, monkeypatch):
+    """An unexpected exception is a bug, but the user gets one line naming it and the log file
+    that holds the traceback."""
+    import io
+
+    import typer
+    from rich.console import Console
+
+    from pliant.guard import EXIT_INTERNAL, run_guarded
+
+    app = typer.Typer()
+
+    @app.command()
+    def boom(x: int = 1):
+        raise RuntimeError("kaboom [/bold] \n second line")
+
+    @app.command()
+    def other():
+        pass
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", None)
+    buf = io.StringIO()
+    code = run_guarded(app, ["boom"], Console(file=buf, width=300))
+    lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
+    assert code == EXIT_INTERNAL == 3 and len(lines) == 1, buf.getvalue()
+    assert "RuntimeError: kaboom" in lines[0] and "Traceback" not in buf.getvalue()
+    log = Path(re.search(r"full traceback in (\S+?);", lines[0]).group(1))
+    assert log.parent == tmp_path and "Traceback" in log.read_text()
+    assert "raise RuntimeError" in log.read_text()
+
+
+def test_usage_errors_exit_2():
+    r = cli("run")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    r = cli("no-such-command")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
