@@ -1,5 +1,7 @@
 """Bad input gives typed errors that name the culprit; state save/restore round-trips."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -129,3 +131,97 @@ def test_non_finite_element_is_named_as_an_element():
     with pytest.raises(pl.InstabilityError, match=r"non-finite deformation in element \d+") as err:
         sim.step(50)
     assert err.value.element is not None and 0 <= err.value.element < len(T)
+
+
+# --- the Python API under hostile calls (issue 11) ----------------------------------------------
+def _sim(E=1e6, tool=False):
+    X, T = _two_cubes()
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=E, nu=0.3), density=1000)
+    b.fix(np.nonzero(X[:, 2] < 1e-9)[0])
+    b.set_gravity()
+    if tool:
+        b.add_tool(pl.contact.Plane((0, 0, -0.1), (0, 0, 1)))
+    return pl.Simulation(b.finalize("float64")), b
+
+
+@pytest.mark.parametrize("content, text", [
+    (None, "no such state file"),
+    (b"", "not a readable pliant state file"),
+    (b"PK\x03\x04 truncated zip", "not a readable pliant state file"),
+    (b"\x93NUMPY garbage" * 10, "not a readable pliant state file"),
+])
+def test_state_load_of_missing_or_corrupt_files(tmp_path, content, text):
+    sim, _ = _sim()
+    p = tmp_path / "s.npz"
+    if content is not None:
+        p.write_bytes(content)
+    with pytest.raises(pl.InputError, match=text) as err:
+        sim.load(p)
+    assert str(p) in str(err.value)
+
+
+def test_state_load_of_truncated_foreign_and_other_models_files(tmp_path):
+    sim, _ = _sim()
+    sim.step(10)
+    good = tmp_path / "s.npz"
+    sim.save(good)
+    data = good.read_bytes()
+    (tmp_path / "half.npz").write_bytes(data[: len(data) // 2])
+    np.savez(tmp_path / "foreign.npz", weights=np.ones(3))
+    for name, text in (("half.npz", "not a readable"), ("foreign.npz", "not a pliant state file")):
+        with pytest.raises(pl.InputError, match=text):
+            sim.load(tmp_path / name)
+    # Same sizes, different model (another stiffness): refused by the fingerprint.
+    other, _ = _sim(E=2e6)
+    assert (other.model.n_nodes, other.model.n_elements) == (sim.model.n_nodes, sim.model.n_elements)
+    with pytest.raises(pl.InputError, match="different model"):
+        other.load(good)
+    sim.load(good)  # and the right model still takes it
+    assert sim.state.steps == 10
+
+
+def test_state_load_checks_values(tmp_path):
+    sim, _ = _sim()
+    sim.save(tmp_path / "s.npz")
+    with np.load(tmp_path / "s.npz") as d:
+        data = {k: d[k] for k in d.files}
+    data["u"] = data["u"].copy()
+    data["u"][3, 1] = np.nan
+    np.savez(tmp_path / "nan.npz", **data)
+    with pytest.raises(pl.InputError, match=r"1 non-finite value\(s\), first at node 3"):
+        sim.load(tmp_path / "nan.npz")
+
+
+@pytest.mark.parametrize("call, text", [
+    (lambda s: s.step(2**70), "expected 0 to"),
+    (lambda s: s.step(-1), "expected 0 to"),
+    (lambda s: s.step(2.5), "whole number"),
+    (lambda s: s.step("10"), "whole number"),
+    (lambda s: s.run_to(float("nan")), "finite time"),
+    (lambda s: s.run_to(float("inf")), "finite time"),
+    (lambda s: s.run_to(1e30), "steps"),
+    (lambda s: s.tool_force(5), "tool index 5"),
+    (lambda s: s.set_tool_pose(-1, (0, 0, 0)), "tool index -1"),
+    (lambda s: s.set_tool_pose(0, (0, 0, float("nan"))), "position"),
+    (lambda s: s.solver.step(s.state, s.state.copy(), float("nan")), "dt"),
+    (lambda s: s.state.set_displacements(np.zeros((3, 3))), "expected shape"),
+])
+def test_simulation_calls_with_bad_arguments(call, text):
+    sim, _ = _sim(tool=True)
+    with pytest.raises(pl.InputError, match=text):
+        call(sim)
+    assert sim.state.steps == 0  # nothing ran
+
+
+def test_simulation_of_a_builder_and_node_ids_of_the_wrong_type():
+    _, b = _sim()
+    with pytest.raises(pl.InputError, match="ModelBuilder; expected a pliant Model; call "
+                                            r"builder.finalize\(\) first"):
+        pl.Simulation(b)
+    for ids, text in (([1.5], "node id 1.5"), (["a"], "type <U1"), ([True], "type bool"),
+                      ([float("nan")], "node id nan")):
+        with pytest.raises(pl.InputError, match=re.escape(text)):
+            b.add_force(ids, (0, 0, 1))
+    b.add_force(np.array([1.0, 2.0]), (0, 0, 1))  # integral floats are node ids

@@ -26,6 +26,33 @@ def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
     return max(1, math.ceil(total_steps / scene.frames))
 
 
+def build(scene: Scene, threads: int | None = None, backend: str | None = None,
+          allow_unstable: bool = False):
+    """The scene's model and solver. Input errors name the scene file (the builder knows only the
+    mesh's source); a duration of more than MAX_STEPS steps is refused here, before any work."""
+    try:
+        model = scene.builder.finalize(scene.dtype,
+                                       threads=scene.threads if threads is None else threads,
+                                       backend=backend or scene.backend)
+        solver = Solver(model, dt=scene.dt, safety=scene.safety, allow_unstable=allow_unstable,
+                        check_every=scene.check_every)
+    except InputError as e:
+        if scene.source in str(e):
+            raise
+        raise type(e)(f"{scene.source}: {e}", *_extra_args(e)) from None
+    total = math.ceil(scene.duration / solver.dt - 1e-9)
+    if total > MAX_STEPS:
+        raise InputError(f"{scene.source}: duration {scene.duration:g} s takes {total:.3g} steps of "
+                         f"{solver.dt:.3g} s; expected at most {MAX_STEPS:.0e} steps (shorten the "
+                         "duration, or use a quasi-static solve)")
+    return model, solver
+
+
+def _extra_args(e: Exception) -> tuple:
+    """The arguments after the message of errors that carry more (an element id)."""
+    return (e.element,) if hasattr(e, "element") else ()
+
+
 def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool = False,
               threads: int | None = None, echo=print, backend: str | None = None) -> dict:
     """Run ``scene`` and write OUTDIR/result.pvd, frame_*.vtu, summary.json and result.png.
@@ -36,16 +63,8 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
 
     out = check_output_dir(out_dir)  # checked first, created only once the model is valid
     t_build = time.perf_counter()
-    model = scene.builder.finalize(scene.dtype, threads=scene.threads if threads is None else threads,
-                                   backend=backend or scene.backend)
-    solver = Solver(model, dt=scene.dt, safety=scene.safety, allow_unstable=allow_unstable,
-                    check_every=scene.check_every)
-    total = math.ceil(scene.duration / solver.dt - 1e-9)
-    if total > MAX_STEPS:
-        raise InputError(f"{scene.source}: duration {scene.duration:g} s takes {total:.3g} steps of "
-                         f"{solver.dt:.3g} s; expected at most {MAX_STEPS:.0e} steps (shorten the "
-                         "duration, or use a quasi-static solve)")
-    total = max(1, total)
+    model, solver = build(scene, threads, backend, allow_unstable)
+    total = max(1, math.ceil(scene.duration / solver.dt - 1e-9))
     state = model.state()
     embedding = None
     if scene.meta.get("embed_surface"):

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import MeshError
 from .repair import enclosed_volume_problem, repair_surface, simplify
-from .tetra import tetrahedralize
+from .tetra import MAX_TETS, tetrahedralize
 
 BODIES = ("union", "separate", "largest", "one")
 
@@ -51,6 +51,8 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
         raise MeshError(f"bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
     if keep_largest:
         bodies = "largest"
+    if not 1 <= int(target_tets) <= MAX_TETS:
+        raise MeshError(f"target_tets = {target_tets}; expected 1 to {MAX_TETS:.0e}")
     info: dict = {"input_vertices": int(len(V)), "input_faces": int(len(F)), "seconds": {},
                   "bodies_mode": bodies}
     t = time.perf_counter()
@@ -106,10 +108,10 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
             raise MeshError(f"tetrahedralize: the tets fill {100 * ratio:.0f} % of the surface's "
                             f"volume (envelope {eps:g}); repair the surface or give a smaller "
                             "edge length")
+        eps /= 2
     if len(parts) > 1:
         info["union_volume"] = vol
         info["bodies_volume"] = ref_vol
-        eps /= 2
     info["epsilon"] = eps
     info["seconds"]["tetrahedralize"] = time.perf_counter() - t
     info["nodes"], info["tets"] = int(len(X)), int(len(T))

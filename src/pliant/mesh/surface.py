@@ -80,6 +80,16 @@ def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:
     z, centred), torus(major_radius, minor_radius; axis z). Resolution follows ``segments``."""
     import trimesh
 
+    for key, low, high in (("segments", 3, 4096), ("minor_segments", 3, 4096),
+                           ("subdivisions", 0, 7)):
+        if key in p and not (isinstance(p[key], (int, np.integer)) and low <= p[key] <= high):
+            raise MeshError(f"{kind}: {key} = {p[key]!r}; expected an integer from {low} to {high}")
+    for key in ("radius", "height", "major_radius", "minor_radius"):
+        if key in p and not (np.isfinite(p[key]) and p[key] > 0):
+            raise MeshError(f"{kind}: {key} = {p[key]!r}; expected a finite length > 0 [m]")
+    if kind == "torus" and not p["minor_radius"] < p["major_radius"]:
+        raise MeshError(f"torus: minor_radius {p['minor_radius']} must be smaller than major_radius "
+                        f"{p['major_radius']} [m]")
     if kind == "sphere":
         m = trimesh.creation.icosphere(subdivisions=int(p.get("subdivisions", 3)),
                                        radius=p["radius"])

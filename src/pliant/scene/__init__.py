@@ -123,7 +123,7 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
         "height": "number", "major_radius": "number", "minor_radius": "number",
         "edge_length": "number", "scale": "number", "rotate": "list", "translate": "list",
         "jitter": "number", "segments": "int", "minor_segments": "int", "target_tets": "int",
-        "embed": "bool", "embed_subdivide": "int"})
+        "embed": "bool", "embed_subdivide": "int", "bodies": "str"})
     if ("file" in spec) == ("primitive" in spec):
         raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
     sets: dict[str, np.ndarray] = {}
@@ -151,8 +151,14 @@ def _load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
         try:
             if f.suffix.lower() in surface_ext:
                 V, F = pm.read_surface(f)
+                from ..mesh.pipeline import BODIES
+
+                if spec.get("bodies", "union") not in BODIES:
+                    raise ctx.error("mesh.bodies", f"bodies = {spec['bodies']!r}; expected one of "
+                                    f"{', '.join(BODIES)}")
                 X, T, info = pm.surface_to_tets(V * scale, F, edge_length=el,
-                                                target_tets=spec.get("target_tets", 10000))
+                                                target_tets=spec.get("target_tets", 10000),
+                                                bodies=spec.get("bodies", "union"))
                 scene.meta["mesh_pipeline"] = info
                 if spec.get("embed") or spec.get("embed_subdivide"):
                     Ve, Fe = pm.subdivide_loop(V * scale, F, int(spec.get("embed_subdivide", 0)))
