@@ -5,6 +5,7 @@ line naming the file. Any other exception, a crash or a hang fails. A fixed budg
 derandomized, so that CI runs the same cases every time."""
 
 import math
+import os
 import re
 import tempfile
 import xml.etree.ElementTree as ET
@@ -20,7 +21,11 @@ from pliant.io.niftysim import load_niftysim
 from pliant.scene import load_scene
 from test_niftysim import _cube_xml
 
-BUDGET = settings(max_examples=120, deadline=None, derandomize=True, database=None,
+# CI's budget: 120 examples per test, the same ones every run. PLIANT_FUZZ_EXAMPLES=5000 explores
+# more, with fresh random cases each time (a developer's hunt; failures print their input).
+_EXPLORE = int(os.environ.get("PLIANT_FUZZ_EXAMPLES", "0"))
+BUDGET = settings(max_examples=_EXPLORE or 120, deadline=None, derandomize=not _EXPLORE,
+                  database=None,
                   suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 
 BASE = """title = "fuzz"

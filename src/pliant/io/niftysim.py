@@ -187,7 +187,11 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
             try:
                 n = int(size)
             except ValueError:
-                raise NiftySimError(f"<ElementSet Size={size!r}>: expected a count or 'all'", f, key) from None
+                raise NiftySimError(f"<ElementSet Size={size[:40]!r}>: expected a count or 'all'", f,
+                                    key) from None
+            if not 0 <= n <= M:
+                raise NiftySimError(f"<ElementSet Size={n}>: expected 0 to {M} (the element count) "
+                                    "or 'all'", f, key)
             if listed.size == n:
                 elems = listed
             elif listed.size <= 1:  # shorthand: N consecutive elements from the first listed (or 0)

@@ -19,17 +19,20 @@ def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
                 try:
                     V.append([float(x) for x in parts[1:4]])
                 except ValueError:
-                    raise MeshError(f"{path}:{lineno}: bad vertex line {line.strip()!r}") from None
+                    raise MeshError(f"{path}:{lineno}: bad vertex line {line.strip()[:80]!r}") from None
                 if len(V[-1]) != 3:
                     raise MeshError(f"{path}:{lineno}: vertex with {len(V[-1])} coordinates")
             elif line.startswith("f "):
                 try:
                     idx = [int(t.split("/")[0]) for t in line.split()[1:]]
                 except ValueError:
-                    raise MeshError(f"{path}:{lineno}: bad face line {line.strip()!r}") from None
+                    raise MeshError(f"{path}:{lineno}: bad face line {line.strip()[:80]!r}") from None
                 idx = [i - 1 if i > 0 else len(V) + i for i in idx]
                 if len(idx) < 3:
                     raise MeshError(f"{path}:{lineno}: face with {len(idx)} vertices")
+                if not all(0 <= i < 2**62 for i in idx):
+                    raise MeshError(f"{path}:{lineno}: face index out of range in "
+                                    f"{line.strip()[:80]!r}")
                 for k in range(1, len(idx) - 1):  # fan-triangulate polygons
                     F.append([idx[0], idx[k], idx[k + 1]])
     return np.asarray(V, dtype=float).reshape(-1, 3), np.asarray(F, dtype=np.int64).reshape(-1, 3)

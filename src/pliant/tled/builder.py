@@ -79,8 +79,12 @@ class ModelBuilder:
 
         Returns the global indices of the new elements."""
         src = source or self.source
-        X = np.asarray(nodes, dtype=float)
-        T = np.asarray(tets)
+        try:
+            X = np.asarray(nodes, dtype=float)
+            T = np.asarray(tets)
+        except (TypeError, ValueError) as e:
+            raise MeshError(f"{src}: nodes (N, 3) and tetrahedra (M, 4) must be numeric arrays: "
+                            f"{e}") from None
         if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] == 0:
             raise MeshError(f"{src}: nodes have shape {X.shape}; expected (N, 3) with N >= 1")
         if not np.all(np.isfinite(X)):
@@ -88,8 +92,10 @@ class ModelBuilder:
             raise MeshError(f"{src}: node {bad} has a non-finite coordinate {X[bad].tolist()}")
         if T.ndim != 2 or T.shape[1] != 4 or T.shape[0] == 0:
             raise MeshError(f"{src}: tetrahedra have shape {T.shape}; expected (M, 4) with M >= 1")
+        if not (np.issubdtype(T.dtype, np.integer) or np.issubdtype(T.dtype, np.floating)):
+            raise MeshError(f"{src}: tetrahedron indices of type {T.dtype}; expected integers")
         if not np.issubdtype(T.dtype, np.integer):
-            if not np.all(np.equal(np.mod(T, 1), 0)):
+            if not np.all(np.isfinite(T)) or not np.all(np.equal(np.mod(T, 1), 0)):
                 raise MeshError(f"{src}: tetrahedron indices must be integers")
             T = T.astype(np.int64)
         bad = np.argwhere((T < 0) | (T >= X.shape[0]))
@@ -166,11 +172,17 @@ class ModelBuilder:
         node (n, len(dofs)). A DOF prescribed twice with different values or curves is an error."""
         ids = self._node_ids(nodes, "prescribe")
         ds = _dofs(dofs)
-        val = np.broadcast_to(np.asarray(displacement, dtype=float), (ids.size, len(ds))) \
-            if np.ndim(displacement) < 2 else np.asarray(displacement, dtype=float)
-        if val.shape != (ids.size, len(ds)):
-            raise InputError(f"prescribe: displacement shape {np.shape(displacement)}; expected a "
-                             f"scalar, ({len(ds)},) or ({ids.size}, {len(ds)})")
+        given = "non-numeric"
+        try:
+            val = np.asarray(displacement, dtype=float)
+            given = f"shape {val.shape}"
+            val = np.broadcast_to(val, (ids.size, len(ds))) if val.ndim < 2 else val
+        except (TypeError, ValueError):
+            val = None
+        if val is None or val.shape != (ids.size, len(ds)):
+            raise InputError(f"prescribe: displacement of {given} for {len(ds)} DOF(s) ({dofs}) of "
+                             f"{ids.size} node(s); expected a scalar, ({len(ds)},) or "
+                             f"({ids.size}, {len(ds)}) [m]")
         if not np.all(np.isfinite(val)):
             raise InputError("prescribe: displacement values must be finite")
         curve = curve or Constant()
@@ -187,10 +199,13 @@ class ModelBuilder:
     def add_force(self, nodes, force, curve: LoadCurve | None = None):
         """Add a force [N] on each node: (3,) for all, or (n, 3) per node; scaled by ``curve``."""
         ids = self._node_ids(nodes, "add_force")
-        f = np.asarray(force, dtype=float)
-        f = np.broadcast_to(f, (ids.size, 3)) if f.ndim == 1 else f
+        try:
+            f = np.asarray(force, dtype=float)
+            f = np.broadcast_to(f, (ids.size, 3)) if f.ndim == 1 else f
+        except (TypeError, ValueError):
+            f = np.zeros((0, 0))
         if f.shape != (ids.size, 3) or not np.all(np.isfinite(f)):
-            raise InputError(f"add_force: force shape {np.shape(force)}; expected finite (3,) or "
+            raise InputError(f"add_force: force of shape {f.shape} or not finite; expected finite (3,) or "
                              f"({ids.size}, 3) [N]")
         self._forces.append((ids, np.array(f), curve or Constant()))
 

@@ -68,6 +68,8 @@ def _warn_slow_element(source: str, sets, owner: np.ndarray, altitude: np.ndarra
     c = np.array([math.sqrt((s.material.lam + 2.0 * s.material.mu) / s.density) for s in sets])
     dt = altitude / c[owner]
     worst = int(np.argmin(dt))
+    if not dt[worst] > 0:  # degenerate elements are refused before (finalize)
+        return
     factor = float(np.median(dt) / dt[worst])
     if factor >= SLOW_ELEMENT_FACTOR:
         warnings.warn(PliantWarning(
