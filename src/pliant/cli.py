@@ -115,6 +115,8 @@ def view(target: Path = typer.Argument(..., help="Scene (.toml), NiftySim model 
     """Interactive 3-D view in the browser: live simulation with draggable tools, or playback."""
     from .view.viewer import LiveViewer, PlaybackViewer
 
+    if not 1 <= port <= 65535:
+        _fail(InputError(f"--port {port}: expected 1 to 65535"), 2)
     try:
         if target.is_dir():
             v = PlaybackViewer(target, host, port)

@@ -22,7 +22,7 @@ def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
     if scene.output_every:
         return scene.output_every
     if scene.output_interval:
-        return max(1, int(round(scene.output_interval / dt)))
+        return max(1, int(round(min(scene.output_interval / dt, MAX_STEPS))))
     return max(1, math.ceil(total_steps / scene.frames))
 
 
@@ -40,8 +40,8 @@ def build(scene: Scene, threads: int | None = None, backend: str | None = None,
         if scene.source in str(e):
             raise
         raise type(e)(f"{scene.source}: {e}", *_extra_args(e)) from None
-    total = math.ceil(scene.duration / solver.dt - 1e-9)
-    if total > MAX_STEPS:
+    total = scene.duration / solver.dt - 1e-9
+    if not total <= MAX_STEPS:
         raise InputError(f"{scene.source}: duration {scene.duration:g} s takes {total:.3g} steps of "
                          f"{solver.dt:.3g} s; expected at most {MAX_STEPS:.0e} steps (shorten the "
                          "duration, or use a quasi-static solve)")

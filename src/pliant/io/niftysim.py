@@ -250,11 +250,9 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
     out_every = None
     for o in root.findall("Output"):
         out_every = _scalar(o.get("Freq"), f, "Output Freq", int, 1, False)
-    steps = int(round(total / dt))
     scene = Scene(f, b, duration=total, dt=dt, dtype="float32", output_every=out_every,
                   frames=20, title=path.stem, warnings=warnings)
     scene.meta["mesh_source"] = f
-    scene.meta["niftysim_steps"] = steps
     return scene
 
 

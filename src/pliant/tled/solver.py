@@ -153,11 +153,11 @@ class Solver:
                 raise InputError(f"until = {until!r}; expected a time [s]") from None
             if not math.isfinite(until):
                 raise InputError(f"until = {until!r}; expected a finite time [s]")
-            n = math.ceil((until - state.time) / self.dt - 1e-9)
-            if n > MAX_STEPS:
+            n = (until - state.time) / self.dt - 1e-9
+            if not n <= MAX_STEPS:
                 raise InputError(f"until = {until:g} s is {n:.3g} steps of {self.dt:.3g} s away; "
                                  f"expected at most {MAX_STEPS:.0e} steps in one call")
-            steps = max(0, n)
+            steps = max(0, math.ceil(n))
         steps = _step_count(steps)
         if steps == 0:
             return RunInfo(0, state.time)

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, PliantError
+from ..io.files import read_meshio
 from .png import boundary_faces
 
 
@@ -268,22 +269,29 @@ class PlaybackViewer:
     def __init__(self, out_dir, host: str = "127.0.0.1", port: int = 8080):
         import re
 
-        import meshio
         import viser
 
         out = Path(out_dir)
         pvd = out / "result.pvd"
         if not pvd.exists():
             raise InputError(f"{out}: no result.pvd (not a pliant results folder)")
-        entries = re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', pvd.read_text())
+        entries = re.findall(r'timestep="([^"]+)"[^>]*file="([^"/\\]+)"',
+                             pvd.read_text(encoding="utf-8", errors="replace"))
         if not entries:
             raise InputError(f"{pvd}: no frames")
-        self.times = [float(t) for t, _ in entries]
+        try:
+            self.times = [float(t) for t, _ in entries]
+        except ValueError:
+            raise InputError(f"{pvd}: a timestep is not a number") from None
         self.files = [out / f for _, f in entries]
-        first = meshio.read(self.files[0])
+        missing = [f for f in self.files if not f.is_file()]
+        if missing:
+            raise InputError(f"{pvd}: lists {missing[0].name}, which is not in {out}")
+        first = read_meshio(self.files[0], "result frame")
+        if "tetra" not in first.cells_dict:
+            raise InputError(f"{self.files[0]}: no tetrahedra; expected a pliant result frame")
         self.X = first.points
         self.surface = _Surface(first.cells_dict["tetra"])
-        self.meshio = meshio
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         _frame_camera(self.server, self.X)
         self.slider = self.server.gui.add_slider("frame", 0, len(self.files) - 1, 1, 0)
@@ -294,7 +302,7 @@ class PlaybackViewer:
     def show(self, i: int):
         import trimesh
 
-        m = self.meshio.read(self.files[i])
+        m = read_meshio(self.files[i], "result frame")
         u = m.point_data.get("displacement", np.zeros_like(self.X))
         vm = m.cell_data_dict.get("von_mises", {}).get("tetra")
         vals = self.surface.node_values(vm) if vm is not None else \
