@@ -19,6 +19,7 @@ import pliant as pl
 from pliant.errors import InputError, PliantError
 from pliant.io.niftysim import load_niftysim
 from pliant.scene import load_scene
+from test_hostile import SCENE
 from test_niftysim import _cube_xml
 
 # CI's budget: 120 examples per test, the same ones every run. PLIANT_FUZZ_EXAMPLES=5000 explores
@@ -28,24 +29,9 @@ BUDGET = settings(max_examples=_EXPLORE or 120, deadline=None, derandomize=not _
                   database=None,
                   suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 
-BASE = """title = "fuzz"
-[mesh]
-primitive = "box"
-size = [0.1, 0.02, 0.02]
-cells = [4, 2, 2]
-[[material]]
-type = "neo-hookean"
-E = 5e5
-nu = 0.45
-density = 1000.0
-[solver]
-duration = 0.0005
-damping = 5.0
-dtype = "float64"
-[[constraint]]
-type = "fix"
-nodes = { plane = { point = [-0.05, 0, 0], normal = [1, 0, 0] } }
-[[constraint]]
+# The hostile-input tests' minimal scene, with more of everything for the mutations to hit.
+BASE = SCENE.replace('title = "bar"', 'title = "fuzz"').replace(
+    "duration = 0.001", 'duration = 0.0005\ndamping = 5.0\ndtype = "float64"') + """[[constraint]]
 type = "displacement"
 nodes = { box = [[0.04, -1, -1], [1, 1, 1]] }
 value = 0.001
@@ -79,6 +65,16 @@ def _build_and_step(scene):
 
     model, solver = build(scene)
     solver.run(model.state(), steps=3)
+
+
+def _loads_or_fails_by_name(load, p: Path):
+    """The property of every scene-like file: loads, builds and steps, or fails typed by name."""
+    try:
+        _build_and_step(load(p))
+    except InputError as e:
+        _check_error(e, p)
+    except PliantError:  # went unstable while stepping: typed, and named by the runner
+        pass
 
 
 def _write(text: str, suffix: str) -> Path:
@@ -122,13 +118,7 @@ def scene_texts(draw):
 @BUDGET
 @given(scene_texts())
 def test_scene_files_load_or_fail_by_name(text):
-    p = _write(text, ".toml")
-    try:
-        _build_and_step(load_scene(p))
-    except InputError as e:
-        _check_error(e, p)
-    except PliantError:  # went unstable while stepping: typed, and named by the runner
-        pass
+    _loads_or_fails_by_name(load_scene, _write(text, ".toml"))
 
 
 # --- NiftySim ---------------------------------------------------------------------------------
@@ -162,13 +152,7 @@ def niftysim_texts(draw):
 @BUDGET
 @given(niftysim_texts())
 def test_niftysim_files_load_or_fail_by_name(text):
-    p = _write(text, ".xml")
-    try:
-        _build_and_step(load_niftysim(p))
-    except InputError as e:
-        _check_error(e, p)
-    except PliantError:
-        pass
+    _loads_or_fails_by_name(load_niftysim, _write(text, ".xml"))
 
 
 # --- mesh files ---------------------------------------------------------------------------------

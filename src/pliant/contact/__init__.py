@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..checks import finite_number, finite_vector
 from ..errors import InputError
 
 __all__ = ["RigidTool", "Plane", "Sphere", "Capsule", "Cylinder", "Box", "MeshTool",
@@ -82,15 +83,8 @@ class RigidTool:
 
     def at(self, t: float, position, rotation=(1.0, 0.0, 0.0, 0.0)) -> "RigidTool":
         """Add a keyframe: at time t [s] the tool is at ``position`` [m] with ``rotation``."""
-        p = np.asarray(position, float).ravel()
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise InputError(f"{self.name}: position {position!r}; expected 3 finite numbers [m]")
-        try:
-            t = float(t)
-        except (TypeError, ValueError):
-            raise InputError(f"{self.name}: keyframe time {t!r}; expected a time [s]") from None
-        if not math.isfinite(t):
-            raise InputError(f"{self.name}: keyframe time {t}; expected a finite time [s]")
+        p = finite_vector(position, 3, f"{self.name}: position", "m")
+        t = finite_number(t, f"{self.name}: keyframe time", "s")
         key = np.concatenate([[t], p, _quat(rotation)])
         if getattr(self, "_fixed", False):  # the first explicit keyframe replaces the initial pose
             self.keys, self._fixed = [], False

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import finite_number, finite_vector
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
 
@@ -147,12 +148,7 @@ class Solver:
         if (steps is None) == (until is None):
             raise InputError("run: give exactly one of steps= or until=")
         if steps is None:
-            try:
-                until = float(until)
-            except (TypeError, ValueError):
-                raise InputError(f"until = {until!r}; expected a time [s]") from None
-            if not math.isfinite(until):
-                raise InputError(f"until = {until!r}; expected a finite time [s]")
+            until = finite_number(until, "until", "s")
             n = (until - state.time) / self.dt - 1e-9
             if not n <= MAX_STEPS:
                 raise InputError(f"until = {until:g} s is {n:.3g} steps of {self.dt:.3g} s away; "
@@ -297,9 +293,7 @@ class Simulation:
         from ..contact import quat_from_matrix
 
         t, dt = self.state.time, self.solver.dt
-        target = np.asarray(position, float).ravel()
-        if target.shape != (3,) or not np.all(np.isfinite(target)):
-            raise InputError(f"set_tool_pose: position {position!r}; expected 3 finite numbers [m]")
+        target = finite_vector(position, 3, "set_tool_pose: position", "m")
         v_max = 0.1 * self.model.min_altitude / dt
         duration = max(dt, float(np.linalg.norm(target - p)) / v_max)
         tool.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]

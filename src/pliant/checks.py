@@ -1,0 +1,33 @@
+"""Checks of values users pass to the API: each returns the value in its canonical type or raises
+:class:`~pliant.errors.InputError` naming the argument and what was expected."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import InputError
+
+
+def finite_number(value, what: str, unit: str = "") -> float:
+    """``value`` as a finite float ("until = nan; expected a finite number [s]")."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        x = None
+    if x is None or not math.isfinite(x):
+        raise InputError(f"{what} = {value!r}; expected a finite number{f' [{unit}]' if unit else ''}")
+    return x
+
+
+def finite_vector(value, n: int, what: str, unit: str = "") -> np.ndarray:
+    """``value`` as a float array of shape (n,) with finite entries."""
+    try:
+        a = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape != (n,) or not np.all(np.isfinite(a)):
+        raise InputError(f"{what} = {value!r}; expected {n} finite numbers"
+                         f"{f' [{unit}]' if unit else ''}")
+    return a
