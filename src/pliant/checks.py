@@ -31,3 +31,12 @@ def finite_vector(value, n: int, what: str, unit: str = "") -> np.ndarray:
         raise InputError(f"{what} = {value!r}; expected {n} finite numbers"
                          f"{f' [{unit}]' if unit else ''}")
     return a
+
+
+def shown(value, limit: int = 80) -> str:
+    """A value as an error message shows it: numpy scalars and arrays as plain Python numbers and
+    lists (never 'np.float64(nan)' or 'array([...])'), cut to ``limit`` characters."""
+    if isinstance(value, (np.ndarray, np.generic)):
+        value = value.tolist()
+    r = repr(value)
+    return r if len(r) <= limit else r[:limit] + f"... ({len(r)} characters)"

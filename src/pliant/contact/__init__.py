@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..checks import finite_number, finite_vector
+from ..checks import finite_number, finite_vector, shown
 from ..errors import InputError
 
 __all__ = ["RigidTool", "Plane", "Sphere", "Capsule", "Cylinder", "Box", "MeshTool",
@@ -32,7 +32,7 @@ def quat_align_z(direction) -> np.ndarray:
     d = np.asarray(direction, float)
     n = np.linalg.norm(d)
     if not n > 0:
-        raise InputError(f"direction {direction!r} has zero length")
+        raise InputError(f"direction {shown(direction)} has zero length")
     d = d / n
     z = np.array([0.0, 0.0, 1.0])
     c = float(z @ d)
@@ -58,7 +58,7 @@ def _quat(q) -> np.ndarray:
     if q.shape == (9,):
         return quat_from_matrix(q.reshape(3, 3))
     if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.linalg.norm(q) > 0:
-        raise InputError(f"rotation {q!r}: expected a quaternion (w, x, y, z) or a 3×3 matrix")
+        raise InputError(f"rotation {shown(q)}: expected a quaternion (w, x, y, z) or a 3×3 matrix")
     return q / np.linalg.norm(q)
 
 
@@ -74,7 +74,7 @@ class RigidTool:
         self.mu_s = float(mu_s)
         self.mu_k = float(self.mu_s if mu_k is None else mu_k)
         if not (0 <= self.mu_k <= self.mu_s) or not math.isfinite(self.mu_s):
-            raise InputError(f"{type(self).__name__}: friction mu_s = {mu_s!r}, mu_k = {mu_k!r}; "
+            raise InputError(f"{type(self).__name__}: friction mu_s = {shown(mu_s)}, mu_k = {shown(mu_k)}; "
                              "expected 0 <= mu_k <= mu_s")
         self.name = name or type(self).__name__.lower()
         self.keys: list[np.ndarray] = []
@@ -130,7 +130,7 @@ class RigidTool:
 def _positive(cls, name, v):
     v = float(v)
     if not (math.isfinite(v) and v > 0):
-        raise InputError(f"{cls}: {name} = {v!r}; expected a length > 0 [m]")
+        raise InputError(f"{cls}: {name} = {shown(v)}; expected a length > 0 [m]")
     return v
 
 
@@ -170,7 +170,7 @@ class Capsule(RigidTool):
         self.radius = _positive("Capsule", "radius", radius)
         self.length = float(length)
         if not (math.isfinite(self.length) and self.length >= 0):
-            raise InputError(f"Capsule: length = {length!r}; expected >= 0 [m]")
+            raise InputError(f"Capsule: length = {shown(length)}; expected >= 0 [m]")
         super().__init__(**kw)
 
     def params(self):
@@ -208,7 +208,7 @@ class Box(RigidTool):
     def __init__(self, half_extents, **kw):
         h = np.asarray(half_extents, float).ravel()
         if h.shape != (3,) or not np.all(h > 0):
-            raise InputError(f"Box: half_extents {half_extents!r}; expected 3 lengths > 0 [m]")
+            raise InputError(f"Box: half_extents {shown(half_extents)}; expected 3 lengths > 0 [m]")
         self.half = h
         super().__init__(**kw)
 

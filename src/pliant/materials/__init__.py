@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 
+from ..checks import shown
 from ..errors import MaterialError
 
 __all__ = ["Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
@@ -32,7 +33,7 @@ __all__ = ["Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVen
 def _positive(name: str, value: float, cls: str) -> float:
     v = float(value)
     if not math.isfinite(v) or v <= 0.0:
-        raise MaterialError(f"{cls}: {name} = {value!r}; expected a finite value > 0 [Pa]")
+        raise MaterialError(f"{cls}: {name} = {shown(value)}; expected a finite value > 0 [Pa]")
     return v
 
 
@@ -41,7 +42,7 @@ def lame_from_young(E: float, nu: float, cls: str = "material") -> tuple[float, 
     E = _positive("E", E, cls)
     nu = float(nu)
     if not math.isfinite(nu) or nu >= 0.5 or nu <= -1.0:
-        raise MaterialError(f"{cls}: nu = {nu!r}; expected -1 < nu < 0.5 (0.5 is incompressible, "
+        raise MaterialError(f"{cls}: nu = {shown(nu)}; expected -1 < nu < 0.5 (0.5 is incompressible, "
                             "which explicit dynamics cannot represent: use e.g. 0.49)")
     return E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
 
@@ -129,7 +130,7 @@ class MooneyRivlin(Material):
         self.C10 = _positive("C10", C10, "MooneyRivlin")
         self.C01 = float(C01)
         if not math.isfinite(self.C01) or self.C01 < 0.0:
-            raise MaterialError(f"MooneyRivlin: C01 = {C01!r}; expected a finite value >= 0 [Pa]")
+            raise MaterialError(f"MooneyRivlin: C01 = {shown(C01)}; expected a finite value >= 0 [Pa]")
         self.K = _positive("K", K, "MooneyRivlin")
         self.mu = 2.0 * (self.C10 + self.C01)
         self.lam = self.K - 2.0 * self.mu / 3.0
@@ -157,7 +158,7 @@ class _MuLambda(Material):
             self.mu = _positive("mu", mu, cls)
             self.lam = float(lam)
             if not math.isfinite(self.lam) or self.lam + 2.0 * self.mu / 3.0 <= 0.0:
-                raise MaterialError(f"{cls}: lam = {lam!r}; expected lam + 2 mu / 3 > 0 "
+                raise MaterialError(f"{cls}: lam = {shown(lam)}; expected lam + 2 mu / 3 > 0 "
                                     "(positive bulk modulus)")
 
     @property
@@ -187,7 +188,7 @@ class LinearElastic(_MuLambda):
 def _finite(name: str, value, cls: str, minimum: float | None = None) -> float:
     v = float(value)
     if not math.isfinite(v) or (minimum is not None and v < minimum):
-        raise MaterialError(f"{cls}: {name} = {value!r}; expected a finite value"
+        raise MaterialError(f"{cls}: {name} = {shown(value)}; expected a finite value"
                             + (f" >= {minimum:g}" if minimum is not None else ""))
     return v
 
@@ -207,7 +208,7 @@ class Polynomial(Material):
         self.K = _positive("K", K, c)
         self.mu = 2.0 * (self.C10 + self.C01)
         if not self.mu > 0:
-            raise MaterialError(f"{c}: 2 (C10 + C01) = {self.mu!r}; expected a positive shear modulus")
+            raise MaterialError(f"{c}: 2 (C10 + C01) = {shown(self.mu)}; expected a positive shear modulus")
         self.lam = self.K - 2.0 * self.mu / 3.0
 
     @property
@@ -232,7 +233,7 @@ class ArrudaBoyce(Material):
         self.mu0, self.K = _positive("mu", mu, c), _positive("K", K, c)
         self.lambda_m = _finite("lambda_m", lambda_m, c)
         if not self.lambda_m > 1.0:
-            raise MaterialError(f"{c}: lambda_m = {lambda_m!r}; expected a locking stretch > 1")
+            raise MaterialError(f"{c}: lambda_m = {shown(lambda_m)}; expected a locking stretch > 1")
         x = 3.0 / self.lambda_m**2  # small-strain shear modulus 2 ∂W/∂Ī1 at Ī1 = 3
         self.mu = 2 * self.mu0 * (0.5 + x * (2 / 20 + x * (33 / 1050 + x * (76 / 7000 + x * 2595 / 673750))))
         self.lam = self.K - 2.0 * self.mu / 3.0
@@ -259,7 +260,7 @@ class TransverselyIsotropic(Material):
         a = [float(v) for v in direction] if hasattr(direction, "__len__") else []
         n = math.sqrt(sum(v * v for v in a)) if len(a) == 3 else 0.0
         if not (math.isfinite(n) and n > 0):
-            raise MaterialError(f"{c}: direction = {direction!r}; expected a non-zero 3-vector")
+            raise MaterialError(f"{c}: direction = {shown(direction)}; expected a non-zero 3-vector")
         self.direction = tuple(v / n for v in a)
         self.lam = self.K - 2.0 * self.mu / 3.0
 
@@ -285,16 +286,16 @@ class Viscoelastic(Material):
     def __init__(self, base: Material, iso=(), vol=()):
         c = "Viscoelastic"
         if not isinstance(base, Material) or type(base).__name__ not in _DECOUPLED:
-            raise MaterialError(f"{c}: base {base!r}; expected a decoupled material "
+            raise MaterialError(f"{c}: base {shown(base)}; expected a decoupled material "
                                 f"({', '.join(_DECOUPLED)})")
         terms = []
         for name, series in (("iso", iso), ("vol", vol)):
             pairs = [tuple(float(v) for v in p) for p in series]
             if len(pairs) > 4 or any(len(p) != 2 for p in pairs):
-                raise MaterialError(f"{c}: {name} = {series!r}; expected up to 4 pairs (alpha, tau)")
+                raise MaterialError(f"{c}: {name} = {shown(series)}; expected up to 4 pairs (alpha, tau)")
             for a, tau in pairs:
                 if not (math.isfinite(a) and a >= 0 and math.isfinite(tau) and tau > 0):
-                    raise MaterialError(f"{c}: {name} term (alpha={a!r}, tau={tau!r}); expected "
+                    raise MaterialError(f"{c}: {name} term (alpha={shown(a)}, tau={shown(tau)}); expected "
                                         "alpha >= 0 and tau > 0 [s]")
             if sum(a for a, _ in pairs) >= 1.0:
                 raise MaterialError(f"{c}: {name} alphas sum to {sum(a for a, _ in pairs):g}; "

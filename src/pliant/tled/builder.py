@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _core
+from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
 from .curves import Constant, LoadCurve
@@ -28,12 +29,12 @@ def _dofs(dofs) -> list[int]:
         out = []
         for c in dofs.lower():
             if c not in _DOFS:
-                raise InputError(f"dofs = {dofs!r}: unknown DOF {c!r}; expected letters from 'xyz'")
+                raise InputError(f"dofs = {shown(dofs)}: unknown DOF {shown(c)}; expected letters from 'xyz'")
             out.append(_DOFS[c])
         return sorted(set(out))
     out = sorted({int(d) for d in np.atleast_1d(dofs)})
     if any(d not in (0, 1, 2) for d in out):
-        raise InputError(f"dofs = {dofs!r}: expected 0, 1, 2 or letters from 'xyz'")
+        raise InputError(f"dofs = {shown(dofs)}: expected 0, 1, 2 or letters from 'xyz'")
     return out
 
 
@@ -127,10 +128,10 @@ class ModelBuilder:
     def set_material(self, material: Material, density: float, elements=None, name: str | None = None):
         """Assign a material and density [kg/m³] to elements (indices; default: all not yet assigned)."""
         if not isinstance(material, Material):
-            raise MaterialError(f"material = {material!r}; expected a pliant.materials.Material")
+            raise MaterialError(f"material = {shown(material)}; expected a pliant.materials.Material")
         rho = float(density)
         if not math.isfinite(rho) or rho <= 0:
-            raise MaterialError(f"density = {density!r}; expected a finite value > 0 [kg/m^3]")
+            raise MaterialError(f"density = {shown(density)}; expected a finite value > 0 [kg/m^3]")
         if elements is None:
             taken = np.zeros(self.n_elements, bool)
             for s in self.sets:
@@ -193,7 +194,7 @@ class ModelBuilder:
                 old = self._cons.get(key)
                 if old is not None and old != new:
                     raise InputError(f"node {int(n)} DOF {'xyz'[d]} is constrained twice: "
-                                     f"{old[0]:g} m with {old[1]!r} and {new[0]:g} m with {new[1]!r}")
+                                     f"{old[0]:g} m with {shown(old[1])} and {new[0]:g} m with {shown(new[1])}")
                 self._cons[key] = new
 
     def add_force(self, nodes, force, curve: LoadCurve | None = None):
@@ -245,7 +246,7 @@ class ModelBuilder:
         """Body acceleration g [m/s²] applied to every node as m_a·g, scaled by ``curve``."""
         gv = np.asarray(g, dtype=float).ravel()
         if gv.shape != (3,) or not np.all(np.isfinite(gv)):
-            raise InputError(f"gravity = {g!r}; expected 3 finite components [m/s^2]")
+            raise InputError(f"gravity = {shown(g)}; expected 3 finite components [m/s^2]")
         self._gravity = (gv, curve or Constant())
 
     def add_tool(self, tool, nodes=None):
@@ -258,12 +259,12 @@ class ModelBuilder:
         from ..contact import RigidTool
 
         if not isinstance(tool, RigidTool):
-            raise InputError(f"add_tool: {tool!r} is not a pliant.contact tool")
+            raise InputError(f"add_tool: {shown(tool)} is not a pliant.contact tool")
         if nodes is not None:
             if len(self.tools) >= 28:
-                raise InputError(f"add_tool {tool.name!r}: only the first 28 tools can be "
+                raise InputError(f"add_tool {shown(tool.name)}: only the first 28 tools can be "
                                  f"restricted to nodes; this is tool {len(self.tools)}")
-            nodes = np.unique(self._node_ids(nodes, f"add_tool {tool.name!r} nodes"))
+            nodes = np.unique(self._node_ids(nodes, f"add_tool {shown(tool.name)} nodes"))
         self.tools.append(tool)
         self.tool_nodes.append(nodes)
         return tool
@@ -284,13 +285,13 @@ class ModelBuilder:
             raise InputError(f"dtype = {dtype}; expected float32 or float64")
         a = float(self.damping)
         if not math.isfinite(a) or a < 0:
-            raise InputError(f"damping = {self.damping!r}; expected a finite value >= 0 [1/s]")
+            raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")
         owner = np.full(self.n_elements, -1, dtype=np.int64)
         for k, s in enumerate(self.sets):
             clash = s.elements[owner[s.elements] >= 0]
             if clash.size:
                 raise InputError(f"element {int(clash[0])} is in two element sets "
-                                 f"({self.sets[owner[clash[0]]].name!r} and {s.name!r})")
+                                 f"({self.sets[owner[clash[0]]].name!r} and {shown(s.name)})")
             owner[s.elements] = k
         if np.any(owner < 0):
             raise MaterialError(f"{self.source}: element {int(np.argmax(owner < 0))} has no material; "
@@ -298,11 +299,11 @@ class ModelBuilder:
         if self.nodal_pressure:
             for s in self.sets:
                 if getattr(s.material, "prony", None):
-                    raise MaterialError(f"element set {s.name!r}: viscoelastic materials and "
+                    raise MaterialError(f"element set {shown(s.name)}: viscoelastic materials and "
                                         "average nodal pressure (T4ANP) cannot be combined yet")
                 if type(s.material).__name__ in ("NeoHookeanCoupled", "StVenantKirchhoff",
                                                  "LinearElastic"):
-                    raise MaterialError(f"element set {s.name!r}: {type(s.material).__name__} has no "
+                    raise MaterialError(f"element set {shown(s.name)}: {type(s.material).__name__} has no "
                                         "separate volumetric term; average nodal pressure (T4ANP) "
                                         "needs a decoupled material (NeoHookean, MooneyRivlin, "
                                         "Polynomial, ArrudaBoyce, TransverselyIsotropic)")
@@ -326,7 +327,7 @@ class ModelBuilder:
                 f"{vol[e]:.3e} m^3; expected positive orientation (swap two nodes), "
                 f"{inverted.size} inverted element(s) in all", e)
         if backend not in ("cpu", "cuda"):
-            raise InputError(f"backend = {backend!r}; expected 'cpu' or 'cuda'")
+            raise InputError(f"backend = {shown(backend)}; expected 'cpu' or 'cuda'")
         model = Model(self, owner, dtype, threads, geometry=(vol, alt))
         if backend == "cuda":
             model.use_cuda(device)

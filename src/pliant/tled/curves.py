@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from ..checks import shown
 from ..errors import InputError
 
 __all__ = ["LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table"]
@@ -54,7 +55,7 @@ class LoadCurve:
 def _time(name, v, cls):
     v = float(v)
     if not math.isfinite(v):
-        raise InputError(f"{cls}: {name} = {v!r}; expected a finite time [s]")
+        raise InputError(f"{cls}: {name} = {shown(v)}; expected a finite time [s]")
     return v
 
 
@@ -91,7 +92,7 @@ class Ramp(LoadCurve):
     def __init__(self, t1: float, t0: float = 0.0):
         self.t0, self.t1 = _time("t0", t0, type(self).__name__), _time("t1", t1, type(self).__name__)
         if not self.t1 > self.t0:
-            raise InputError(f"{type(self).__name__}: t1 = {t1!r} must be later than t0 = {t0!r}")
+            raise InputError(f"{type(self).__name__}: t1 = {shown(t1)} must be later than t0 = {shown(t0)}")
 
     @property
     def end_time(self):

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _core
+from ..checks import shown
 from ..errors import InputError, PliantWarning
 from .curves import Constant, LoadCurve
 
@@ -40,7 +41,7 @@ def _check_threads(threads) -> None:
     limit = int(_core.thread_limit())
     if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) \
             or not 1 <= threads <= limit:
-        raise InputError(f"threads = {threads!r}; expected an integer from 1 to {limit} on this "
+        raise InputError(f"threads = {shown(threads)}; expected an integer from 1 to {limit} on this "
                          "machine, or None for automatic")
 
 

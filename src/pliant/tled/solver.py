@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..checks import finite_number, finite_vector
+from ..checks import finite_number, finite_vector, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
 
@@ -27,7 +27,7 @@ def _step_count(steps, what: str = "steps") -> int:
     """A step count: an integer (not a bool, not a float with a fraction) from 0 to MAX_STEPS."""
     if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer, float)) \
             or (isinstance(steps, float) and not steps.is_integer()):
-        raise InputError(f"{what} = {steps!r}; expected a whole number of steps")
+        raise InputError(f"{what} = {shown(steps)}; expected a whole number of steps")
     if not 0 <= steps <= MAX_STEPS:
         raise InputError(f"{what} = {int(steps)}; expected 0 to {MAX_STEPS:.0e} steps in one call")
     return int(steps)
@@ -79,12 +79,12 @@ class Solver:
         _check_model(model, "Solver(model)")
         self.model = model
         if not (0 < safety <= 1):
-            raise InputError(f"safety = {safety!r}; expected 0 < safety <= 1")
+            raise InputError(f"safety = {shown(safety)}; expected 0 < safety <= 1")
         if dt is None:
             dt = safety * model.dt_critical
         dt = float(dt)
         if not math.isfinite(dt) or dt <= 0:
-            raise TimeStepError(f"dt = {dt!r}; expected a finite time step > 0 [s]")
+            raise TimeStepError(f"dt = {shown(dt)}; expected a finite time step > 0 [s]")
         if dt > model.dt_critical and not allow_unstable:
             raise TimeStepError(
                 f"dt = {dt:.4g} s exceeds the critical time step {model.dt_critical:.4g} s "
@@ -93,9 +93,9 @@ class Solver:
         self.dt = dt
         self.damping = model.damping if damping is None else float(damping)
         if not math.isfinite(self.damping) or self.damping < 0:
-            raise InputError(f"damping = {damping!r}; expected a finite value >= 0 [1/s]")
+            raise InputError(f"damping = {shown(damping)}; expected a finite value >= 0 [1/s]")
         if int(check_every) < 1:
-            raise InputError(f"check_every = {check_every!r}; expected >= 1")
+            raise InputError(f"check_every = {shown(check_every)}; expected >= 1")
         self.check_every = int(check_every)
         X = model.reference_positions
         # Blow-up: any displacement beyond 100 × the body's size.
@@ -134,7 +134,7 @@ class Solver:
             raise InputError("step(state_in, state_out): states must be distinct; use run() in place")
         dt = self.dt if dt is None else float(dt)
         if not (math.isfinite(dt) and dt > 0):
-            raise TimeStepError(f"dt = {dt!r}; expected a finite time step > 0 [s]")
+            raise TimeStepError(f"dt = {shown(dt)}; expected a finite time step > 0 [s]")
         if dt > self.model.dt_critical and self.dt <= self.model.dt_critical:
             raise TimeStepError(f"dt = {dt:.4g} s exceeds the critical time step "
                                 f"{self.model.dt_critical:.4g} s")
@@ -181,8 +181,8 @@ class Solver:
     def _tool_index(self, k) -> int:
         n = len(self.model.tools)
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < n:
-            raise InputError(f"tool index {k!r}; expected an integer from 0 to {n - 1}" if n else
-                             f"tool index {k!r}: this model has no tools")
+            raise InputError(f"tool index {shown(k)}; expected an integer from 0 to {n - 1}" if n else
+                             f"tool index {shown(k)}: this model has no tools")
         return int(k)
 
     def tool_force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -209,7 +209,7 @@ class Solver:
         self._same_model(state)
         t_end = self.model.last_load_time if at_time is None else float(at_time)
         if int(increments) < 1:
-            raise InputError(f"increments = {increments!r}; expected >= 1")
+            raise InputError(f"increments = {shown(increments)}; expected >= 1")
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
             rep = self.model._engine.relax(state._s, float(t), self.dt, float(tol), int(max_steps),
