@@ -291,3 +291,47 @@ def test_usage_errors_exit_2():
     assert r.returncode == 2 and "Traceback" not in r.stderr
     r = cli("no-such-command")
     assert r.returncode == 2 and "Traceback" not in r.stderr
+
+
+# --- more resource bounds (found by a second probe) -------------------------------------------
+@pytest.mark.parametrize("patch, words", [
+    (("size = [0.1, 0.02, 0.02]", "size = [1e300, 1e300, 1e300]"), ["non-finite volume"]),
+    (("E = 5e5", "E = 1e300"), ["steps"]),
+    (("density = 1000.0", "density = 1e-300"), ["steps"]),
+    (("duration = 0.001", "duration = 0.001\nstatic = true\nincrements = 1000000000"),
+     ["solver.increments"]),
+])
+def test_extreme_values_are_refused_in_one_line(tmp_path, patch, words):
+    """Coordinates that overflow the geometry (an internal error before), materials and densities
+    that make the stable step absurdly small, and a billion load increments (a hang)."""
+    p = scene(tmp_path, SCENE.replace(*patch))
+    assert p.read_text() != SCENE
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), *words)
+
+
+def test_volume_meshes_with_other_cells_are_refused(tmp_path):
+    """Hexahedra beside tets were dropped silently: the run simulated a part of the body."""
+    X = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1],
+                  [0, 1, 1], [2, 0, 0.0]])
+    p = tmp_path / "hex.vtu"
+    meshio.write(p, meshio.Mesh(X, [("hexahedron", np.array([[0, 1, 2, 3, 4, 5, 6, 7]])),
+                                    ("tetra", np.array([[1, 8, 2, 5]]))]))
+    refused(cli("mesh", "quality", p), str(p), "1 hexahedron")
+
+
+@pytest.mark.parametrize("args, words", [
+    (["demo", "--duration", "-1"], ["--duration"]),
+    (["demo", "--duration", "nan"], ["--duration"]),
+    (["bench", "--dtype", "float16"], ["--dtype"]),
+    (["bench", "--sizes", "1000000000000"], ["--sizes"]),
+    (["bench", "--steps", "1000000000000"], ["--steps"]),
+    (["view", "x.toml", "--port", "0"], ["--port"]),
+    (["mesh", "subdivide", ROOT / "src" / "pliant" / "data" / "spot.obj", "OUT", "--levels", "6"],
+     ["6 levels"]),
+])
+def test_command_options_out_of_range(tmp_path, args, words):
+    args = [tmp_path / "s.obj" if a == "OUT" else a for a in args]
+    if args[0] == "demo":
+        args += ["-o", tmp_path / "d"]
+    refused(cli(*args, cwd=tmp_path), *words)
+    assert not (tmp_path / "d").exists()

@@ -67,9 +67,7 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
     from .runner import run_scene
 
     try:
-        sc = load_any(scene, ignore)
-        for w in sc.warnings:
-            err_console.print(f"[yellow]warning:[/] {escape(one_line(w))}", highlight=False)
+        sc = load_any(scene, ignore)  # its warnings are printed once the model is built
         summary = run_scene(sc, out, progress=progress, allow_unstable=allow_unstable,
                             threads=threads, echo=console.print, backend=backend)
     except InputError as e:
@@ -144,13 +142,20 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
           backend: str = typer.Option("cpu", help="cpu or cuda (a GPU; e.g. --sizes up to 10000000).")):
     """Reproduce the study's timing table (8,000 steps of 0.025 ms, Neo-Hookean) and larger meshes."""
     from .bench import bench_contact, run_benchmark
+    from .mesh.primitives import MAX_BOX_TETS
+    from .tled.solver import MAX_STEPS
 
     try:
         n = [int(s) for s in sizes.split(",") if s.strip()]
     except ValueError:
         _fail(InputError(f"--sizes {sizes!r}: expected comma-separated integers"), 2)
-    if steps < 1 or large_steps < 1 or any(v < 1 for v in n):
+    if steps < 1 or large_steps < 1 or not n or any(v < 1 for v in n):
         _fail(InputError("--steps, --large-steps and --sizes must be positive"), 2)
+    if max(steps, large_steps) > MAX_STEPS or max(n) > MAX_BOX_TETS:
+        _fail(InputError(f"--steps and --large-steps at most {MAX_STEPS:.0e}, --sizes at most "
+                         f"{MAX_BOX_TETS:.0e} tets"), 2)
+    if dtype not in ("float32", "float64"):
+        _fail(InputError(f"--dtype {dtype!r}: expected float32 or float64"), 2)
     if backend not in ("cpu", "cuda"):
         _fail(InputError(f"--backend {backend!r}: expected cpu or cuda"), 2)
     if os.getloadavg()[0] > 0.5:

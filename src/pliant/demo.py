@@ -4,8 +4,10 @@ tetrahedralized, standing on the ground under gravity and indented on its back b
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
+from .errors import InputError
 from .runner import run_scene
 from .scene import load_scene
 
@@ -16,6 +18,8 @@ def run_demo(out_dir, duration: float | None = None, threads=None, progress: boo
              echo=print) -> dict:
     scene = load_scene(DEMO_SCENE)
     if duration is not None:
+        if not (math.isfinite(duration) and duration > 0):
+            raise InputError(f"--duration {duration}: expected a finite time > 0 [s]")
         scene.duration = float(duration)
     echo(f"demo: {DEMO_SCENE.name} ({scene.title}); mesh {scene.builder.n_elements:,} tets, "
          f"{scene.builder.n_nodes:,} nodes")

@@ -6,12 +6,13 @@ from __future__ import annotations
 import json
 import math
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from . import __version__
-from .errors import InputError, InstabilityError
+from .errors import InputError, InstabilityError, PliantWarning
 from .io import ResultWriter, atomic_write_text, check_output_dir
 from .scene import Scene
 from .tled import Solver
@@ -63,7 +64,13 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
 
     out = check_output_dir(out_dir)  # checked first, created only once the model is valid
     t_build = time.perf_counter()
-    model, solver = build(scene, threads, backend, allow_unstable)
+    with warnings.catch_warnings(record=True) as held:  # a refused build prints its error alone
+        warnings.simplefilter("always")
+        model, solver = build(scene, threads, backend, allow_unstable)
+    for w in scene.warnings:
+        warnings.warn(PliantWarning(w), stacklevel=2)
+    for w in held:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     total = max(1, math.ceil(scene.duration / solver.dt - 1e-9))
     state = model.state()
     embedding = None
@@ -80,7 +87,7 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
                "dt_critical": model.dt_critical, "simulated_time": 0.0, "wall_time": 0.0,
                "setup_time": build_s, "backend": model.backend, "threads": model.threads,
                "dtype": scene.dtype, "elements": model.n_elements, "nodes": model.n_nodes,
-               "interrupted": False, "error": None, "warnings": list(scene.warnings),
+               "interrupted": False, "error": None, "warnings": list(scene.warnings) + [str(w.message) for w in held],
                "files": ["result.pvd", "summary.json"]}
     t0 = time.perf_counter()
     try:

@@ -10,11 +10,23 @@ from ..errors import MeshError
 from .files import read_meshio
 
 
+# Cells of lower dimension that volume-mesh files carry beside their tets (boundary faces, edges,
+# points): not simulated, and not an error.
+SURFACE_CELLS = {"vertex", "line", "line3", "triangle", "triangle6", "quad", "quad8", "quad9"}
+
+
 def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """Read a tetrahedral mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
     {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds'."""
     path = Path(path)
     mesh = read_meshio(path, "volume mesh")
+    other = sorted({c.type for c in mesh.cells} - {"tetra"} - SURFACE_CELLS)
+    if other:
+        counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}"
+                           for t in other)
+        raise MeshError(f"{path}: has {counts} cells; pliant simulates linear tetrahedra only "
+                        "(convert the mesh, e.g. re-mesh its surface with pliant mesh "
+                        "tetrahedralize)")
     blocks = [(i, c) for i, c in enumerate(mesh.cells) if c.type == "tetra"]
     if not blocks:
         kinds = sorted({c.type for c in mesh.cells}) or ["none"]

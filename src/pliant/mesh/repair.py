@@ -229,6 +229,7 @@ def fill_loop(V: np.ndarray, loop: np.ndarray, existing_edges: set | None = None
 
 
 BODIES = ("one", "all", "largest")
+MAX_FACES = 2e7  # surfaces beyond this exhaust a workstation's memory in the mesh pipeline
 
 
 def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
@@ -378,6 +379,10 @@ def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.nd
     if levels < 0:
         raise MeshError(f"subdivide: levels = {levels}; expected >= 0")
     V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    if len(F) * 4.0 ** levels > MAX_FACES:
+        raise MeshError(f"subdivide: {levels} levels turn {len(F):,} faces into "
+                        f"{len(F) * 4.0 ** levels:.3g}; expected at most {MAX_FACES:.0e} (fewer levels, "
+                        "or simplify first)")
     for _ in range(int(levels)):
         V, F = _loop_once(V, F)
     return V, F

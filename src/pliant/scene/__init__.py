@@ -19,6 +19,7 @@ from .. import materials as mat
 from ..errors import InputError, MeshError
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
+from ..tled.solver import MAX_INCREMENTS
 from .schema import Ctx, SceneError, check_keys, vector
 from ..mesh.topology import boundary_faces
 from .select import select_elements, select_nodes
@@ -333,8 +334,12 @@ def load_scene(path) -> Scene:
     scene.tol = float(solver.get("tol", 1e-5))
     scene.increments = int(solver.get("increments", 1))
     scene.check_every = int(solver.get("check_every", 16))
-    if scene.increments < 1 or scene.check_every < 1:
-        raise ctx.error("solver", "increments and check_every must be >= 1")
+    if not 1 <= scene.increments <= MAX_INCREMENTS:
+        raise ctx.error("solver.increments", f"increments = {scene.increments}; expected 1 to "
+                        f"{MAX_INCREMENTS}")
+    if not 1 <= scene.check_every <= 10**6:
+        raise ctx.error("solver.check_every", f"check_every = {scene.check_every}; expected 1 to "
+                        "1000000")
     damping = float(solver.get("damping", 0.0))
     if damping < 0:
         raise ctx.error("solver.damping", "expected damping >= 0 [1/s]")

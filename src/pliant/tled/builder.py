@@ -310,6 +310,12 @@ class ModelBuilder:
         X = np.ascontiguousarray(self.nodes)
         T32 = np.ascontiguousarray(self.tets.astype(np.int32))
         vol, alt = _core.tet_geometry(X, T32)
+        bad = np.nonzero(~(np.isfinite(vol) & np.isfinite(alt)))[0]
+        if bad.size:
+            e = int(bad[0])
+            raise MeshError(f"{self.source}: element {e} has a non-finite volume or altitude: "
+                            f"coordinates up to {float(np.abs(X).max()):.3g} m overflow (SI metres "
+                            "expected; scale the mesh)")
         edges = X[T32[:, [1, 2, 3, 2, 3, 3]]] - X[T32[:, [0, 0, 0, 1, 1, 2]]]
         lmax = np.sqrt((edges**2).sum(-1)).max(axis=1)
         rel = vol / np.maximum(lmax, np.finfo(float).tiny) ** 3

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import _core
 from ..checks import shown
-from ..errors import InputError, PliantWarning
+from ..errors import InputError, MeshError, PliantWarning
 from .curves import Constant, LoadCurve
 
 __all__ = ["Model", "State"]
@@ -200,29 +200,32 @@ class Model:
         params = [p for k in np.nonzero(keep)[0]
                   for p in (*self.sets[k].material.params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:8]]
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
-        self._engine = Engine(
-            np.ascontiguousarray(X[node_order]),
-            np.ascontiguousarray(node_rank[T[elem_order]].astype(np.int32)),
-            np.ascontiguousarray(density),
-            [int(e) for e in group_end[keep]],
-            [self.sets[k].material.kind for k in np.nonzero(keep)[0]],
-            params,
-            np.ascontiguousarray(patterns, dtype=float),
-            pattern_curve,
-            [int(node_rank[n]) for (n, d), _ in cons], [d for (n, d), _ in cons],
-            [v for _, (v, c) in cons], cons_curve,
-            [c.kind for c in curves], [c.t0 for c in curves], [c.t1 for c in curves],
-            tb, tc, tt, tv, [float(x) for x in g], gcurve,
-            [int(node_rank[n]) for n in cn[cn_order]],  # engine order: sequential access
-            [int(m) for m in masks[cn_order]],
-            [t.kind for t in self.tools], [p for t in self.tools for p in t.params()],
-            [m for t in self.tools for m in (t.mu_s, t.mu_k)],
-            [t.key_array().tolist() for t in self.tools],
-            [d for dims, _ in tool_grids for d in dims], [v.tolist() for _, v in tool_grids],
-            [int(v) for v in node_rank[press_F].ravel()], press_p.tolist(), press_c,
-            bool(builder.nodal_pressure), visco,
-            int(threads if threads else _auto_threads(M)),
-        )
+        try:
+            self._engine = Engine(
+                np.ascontiguousarray(X[node_order]),
+                np.ascontiguousarray(node_rank[T[elem_order]].astype(np.int32)),
+                np.ascontiguousarray(density),
+                [int(e) for e in group_end[keep]],
+                [self.sets[k].material.kind for k in np.nonzero(keep)[0]],
+                params,
+                np.ascontiguousarray(patterns, dtype=float),
+                pattern_curve,
+                [int(node_rank[n]) for (n, d), _ in cons], [d for (n, d), _ in cons],
+                [v for _, (v, c) in cons], cons_curve,
+                [c.kind for c in curves], [c.t0 for c in curves], [c.t1 for c in curves],
+                tb, tc, tt, tv, [float(x) for x in g], gcurve,
+                [int(node_rank[n]) for n in cn[cn_order]],  # engine order: sequential access
+                [int(m) for m in masks[cn_order]],
+                [t.kind for t in self.tools], [p for t in self.tools for p in t.params()],
+                [m for t in self.tools for m in (t.mu_s, t.mu_k)],
+                [t.key_array().tolist() for t in self.tools],
+                [d for dims, _ in tool_grids for d in dims], [v.tolist() for _, v in tool_grids],
+                [int(v) for v in node_rank[press_F].ravel()], press_p.tolist(), press_c,
+                bool(builder.nodal_pressure), visco,
+                int(threads if threads else _auto_threads(M)),
+            )
+        except ValueError as e:  # the engine's own checks, in words a user can act on
+            raise MeshError(f"{builder.source}: {e}") from None
         self.n_nodes, self.n_elements = N, M
         self.fingerprint = _fingerprint(X, T, self.sets, dtype, self._cons_user)
         self.dt_critical = float(self._engine.dt_critical)

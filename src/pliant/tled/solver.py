@@ -21,6 +21,7 @@ __all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation", "MAX_STEPS"]
 # Most steps one call may take: a billion steps is days of computing even on a small mesh; above it
 # a duration is almost surely a typo (1e20 s), and tool histories would not fit in memory.
 MAX_STEPS = 10**9
+MAX_INCREMENTS = 10_000  # load steps of one quasi-static solve
 
 
 def _step_count(steps, what: str = "steps") -> int:
@@ -208,8 +209,11 @@ class Solver:
         does not within ``max_steps`` (unless ``strict=False``)."""
         self._same_model(state)
         t_end = self.model.last_load_time if at_time is None else float(at_time)
-        if int(increments) < 1:
-            raise InputError(f"increments = {shown(increments)}; expected >= 1")
+        if not 1 <= int(increments) <= MAX_INCREMENTS:
+            raise InputError(f"increments = {shown(increments)}; expected 1 to {MAX_INCREMENTS} "
+                             "(each is a whole relaxation)")
+        if not 1 <= int(max_steps) <= MAX_STEPS:
+            raise InputError(f"max_steps = {shown(max_steps)}; expected 1 to {MAX_STEPS:.0e}")
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
             rep = self.model._engine.relax(state._s, float(t), self.dt, float(tol), int(max_steps),
