@@ -258,18 +258,17 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
         actions.append(f"removed {len(F) - len(m.faces)} degenerate/duplicate faces")
     if len(m.faces) == 0:
         raise MeshError("repair: no valid faces left (every face is degenerate or a duplicate)")
-    parts = m.split(only_watertight=False)
-    if len(parts) > 1:
-        big = [p for p in parts if len(p.faces) >= 0.01 * len(m.faces)]
-        if len(big) < len(parts):
-            actions.append(f"dropped {len(parts) - len(big)} fragment(s) of "
-                           f"{sum(len(p.faces) for p in parts) - sum(len(p.faces) for p in big)} faces")
-        parts = big
-    for p in parts:
-        _, count = _edges(np.asarray(p.faces))
-        if (count > 2).any():
-            raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than "
-                            "two faces); cannot repair automatically")
+    groups = trimesh.graph.connected_components(m.face_adjacency, nodes=np.arange(len(m.faces)),
+                                                min_len=1)
+    big = [g for g in groups if len(g) >= 0.01 * len(m.faces)]
+    if len(big) < len(groups):
+        actions.append(f"dropped {len(groups) - len(big)} fragment(s) of "
+                       f"{len(m.faces) - sum(len(g) for g in big)} faces")
+    _, count = _edges(np.asarray(m.faces)[np.concatenate(big)])
+    if (count > 2).any():
+        raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than "
+                        "two faces); cannot repair automatically")
+    parts = [m.submesh([g], append=True) for g in big]
     if len(parts) > 1 and bodies == "one":
         raise MeshError(f"repair: {len(parts)} separate bodies; keep them all (bodies='all', "
                         "--bodies all: their union is meshed), or the largest (--bodies largest)")

@@ -8,7 +8,6 @@ positively oriented (det[X1 − X0, X2 − X0, X3 − X0] > 0); DOFs named x, y,
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np

@@ -1,0 +1,244 @@
+"""Rigid tools: shapes with friction and a trajectory (keyframes or poses set between steps), and
+the quaternion helpers they use. See the package docstring."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..checks import finite_number, finite_vector, shown
+from ..errors import InputError
+
+__all__ = ["RigidTool", "Plane", "Sphere", "Capsule", "Cylinder", "Box", "MeshTool",
+           "quat_from_matrix", "quat_from_axis_angle", "quat_align_z"]
+
+
+def quat_from_axis_angle(axis, angle: float) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation by ``angle`` [rad] about ``axis``."""
+    a = np.asarray(axis, float)
+    a = a / np.linalg.norm(a)
+    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * a])
+
+
+def quat_align_z(direction) -> np.ndarray:
+    """Quaternion rotating +z onto ``direction``."""
+    d = np.asarray(direction, float)
+    n = np.linalg.norm(d)
+    if not n > 0:
+        raise InputError(f"direction {shown(direction)} has zero length")
+    d = d / n
+    z = np.array([0.0, 0.0, 1.0])
+    c = float(z @ d)
+    if c < -1 + 1e-12:
+        return np.array([0.0, 1.0, 0.0, 0.0])
+    axis = np.cross(z, d)
+    q = np.concatenate([[1.0 + c], axis])
+    return q / np.linalg.norm(q)
+
+
+def quat_from_matrix(R) -> np.ndarray:
+    R = np.asarray(R, float)
+    w = math.sqrt(max(0.0, 1 + R[0, 0] + R[1, 1] + R[2, 2])) / 2
+    x = math.copysign(math.sqrt(max(0.0, 1 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2])
+    y = math.copysign(math.sqrt(max(0.0, 1 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0])
+    z = math.copysign(math.sqrt(max(0.0, 1 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1])
+    q = np.array([w, x, y, z])
+    return q / np.linalg.norm(q)
+
+
+def _quat(q) -> np.ndarray:
+    q = np.asarray(q, float).ravel()
+    if q.shape == (9,):
+        return quat_from_matrix(q.reshape(3, 3))
+    if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.linalg.norm(q) > 0:
+        raise InputError(f"rotation {shown(q)}: expected a quaternion (w, x, y, z) or a 3×3 matrix")
+    return q / np.linalg.norm(q)
+
+
+class RigidTool:
+    """Base class. ``mu_s``/``mu_k``: static/kinetic friction coefficients (μk ≤ μs; 0 for
+    frictionless). Trajectory: :meth:`at` adds keyframes (time [s], position [m], rotation);
+    between keyframes positions are linear and rotations normalized-linear; held outside."""
+
+    kind = -1
+
+    def __init__(self, mu_s: float = 0.0, mu_k: float | None = None, position=(0.0, 0.0, 0.0),
+                 rotation=(1.0, 0.0, 0.0, 0.0), name: str | None = None):
+        self.mu_s = float(mu_s)
+        self.mu_k = float(self.mu_s if mu_k is None else mu_k)
+        if not (0 <= self.mu_k <= self.mu_s) or not math.isfinite(self.mu_s):
+            raise InputError(f"{type(self).__name__}: friction mu_s = {shown(mu_s)}, mu_k = {shown(mu_k)}; "
+                             "expected 0 <= mu_k <= mu_s")
+        self.name = name or type(self).__name__.lower()
+        self.keys: list[np.ndarray] = []
+        self.at(0.0, position, rotation)
+        self._fixed = True
+
+    def at(self, t: float, position, rotation=(1.0, 0.0, 0.0, 0.0)) -> "RigidTool":
+        """Add a keyframe: at time t [s] the tool is at ``position`` [m] with ``rotation``."""
+        p = finite_vector(position, 3, f"{self.name}: position", "m")
+        t = finite_number(t, f"{self.name}: keyframe time", "s")
+        key = np.concatenate([[t], p, _quat(rotation)])
+        if getattr(self, "_fixed", False):  # the first explicit keyframe replaces the initial pose
+            self.keys, self._fixed = [], False
+        if self.keys and t <= self.keys[-1][0]:
+            raise InputError(f"{self.name}: keyframe times must increase ({t} after {self.keys[-1][0]})")
+        self.keys.append(key)
+        return self
+
+    def key_array(self) -> np.ndarray:
+        return np.concatenate(self.keys)
+
+    def params(self) -> list[float]:
+        return [0.0, 0.0, 0.0, 0.0]
+
+    def grid(self) -> tuple[list[int], np.ndarray]:
+        return [0, 0, 0], np.zeros(0)
+
+    def signed_distance(self, x, t: float = 0.0) -> np.ndarray:
+        """φ [m] of world points x (n, 3) at time t (NumPy, for checks and tests)."""
+        R, p = self.pose(t)
+        return self._sdf_local((np.asarray(x, float) - p) @ R)
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(R (3, 3), position (3,)) at time t, interpolated like the engine does."""
+        K = np.array(self.keys)
+        if len(K) == 1 or t <= K[0, 0]:
+            k = K[0]
+        elif t >= K[-1, 0]:
+            k = K[-1]
+        else:
+            i = int(np.searchsorted(K[:, 0], t)) - 1
+            w = (t - K[i, 0]) / (K[i + 1, 0] - K[i, 0])
+            qb = K[i + 1, 4:] * (1 if K[i, 4:] @ K[i + 1, 4:] >= 0 else -1)
+            k = np.concatenate([[t], (1 - w) * K[i, 1:4] + w * K[i + 1, 1:4],
+                                (1 - w) * K[i, 4:] + w * qb])
+        w, x, y, z = k[4:] / np.linalg.norm(k[4:])
+        R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        return R, k[1:4]
+
+
+def _positive(cls, name, v):
+    v = float(v)
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(f"{cls}: {name} = {shown(v)}; expected a length > 0 [m]")
+    return v
+
+
+class Plane(RigidTool):
+    """Half-space below the plane through ``point`` with outward ``normal`` (e.g. the ground)."""
+
+    kind = 0
+
+    def __init__(self, point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0), **kw):
+        super().__init__(position=point, rotation=quat_align_z(normal), **kw)
+
+    def _sdf_local(self, y):
+        return y[:, 2]
+
+
+class Sphere(RigidTool):
+    kind = 1
+
+    def __init__(self, radius: float, **kw):
+        self.radius = _positive("Sphere", "radius", radius)
+        super().__init__(**kw)
+
+    def params(self):
+        return [self.radius, 0.0, 0.0, 0.0]
+
+    def _sdf_local(self, y):
+        return np.linalg.norm(y, axis=1) - self.radius
+
+
+class Capsule(RigidTool):
+    """Cylinder with hemispherical ends (most laparoscopic tools): axis along the tool's z, from
+    −length/2 to +length/2 (segment), radius ``radius``."""
+
+    kind = 2
+
+    def __init__(self, radius: float, length: float, **kw):
+        self.radius = _positive("Capsule", "radius", radius)
+        self.length = float(length)
+        if not (math.isfinite(self.length) and self.length >= 0):
+            raise InputError(f"Capsule: length = {shown(length)}; expected >= 0 [m]")
+        super().__init__(**kw)
+
+    def params(self):
+        return [self.radius, self.length / 2, 0.0, 0.0]
+
+    def _sdf_local(self, y):
+        c = np.zeros_like(y)
+        c[:, 2] = np.clip(y[:, 2], -self.length / 2, self.length / 2)
+        return np.linalg.norm(y - c, axis=1) - self.radius
+
+
+class Cylinder(RigidTool):
+    """Cylinder with flat ends (a rod, a retractor blade's edge): axis along the tool's z, from
+    −length/2 to +length/2, radius ``radius``."""
+
+    kind = 5
+
+    def __init__(self, radius: float, length: float, **kw):
+        self.radius = _positive("Cylinder", "radius", radius)
+        self.length = _positive("Cylinder", "length", length)
+        super().__init__(**kw)
+
+    def params(self):
+        return [self.radius, self.length / 2, 0.0, 0.0]
+
+    def _sdf_local(self, y):
+        q = np.stack([np.hypot(y[:, 0], y[:, 1]) - self.radius,
+                      np.abs(y[:, 2]) - self.length / 2], axis=1)
+        return np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0)
+
+
+class Box(RigidTool):
+    kind = 3
+
+    def __init__(self, half_extents, **kw):
+        h = np.asarray(half_extents, float).ravel()
+        if h.shape != (3,) or not np.all(h > 0):
+            raise InputError(f"Box: half_extents {shown(half_extents)}; expected 3 lengths > 0 [m]")
+        self.half = h
+        super().__init__(**kw)
+
+    def params(self):
+        return [*self.half.tolist(), 0.0]
+
+    def _sdf_local(self, y):
+        q = np.abs(y) - self.half
+        return np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0)
+
+
+class MeshTool(RigidTool):
+    """Any closed triangle mesh (vertices [m] in the tool frame, faces), through a signed-distance
+    grid of spacing ``spacing`` [m] (default: 1/64 of its largest extent) interpolated trilinearly."""
+
+    kind = 4
+
+    def __init__(self, vertices, faces, spacing: float | None = None, **kw):
+        from .sdf import signed_distance_grid
+
+        V = np.asarray(vertices, float)
+        F = np.asarray(faces, np.int64)
+        ext = float(np.ptp(V, axis=0).max())
+        h = float(spacing) if spacing else ext / 64
+        self.origin, self.spacing, self.values = signed_distance_grid(V, F, h, margin=4 * h)
+        super().__init__(**kw)
+
+    def params(self):
+        return [*self.origin.tolist(), self.spacing]
+
+    def grid(self):
+        return list(self.values.shape), self.values.ravel()
+
+    def _sdf_local(self, y):
+        from scipy.interpolate import RegularGridInterpolator
+
+        axes = [self.origin[d] + self.spacing * np.arange(self.values.shape[d]) for d in range(3)]
+        f = RegularGridInterpolator(axes, self.values, bounds_error=False, fill_value=None)
+        return f(y)

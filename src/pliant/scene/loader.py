@@ -1,0 +1,295 @@
+"""Scene files (TOML) → a validated :class:`Scene`: the top-level tables, materials, constraints,
+loads and outputs (the mesh and the tools have their own modules). See the package docstring."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import _core
+from .. import materials as mat
+from ..errors import InputError, MeshError
+from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
+from ..tled.curves import LoadCurve
+from ..tled.solver import MAX_INCREMENTS
+from .mesh import load_mesh
+from .schema import Ctx, SceneError, check_keys, vector
+from .tools import make_tool
+from ..mesh.topology import boundary_faces
+from .select import select_elements, select_nodes
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Scene", "load_scene", "SceneError", "make_curve"]
+
+
+@dataclass
+class Scene:
+    """A validated scene: builder (mesh, materials, constraints, loads) plus run settings."""
+
+    source: str
+    builder: ModelBuilder
+    duration: float = 1.0  # [s]
+    dt: float | None = None  # [s]; None: safety × critical
+    safety: float = 0.8
+    dtype: str = "float32"
+    backend: str = "cpu"
+    threads: int | None = None
+    static: bool = False
+    tol: float = 1e-5
+    increments: int = 1
+    check_every: int = 16
+    output_every: int | None = None  # steps
+    output_interval: float | None = None  # [s]
+    frames: int = 20
+    png: bool = True
+    fields: tuple = ("displacement", "velocity", "von_mises", "J", "strain_energy_density")
+    title: str = ""
+    warnings: list[str] = field(default_factory=list)
+    meta: dict = field(default_factory=dict)
+
+
+_MATERIALS = {
+    "neo-hookean": (mat.NeoHookean, ("mu", "K")),
+    "mooney-rivlin": (mat.MooneyRivlin, ("C10", "C01", "K")),
+    "neo-hookean-coupled": (mat.NeoHookeanCoupled, ("mu", "lambda")),
+    "st-venant-kirchhoff": (mat.StVenantKirchhoff, ("mu", "lambda")),
+    "linear-elastic": (mat.LinearElastic, ("mu", "lambda")),
+    "polynomial": (lambda C10, C01, C20, C02, C11, K: mat.Polynomial(C10, C01, C20, C02, C11, K=K),
+                   ("C10", "C01", "C20", "C02", "C11", "K")),
+    "arruda-boyce": (mat.ArrudaBoyce, ("mu", "lambda_m", "K")),
+    "transversely-isotropic": (mat.TransverselyIsotropic, ("mu", "K", "eta", "direction")),
+}
+_NO_E_NU = ("mooney-rivlin", "polynomial", "arruda-boyce", "transversely-isotropic")
+
+
+def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
+    """'constant' | 'step' | 'ramp' | 'smooth-ramp' (0 → 1 over the duration) or a table
+    {type = 'ramp' | 'smooth-ramp', t0, t1} | {type = 'step', t0} | {type = 'table', times, values}."""
+    if spec is None:
+        return Constant()
+    if isinstance(spec, str):
+        spec = {"type": spec}
+    check_keys(ctx, spec, path, {"type": "str", "t0": "number", "t1": "number", "times": "list",
+                                 "values": "list"}, ("type",))
+    kind = spec["type"]
+    try:
+        if kind == "constant":
+            return Constant()
+        if kind == "step":
+            return Step(spec.get("t0", 0.0))
+        if kind in ("ramp", "smooth-ramp"):
+            cls = Ramp if kind == "ramp" else SmoothRamp
+            return cls(spec.get("t1", duration), spec.get("t0", 0.0))
+        if kind == "table":
+            if "times" not in spec or "values" not in spec:
+                raise ctx.error(path, "a table curve needs 'times' and 'values'")
+            return Table(spec["times"], spec["values"])
+    except InputError as e:
+        if isinstance(e, SceneError):
+            raise
+        raise ctx.error(path, str(e)) from None
+    raise ctx.error(f"{path}.type", f"unknown curve {kind!r}; expected constant, step, ramp, "
+                    "smooth-ramp or table")
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a scene file (TOML). Raises SceneError naming file, key and line."""
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(f"no such scene file: {path}", str(path))
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        raise SceneError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"not valid TOML: {e}", str(path)) from None
+    except RecursionError:
+        raise SceneError("not a usable scene: tables or arrays nested too deeply", str(path)) from None
+    ctx = Ctx(str(path), text)
+    check_keys(ctx, data, "", {"title": "str", "mesh": "table", "material": "list",
+                               "solver": "table", "constraint": "list", "load": "list",
+                               "tool": "list", "output": "table"}, ("mesh", "material"))
+    b = ModelBuilder()
+    scene = Scene(str(path), b, title=data.get("title", path.stem))
+    solver = check_keys(ctx, data.get("solver", {}), "solver", {
+        "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
+        "nodal_pressure": "bool",
+        "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
+        "check_every": "int", "backend": "str"})
+    scene.duration = float(solver.get("duration", 1.0))
+    if not scene.duration > 0:
+        raise ctx.error("solver.duration", "expected a duration > 0 [s]")
+    dt = solver.get("dt", "auto")
+    if isinstance(dt, str):
+        if dt != "auto":
+            raise ctx.error("solver.dt", f"dt = {dt!r}: expected 'auto' or a time step [s]")
+    elif not dt > 0:
+        raise ctx.error("solver.dt", f"dt = {dt!r}: expected a time step > 0 [s]")
+    else:
+        scene.dt = float(dt)
+    scene.safety = float(solver.get("safety", 0.8))
+    if not 0 < scene.safety <= 1:
+        raise ctx.error("solver.safety", "expected 0 < safety <= 1")
+    scene.dtype = solver.get("dtype", "float32")
+    if scene.dtype not in ("float32", "float64"):
+        raise ctx.error("solver.dtype", f"dtype = {scene.dtype!r}: expected 'float32' or 'float64'")
+    scene.backend = solver.get("backend", "cpu")
+    if scene.backend not in ("cpu", "cuda"):
+        raise ctx.error("solver.backend", f"backend = {scene.backend!r}: expected 'cpu' or 'cuda'")
+    scene.threads = solver.get("threads")
+    if scene.threads is not None and not 1 <= scene.threads <= _core.thread_limit():
+        raise ctx.error("solver.threads", f"threads = {scene.threads}; expected 1 to "
+                        f"{_core.thread_limit()} on this machine (leave it out for automatic)")
+    scene.static = bool(solver.get("static", False))
+    scene.tol = float(solver.get("tol", 1e-5))
+    scene.increments = int(solver.get("increments", 1))
+    scene.check_every = int(solver.get("check_every", 16))
+    if not 1 <= scene.increments <= MAX_INCREMENTS:
+        raise ctx.error("solver.increments", f"increments = {scene.increments}; expected 1 to "
+                        f"{MAX_INCREMENTS}")
+    if not 1 <= scene.check_every <= 10**6:
+        raise ctx.error("solver.check_every", f"check_every = {scene.check_every}; expected 1 to "
+                        "1000000")
+    damping = float(solver.get("damping", 0.0))
+    if damping < 0:
+        raise ctx.error("solver.damping", "expected damping >= 0 [1/s]")
+    b.damping = damping
+    b.nodal_pressure = bool(solver.get("nodal_pressure", False))
+
+    with ctx.under("mesh"):
+        X, T, sets = load_mesh(ctx, data["mesh"], path.parent, scene)
+    try:
+        b.add_mesh(X, T, source=scene.meta["mesh_source"])
+    except MeshError as e:
+        raise ctx.error("mesh", str(e)) from None
+
+    for i, m in enumerate(data["material"]):
+        p = f"material[{i}]"
+        check_keys(ctx, m, p, {"type": "str", "region": "table", "density": "number", "E": "number",
+                               "nu": "number", "mu": "number", "K": "number", "lambda": "number",
+                               "C10": "number", "C01": "number", "C20": "number", "C02": "number",
+                               "C11": "number", "lambda_m": "number", "eta": "number",
+                               "direction": "list", "prony_iso": "list", "prony_vol": "list",
+                               "name": "str"}, ("type", "density"))
+        if m["type"] not in _MATERIALS:
+            raise ctx.error(f"{p}.type", f"unknown material {m['type']!r}; expected one of "
+                            f"{', '.join(_MATERIALS)}")
+        cls, native = _MATERIALS[m["type"]]
+        given = {k for k in m if k not in ("type", "region", "density", "name", "prony_iso",
+                                           "prony_vol")}
+        with ctx.under(p):
+            if m["type"] == "polynomial":  # higher-order constants default to 0
+                given |= {"C01", "C20", "C02", "C11"}
+                m = {"C01": 0.0, "C20": 0.0, "C02": 0.0, "C11": 0.0, **m}
+            if given == {"E", "nu"} and m["type"] not in _NO_E_NU:
+                material = cls(E=m["E"], nu=m["nu"])
+            elif given == set(native):
+                material = cls(*[m[k] for k in native])
+            else:
+                alt = " or (E, nu)" if m["type"] not in _NO_E_NU else ""
+                raise ctx.error(p, f"{m['type']} takes ({', '.join(native)}){alt}; got "
+                                f"({', '.join(sorted(given)) or 'nothing'})")
+            if "prony_iso" in m or "prony_vol" in m:  # visco-hyperelastic: (alpha, tau [s]) pairs
+                material = mat.Viscoelastic(material, m.get("prony_iso", []), m.get("prony_vol", []))
+            elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) \
+                if "region" in m else None
+            b.set_material(material, m["density"], elements=elems, name=m.get("name", p))
+
+    for i, c in enumerate(data.get("constraint", [])):
+        p = f"constraint[{i}]"
+        check_keys(ctx, c, p, {"type": "str", "nodes": "table", "dofs": "str", "value": "number|list",
+                               "curve": "str|table"}, ("type", "nodes"))
+        ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T)
+        dofs = c.get("dofs", "xyz")
+        with ctx.under(p):
+            if c["type"] == "fix":
+                if "value" in c or "curve" in c:
+                    raise ctx.error(p, "a 'fix' constraint takes no value or curve")
+                b.fix(ids, dofs)
+            elif c["type"] == "displacement":
+                if "value" not in c:
+                    raise ctx.error(p, "a 'displacement' constraint needs 'value' [m]")
+                b.prescribe(ids, c["value"], dofs,
+                            make_curve(ctx, c.get("curve"), f"{p}.curve", scene.duration))
+            else:
+                raise ctx.error(f"{p}.type", f"unknown constraint {c['type']!r}; expected 'fix' or "
+                                "'displacement'")
+
+    for i, ld in enumerate(data.get("load", [])):
+        p = f"load[{i}]"
+        check_keys(ctx, ld, p, {"type": "str", "nodes": "table", "force": "list",
+                                "total_force": "list", "g": "list", "value": "number",
+                                "curve": "str|table"}, ("type",))
+        with ctx.under(p):
+            _add_load(ctx, b, ld, p, X, T, scene)
+
+    for i, t in enumerate(data.get("tool", [])):
+        with ctx.under(f"tool[{i}]"):
+            only = select_nodes(ctx, t["nodes"], f"tool[{i}].nodes", X, T) if "nodes" in t else None
+            b.add_tool(make_tool(ctx, t, f"tool[{i}]", path.parent), nodes=only)
+
+    _output(ctx, data, scene)
+    return scene
+
+
+def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -> None:
+    """One [[load]] table: gravity, force or pressure."""
+    curve = make_curve(ctx, ld.get("curve"), f"{p}.curve", scene.duration)
+    if ld["type"] == "gravity":
+        b.set_gravity(vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g"), curve)
+    elif ld["type"] == "force":
+        if "nodes" not in ld or (("force" in ld) == ("total_force" in ld)):
+            raise ctx.error(p, "a 'force' load needs 'nodes' and one of 'force' (per node [N]) "
+                            "or 'total_force' (shared equally [N])")
+        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+        if "force" in ld:
+            f = np.array(vector(ctx, ld["force"], f"{p}.force"))
+        else:
+            f = np.array(vector(ctx, ld["total_force"], f"{p}.total_force")) / ids.size
+        b.add_force(ids, f, curve)
+    elif ld["type"] == "pressure":
+        if "nodes" not in ld or "value" not in ld:
+            raise ctx.error(p, "a 'pressure' load needs 'value' [Pa] and 'nodes' (the boundary "
+                            "triangles whose three nodes are all selected)")
+        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+        B, _ = boundary_faces(T)
+        faces = B[np.all(np.isin(B, ids), axis=1)]
+        if len(faces) == 0:
+            raise ctx.error(f"{p}.nodes", f"the {ids.size} selected nodes hold no whole boundary "
+                            "triangle: select a surface patch")
+        b.add_pressure(faces, float(ld["value"]), curve)
+    else:
+        raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force', "
+                        "'pressure' or 'gravity'")
+
+
+def _output(ctx: Ctx, data: dict, scene: Scene) -> None:
+    """The [output] table."""
+    out = check_keys(ctx, data.get("output", {}), "output",
+                     {"every": "int", "interval": "number", "frames": "int", "png": "bool",
+                      "fields": "list"})
+    from ..io.results import FIELDS
+
+    fields = out.get("fields", list(FIELDS[:5]))
+    bad = [x for x in fields if x not in FIELDS]
+    if bad:
+        raise ctx.error("output.fields", f"unknown field(s) {bad}; expected some of {list(FIELDS)}")
+    scene.fields = tuple(fields)
+    if sum(k in out for k in ("every", "interval", "frames")) > 1:
+        raise ctx.error("output", "give at most one of 'every' (steps), 'interval' [s], 'frames'")
+    if "every" in out and out["every"] < 1 or "frames" in out and out["frames"] < 1 \
+            or "interval" in out and not out["interval"] > 0:
+        raise ctx.error("output", "every, frames and interval must be positive")
+    scene.output_every = out.get("every")
+    scene.output_interval = out.get("interval")
+    scene.frames = int(out.get("frames", 20))
+    scene.png = bool(out.get("png", True))

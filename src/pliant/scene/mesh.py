@@ -1,0 +1,133 @@
+"""The [mesh] table of a scene: a volume mesh file, a surface file (through the mesh pipeline) or a
+primitive, then scale, rotation and translation."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import MeshError
+from .schema import Ctx, check_keys, vector
+
+if TYPE_CHECKING:
+    from .loader import Scene
+
+
+def _rotation(deg) -> np.ndarray:
+    R = np.eye(3)
+    for axis, a in enumerate(np.radians(deg)):
+        c, s = math.cos(a), math.sin(a)
+        i, j = [(1, 2), (0, 2), (0, 1)][axis]
+        Q = np.eye(3)
+        Q[i, i], Q[i, j], Q[j, i], Q[j, j] = c, -s, s, c
+        if axis == 1:
+            Q[i, j], Q[j, i] = s, -s
+        R = Q @ R
+    return R
+
+
+def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
+    from .. import mesh as pm
+    from ..io.mesh import read_volume_mesh
+
+    check_keys(ctx, spec, "mesh", {
+        "file": "str", "primitive": "str", "size": "list|number", "cells": "list", "radius": "number",
+        "height": "number", "major_radius": "number", "minor_radius": "number",
+        "edge_length": "number", "scale": "number", "rotate": "list", "translate": "list",
+        "jitter": "number", "segments": "int", "minor_segments": "int", "target_tets": "int",
+        "embed": "bool", "embed_subdivide": "int", "bodies": "str"})
+    if ("file" in spec) == ("primitive" in spec):
+        raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
+    sets: dict[str, np.ndarray] = {}
+    scale = float(spec.get("scale", 1.0))
+    if not scale > 0:
+        raise ctx.error("mesh.scale", "expected a scale > 0")
+
+    def pos(key):
+        v = spec.get(key)
+        if v is None:
+            raise ctx.error("mesh", f"primitive {spec['primitive']!r} needs '{key}' [m]")
+        if not v > 0:
+            raise ctx.error(f"mesh.{key}", f"{key} = {v!r}: expected a length > 0 [m]")
+        return float(v)
+
+    el = spec.get("edge_length")
+    if el is not None and not el > 0:
+        raise ctx.error("mesh.edge_length", "expected a length > 0 [m]")
+    if "file" in spec:
+        f = Path(spec["file"])
+        f = f if f.is_absolute() else base / f
+        if not f.is_file():
+            raise ctx.error("mesh.file", f"no such file: {f}")
+        surface_ext = {".obj", ".stl", ".ply", ".off"}
+        try:
+            if f.suffix.lower() in surface_ext:
+                V, F = pm.read_surface(f)
+                from ..mesh.pipeline import BODIES
+
+                if spec.get("bodies", "union") not in BODIES:
+                    raise ctx.error("mesh.bodies", f"bodies = {spec['bodies']!r}; expected one of "
+                                    f"{', '.join(BODIES)}")
+                X, T, info = pm.surface_to_tets(V * scale, F, edge_length=el,
+                                                target_tets=spec.get("target_tets", 10000),
+                                                bodies=spec.get("bodies", "union"))
+                scene.meta["mesh_pipeline"] = info
+                if spec.get("embed") or spec.get("embed_subdivide"):
+                    Ve, Fe = pm.subdivide_loop(V * scale, F, int(spec.get("embed_subdivide", 0)))
+                    scene.meta["embed_surface"] = [Ve, Fe]
+                scale = 1.0
+            else:
+                X, T, sets = read_volume_mesh(f)
+        except MeshError as e:
+            raise ctx.error("mesh.file", str(e)) from None
+        scene.meta["mesh_source"] = str(f)
+    else:
+        kind = spec["primitive"]
+        if kind == "box":
+            size = spec.get("size", [0.1, 0.1, 0.1])
+            size = vector(ctx, size, "mesh.size") if isinstance(size, list) else [float(size)] * 3
+            if min(size) <= 0:
+                raise ctx.error("mesh.size", "expected lengths > 0 [m]")
+            h = el or min(size) / 4
+            cells = spec.get("cells") or [max(1, round(s / h)) for s in size]
+            if not (len(cells) == 3 and all(isinstance(c, int) and c >= 1 for c in cells)):
+                raise ctx.error("mesh.cells", "expected three integers >= 1")
+            X, T = pm.box_tets(size, cells, origin=[-s / 2 for s in size],
+                               jitter=float(spec.get("jitter", 0.0)))
+        elif kind in ("sphere", "cylinder", "torus"):
+            if kind == "sphere":
+                V, F = pm.primitive_surface("sphere", radius=pos("radius"))
+            elif kind == "cylinder":
+                V, F = pm.primitive_surface("cylinder", radius=pos("radius"), height=pos("height"),
+                                            segments=spec.get("segments", 48))
+            else:
+                V, F = pm.primitive_surface("torus", major_radius=pos("major_radius"),
+                                            minor_radius=pos("minor_radius"),
+                                            segments=spec.get("segments", 48),
+                                            minor_segments=spec.get("minor_segments", 24))
+            X, T, info = pm.surface_to_tets(V, F, edge_length=el,
+                                            target_tets=spec.get("target_tets", 10000))
+            scene.meta["mesh_pipeline"] = info
+        else:
+            raise ctx.error("mesh.primitive", f"unknown primitive {kind!r}; expected box, sphere, "
+                            "cylinder or torus")
+        scene.meta["mesh_source"] = f"primitive {kind}"
+    X = np.asarray(X, float) * scale
+    emb = scene.meta.get("embed_surface")
+    if "rotate" in spec:
+        R = _rotation(vector(ctx, spec["rotate"], "mesh.rotate"))
+        X = X @ R.T
+        if emb:
+            emb[0] = emb[0] @ R.T
+    if "translate" in spec:
+        X = X + np.array(vector(ctx, spec["translate"], "mesh.translate"))
+        if emb:
+            emb[0] = emb[0] + np.array(spec["translate"], float)
+    extent = float(np.ptp(X, axis=0).max())
+    if extent > 10.0:
+        scene.warnings.append(f"{ctx.file}: the mesh is {extent:g} m across; pliant expects SI "
+                              "metres: if the file is in millimetres, set mesh.scale = 0.001")
+    return X, np.asarray(T, np.int64), sets
