@@ -350,6 +350,30 @@ NB_MODULE(_core, m) {
     bind_engine<float>(m, "EngineF32", "StateF32");
     bind_engine<double>(m, "EngineF64", "StateF64");
     m.attr("lanes") = kLanes;
+    // The kinds the engine dispatches on, bound so that Python names them and restates no number.
+    nb::enum_<MaterialKind>(m, "MaterialKind", nb::is_arithmetic(), "Hyperelastic material models.")
+        .value("NeoHookean", MaterialKind::NeoHookean)
+        .value("MooneyRivlin", MaterialKind::MooneyRivlin)
+        .value("NeoHookeanCoupled", MaterialKind::NeoHookeanCoupled)
+        .value("StVenantKirchhoff", MaterialKind::StVenantKirchhoff)
+        .value("LinearElastic", MaterialKind::LinearElastic)
+        .value("Polynomial", MaterialKind::Polynomial)
+        .value("ArrudaBoyce", MaterialKind::ArrudaBoyce)
+        .value("TransverselyIsotropic", MaterialKind::TransverselyIsotropic);
+    nb::enum_<CurveKind>(m, "CurveKind", nb::is_arithmetic(), "Load curve shapes.")
+        .value("Constant", CurveKind::Constant)
+        .value("Step", CurveKind::Step)
+        .value("Ramp", CurveKind::Ramp)
+        .value("SmoothRamp", CurveKind::SmoothRamp)
+        .value("Table", CurveKind::Table)
+        .value("Hilly", CurveKind::Hilly);
+    nb::enum_<ToolKind>(m, "ToolKind", nb::is_arithmetic(), "Rigid tool shapes.")
+        .value("Plane", ToolKind::Plane)
+        .value("Sphere", ToolKind::Sphere)
+        .value("Capsule", ToolKind::Capsule)
+        .value("Box", ToolKind::Box)
+        .value("Grid", ToolKind::Grid)
+        .value("Cylinder", ToolKind::Cylinder);
     m.def("max_threads", []() { return omp_get_max_threads(); });
     m.def("thread_limit", &pliant::thread_limit, "Most CPU threads a solver accepts.");
     m.def("cuda_compiled", []() {

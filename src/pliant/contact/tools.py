@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .. import _core
 from ..checks import finite_number, finite_vector, shown
 from ..errors import InputError
 
@@ -61,7 +62,7 @@ class RigidTool:
     frictionless). Trajectory: :meth:`at` adds keyframes (time [s], position [m], rotation);
     between keyframes positions are linear and rotations normalized-linear; held outside."""
 
-    kind = -1
+    kind: _core.ToolKind | None = None
 
     def __init__(self, mu_s: float = 0.0, mu_k: float | None = None, position=(0.0, 0.0, 0.0),
                  rotation=(1.0, 0.0, 0.0, 0.0), name: str | None = None):
@@ -131,7 +132,7 @@ def _positive(cls, name, v):
 class Plane(RigidTool):
     """Half-space below the plane through ``point`` with outward ``normal`` (e.g. the ground)."""
 
-    kind = 0
+    kind = _core.ToolKind.Plane
 
     def __init__(self, point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0), **kw):
         super().__init__(position=point, rotation=quat_align_z(normal), **kw)
@@ -141,7 +142,7 @@ class Plane(RigidTool):
 
 
 class Sphere(RigidTool):
-    kind = 1
+    kind = _core.ToolKind.Sphere
 
     def __init__(self, radius: float, **kw):
         self.radius = _positive("Sphere", "radius", radius)
@@ -158,7 +159,7 @@ class Capsule(RigidTool):
     """Cylinder with hemispherical ends (most laparoscopic tools): axis along the tool's z, from
     −length/2 to +length/2 (segment), radius ``radius``."""
 
-    kind = 2
+    kind = _core.ToolKind.Capsule
 
     def __init__(self, radius: float, length: float, **kw):
         self.radius = _positive("Capsule", "radius", radius)
@@ -180,7 +181,7 @@ class Cylinder(RigidTool):
     """Cylinder with flat ends (a rod, a retractor blade's edge): axis along the tool's z, from
     −length/2 to +length/2, radius ``radius``."""
 
-    kind = 5
+    kind = _core.ToolKind.Cylinder
 
     def __init__(self, radius: float, length: float, **kw):
         self.radius = _positive("Cylinder", "radius", radius)
@@ -197,7 +198,7 @@ class Cylinder(RigidTool):
 
 
 class Box(RigidTool):
-    kind = 3
+    kind = _core.ToolKind.Box
 
     def __init__(self, half_extents, **kw):
         h = np.asarray(half_extents, float).ravel()
@@ -218,7 +219,7 @@ class MeshTool(RigidTool):
     """Any closed triangle mesh (vertices [m] in the tool frame, faces), through a signed-distance
     grid of spacing ``spacing`` [m] (default: 1/64 of its largest extent) interpolated trilinearly."""
 
-    kind = 4
+    kind = _core.ToolKind.Grid
 
     def __init__(self, vertices, faces, spacing: float | None = None, **kw):
         from .sdf import signed_distance_grid

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+from .. import _core
 from ..checks import shown
 from ..errors import MaterialError
 
@@ -33,7 +34,7 @@ class Material:
     """Base class: ``kind`` (engine code), ``params`` (up to 8 floats), ``mu``/``lam`` small-strain
     Lamé constants [Pa]."""
 
-    kind: int = -1
+    kind: _core.MaterialKind | None = None
     mu: float
     lam: float
 
@@ -89,7 +90,7 @@ class NeoHookean(Material):
     ``NeoHookean(E=..., nu=...)``.
     """
 
-    kind = 0
+    kind = _core.MaterialKind.NeoHookean
 
     def __init__(self, mu=None, K=None, *, E=None, nu=None):
         self.mu, self.K = _mu_k("NeoHookean", mu, K, E, nu)
@@ -106,7 +107,7 @@ class MooneyRivlin(Material):
     Small-strain shear modulus μ = 2 (C10 + C01). ``MooneyRivlin(C10=..., C01=..., K=...)``.
     """
 
-    kind = 1
+    kind = _core.MaterialKind.MooneyRivlin
 
     def __init__(self, C10, C01, K):
         self.C10 = _positive("C10", C10, "MooneyRivlin")
@@ -152,19 +153,19 @@ class NeoHookeanCoupled(_MuLambda):
     """Coupled compressible Neo-Hookean: W = μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²
     (Bonet & Wood 2008, §6.4.3; FEBio's "neo-Hookean")."""
 
-    kind = 2
+    kind = _core.MaterialKind.NeoHookeanCoupled
 
 
 class StVenantKirchhoff(_MuLambda):
     """St Venant–Kirchhoff: W = λ/2 (tr E)² + μ E:E (Bonet & Wood 2008, §6.4.2)."""
 
-    kind = 3
+    kind = _core.MaterialKind.StVenantKirchhoff
 
 
 class LinearElastic(_MuLambda):
     """Small-strain linear elasticity, σ = λ tr(ε) I + 2μ ε; for small displacements only."""
 
-    kind = 4
+    kind = _core.MaterialKind.LinearElastic
 
 
 def _finite(name: str, value, cls: str, minimum: float | None = None) -> float:
@@ -180,7 +181,7 @@ class Polynomial(Material):
     C20 (Ī1 − 3)² + C02 (Ī2 − 3)² + C11 (Ī1 − 3)(Ī2 − 3) + K/2 (J − 1)². Small-strain shear
     modulus μ = 2 (C10 + C01). ``Polynomial(C10=..., C01=..., C20=..., C02=..., C11=..., K=...)``."""
 
-    kind = 5
+    kind = _core.MaterialKind.Polynomial
 
     def __init__(self, C10, C01=0.0, C20=0.0, C02=0.0, C11=0.0, *, K):
         c = "Polynomial"
@@ -208,7 +209,7 @@ class ArrudaBoyce(Material):
     (Arruda & Boyce 1993). ``ArrudaBoyce(mu=..., lambda_m=..., K=...)``: λm the locking stretch
     (> 1); the small-strain shear modulus is μ (1 + 3/(5 λm²) + 99/(175 λm⁴) + …)."""
 
-    kind = 6
+    kind = _core.MaterialKind.ArrudaBoyce
 
     def __init__(self, mu, lambda_m, K):
         c = "ArrudaBoyce"
@@ -233,7 +234,7 @@ class TransverselyIsotropic(Material):
     K/2 (J − 1)², Ī4 = J^(−2/3) a·Ca, fibres along the unit vector a (normalized here).
     ``TransverselyIsotropic(mu=..., K=..., eta=..., direction=(a1, a2, a3))``."""
 
-    kind = 7
+    kind = _core.MaterialKind.TransverselyIsotropic
 
     def __init__(self, mu, K, eta, direction):
         c = "TransverselyIsotropic"

@@ -10,14 +10,17 @@ import math
 
 import numpy as np
 
+from .. import _core
 from ..checks import shown
 from ..errors import InputError
+
+K = _core.CurveKind
 
 __all__ = ["LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table"]
 
 
 class LoadCurve:
-    kind: int = 0
+    kind: _core.CurveKind = K.Constant
     t0 = 0.0
     t1 = 0.0
     times: tuple = ()
@@ -40,15 +43,15 @@ class LoadCurve:
     def __call__(self, t):
         """Factor at time(s) t [s] (a NumPy mirror of the engine's curve_value, for plotting)."""
         t = np.asarray(t, dtype=float)
-        if self.kind == 0:
+        if self.kind == K.Constant:
             return np.ones_like(t)
-        if self.kind == 1:
+        if self.kind == K.Step:
             return (t >= self.t0).astype(float)
-        if self.kind in (2, 3, 5):
+        if self.kind in (K.Ramp, K.SmoothRamp, K.Hilly):
             tau = np.clip((t - self.t0) / (self.t1 - self.t0), 0.0, 1.0)
-            if self.kind == 5:
+            if self.kind == K.Hilly:
                 return tau * np.exp(np.cos(4 * np.pi * tau) - 1)
-            return tau if self.kind == 2 else tau**3 * (10 - 15 * tau + 6 * tau**2)
+            return tau if self.kind == K.Ramp else tau**3 * (10 - 15 * tau + 6 * tau**2)
         return np.interp(t, self.times, self.values)
 
 
@@ -62,7 +65,7 @@ def _time(name, v, cls):
 class Constant(LoadCurve):
     """Factor 1 at all times."""
 
-    kind = 0
+    kind = K.Constant
 
     def __repr__(self):
         return "Constant()"
@@ -71,7 +74,7 @@ class Constant(LoadCurve):
 class Step(LoadCurve):
     """0 before t0 [s], 1 from t0 on."""
 
-    kind = 1
+    kind = K.Step
 
     def __init__(self, t0: float = 0.0):
         self.t0 = _time("t0", t0, "Step")
@@ -87,7 +90,7 @@ class Step(LoadCurve):
 class Ramp(LoadCurve):
     """Linear from 0 at t0 to 1 at t1 [s], then held (NiftySim's RAMP with t0 = 0)."""
 
-    kind = 2
+    kind = K.Ramp
 
     def __init__(self, t1: float, t0: float = 0.0):
         self.t0, self.t1 = _time("t0", t0, type(self).__name__), _time("t1", t1, type(self).__name__)
@@ -106,19 +109,19 @@ class SmoothRamp(Ramp):
     """10τ³ − 15τ⁴ + 6τ⁵ with τ = (t − t0)/(t1 − t0): zero velocity and acceleration at both ends
     (NiftySim's POLY345)."""
 
-    kind = 3
+    kind = K.SmoothRamp
 
 
 class Hilly(Ramp):
     """τ exp(cos(4πτ) − 1) with τ = (t − t0)/(t1 − t0): a peaky curve (NiftySim's HILLY)."""
 
-    kind = 5
+    kind = K.Hilly
 
 
 class Table(LoadCurve):
     """Piecewise linear through (times [s], values), held constant outside."""
 
-    kind = 4
+    kind = K.Table
 
     def __init__(self, times, values):
         t = np.asarray(times, dtype=float).ravel()
