@@ -31,6 +31,7 @@ BUDGET = settings(max_examples=_EXPLORE or 120, deadline=None, derandomize=not _
 
 # The hostile-input tests' minimal scene, with more of everything for the mutations to hit.
 BASE = SCENE.replace('title = "bar"', 'title = "fuzz"').replace(
+    "density = 1000.0", "density = 1000.0\nprony_iso = [[0.3, 0.1]]").replace(
     "duration = 0.001", 'duration = 0.0005\ndamping = 5.0\ndtype = "float64"') + """[[constraint]]
 type = "displacement"
 nodes = { box = [[0.04, -1, -1], [1, 1, 1]] }

@@ -350,6 +350,10 @@ NB_MODULE(_core, m) {
     bind_engine<float>(m, "EngineF32", "StateF32");
     bind_engine<double>(m, "EngineF64", "StateF64");
     m.attr("lanes") = kLanes;
+    // Layout limits of the model description, so that Python restates none of them.
+    m.attr("material_params") = kMaterialParams;  // parameters per material group
+    m.attr("prony_max") = kPronyMax;              // Prony terms per group (half isochoric)
+    m.attr("masked_tools") = kMaskedTools;        // tools that can be restricted to node sets
     // The kinds the engine dispatches on, bound so that Python names them and restates no number.
     nb::enum_<MaterialKind>(m, "MaterialKind", nb::is_arithmetic(), "Hyperelastic material models.")
         .value("NeoHookean", MaterialKind::NeoHookean)

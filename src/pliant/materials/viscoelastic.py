@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+from .. import _core
 from ..checks import shown
 from ..errors import MaterialError
 from .hyperelastic import Material
@@ -28,9 +29,14 @@ class Viscoelastic(Material):
                                 f"({', '.join(_DECOUPLED)})")
         terms = []
         for name, series in (("iso", iso), ("vol", vol)):
-            pairs = [tuple(float(v) for v in p) for p in series]
-            if len(pairs) > 4 or any(len(p) != 2 for p in pairs):
-                raise MaterialError(f"{c}: {name} = {shown(series)}; expected up to 4 pairs (alpha, tau)")
+            most = _core.prony_max // 2
+            try:
+                pairs = [tuple(float(v) for v in p) for p in series]
+            except (TypeError, ValueError):
+                pairs = None
+            if pairs is None or len(pairs) > most or any(len(p) != 2 for p in pairs):
+                raise MaterialError(f"{c}: {name} = {shown(series)}; expected up to {most} pairs "
+                                    "(alpha, tau [s])")
             for a, tau in pairs:
                 if not (math.isfinite(a) and a >= 0 and math.isfinite(tau) and tau > 0):
                     raise MaterialError(f"{c}: {name} term (alpha={shown(a)}, tau={shown(tau)}); expected "

@@ -260,8 +260,9 @@ class ModelBuilder:
         if not isinstance(tool, RigidTool):
             raise InputError(f"add_tool: {shown(tool)} is not a pliant.contact tool")
         if nodes is not None:
-            if len(self.tools) >= 28:
-                raise InputError(f"add_tool {shown(tool.name)}: only the first 28 tools can be "
+            if len(self.tools) >= _core.masked_tools:
+                raise InputError(f"add_tool {shown(tool.name)}: only the first "
+                                 f"{_core.masked_tools} tools can be "
                                  f"restricted to nodes; this is tool {len(self.tools)}")
             nodes = np.unique(self._node_ids(nodes, f"add_tool {shown(tool.name)} nodes"))
         self.tools.append(tool)

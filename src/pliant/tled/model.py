@@ -80,6 +80,18 @@ def _warn_slow_element(source: str, sets, owner: np.ndarray, altitude: np.ndarra
             "m); check the mesh (pliant mesh quality)"), stacklevel=4)
 
 
+def _prony_row(prony) -> list[float]:
+    """One group's Prony terms in the engine's layout (materials.hpp, Prony): n_iso, n_vol, then
+    (α, τ) pairs, isochoric at 0.., volumetric at prony_max/2.."""
+    iso, vol = prony or ((), ())
+    half = _core.prony_max // 2
+    row = [float(len(iso)), float(len(vol))] + [0.0] * (2 * _core.prony_max)
+    for start, terms in ((0, iso), (half, vol)):
+        for i, (a, tau) in enumerate(terms):
+            row[2 + 2 * (start + i)], row[3 + 2 * (start + i)] = a, tau
+    return row
+
+
 def _auto_threads(n_elements: int) -> int:
     """Threads for a model: all cores, but one per ~1,000 elements at most: every step has
     barriers (two to four) that cost a few microseconds each, more than a tiny model's work."""
@@ -180,25 +192,20 @@ class Model:
             # without a node set, the node set otherwise).
             on_surface = np.isin(cn, surface)
             masks = np.zeros(cn.size, np.int64)
-            for k, s in enumerate(builder.tool_nodes[:28]):
+            for k, s in enumerate(builder.tool_nodes[:_core.masked_tools]):
                 masks |= (on_surface if s is None else np.isin(cn, s)).astype(np.int64) << k
         else:
             cn, masks = np.zeros(0, np.int64), np.zeros(0, np.int64)
         self.contact_nodes = cn
         cn_order = np.argsort(node_rank[cn], kind="stable")
         tool_grids = [t.grid() for t in self.tools]
-        visco = []  # per group: n_iso, n_vol, (α, τ) × 8 (isochoric in 0..3, volumetric in 4..7)
+        visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
             for k in np.nonzero(keep)[0]:
-                iso, vol = getattr(self.sets[k].material, "prony", None) or ((), ())
-                row = [float(len(iso)), float(len(vol))] + [0.0] * 16
-                for i, (a, tau) in enumerate(iso):
-                    row[2 + 2 * i], row[3 + 2 * i] = a, tau
-                for i, (a, tau) in enumerate(vol):
-                    row[2 + 2 * (4 + i)], row[3 + 2 * (4 + i)] = a, tau
-                visco.extend(row)
+                visco.extend(_prony_row(getattr(self.sets[k].material, "prony", None)))
+        n_par = _core.material_params
         params = [p for k in np.nonzero(keep)[0]
-                  for p in (*self.sets[k].material.params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:8]]
+                  for p in (*self.sets[k].material.params, *([0.0] * n_par))[:n_par]]
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
         try:
             self._engine = Engine(
