@@ -286,6 +286,31 @@ def test_internal_errors_give_one_line_a_log_and_exit_3(tmp_path, monkeypatch):
     assert "raise RuntimeError" in log.read_text()
 
 
+def test_file_system_refusals_exit_2(tmp_path):
+    """An OSError that escapes a command (permissions, a full disk) is the environment's, not a
+    bug: exit 2 and one line naming the file."""
+    import io
+
+    import typer
+    from rich.console import Console
+
+    from pliant.guard import run_guarded
+
+    app = typer.Typer()
+
+    @app.command()
+    def read():
+        raise PermissionError(13, "Permission denied", str(tmp_path / "locked.obj"))
+
+    @app.command()
+    def other():
+        pass
+
+    buf = io.StringIO()
+    assert run_guarded(app, ["read"], Console(file=buf, width=300)) == 2
+    assert buf.getvalue().strip() == f"error: {tmp_path / 'locked.obj'}: Permission denied"
+
+
 def test_usage_errors_exit_2():
     r = cli("run")
     assert r.returncode == 2 and "Traceback" not in r.stderr

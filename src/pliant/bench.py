@@ -97,9 +97,11 @@ def run_benchmark(sizes=(7456, 12584, 27918, 100_000, 1_000_000), steps: int = 8
         rows.append(row)
         echo(row)
     if json_path:
-        with open(json_path, "w") as f:
-            json.dump({"backend": backend, "load_average": os.getloadavg(),
-                       "rows": [asdict(r) for r in rows]}, f, indent=2)
+        from .io.files import atomic_write_text
+
+        atomic_write_text(json_path, json.dumps({"backend": backend, "load_average": os.getloadavg(),
+                                                 "rows": [asdict(r) for r in rows]}, indent=2),
+                          "benchmark JSON")
     return rows
 
 

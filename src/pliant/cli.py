@@ -156,6 +156,13 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
                          f"{MAX_BOX_TETS:.0e} tets"), 2)
     if dtype not in ("float32", "float64"):
         _fail(InputError(f"--dtype {dtype!r}: expected float32 or float64"), 2)
+    if json_out is not None:
+        from .io.files import check_output_file
+
+        try:
+            check_output_file(json_out, "benchmark JSON")
+        except InputError as e:
+            _fail(e, 2)
     if backend not in ("cpu", "cuda"):
         _fail(InputError(f"--backend {backend!r}: expected cpu or cuda"), 2)
     if os.getloadavg()[0] > 0.5:
@@ -187,9 +194,11 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
             f"{r['steps']} steps in {r['seconds']:.2f} s; contact {100 * r['contact_share']:.1f} %, "
             f"kernel 1 {100 * r['element_share']:.0f} %, kernel 2 {100 * r['node_share']:.0f} %"))
         if json_out:
+            from .io.files import atomic_write_text
+
             data = json.loads(Path(json_out).read_text())
             data["contact"] = rows
-            Path(json_out).write_text(json.dumps(data, indent=2))
+            atomic_write_text(json_out, json.dumps(data, indent=2), "benchmark JSON")
 
 
 @app.command()

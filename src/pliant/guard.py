@@ -3,7 +3,8 @@ line on stderr, never a traceback.
 
 Exit codes (also in ``pliant --help`` and docs): 0 success; 1 the simulation failed
 (:class:`~pliant.errors.InstabilityError`, :class:`~pliant.errors.ConvergenceError`) or a check
-found problems; 2 bad input (:class:`~pliant.errors.InputError` and usage errors); 3 an internal
+found problems; 2 bad input (:class:`~pliant.errors.InputError`, usage errors, and files the
+operating system refuses to read or write); 3 an internal
 error, i.e. a bug in pliant: the line names the exception and the log file that holds the full
 traceback; 130 interrupted (Ctrl-C).
 
@@ -111,6 +112,10 @@ def run_guarded(app, argv: list[str] | None, console) -> int:
         except PliantError as e:
             say(str(e))
             return EXIT_FAILED
+        except OSError as e:  # the file system refused: permissions, a full disk, a vanished file
+            where = f"{e.filename}: " if getattr(e, "filename", None) else ""
+            say(f"{where}{e.strerror or e}")
+            return EXIT_INPUT
         except RecursionError as e:  # deep structures in input files
             say(f"input nested too deeply to process ({e})")
             return EXIT_INPUT
