@@ -118,7 +118,7 @@ def test_open_scans_become_valid_tet_meshes(name):
     # A valid tet mesh: no face in more than two tets, one face-connected body, and a closed
     # boundary (every boundary edge in an even number of boundary faces).
     from pliant.mesh.tetra import largest_component
-    from pliant.view.png import boundary_faces
+    from pliant.mesh.topology import boundary_faces
 
     faces = np.sort(np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]],
                                     T[:, [0, 1, 2]]]), axis=1)

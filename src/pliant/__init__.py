@@ -8,9 +8,9 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
 """
 
 from . import _core, contact, io, mesh
-from .errors import (BackendError, ConvergenceError, DegenerateElementError, InputError, InstabilityError,
-                     InvertedElementError, MaterialError, MeshError, PliantError, PliantWarning,
-                     TimeStepError)
+from .errors import (BackendError, ConvergenceError, DegenerateElementError, FileError, InputError,
+                     InstabilityError, InvertedElementError, MaterialError, MeshError, PliantError,
+                     PliantWarning, TimeStepError)
 from .materials import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoHookean,
                         NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic,
                         Viscoelastic)
@@ -25,6 +25,6 @@ __all__ = [
     "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
     "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "Viscoelastic",
     "LinearElastic",
-    "PliantError", "InputError", "BackendError", "MaterialError", "MeshError", "InvertedElementError",
+    "PliantError", "InputError", "FileError", "BackendError", "MaterialError", "MeshError", "InvertedElementError",
     "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError", "PliantWarning",
 ]

@@ -15,6 +15,21 @@ class InputError(PliantError, ValueError):
     """Bad user input: a parameter, array or file that does not meet its contract."""
 
 
+class FileError(InputError):
+    """An input file that does not meet its format (a scene, a NiftySim model). ``file``, ``key``
+    (a key path or an XML element) and ``line`` name the culprit; the message starts with them:
+    ``file:line [key]: what was wrong; what was expected``."""
+
+    def __init__(self, message: str, file: str = "", key: str = "", line: int | None = None):
+        where = file
+        if line:
+            where += f":{line}"
+        if key:
+            where += f" [{key}]"
+        super().__init__(f"{where}: {message}" if where else message)
+        self.file, self.key, self.line = file, key, line
+
+
 class MaterialError(InputError):
     """Non-physical material parameters (ν ≥ 0.5, non-positive modulus or density...)."""
 

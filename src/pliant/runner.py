@@ -13,7 +13,7 @@ import numpy as np
 from . import __version__
 from .errors import InputError, InstabilityError, PliantWarning
 from .io import ResultWriter, atomic_write_text, check_output_dir
-from .scene import Scene
+from .job import Scene
 from .tled import Solver
 from .tled.solver import MAX_STEPS
 

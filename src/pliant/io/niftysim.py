@@ -21,11 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import FileError, InputError
 from ..materials import (ArrudaBoyce, NeoHookean, Polynomial, StVenantKirchhoff,
                          TransverselyIsotropic)
-from ..scene import Scene
-from ..scene.schema import SceneError
+from ..job import Scene
 from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
 
 _KNOWN_TOP = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams", "SubMesh", "Output",
@@ -44,7 +43,7 @@ _MATERIALS = {
 }
 
 
-class NiftySimError(SceneError):
+class NiftySimError(FileError):
     """A NiftySim file that cannot be imported (malformed, or a feature pliant does not support)."""
 
 
@@ -92,7 +91,7 @@ def _named(f: str, key: str):
     """Builder errors inside become NiftySimErrors naming the file and the XML element."""
     try:
         yield
-    except SceneError:
+    except FileError:
         raise
     except InputError as e:
         raise NiftySimError(str(e), f, key) from None
@@ -229,7 +228,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
                 unsupported(f"Material Type={mtype}", "pliant imports NH, LE, PY, AB, TI, NHV and TIV")
                 continue
             b.set_material(material, rho, elements=elems, name=key)
-        except SceneError:
+        except FileError:
             raise
         except InputError as e:
             raise NiftySimError(str(e), f, key) from None

@@ -5,7 +5,8 @@ settings and outputs. ``load_scene(path)`` validates everything and returns a :c
 See docs/scenes.md for the full reference, and examples/ for complete scenes.
 """
 
-from .loader import Scene, load_scene, make_curve
+from ..job import Scene
+from .loader import load_scene, make_curve
 from .schema import SceneError
 
 __all__ = ["Scene", "load_scene", "SceneError", "make_curve"]

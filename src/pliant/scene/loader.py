@@ -4,7 +4,6 @@ loads and outputs (the mesh and the tools have their own modules). See the packa
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ from ..errors import InputError, MeshError
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from ..tled.solver import MAX_INCREMENTS
+from ..job import Scene
 from .mesh import load_mesh
 from .schema import Ctx, SceneError, check_keys, vector
 from .tools import make_tool
@@ -26,33 +26,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Scene", "load_scene", "SceneError", "make_curve"]
-
-
-@dataclass
-class Scene:
-    """A validated scene: builder (mesh, materials, constraints, loads) plus run settings."""
-
-    source: str
-    builder: ModelBuilder
-    duration: float = 1.0  # [s]
-    dt: float | None = None  # [s]; None: safety × critical
-    safety: float = 0.8
-    dtype: str = "float32"
-    backend: str = "cpu"
-    threads: int | None = None
-    static: bool = False
-    tol: float = 1e-5
-    increments: int = 1
-    check_every: int = 16
-    output_every: int | None = None  # steps
-    output_interval: float | None = None  # [s]
-    frames: int = 20
-    png: bool = True
-    fields: tuple = ("displacement", "velocity", "von_mises", "J", "strain_energy_density")
-    title: str = ""
-    warnings: list[str] = field(default_factory=list)
-    meta: dict = field(default_factory=dict)
+__all__ = ["load_scene", "make_curve"]
 
 
 _MATERIALS = {

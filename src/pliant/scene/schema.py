@@ -9,20 +9,11 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import InputError
+from ..errors import FileError, InputError
 
 
-class SceneError(InputError):
+class SceneError(FileError):
     """A scene file that does not meet the schema. ``file``, ``key`` and ``line`` name the culprit."""
-
-    def __init__(self, message: str, file: str = "", key: str = "", line: int | None = None):
-        where = file
-        if line:
-            where += f":{line}"
-        if key:
-            where += f" [{key}]"
-        super().__init__(f"{where}: {message}" if where else message)
-        self.file, self.key, self.line = file, key, line
 
 
 @dataclass
@@ -75,7 +66,7 @@ class Ctx:
         this file, key and line."""
         try:
             yield
-        except SceneError:
+        except FileError:
             raise
         except InputError as e:
             raise self.error(key, str(e)) from None

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..mesh.topology import boundary_faces  # noqa: F401  (re-exported)
+from ..mesh.topology import boundary_faces
 
 
 def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.ndarray,

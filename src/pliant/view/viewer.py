@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import InputError, PliantError
 from ..io.files import read_meshio
-from .png import boundary_faces
+from ..mesh.topology import boundary_faces
 
 
 def _colours(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
