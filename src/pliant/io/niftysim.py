@@ -121,6 +121,38 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         if child.tag not in _KNOWN_TOP:
             unsupported(child.tag, "not implemented in pliant")
 
+    X, T, etype = _mesh(root, f)
+    dt, total, damping, default_rho = _system_params(root, f, unsupported, warnings)
+    b = ModelBuilder()
+    with _named(f, "Elements"):
+        b.add_mesh(X, T, source=f)
+    b.damping = damping
+    b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
+    _element_sets(root, b, len(T), default_rho, f, unsupported)
+    shapes = {"RAMP": lambda: Ramp(total), "STEP": lambda: Step(0.0),
+              "POLY345": lambda: SmoothRamp(total), "HILLY": lambda: Hilly(total),
+              "RAMPHOLD": lambda: Ramp(0.1 * total)}  # NiftySim: ramp over 10 % of T, then hold
+    for k, c in enumerate(root.findall("Constraint")):
+        key = f"Constraint[{k}]"
+        with _named(f, key):
+            _constraint(c, b, T, shapes, f, key, unsupported)
+
+    with _named(f, "ContactPlate/ContactCylinder/ContactUSProbe"):
+        _rigid_contacts(root, b, total, f, unsupported, warnings)
+    with _named(f, "ContactSurface"):
+        _rigid_surfaces(root, b, path, f, unsupported)
+
+    out_every = None
+    for o in root.findall("Output"):
+        out_every = _scalar(o.get("Freq"), f, "Output Freq", int, 1, False)
+    scene = Scene(f, b, duration=total, dt=dt, dtype="float32", output_every=out_every,
+                  frames=20, title=path.stem, warnings=warnings)
+    scene.meta["mesh_source"] = f
+    return scene
+
+
+def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
+    """<Nodes> (N, 3) and <Elements> (M, 4) with their counts checked; the element type."""
     nodes_el = root.find("Nodes")
     elems_el = root.find("Elements")
     if nodes_el is None or elems_el is None:
@@ -149,6 +181,11 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         raise NiftySimError(f"<Elements NumEls={elems_el.get('NumEls')}> but {M} elements listed",
                             f, "Elements")
 
+    return X, T, etype
+
+
+def _system_params(root, f: str, unsupported, warnings: list[str]):
+    """<SystemParams>: time step [s], total time [s], damping [1/s], default density [kg/m³]."""
     sp = root.find("SystemParams")
     if sp is None:
         raise NiftySimError("missing <SystemParams>", f)
@@ -171,11 +208,11 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
     if "HGKappa" in params:
         warnings.append(f"{f}: HGKappa ignored (hourglass control applies to H8 elements only)")
 
-    b = ModelBuilder()
-    with _named(f, "Elements"):
-        b.add_mesh(X, T, source=f)
-    b.damping = damping
-    b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
+    return dt, total, damping, default_rho
+
+
+def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupported) -> None:
+    """<ElementSet>s: a material and a density on listed (or all) elements."""
     for k, es in enumerate(root.findall("ElementSet")):
         key = f"ElementSet[{k}]"
         size = es.get("Size", "")
@@ -233,26 +270,6 @@ def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
         except InputError as e:
             raise NiftySimError(str(e), f, key) from None
 
-    shapes = {"RAMP": lambda: Ramp(total), "STEP": lambda: Step(0.0),
-              "POLY345": lambda: SmoothRamp(total), "HILLY": lambda: Hilly(total),
-              "RAMPHOLD": lambda: Ramp(0.1 * total)}  # NiftySim: ramp over 10 % of T, then hold
-    for k, c in enumerate(root.findall("Constraint")):
-        key = f"Constraint[{k}]"
-        with _named(f, key):
-            _constraint(c, b, T, shapes, f, key, unsupported)
-
-    with _named(f, "ContactPlate/ContactCylinder/ContactUSProbe"):
-        _rigid_contacts(root, b, total, f, unsupported, warnings)
-    with _named(f, "ContactSurface"):
-        _rigid_surfaces(root, b, path, f, unsupported)
-
-    out_every = None
-    for o in root.findall("Output"):
-        out_every = _scalar(o.get("Freq"), f, "Output Freq", int, 1, False)
-    scene = Scene(f, b, duration=total, dt=dt, dtype="float32", output_every=out_every,
-                  frames=20, title=path.stem, warnings=warnings)
-    scene.meta["mesh_source"] = f
-    return scene
 
 
 def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupported) -> None:

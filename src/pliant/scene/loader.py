@@ -76,6 +76,30 @@ def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
 def load_scene(path) -> Scene:
     """Read and validate a scene file (TOML). Raises SceneError naming file, key and line."""
     path = Path(path)
+    text, data = _read_toml(path)
+    ctx = Ctx(str(path), text)
+    check_keys(ctx, data, "", {"title": "str", "mesh": "table", "material": "list",
+                               "solver": "table", "constraint": "list", "load": "list",
+                               "tool": "list", "output": "table"}, ("mesh", "material"))
+    b = ModelBuilder()
+    scene = Scene(str(path), b, title=data.get("title", path.stem))
+    _solver_settings(ctx, data.get("solver", {}), scene)
+    with ctx.under("mesh"):
+        X, T, sets = load_mesh(ctx, data["mesh"], path.parent, scene)
+    try:
+        b.add_mesh(X, T, source=scene.meta["mesh_source"])
+    except MeshError as e:
+        raise ctx.error("mesh", str(e)) from None
+    _materials(ctx, data["material"], b, X, T, sets)
+    _constraints(ctx, data.get("constraint", []), b, X, T, scene)
+    _loads(ctx, data.get("load", []), b, X, T, scene)
+    _tools(ctx, data.get("tool", []), b, X, T, path.parent)
+    _output(ctx, data, scene)
+    return scene
+
+
+def _read_toml(path: Path) -> tuple[str, dict]:
+    """The file's text and its TOML tables; SceneError for a missing, unreadable or invalid file."""
     if not path.is_file():
         raise SceneError(f"no such scene file: {path}", str(path))
     try:
@@ -83,18 +107,16 @@ def load_scene(path) -> Scene:
     except OSError as e:
         raise SceneError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
     try:
-        data = tomllib.loads(text)
+        return text, tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"not valid TOML: {e}", str(path)) from None
     except RecursionError:
         raise SceneError("not a usable scene: tables or arrays nested too deeply", str(path)) from None
-    ctx = Ctx(str(path), text)
-    check_keys(ctx, data, "", {"title": "str", "mesh": "table", "material": "list",
-                               "solver": "table", "constraint": "list", "load": "list",
-                               "tool": "list", "output": "table"}, ("mesh", "material"))
-    b = ModelBuilder()
-    scene = Scene(str(path), b, title=data.get("title", path.stem))
-    solver = check_keys(ctx, data.get("solver", {}), "solver", {
+
+
+def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
+    """The [solver] table: time, step, precision, backend, threads, quasi-static options, damping."""
+    check_keys(ctx, solver, "solver", {
         "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
         "nodal_pressure": "bool",
         "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
@@ -136,17 +158,14 @@ def load_scene(path) -> Scene:
     damping = float(solver.get("damping", 0.0))
     if damping < 0:
         raise ctx.error("solver.damping", "expected damping >= 0 [1/s]")
-    b.damping = damping
-    b.nodal_pressure = bool(solver.get("nodal_pressure", False))
+    scene.builder.damping = damping
+    scene.builder.nodal_pressure = bool(solver.get("nodal_pressure", False))
 
-    with ctx.under("mesh"):
-        X, T, sets = load_mesh(ctx, data["mesh"], path.parent, scene)
-    try:
-        b.add_mesh(X, T, source=scene.meta["mesh_source"])
-    except MeshError as e:
-        raise ctx.error("mesh", str(e)) from None
 
-    for i, m in enumerate(data["material"]):
+def _materials(ctx: Ctx, tables: list, b: ModelBuilder, X, T, sets) -> None:
+    """The [[material]] tables: a model from native constants or (E, nu), optionally viscoelastic,
+    on a region or on every element not yet assigned."""
+    for i, m in enumerate(tables):
         p = f"material[{i}]"
         check_keys(ctx, m, p, {"type": "str", "region": "table", "density": "number", "E": "number",
                                "nu": "number", "mu": "number", "K": "number", "lambda": "number",
@@ -157,28 +176,36 @@ def load_scene(path) -> Scene:
         if m["type"] not in _MATERIALS:
             raise ctx.error(f"{p}.type", f"unknown material {m['type']!r}; expected one of "
                             f"{', '.join(_MATERIALS)}")
-        cls, native = _MATERIALS[m["type"]]
-        given = {k for k in m if k not in ("type", "region", "density", "name", "prony_iso",
-                                           "prony_vol")}
         with ctx.under(p):
-            if m["type"] == "polynomial":  # higher-order constants default to 0
-                given |= {"C01", "C20", "C02", "C11"}
-                m = {"C01": 0.0, "C20": 0.0, "C02": 0.0, "C11": 0.0, **m}
-            if given == {"E", "nu"} and m["type"] not in _NO_E_NU:
-                material = cls(E=m["E"], nu=m["nu"])
-            elif given == set(native):
-                material = cls(*[m[k] for k in native])
-            else:
-                alt = " or (E, nu)" if m["type"] not in _NO_E_NU else ""
-                raise ctx.error(p, f"{m['type']} takes ({', '.join(native)}){alt}; got "
-                                f"({', '.join(sorted(given)) or 'nothing'})")
-            if "prony_iso" in m or "prony_vol" in m:  # visco-hyperelastic: (alpha, tau [s]) pairs
-                material = mat.Viscoelastic(material, m.get("prony_iso", []), m.get("prony_vol", []))
+            material = _material(ctx, m, p)
             elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) \
                 if "region" in m else None
             b.set_material(material, m["density"], elements=elems, name=m.get("name", p))
 
-    for i, c in enumerate(data.get("constraint", [])):
+
+def _material(ctx: Ctx, m: dict, p: str):
+    cls, native = _MATERIALS[m["type"]]
+    given = {k for k in m if k not in ("type", "region", "density", "name", "prony_iso",
+                                       "prony_vol")}
+    if m["type"] == "polynomial":  # higher-order constants default to 0
+        given |= {"C01", "C20", "C02", "C11"}
+        m = {"C01": 0.0, "C20": 0.0, "C02": 0.0, "C11": 0.0, **m}
+    if given == {"E", "nu"} and m["type"] not in _NO_E_NU:
+        material = cls(E=m["E"], nu=m["nu"])
+    elif given == set(native):
+        material = cls(*[m[k] for k in native])
+    else:
+        alt = " or (E, nu)" if m["type"] not in _NO_E_NU else ""
+        raise ctx.error(p, f"{m['type']} takes ({', '.join(native)}){alt}; got "
+                        f"({', '.join(sorted(given)) or 'nothing'})")
+    if "prony_iso" in m or "prony_vol" in m:  # visco-hyperelastic: (alpha, tau [s]) pairs
+        material = mat.Viscoelastic(material, m.get("prony_iso", []), m.get("prony_vol", []))
+    return material
+
+
+def _constraints(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) -> None:
+    """The [[constraint]] tables: 'fix' or 'displacement' (value [m], optional curve)."""
+    for i, c in enumerate(tables):
         p = f"constraint[{i}]"
         check_keys(ctx, c, p, {"type": "str", "nodes": "table", "dofs": "str", "value": "number|list",
                                "curve": "str|table"}, ("type", "nodes"))
@@ -198,7 +225,10 @@ def load_scene(path) -> Scene:
                 raise ctx.error(f"{p}.type", f"unknown constraint {c['type']!r}; expected 'fix' or "
                                 "'displacement'")
 
-    for i, ld in enumerate(data.get("load", [])):
+
+def _loads(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) -> None:
+    """The [[load]] tables."""
+    for i, ld in enumerate(tables):
         p = f"load[{i}]"
         check_keys(ctx, ld, p, {"type": "str", "nodes": "table", "force": "list",
                                 "total_force": "list", "g": "list", "value": "number",
@@ -206,13 +236,16 @@ def load_scene(path) -> Scene:
         with ctx.under(p):
             _add_load(ctx, b, ld, p, X, T, scene)
 
-    for i, t in enumerate(data.get("tool", [])):
-        with ctx.under(f"tool[{i}]"):
-            only = select_nodes(ctx, t["nodes"], f"tool[{i}].nodes", X, T) if "nodes" in t else None
-            b.add_tool(make_tool(ctx, t, f"tool[{i}]", path.parent), nodes=only)
 
-    _output(ctx, data, scene)
-    return scene
+def _tools(ctx: Ctx, tables: list, b: ModelBuilder, X, T, base: Path) -> None:
+    """The [[tool]] tables, each optionally restricted to a node selection."""
+    for i, t in enumerate(tables):
+        p = f"tool[{i}]"
+        if not isinstance(t, dict):
+            raise ctx.error(p, f"expected a table, got {type(t).__name__}")
+        with ctx.under(p):
+            only = select_nodes(ctx, t["nodes"], f"{p}.nodes", X, T) if "nodes" in t else None
+            b.add_tool(make_tool(ctx, t, p, base), nodes=only)
 
 
 def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -> None:
