@@ -98,3 +98,34 @@ def test_tetrahedralize_command_reports_the_union(spheres, tmp_path):
     assert "3 bodies meshed as their union" in r.stdout
     m = meshio.read(out)
     assert len(m.cells_dict["tetra"]) > 1000
+
+
+def test_scene_from_a_surface_of_several_bodies_says_so(spheres, tmp_path):
+    """Scenes that start from surfaces mesh the union too, and the run reports it (stdout and
+    summary.json)."""
+    import json
+
+    V, F, _ = spheres
+    src = tmp_path / "three.stl"
+    meshio.write(src, meshio.Mesh(V, [("triangle", F)]))
+    scene = tmp_path / "s.toml"
+    scene.write_text(f"""[mesh]
+file = "{src}"
+target_tets = 5000
+[[material]]
+type = "neo-hookean"
+E = 1e4
+nu = 0.4
+density = 1000.0
+[solver]
+duration = 0.0005
+[output]
+png = false
+""")
+    exe = str(__import__("pathlib").Path(sys.executable).with_name("pliant"))
+    r = subprocess.run([exe, "run", str(scene), "-o", str(tmp_path / "o"), "--no-progress"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "3 bodies in the surface, meshed as their union" in r.stdout
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert s["mesh_pipeline"]["bodies"] == 3 and s["mesh_pipeline"]["bodies_mode"] == "union"

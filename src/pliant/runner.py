@@ -86,8 +86,16 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
                "dt_critical": model.dt_critical, "simulated_time": 0.0, "wall_time": 0.0,
                "setup_time": build_s, "backend": model.backend, "threads": model.threads,
                "dtype": scene.dtype, "elements": model.n_elements, "nodes": model.n_nodes,
-               "interrupted": False, "error": None, "warnings": list(scene.warnings) + [str(w.message) for w in held],
+               "interrupted": False, "error": None,
+               "warnings": list(scene.warnings) + [str(w.message) for w in held],
                "files": ["result.pvd", "summary.json"]}
+    pipeline = scene.meta.get("mesh_pipeline")
+    if pipeline:  # a surface went through the mesh pipeline: say what it made
+        summary["mesh_pipeline"] = pipeline
+        if pipeline.get("bodies", 1) > 1:
+            echo(f"{pipeline['bodies']} bodies in the surface, meshed "
+                 f"{'as their union' if pipeline['bodies_mode'] == 'union' else pipeline['bodies_mode']}"
+                 f": {pipeline['tets']:,} tets")
     t0 = time.perf_counter()
     try:
         if scene.static:
