@@ -38,7 +38,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
         "height": "number", "major_radius": "number", "minor_radius": "number",
         "edge_length": "number", "scale": "number", "rotate": "list", "translate": "list",
         "jitter": "number", "segments": "int", "minor_segments": "int", "target_tets": "int",
-        "embed": "bool", "embed_subdivide": "int", "bodies": "str"})
+        "embed": "bool", "embed_subdivide": "int", "bodies": "str", "envelope": "number"})
     if ("file" in spec) == ("primitive" in spec):
         raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
     sets: dict[str, np.ndarray] = {}
@@ -71,9 +71,13 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
                 if spec.get("bodies", "union") not in BODIES:
                     raise ctx.error("mesh.bodies", f"bodies = {spec['bodies']!r}; expected one of "
                                     f"{', '.join(BODIES)}")
+                env = spec.get("envelope")
+                if env is not None and not 0 < env < 0.1:
+                    raise ctx.error("mesh.envelope", f"envelope = {env}; expected 0 < envelope < "
+                                    "0.1 (a fraction of the bounding-box diagonal)")
                 X, T, info = pm.surface_to_tets(V * scale, F, edge_length=el,
                                                 target_tets=spec.get("target_tets", 10000),
-                                                bodies=spec.get("bodies", "union"))
+                                                epsilon=env, bodies=spec.get("bodies", "union"))
                 scene.meta["mesh_pipeline"] = info
                 if spec.get("embed") or spec.get("embed_subdivide"):
                     Ve, Fe = pm.subdivide_loop(V * scale, F, int(spec.get("embed_subdivide", 0)))
