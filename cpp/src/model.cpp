@@ -11,9 +11,19 @@ Model<T>::Model(const ModelInput& in) {
     n_nodes = in.n_nodes;
     n_pad = (n_nodes + kLanes - 1) / kLanes * kLanes;
     n_elems = in.n_elems;
-    const std::size_t P = static_cast<std::size_t>(n_pad);
+    build_groups(in);
+    const NodeSums sums = build_elements(in);
+    build_masses(in, sums);
+    build_incidence(sums.count);
+    build_loads(in, sums.mass);
+    build_pressure(in);
+    build_constraints(in);
+    build_contact_and_tables(in);
+}
 
-    // Groups: each starts on a fresh block so that a block has a single material.
+/// Material groups; each starts on a fresh block so that a block has a single material.
+template <class T>
+void Model<T>::build_groups(const ModelInput& in) {
     index_t begin = 0, blocks = 0;
     for (std::size_t g = 0; g < in.group_end.size(); ++g) {
         const index_t end = in.group_end[g];
@@ -37,16 +47,25 @@ Model<T>::Model(const ModelInput& in) {
         begin = end;
     }
     n_blocks = blocks;
+}
+
+/// Element slots (AoSoA): nodes, reference gradients and volumes, the critical time step; per-node
+/// sums of mass, relaxation stiffness and volume, and incidence counts.
+template <class T>
+typename Model<T>::NodeSums Model<T>::build_elements(const ModelInput& in) {
+    const std::size_t P = static_cast<std::size_t>(n_pad);
     const std::size_t S = static_cast<std::size_t>(n_blocks) * kLanes;  // padded element slots
     elem_nodes.assign(4 * S, 0);
     elem_grad.assign(9 * S, T(0));
     elem_vol.assign(S, T(0));
     elem_id.assign(S, -1);
     mass.assign(P, T(0));
-    std::vector<double> mass_d(P, 0.0), stiff_d(P, 0.0), vol_d(P, 0.0);
-    std::vector<index_t> count(n_nodes + 1, 0);
+    NodeSums sums{std::vector<double>(P, 0.0), std::vector<double>(P, 0.0),
+                  std::vector<double>(P, 0.0), std::vector<index_t>(n_nodes + 1, 0)};
+    std::vector<double>&mass_d = sums.mass, &stiff_d = sums.stiff, &vol_d = sums.vol;
+    std::vector<index_t>& count = sums.count;
 
-    begin = 0;
+    index_t begin = 0;
     for (std::size_t g = 0; g < groups.size(); ++g) {
         const index_t end = in.group_end[g];
         const index_t first_slot = groups[g].block_begin * kLanes;
@@ -84,6 +103,14 @@ Model<T>::Model(const ModelInput& in) {
         }
         begin = end;
     }
+    return sums;
+}
+
+/// Lumped and relaxation masses; nodal volumes for T4ANP (which needs decoupled, elastic groups).
+template <class T>
+void Model<T>::build_masses(const ModelInput& in, const NodeSums& sums) {
+    const std::size_t P = static_cast<std::size_t>(n_pad);
+    const std::vector<double>&mass_d = sums.mass, &stiff_d = sums.stiff, &vol_d = sums.vol;
     anp = in.anp;
     if (anp && visco_terms > 0)
         throw std::invalid_argument("average nodal pressure (T4ANP) and viscoelastic materials "
@@ -107,7 +134,12 @@ Model<T>::Model(const ModelInput& in) {
         relax_inv_mass[n] = mr > 0.0 ? T(1.0 / mr) : T(0);
     }
 
-    // Node → (element slot, corner) incidence, ordered by slot: a fixed summation order.
+}
+
+/// Node → (element slot, corner) incidence, ordered by slot: a fixed summation order.
+template <class T>
+void Model<T>::build_incidence(std::vector<index_t> count) {
+    const std::size_t S = static_cast<std::size_t>(n_blocks) * kLanes;
     for (index_t n = 0; n < n_nodes; ++n) count[n + 1] += count[n];
     inc_offsets.assign(count.begin(), count.end());
     inc_index.assign(static_cast<std::size_t>(count[n_nodes]), 0);
@@ -120,7 +152,12 @@ Model<T>::Model(const ModelInput& in) {
         }
     }
 
-    // Loads: (K, N, 3) → (K, 3, P).
+}
+
+/// Load patterns (K, N, 3) → (K, 3, P), and gravity as one more pattern (m_a g).
+template <class T>
+void Model<T>::build_loads(const ModelInput& in, const std::vector<double>& mass_d) {
+    const std::size_t P = static_cast<std::size_t>(n_pad);
     pattern_curve = in.pattern_curve;
     load_patterns.assign(static_cast<std::size_t>(in.n_patterns) * 3 * P, T(0));
     for (int k = 0; k < in.n_patterns; ++k)
@@ -139,8 +176,12 @@ Model<T>::Model(const ModelInput& in) {
     }
     n_load_patterns = static_cast<int>(pattern_curve.size());
 
-    // Follower pressure: one pattern-factor slot per distinct curve, reference edges, node → face
-    // CSR in face order (a fixed summation order).
+}
+
+/// Follower pressure: one pattern-factor slot per distinct curve, reference edges, node → face
+/// CSR in face order (a fixed summation order).
+template <class T>
+void Model<T>::build_pressure(const ModelInput& in) {
     const index_t nf = static_cast<index_t>(in.press_value.size());
     press_nodes = in.press_nodes;
     press_value.resize(nf);
@@ -169,7 +210,12 @@ Model<T>::Model(const ModelInput& in) {
             for (int a = 0; a < 3; ++a) pface_index[fill[press_nodes[3 * f + a]]++] = f;
     }
 
-    // Constraints.
+}
+
+/// Prescribed DOFs sorted by node (values, curves, per-node offsets) and the free-DOF mask.
+template <class T>
+void Model<T>::build_constraints(const ModelInput& in) {
+    const std::size_t P = static_cast<std::size_t>(n_pad);
     free_mask.assign(3 * P, T(1));
     std::vector<std::size_t> order(in.cons_node.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -186,6 +232,12 @@ Model<T>::Model(const ModelInput& in) {
         ++cons_offsets[in.cons_node[i] + 1];
     }
     for (index_t n = 0; n < n_nodes; ++n) cons_offsets[n + 1] += cons_offsets[n];
+}
+
+/// Reference positions, contact nodes with their free-DOF and tool bits, tools, curves and tables
+/// (never empty, so that device copies have an address).
+template <class T>
+void Model<T>::build_contact_and_tables(const ModelInput& in) {
     X.assign(in.X, in.X + 3 * static_cast<std::size_t>(n_nodes));
     contact_nodes = in.contact_nodes;
     contact_bits.assign(contact_nodes.size(), 0);

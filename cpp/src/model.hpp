@@ -106,6 +106,23 @@ struct Model {
             out[c] = T(curve_value(curves[c], t, table_t.data(), table_v.data()));
     }
     std::size_t bytes() const;
+
+private:
+    /// Per-node sums over elements while they are built: lumped mass [kg], stiffness-scaled
+    /// relaxation density ρ' V Δt_c⁻² sums, volume [m³]; and per-node incidence counts.
+    struct NodeSums {
+        std::vector<double> mass, stiff, vol;
+        std::vector<index_t> count;
+    };
+    // The constructor's steps, in order.
+    void build_groups(const ModelInput& in);
+    NodeSums build_elements(const ModelInput& in);
+    void build_masses(const ModelInput& in, const NodeSums& sums);
+    void build_incidence(std::vector<index_t> count);
+    void build_loads(const ModelInput& in, const std::vector<double>& mass);
+    void build_pressure(const ModelInput& in);
+    void build_constraints(const ModelInput& in);
+    void build_contact_and_tables(const ModelInput& in);
 };
 
 /// Per-step state: displacements now and one step before [m], SoA (3, P); time t [s] and the last
