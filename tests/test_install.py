@@ -118,3 +118,10 @@ def test_kinds_are_the_engines_enums():
              c.Cylinder(0.1, 0.2)]
     assert {type(t.kind).__name__ for t in tools} == {"ToolKind"}
     assert {t.kind.name for t in tools} | {"Grid"} == set(_core.ToolKind.__members__)
+
+
+def test_main_help_lists_the_exit_codes():
+    r = subprocess.run([str(PLIANT), "--help"], capture_output=True, text=True, timeout=60)
+    text = " ".join(r.stdout.split())
+    assert r.returncode == 0 and "Exit codes: 0 done; 1 the simulation failed" in text
+    assert "2 bad input" in text and "3 internal error" in text and "130 interrupted" in text

@@ -24,7 +24,11 @@ from .errors import InputError, PliantError
 from .guard import one_line
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
-                  help="pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra.")
+                  help="pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra.",
+                  epilog="Exit codes: 0 done; 1 the simulation failed (unstable, not converged) "
+                         "or mesh check found problems; 2 bad input (one line names the file, key "
+                         "or element); 3 internal error (a bug: the line names the log with the "
+                         "traceback); 130 interrupted.")
 console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
 

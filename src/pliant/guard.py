@@ -1,16 +1,16 @@
 """The command line's outer guard: every outcome of a command becomes an exit code and at most one
 line on stderr, never a traceback.
 
-Exit codes (also in ``pliant --help`` and docs): 0 success; 1 the simulation failed
+Exit codes (also in ``pliant --help`` and docs/scenes.md): 0 success; 1 the simulation failed
 (:class:`~pliant.errors.InstabilityError`, :class:`~pliant.errors.ConvergenceError`) or a check
 found problems; 2 bad input (:class:`~pliant.errors.InputError`, usage errors, and files the
-operating system refuses to read or write); 3 an internal
-error, i.e. a bug in pliant: the line names the exception and the log file that holds the full
-traceback; 130 interrupted (Ctrl-C).
+operating system refuses to read or write); 3 an internal error, i.e. a bug in pliant: the line
+names the exception and the log file that holds the full traceback; 130 interrupted (Ctrl-C).
 
-Python warnings are routed too: pliant's own (``UserWarning`` raised from pliant modules) are
-printed as one ``warning:`` line each; those of libraries (numpy overflow and the like) go to the
-debug log only. ``PLIANT_DEBUG=1`` prints tracebacks and every warning, for developers.
+Python warnings are routed too: pliant's own (:class:`~pliant.errors.PliantWarning`, and
+``UserWarning`` raised from pliant modules) are printed as one ``warning:`` line each; those of
+libraries (numpy overflow and the like) are dropped. ``PLIANT_DEBUG=1`` prints tracebacks and every
+warning, for developers.
 """
 
 from __future__ import annotations
@@ -24,12 +24,12 @@ import traceback
 import warnings
 from pathlib import Path
 
+import typer
+from rich.markup import escape
+
 from .errors import InputError, PliantError, PliantWarning
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
-
-import typer
-from rich.markup import escape
 
 Abort = typer.Abort
 # Usage errors: click's ClickException (vendored inside typer in recent versions, click's own in
