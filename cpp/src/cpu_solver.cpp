@@ -277,6 +277,46 @@ RunReport CpuSolver<T>::run(State<T>& s, long n, double dt, double alpha, int ch
 }
 
 template <class T>
+typename CpuSolver<T>::RelaxMeasure CpuSolver<T>::relax_measure(const T* u_cur, const T* u_prev,
+                                                                const T* f_cur, const T* f_prev,
+                                                                const T* pattern_factors) const {
+    const index_t P = m_.n_pad;
+    const std::size_t N3 = 3 * static_cast<std::size_t>(P);
+    const T* lp = m_.load_patterns.data();
+    double res = 0.0, scale = 0.0, num = 0.0, den = 0.0;
+    // Follower pressure at the current displacements: an external load too.
+    std::vector<T> rpress(m_.pface_index.empty() ? 0 : N3, T(0));
+    if (!rpress.empty()) {
+        const NodeData<T> nd = m_.nodes(true);
+        for (index_t n = 0; n < m_.n_nodes; ++n) {
+            T q[3];
+            pressure_force(n, nd, pattern_factors, u_cur, P, q);
+            for (int d = 0; d < 3; ++d) rpress[d * P + n] = q[d];
+        }
+    }
+    // Contact forces from the rigid tools are external loads at equilibrium.
+    std::vector<double> fcon(m_.tools.empty() ? 0 : N3, 0.0);
+    for (std::size_t c = 0; c < fcon.size() / N3 * contact_tool_.size(); ++c)
+        if (contact_tool_[c] >= 0)
+            for (int d = 0; d < 3; ++d)
+                fcon[d * P + m_.contact_nodes[c]] += contact_force_[3 * c + d];
+    for (std::size_t i = 0; i < N3; ++i) {
+        double r = (fcon.empty() ? 0.0 : fcon[i]) + (rpress.empty() ? 0.0 : rpress[i]);
+        for (int p = 0; p < m_.n_load_patterns; ++p) r += double(pattern_factors[p]) * lp[p * N3 + i];
+        const double fm = m_.free_mask[i];
+        res += fm * (r - f_cur[i]) * (r - f_cur[i]);
+        scale += r * r + (1.0 - fm) * double(f_cur[i]) * f_cur[i];
+        const double du = double(u_cur[i]) - u_prev[i];
+        num += fm * du * (double(f_cur[i]) - f_prev[i]);
+        den += fm * double(m_.relax_mass[i % P]) * du * du;
+    }
+    RelaxMeasure out;
+    out.residual = scale > 0.0 ? std::sqrt(res / scale) : 0.0;
+    if (den > 0.0) out.alpha = 2.0 * std::sqrt(std::max(num / den, 0.0));
+    return out;
+}
+
+template <class T>
 RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
                               int check_every, double blowup) {
     s.u_prev = s.u;  // start at rest
@@ -287,8 +327,6 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
     std::vector<T> cf(nc), pf(np + 1);
     m_.curve_factors(t_eval, cf.data());
     for (std::size_t p = 0; p < np; ++p) pf[p] = cf[m_.pattern_curve[p]];
-    const index_t P = m_.n_pad;
-    const std::size_t N3 = 3 * static_cast<std::size_t>(P);
     double alpha = 0.0;
     long done = 0;
     bool stop = false;
@@ -313,39 +351,10 @@ RunReport CpuSolver<T>::relax(State<T>& s, double t_eval, double dt, double tol,
                 {
                     done = k + 1;
                     const T* uc = v[ic]->data();
-                    const T* up = v[ip]->data();
-                    const T* fcur = f_node_[fc].data();
-                    const T* fprev = f_node_[1 - fc].data();
-                    const T* lp = m_.load_patterns.data();
-                    double res = 0.0, scale = 0.0, num = 0.0, den = 0.0;
-                    // Follower pressure at the current displacements: an external load too.
-                    std::vector<T> rpress(m_.pface_index.empty() ? 0 : N3, T(0));
-                    if (!rpress.empty()) {
-                        const NodeData<T> nd = m_.nodes(true);
-                        for (index_t n = 0; n < m_.n_nodes; ++n) {
-                            T q[3];
-                            pressure_force(n, nd, pf.data(), uc, P, q);
-                            for (int d = 0; d < 3; ++d) rpress[d * P + n] = q[d];
-                        }
-                    }
-                    // Contact forces from the rigid tools are external loads at equilibrium.
-                    std::vector<double> fcon(m_.tools.empty() ? 0 : N3, 0.0);
-                    for (std::size_t c = 0; c < fcon.size() / N3 * contact_tool_.size(); ++c)
-                        if (contact_tool_[c] >= 0)
-                            for (int d = 0; d < 3; ++d)
-                                fcon[d * P + m_.contact_nodes[c]] += contact_force_[3 * c + d];
-                    for (std::size_t i = 0; i < N3; ++i) {
-                        double r = (fcon.empty() ? 0.0 : fcon[i]) + (rpress.empty() ? 0.0 : rpress[i]);
-                        for (int p = 0; p < m_.n_load_patterns; ++p) r += double(pf[p]) * lp[p * N3 + i];
-                        const double fm = m_.free_mask[i];
-                        res += fm * (r - fcur[i]) * (r - fcur[i]);
-                        scale += r * r + (1.0 - fm) * double(fcur[i]) * fcur[i];
-                        const double du = double(uc[i]) - up[i];
-                        num += fm * du * (double(fcur[i]) - fprev[i]);
-                        den += fm * double(m_.relax_mass[i % P]) * du * du;
-                    }
-                    rep.residual = scale > 0.0 ? std::sqrt(res / scale) : 0.0;
-                    if (den > 0.0) alpha = 2.0 * std::sqrt(std::max(num / den, 0.0));
+                    const RelaxMeasure rm = relax_measure(uc, v[ip]->data(), f_node_[fc].data(),
+                                                          f_node_[1 - fc].data(), pf.data());
+                    rep.residual = rm.residual;
+                    if (rm.alpha >= 0.0) alpha = rm.alpha;
                     const bool ok = check(uc, t_eval, blowup, rep);
                     ++checks;
                     if (rep.residual < 0.99 * best) {

@@ -70,6 +70,17 @@ private:
     void node_pass(const Buffers& b, const T* pattern_factors, const T* cons_factors,
                    const Integrator<T>& it, T* f_node);
     bool check(const T* u_cur, double t, double blowup, RunReport& rep) const;
+    /// Dynamic relaxation's measures at a check: the relative out-of-balance force on the free DOFs
+    /// (external loads: patterns, follower pressure and contact, against the internal forces) and
+    /// the adaptive damping α = 2 √(Rayleigh quotient of the stiffness change) (Joldes, Wittek &
+    /// Miller 2009, CMAME 198:3313: the minimum-eigenvalue estimate of its adaptive damping), from u
+    /// and f at this step and the one before.
+    struct RelaxMeasure {
+        double residual = 0.0;
+        double alpha = -1.0;  // < 0: no estimate (no motion)
+    };
+    RelaxMeasure relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev,
+                               const T* pattern_factors) const;
     void contact_pass(const T* u_cur, T* u_next, double t0, double t1, double g1, double* hist);
 
     const Model<T>& m_;
