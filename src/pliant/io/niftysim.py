@@ -248,7 +248,7 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
             if rho_el is not None else default_rho
         if rho is None:
             raise NiftySimError("no density: give <Density> in the material or SystemParams", f, key)
-        try:
+        with _named(f, key):
             if mtype == "LE":
                 if vals.size != 2:
                     raise NiftySimError(f"LE takes 2 parameters (E, nu); got {vals.size}", f, key)
@@ -265,11 +265,6 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
                 unsupported(f"Material Type={mtype}", "pliant imports NH, LE, PY, AB, TI, NHV and TIV")
                 continue
             b.set_material(material, rho, elements=elems, name=key)
-        except FileError:
-            raise
-        except InputError as e:
-            raise NiftySimError(str(e), f, key) from None
-
 
 
 def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupported) -> None:

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import _core
 from .. import materials as mat
-from ..errors import InputError, MeshError
+from ..errors import MeshError
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from ..tled.solver import MAX_INCREMENTS
@@ -53,7 +53,7 @@ def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
     check_keys(ctx, spec, path, {"type": "str", "t0": "number", "t1": "number", "times": "list",
                                  "values": "list"}, ("type",))
     kind = spec["type"]
-    try:
+    with ctx.under(path):
         if kind == "constant":
             return Constant()
         if kind == "step":
@@ -65,10 +65,6 @@ def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
             if "times" not in spec or "values" not in spec:
                 raise ctx.error(path, "a table curve needs 'times' and 'values'")
             return Table(spec["times"], spec["values"])
-    except InputError as e:
-        if isinstance(e, SceneError):
-            raise
-        raise ctx.error(path, str(e)) from None
     raise ctx.error(f"{path}.type", f"unknown curve {kind!r}; expected constant, step, ramp, "
                     "smooth-ramp or table")
 

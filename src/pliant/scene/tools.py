@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
-from .schema import Ctx, SceneError, check_keys, vector
+from .schema import Ctx, check_keys, vector
 
 
 def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
-    """A rigid tool from a [[tool]] table (see docs/scenes.md)."""
+    """A rigid tool from a [[tool]] table (see docs/scenes.md). Call it under ``ctx.under(p)``: the
+    tool classes' InputErrors then name this file and key."""
     from .. import contact as ct
 
     check_keys(ctx, t, p, {"type": "str", "name": "str", "mu_s": "number", "mu_k": "number",
@@ -28,44 +28,40 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
             return ct.quat_from_axis_angle(a / ang, ang) if ang > 0 else np.array([1.0, 0, 0, 0])
         return np.array(vector(ctx, v, key, 4))
 
-    try:
-        kind = t["type"]
-        pose = {}
-        if "position" in t:
-            pose["position"] = vector(ctx, t["position"], f"{p}.position")
-        if "rotation" in t:
-            pose["rotation"] = rot(t["rotation"], f"{p}.rotation")
-        if kind == "plane":
-            tool = ct.Plane(vector(ctx, t.get("point", [0, 0, 0]), f"{p}.point"),
-                            vector(ctx, t.get("normal", [0, 0, 1]), f"{p}.normal"), **kw)
-        elif kind == "sphere":
-            tool = ct.Sphere(t.get("radius", 0.0), **pose, **kw)
-        elif kind == "capsule":
-            tool = ct.Capsule(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
-        elif kind == "cylinder":
-            tool = ct.Cylinder(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
-        elif kind == "box":
-            tool = ct.Box(vector(ctx, t.get("half_extents", [0, 0, 0]), f"{p}.half_extents"),
-                          **pose, **kw)
-        elif kind == "mesh":
-            from ..mesh import read_surface
+    kind = t["type"]
+    pose = {}
+    if "position" in t:
+        pose["position"] = vector(ctx, t["position"], f"{p}.position")
+    if "rotation" in t:
+        pose["rotation"] = rot(t["rotation"], f"{p}.rotation")
+    if kind == "plane":
+        tool = ct.Plane(vector(ctx, t.get("point", [0, 0, 0]), f"{p}.point"),
+                        vector(ctx, t.get("normal", [0, 0, 1]), f"{p}.normal"), **kw)
+    elif kind == "sphere":
+        tool = ct.Sphere(t.get("radius", 0.0), **pose, **kw)
+    elif kind == "capsule":
+        tool = ct.Capsule(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
+    elif kind == "cylinder":
+        tool = ct.Cylinder(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
+    elif kind == "box":
+        tool = ct.Box(vector(ctx, t.get("half_extents", [0, 0, 0]), f"{p}.half_extents"),
+                      **pose, **kw)
+    elif kind == "mesh":
+        from ..mesh import read_surface
 
-            f = Path(t.get("file", ""))
-            f = f if f.is_absolute() else base / f
-            V, F = read_surface(f)
-            tool = ct.MeshTool(V * float(t.get("scale", 1.0)), F, t.get("spacing"), **pose, **kw)
-        else:
-            raise ctx.error(f"{p}.type", f"unknown tool {kind!r}; expected plane, sphere, capsule, "
-                            "cylinder, box or mesh")
-        for j, k in enumerate(t.get("keyframes", [])):
-            kp = f"{p}.keyframes[{j}]"
-            check_keys(ctx, k, kp, {"t": "number", "position": "list", "rotation": "list"},
-                       ("t", "position"))
-            tool.at(k["t"], vector(ctx, k["position"], f"{kp}.position"),
-                    rot(k["rotation"], f"{kp}.rotation") if "rotation" in k else
-                    tool.keys[-1][4:] if tool.keys else (1.0, 0, 0, 0))
-        return tool
-    except SceneError:
-        raise
-    except InputError as e:
-        raise ctx.error(p, str(e)) from None
+        f = Path(t.get("file", ""))
+        f = f if f.is_absolute() else base / f
+        V, F = read_surface(f)
+        tool = ct.MeshTool(V * float(t.get("scale", 1.0)), F, t.get("spacing"), **pose, **kw)
+    else:
+        raise ctx.error(f"{p}.type", f"unknown tool {kind!r}; expected plane, sphere, capsule, "
+                        "cylinder, box or mesh")
+    for j, k in enumerate(t.get("keyframes", [])):
+        kp = f"{p}.keyframes[{j}]"
+        check_keys(ctx, k, kp, {"t": "number", "position": "list", "rotation": "list"},
+                   ("t", "position"))
+        tool.at(k["t"], vector(ctx, k["position"], f"{kp}.position"),
+                rot(k["rotation"], f"{kp}.rotation") if "rotation" in k else
+                tool.keys[-1][4:] if tool.keys else (1.0, 0, 0, 0))
+    return tool
+
