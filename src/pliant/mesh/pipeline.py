@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from ..errors import MeshError
-from .repair import enclosed_volume_problem, repair_surface, simplify
+from .repair import repair_surface, require_volume, simplify
 from .tetra import MAX_TETS, tetrahedralize
 
 BODIES = ("union", "separate", "largest", "one")
@@ -56,19 +56,13 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
     info: dict = {"input_vertices": int(len(V)), "input_faces": int(len(F)), "seconds": {},
                   "bodies_mode": bodies}
     t = time.perf_counter()
-    flat = enclosed_volume_problem(V, F, closed=False)
-    if flat:
-        raise MeshError(f"the surface encloses no volume: {flat}; expected a closed surface "
-                        "around a solid")
+    require_volume(V, F, closed=False)
     if repair:
         V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(
             bodies, bodies))
         info["repair"] = actions
     info["seconds"]["repair"] = time.perf_counter() - t
-    why = enclosed_volume_problem(V, F)
-    if why:
-        raise MeshError(f"the surface encloses no volume: {why}; expected a closed surface "
-                        "around a solid")
+    require_volume(V, F)
     parts = _bodies(V, F)
     info["bodies"] = len(parts)
     if bodies == "separate" and len(parts) > 1:

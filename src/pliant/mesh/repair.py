@@ -310,23 +310,34 @@ def _close_body(m, fill_holes: bool, actions: list[str]):
     return m
 
 
-def enclosed_volume_problem(V: np.ndarray, F: np.ndarray, closed: bool = True) -> str | None:
-    """Why a surface encloses no volume (flat: all vertices on a plane or a line; or, for a closed
-    surface, a signed volume ~0, as in a sheet folded onto itself), or None. Tetrahedralizers crash
-    or loop on such input, so it is refused first."""
-    V = np.asarray(V, float)
+def surface_volume(V: np.ndarray, F: np.ndarray) -> float:
+    """Signed volume [m³] a closed triangle surface encloses (divergence theorem: Σ x0·(x1 × x2)/6
+    over faces); positive for outward faces."""
+    P = np.asarray(V, float)[np.asarray(F, np.int64)]
+    return float(np.einsum("ij,ij->i", P[:, 0], np.cross(P[:, 1], P[:, 2])).sum() / 6)
+
+
+def require_volume(V: np.ndarray, F: np.ndarray, closed: bool = True, who: str = "") -> None:
+    """Refuse a surface that encloses no volume (flat: all vertices on a plane or a line; or, for a
+    closed surface, a signed volume ~0, as in a sheet folded onto itself): tetrahedralizers crash
+    or loop on such input. Raises MeshError ("``who``: the surface encloses no volume: why")."""
+    why = _no_volume(np.asarray(V, float), F, closed)
+    if why:
+        raise MeshError(f"{who}{': ' if who else ''}the surface encloses no volume: {why}; expected "
+                        "a closed surface around a solid")
+
+
+def _no_volume(V: np.ndarray, F: np.ndarray, closed: bool) -> str | None:
     if len(V) < 4 or (closed and len(F) < 4):
         return f"{len(V)} vertices and {len(F)} faces cannot enclose a volume"
-    c = V - V.mean(axis=0)
-    sv = np.linalg.svd(c, compute_uv=False)
+    sv = np.linalg.svd(V - V.mean(axis=0), compute_uv=False)
     if not sv[0] > 0:
         return "all vertices coincide"
     if sv[2] <= 1e-9 * sv[0]:
         return "all vertices lie on one plane (a flat sheet)"
     if not closed:
         return None
-    P = V[np.asarray(F, np.int64)]
-    vol = float(np.einsum("ij,ij->i", P[:, 0], np.cross(P[:, 1], P[:, 2])).sum() / 6)
+    vol = surface_volume(V, F)
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     if abs(vol) <= 1e-9 * diag**3:
         return f"its faces enclose a signed volume of {vol:.3g} m^3 (a zero-thickness shell)"

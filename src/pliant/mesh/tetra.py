@@ -94,23 +94,19 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
     connected piece of the result is kept, or with ``keep_all`` every piece of at least 1 % of the
     tets (several bodies). A surface that encloses no volume is refused before fTetWild sees it
     (fTetWild crashes on flat input)."""
-    from .repair import enclosed_volume_problem
+    from .repair import require_volume, surface_volume
 
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.uint32)
     if V.ndim != 2 or V.shape[1] != 3 or len(V) < 4 or F.ndim != 2 or F.shape[1] != 3 or len(F) < 4:
         raise MeshError(f"tetrahedralize: need a closed triangle surface, got {V.shape} vertices, "
                         f"{F.shape} faces")
-    why = enclosed_volume_problem(V, F)
-    if why:
-        raise MeshError(f"tetrahedralize: the surface encloses no volume: {why}; expected a closed "
-                        "surface around a solid")
+    require_volume(V, F, who="tetrahedralize")
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     el = float(edge_length) if edge_length else edge_length_fac * diag
     if not (math.isfinite(el) and el > 0):
         raise MeshError(f"tetrahedralize: edge length {el!r}; expected a finite length > 0 [m]")
-    P = V[F.astype(np.int64)]
-    volume = abs(float(np.einsum("ij,ij->i", P[:, 0], np.cross(P[:, 1], P[:, 2])).sum() / 6))
+    volume = abs(surface_volume(V, F))
     expected = volume / (el**3 / (6 * math.sqrt(2)))  # regular tets of edge el
     if expected > MAX_TETS:
         raise MeshError(f"tetrahedralize: edge length {el:.3g} m would make about {expected:.3g} "
