@@ -151,6 +151,13 @@ def test_bad_surfaces(tmp_path):
         pl.mesh.repair_surface(V, F)
 
 
+def test_subdivision_levels_beyond_any_memory_are_refused():
+    """4^1000 overflows a float: a MeshError naming the levels, not an OverflowError."""
+    V, F = pl.mesh.primitive_surface("sphere", radius=1.0)
+    with pytest.raises(MeshError, match="1000 levels turn 1,280 faces"):
+        pl.mesh.subdivide_loop(V, F, 1000)
+
+
 def test_embedding_follows_affine_motion():
     """Embedded vertices are barycentric in their tets: under an affine motion of the nodes they
     move by exactly the same affine map."""

@@ -17,7 +17,8 @@ def finite_number(value, what: str, unit: str = "") -> float:
     except (TypeError, ValueError, OverflowError):
         x = None
     if x is None or not math.isfinite(x):
-        raise InputError(f"{what} = {value!r}; expected a finite number{f' [{unit}]' if unit else ''}")
+        raise InputError(f"{what} = {shown(value)}; expected a finite number"
+                         f"{f' [{unit}]' if unit else ''}")
     return x
 
 
@@ -28,7 +29,7 @@ def finite_vector(value, n: int, what: str, unit: str = "") -> np.ndarray:
     except (TypeError, ValueError):
         a = None
     if a is None or a.shape != (n,) or not np.all(np.isfinite(a)):
-        raise InputError(f"{what} = {value!r}; expected {n} finite numbers"
+        raise InputError(f"{what} = {shown(value)}; expected {n} finite numbers"
                          f"{f' [{unit}]' if unit else ''}")
     return a
 

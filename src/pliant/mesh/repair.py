@@ -389,10 +389,11 @@ def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.nd
     if levels < 0:
         raise MeshError(f"subdivide: levels = {levels}; expected >= 0")
     V, F = np.asarray(V, float), np.asarray(F, np.int64)
-    if len(F) * 4.0 ** levels > MAX_FACES:
+    faces = len(F) * 4.0 ** min(int(levels), 500)  # 4^500 ≈ 1e301: no float overflow
+    if faces > MAX_FACES:
         raise MeshError(f"subdivide: {levels} levels turn {len(F):,} faces into "
-                        f"{len(F) * 4.0 ** levels:.3g}; expected at most {MAX_FACES:.0e} (fewer levels, "
-                        "or simplify first)")
+                        f"{faces:.3g}{' or more' if levels > 500 else ''}; expected at most "
+                        f"{MAX_FACES:.0e} (fewer levels, or simplify first)")
     for _ in range(int(levels)):
         V, F = _loop_once(V, F)
     return V, F
