@@ -225,3 +225,22 @@ def test_simulation_of_a_builder_and_node_ids_of_the_wrong_type():
         with pytest.raises(pl.InputError, match=re.escape(text)):
             b.add_force(ids, (0, 0, 1))
     b.add_force(np.array([1.0, 2.0]), (0, 0, 1))  # integral floats are node ids
+
+
+def test_slow_element_warning_matches_the_quality_tool():
+    """The warning's element and factor agree with pliant.mesh.critical_time_steps, which computes
+    h_min / √((λ + 2μ)/ρ) per element in NumPy (the engine's own per-element steps feed the
+    warning); 3 significant digits, as printed."""
+    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (5, 2, 2), jitter=0.499)
+    mat = pl.NeoHookean(E=5e5, nu=0.45)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(mat, density=1000.0)
+    with pytest.warns(pl.PliantWarning) as rec:
+        model = b.finalize("float64")
+    dt = pl.mesh.critical_time_steps(X, T, pl.LinearElastic(mu=mat.mu, lam=mat.lam), 1000.0)
+    worst = int(np.argmin(dt))
+    text = str(rec[0].message)
+    assert f"element {worst} limits" in text and model.dt_critical_element == worst
+    assert f"{np.median(dt) / dt[worst]:.0f}x below" in text
+    assert f"{dt[worst]:.3g} s" in text

@@ -230,6 +230,12 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                                   static_cast<std::size_t>(e.model.visco_terms);
             return S{State<T>(e.model.n_pad, q), e.model.n_nodes};
         })
+        .def("critical_steps", [](const E& e) {
+            // Stable step of each element [s] (h_min / c_d), in the order elements were given.
+            const std::size_t n = e.model.elem_dt.size();
+            std::vector<double> dt = e.model.elem_dt;
+            return to_numpy(std::move(dt), {n});
+        })
         .def("mass", [](const E& e) {
             std::vector<T> m(e.model.mass.begin(), e.model.mass.begin() + e.model.n_nodes);
             return to_numpy(std::move(m), {size_t(e.model.n_nodes)});

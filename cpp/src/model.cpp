@@ -59,6 +59,7 @@ typename Model<T>::NodeSums Model<T>::build_elements(const ModelInput& in) {
     elem_grad.assign(9 * S, T(0));
     elem_vol.assign(S, T(0));
     elem_id.assign(S, -1);
+    elem_dt.assign(static_cast<std::size_t>(n_elems), 0.0);
     mass.assign(P, T(0));
     NodeSums sums{std::vector<double>(P, 0.0), std::vector<double>(P, 0.0),
                   std::vector<double>(P, 0.0), std::vector<index_t>(n_nodes + 1, 0)};
@@ -96,6 +97,7 @@ typename Model<T>::NodeSums Model<T>::build_elements(const ModelInput& in) {
                 stiff_d[in.tets[4 * e + a]] += modulus * vol / (alt * alt) / 4.0;  // ρ' Δt_c⁻²
             }
             const double dt_e = alt / std::sqrt(modulus / rho);
+            elem_dt[e] = dt_e;
             if (dt_critical_elem < 0 || dt_e < dt_critical) {
                 dt_critical = dt_e;
                 dt_critical_elem = e;

@@ -90,6 +90,7 @@ struct Model {
     std::vector<double> tool_keys, tool_grid;
     double dt_critical = 0.0;   // min over elements of h_min / c_d [s]
     index_t dt_critical_elem = -1;
+    std::vector<double> elem_dt;  // per builder element: h_min / c_d [s] (host only, for reports)
 
     explicit Model(const ModelInput& in);
 

@@ -8,7 +8,6 @@ array back, so users never see that order.
 from __future__ import annotations
 
 import hashlib
-import math
 import warnings
 from pathlib import Path
 
@@ -61,13 +60,11 @@ def _fingerprint(X, T, sets, dtype, constraints) -> str:
 SLOW_ELEMENT_FACTOR = 20.0  # warn when one element makes a run this many times longer
 
 
-def _warn_slow_element(source: str, sets, owner: np.ndarray, altitude: np.ndarray) -> None:
-    """Warn when the worst element's stable step h/c (h its smallest altitude, c the dilatational
-    wave speed √((λ + 2μ)/ρ); Belytschko et al. 2000, §6.3) is SLOW_ELEMENT_FACTOR or more times
-    below the median element's: that one element multiplies the steps of every run (a sliver from a
-    mesher, a node jittered almost onto a face)."""
-    c = np.array([math.sqrt((s.material.lam + 2.0 * s.material.mu) / s.density) for s in sets])
-    dt = altitude / c[owner]
+def _warn_slow_element(source: str, dt: np.ndarray, altitude: np.ndarray) -> None:
+    """Warn when the worst element's stable step (the engine's h_min / c_d per element, ``dt`` [s],
+    user order) is SLOW_ELEMENT_FACTOR or more times below the median element's: that one element
+    multiplies the steps of every run (a sliver from a mesher, a node jittered almost onto a face).
+    ``altitude``: smallest altitude per element [m], for the message."""
     worst = int(np.argmin(dt))
     if not dt[worst] > 0:  # degenerate elements are refused before (finalize)
         return
@@ -239,7 +236,9 @@ class Model:
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
-        _warn_slow_element(builder.source, self.sets, owner, np.asarray(geometry[1], float))
+        _warn_slow_element(builder.source,
+                           self.to_user_elements(np.asarray(self._engine.critical_steps())),
+                           np.asarray(geometry[1], float))
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)
         self.constrained = np.zeros((N, 3), dtype=bool)
