@@ -127,13 +127,12 @@ def test_deeply_nested_toml_is_refused(tmp_path):
 
 
 def test_huge_title_does_not_hang(tmp_path):
-    """A 2-million-character title made the PNG title layout run for minutes."""
+    """A 2-million-character title made the PNG title layout run for minutes. A hang fails through
+    the subprocess time-out (a guard against a hang, not a speed target: the run takes ~2 s)."""
     p = scene(tmp_path, SCENE.replace('"bar"', '"' + "x" * 2_000_000 + '$\\\\frac{"'))
-    t = time.perf_counter()
     r = cli("run", p, "-o", tmp_path / "o", "--no-progress", timeout=60)
     assert r.returncode == 0 and r.stderr == "", r.stderr[-2000:]
     assert (tmp_path / "o" / "result.png").stat().st_size > 10_000
-    assert time.perf_counter() - t < 60
 
 
 def test_box_sizes_and_jitter_are_bounded(tmp_path):
