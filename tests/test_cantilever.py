@@ -34,7 +34,7 @@ def cantilever_tip_deflection(n, material, nodal_pressure=False):
         w[edge] *= 0.5
     b.add_force(tip, np.outer(-P * w / w.sum(), [0, 0, 1]), curve=pl.Ramp(1.0))
     sim = pl.Simulation(b.finalize("float64"))
-    sim.solve_static(tol=1e-9, max_steps=1_000_000)
+    sim.relax(tol=1e-9, max_steps=1_000_000)
     return -sim.displacements[tip, 2].mean()
 
 

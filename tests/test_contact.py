@@ -33,7 +33,7 @@ def _centroid_track(sim, t_end, frames):
     t, x = [], []
     m = sim.model.mass
     for k in range(frames):
-        sim.run_to(t_end * (k + 1) / frames)
+        sim.run(until=t_end * (k + 1) / frames)
         t.append(sim.time)
         x.append(np.sum(m[:, None] * sim.positions, axis=0) / m.sum())
     return np.array(t), np.array(x)
@@ -79,7 +79,7 @@ def test_tall_block_tips_when_its_geometry_says(tan_theta, tips):
     model = b.finalize("float64")
     sim = pl.Simulation(model)
     top = np.nonzero(X[:, 2] > 0.04 - 1e-9)[0]
-    sim.run_to(0.25)
+    sim.run(until=0.25)
     lean = np.degrees(np.arctan2(sim.positions[top, 0].mean(), sim.positions[top, 2].mean()))
     if tips:
         assert lean > 20  # falling over (rotating about the downhill edge)
@@ -97,7 +97,7 @@ def test_moving_tool_momentum_matches_reported_impulse():
     b.add_tool(tool)
     model = b.finalize("float64")
     sim = pl.Simulation(model)
-    sim.run_to(0.06)
+    sim.run(until=0.06)
     H = sim.solver.tool_histories[0]
     impulse = -H.force.sum(axis=0) * sim.solver.dt
     p = np.sum(model.mass[:, None] * sim.velocities, axis=0)
@@ -123,7 +123,7 @@ def test_no_node_inside_a_pressing_tool(tool):
     model = b.finalize("float64")
     sim = pl.Simulation(model)
     for k in range(10):
-        sim.run_to(0.01 * (k + 1))
+        sim.run(until=0.01 * (k + 1))
         nodes, _, _ = model.contact_forces()
         assert tool.signed_distance(sim.positions[nodes], sim.time).min() > -1e-9
     assert sim.tool_force(0)[0][2] > 0  # the body pushes the tool up: force along +z
@@ -144,7 +144,7 @@ def test_cylinder_distance_matches_geometry():
     tool.at(0.0, (0, 0, 0.03 + 1e-4)).at(0.1, (0, 0, 0.03 - 0.002))  # end face from z = 0.0201 to 0.018
     b.add_tool(tool)
     sim = pl.Simulation(b.finalize("float64"))
-    sim.run_to(0.1)
+    sim.run(until=0.1)
     under = (np.hypot(X[:, 0], X[:, 1]) < 0.006 - 1e-9) & (X[:, 2] > 0.02 - 1e-9)
     assert under.sum() >= 5
     np.testing.assert_allclose(sim.positions[under, 2], 0.018, atol=1e-12)
@@ -162,7 +162,7 @@ def test_tool_restricted_to_a_node_set():
     b.damping = 20.0
     b.add_tool(Plane((0, 0, 0), (0, 0, 1)), nodes=np.arange(len(X1)))
     sim = pl.Simulation(b.finalize("float64"))
-    sim.run_to(0.1)
+    sim.run(until=0.1)
     first, second = sim.positions[: len(X1)], sim.positions[len(X1):]
     assert first[:, 2].min() >= -1e-12          # the first block rests on the plane
     # The second falls freely; mass-proportional damping α = 20/s slows it: z'' = −g − α z' gives

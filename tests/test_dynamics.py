@@ -20,7 +20,7 @@ def _energy_history(sim, n_frames, steps_per_frame):
     E, t = [], []
     model, s = sim.model, sim.state
     for _ in range(n_frames):
-        sim.step(steps_per_frame)
+        sim.run(steps=steps_per_frame)
         nxt = model.state()
         sim.solver.step(s, nxt)
         u_prev = s.displacements - s.velocities * s.dt
@@ -143,7 +143,7 @@ def test_threads_give_identical_bits(dtype, extras):
         model = b.finalize(dtype, threads=threads)
         assert model.threads == threads
         sim = pl.Simulation(model)
-        sim.step(500)
+        sim.run(steps=500)
         results.append((sim.displacements, model.element_results(sim.state)["cauchy"]))
     assert np.abs(results[0][0]).max() > 0
     assert np.array_equal(results[0][0], results[1][0])
@@ -164,7 +164,7 @@ def test_load_curves_drive_prescribed_displacements():
     model = b.finalize("float64")
     sim = pl.Simulation(model)
     for _ in range(40):
-        sim.step(3)
+        sim.run(steps=3)
         t, u = sim.time, sim.displacements
         assert u[0, 0] == pytest.approx(0.002 * np.interp(t, times, values), abs=1e-15)
         assert u[1, 1] == (0.003 if t >= 0.02 else 0.0)
@@ -184,7 +184,7 @@ def test_inverted_element_during_run_is_named():
     model = b.finalize("float64")
     sim = pl.Simulation(model, check_every=1)
     with pytest.raises(pl.InstabilityError) as err:
-        sim.run_to(0.02)
+        sim.run(until=0.02)
     e = err.value
     assert e.quantity == "J" and e.value <= 0 and centre in T[e.element]
     assert 0 < e.time <= 0.02 and f"element {e.element}" in str(e)
@@ -203,7 +203,7 @@ def test_float32_rigid_offset_at_rest_stays_put():
     model = b.finalize("float32")
     sim = pl.Simulation(model, safety=0.2)
     sim.state.set_displacements(np.tile([1.0, -1.0, 1.0], (len(X), 1)))
-    sim.step(20000)
+    sim.run(steps=20000)
     u = sim.displacements
     # float32 holds 1 m to 6e-8 m: the body stays where it is, undeformed.
     assert np.abs(u - [1.0, -1.0, 1.0]).max() < 1e-6

@@ -107,14 +107,14 @@ def test_state_save_and_restore(tmp_path):
     b.set_gravity()
     m = b.finalize("float64")
     sim = pl.Simulation(m)
-    sim.step(50)
+    sim.run(steps=50)
     sim.save(tmp_path / "s.npz")
-    sim.step(50)
+    sim.run(steps=50)
     ref = sim.displacements
     other = pl.Simulation(m)
     other.load(tmp_path / "s.npz")
     assert other.time == pytest.approx(50 * sim.solver.dt)
-    other.step(50)
+    other.run(steps=50)
     assert np.array_equal(other.displacements, ref)  # same bits: restart is exact
 
 
@@ -129,7 +129,7 @@ def test_non_finite_element_is_named_as_an_element():
     b.add_force([len(X) - 1], (3e38, 0.0, 0.0))
     sim = pl.Simulation(b.finalize("float32"))
     with pytest.raises(pl.InstabilityError, match=r"non-finite deformation in element \d+") as err:
-        sim.step(50)
+        sim.run(steps=50)
     assert err.value.element is not None and 0 <= err.value.element < len(T)
 
 
@@ -164,7 +164,7 @@ def test_state_load_of_missing_or_corrupt_files(tmp_path, content, text):
 
 def test_state_load_of_truncated_foreign_and_other_models_files(tmp_path):
     sim, _ = _sim()
-    sim.step(10)
+    sim.run(steps=10)
     good = tmp_path / "s.npz"
     sim.save(good)
     data = good.read_bytes()
@@ -199,9 +199,9 @@ def test_state_load_checks_values(tmp_path):
     (lambda s: s.step(-1), "expected 0 to"),
     (lambda s: s.step(2.5), "whole number"),
     (lambda s: s.step("10"), "whole number"),
-    (lambda s: s.run_to(float("nan")), "until = nan; expected a finite number"),
-    (lambda s: s.run_to(float("inf")), "until = inf; expected a finite number"),
-    (lambda s: s.run_to(1e30), "steps"),
+    (lambda s: s.run(until=float("nan")), "until = nan; expected a finite number"),
+    (lambda s: s.run(until=float("inf")), "until = inf; expected a finite number"),
+    (lambda s: s.run(until=1e30), "steps"),
     (lambda s: s.tool_force(5), "tool index 5"),
     (lambda s: s.set_tool_pose(-1, (0, 0, 0)), "tool index -1"),
     (lambda s: s.set_tool_pose(0, (0, 0, float("nan"))), "position"),

@@ -35,7 +35,7 @@ def test_ball_ball_import_and_driven_nodes_follow_ramp():
     assert s.density == 20.0 and b.damping == 0.5 and sc.dt == 1e-4 and sc.duration == 1.0
     model = b.finalize("float64")
     sim = pl.Simulation(model, dt=sc.dt)
-    sim.step(150)  # t = 0.015 s: the balls (gap 0.02) have not met yet
+    sim.run(steps=150)  # t = 0.015 s: the balls (gap 0.02) have not met yet
     u = sim.displacements
     for ids, mag in cons:
         assert np.allclose(u[ids, 0], mag * sim.time / sc.duration, rtol=1e-12, atol=1e-15)
@@ -85,8 +85,8 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path, etyp
     f[:, 2] = np.linspace(-1, -2, len(right))
     b.add_force(right, f, curve=pl.Ramp(0.05))
     sim_b = pl.Simulation(b.finalize("float64"), dt=1e-4)
-    sim_a.run_to(0.05)
-    sim_b.run_to(0.05)
+    sim_a.run(until=0.05)
+    sim_b.run(until=0.05)
     assert np.abs(sim_a.displacements).max() > 1e-3
     assert np.array_equal(sim_a.displacements, sim_b.displacements)
 
@@ -153,7 +153,7 @@ def test_contact_plate_moves_and_presses_only_its_slave_nodes(tmp_path):
         phi = tool.signed_distance(np.array([x, x - [0, 0, 0.001]]), t)
         np.testing.assert_allclose(phi, [0.0, 0.001], atol=1e-4 * 0.007)  # keyframe sampling
     sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
-    sim.run_to(0.5)
+    sim.run(until=0.5)
     z = sim.positions[:, 2]
     assert z[slaves].max() <= 0.094 + 1e-9        # the slaves are pressed to the plate
     assert z[top[X[top, 0] > 0.1 - 1e-9]].min() > 0.094 + 1e-4  # others pass through it
@@ -199,7 +199,7 @@ def test_ramphold_reaches_its_value_at_a_tenth_of_the_total_time(tmp_path):
     sc = load_niftysim(p)
     sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
     for t in (0.0025, 0.005, 0.02):   # T = 0.05 s: ramp until 0.005 s
-        sim.run_to(t)
+        sim.run(until=t)
         assert np.isclose(sim.displacements[26, 1], 0.002 * min(1.0, sim.time / 0.005), rtol=1e-9)
 
 
@@ -243,19 +243,19 @@ def test_pressure_faces_list_normal_and_all(tmp_path):
         b.fix(np.nonzero(X[:, d] < 1e-9)[0], "xyz"[d])
     b.add_pressure(right, 300.0, pl.Ramp(1.0))
     ref = pl.Simulation(b.finalize("float64"), dt=1e-3)
-    ref.run_to(0.2)
+    ref.run(until=0.2)
     for k, xml in enumerate((listed, normal)):
         p = tmp_path / f"p{k}.xml"
         p.write_text(_pressure_cube_xml(xml)[2])
         sim = pl.Simulation(load_niftysim(p).builder.finalize("float64"), dt=1e-3)
-        sim.run_to(0.2)
+        sim.run(until=0.2)
         assert np.abs(sim.displacements).max() > 1e-4
         assert np.array_equal(sim.displacements, ref.displacements)
     p = tmp_path / "all.xml"
     p.write_text(_pressure_cube_xml('<Constraint Type="Pressure" NumFaces="all" LoadShape="RAMP">'
                                     '<Magnitude>500</Magnitude></Constraint>')[2])
     sim = pl.Simulation(load_niftysim(p).builder.finalize("float64"))
-    sim.solve_static(tol=1e-9, increments=4)
+    sim.relax(tol=1e-9, increments=4)
     corner = np.argmax(X.sum(axis=1))
     np.testing.assert_allclose(np.prod(1 + sim.displacements[corner]), 1 - 500 / 1e4, rtol=1e-8)
 

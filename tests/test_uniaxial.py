@@ -104,7 +104,7 @@ def test_uniaxial_stress_stretch(name, stretch, dtype):
     X, model, right = cube_with_symmetry_bcs(material, stretch, dtype=dtype)
     sim = pl.Simulation(model)
     # 1e-5 relative residual is 20× below the 0.5 % bound; float32 round-off floors near 4e-6.
-    sim.solve_static(tol=1e-5, increments=10)
+    sim.relax(tol=1e-5, increments=10)
     P_ref, lt_ref = uniaxial_reference(W, stretch)
     # Reaction on the loaded face / reference area = nominal stress P_x.
     P = model.internal_forces(sim.state)[right, 0].sum() / 1.0
@@ -124,7 +124,7 @@ def test_linear_elastic_small_strain():
     E, nu, eps = 5e3, 0.3, 1e-3
     X, model, right = cube_with_symmetry_bcs(pl.LinearElastic(E=E, nu=nu), 1 + eps, dtype="float64")
     sim = pl.Simulation(model)
-    sim.solve_static(tol=1e-8)
+    sim.relax(tol=1e-8)
     P = model.internal_forces(sim.state)[right, 0].sum()
     assert abs(P - E * eps) <= 1e-5 * E * eps  # exact in the FE space; DR tolerance 1e-8
     top = X[:, 1] > 1 - 1e-9
@@ -148,7 +148,7 @@ def test_float32_resolves_a_strain_of_1e_6(name):
     eps = 1e-6
     X, model, right = cube_with_symmetry_bcs(material, 1 + eps, dtype="float32")
     sim = pl.Simulation(model)
-    sim.solve_static(tol=1e-5)
+    sim.relax(tol=1e-5)
     P = model.internal_forces(sim.state)[right, 0].sum()
     # 1e-3: the residual tolerance (1e-5) and float32 rounding of u (1e-7 relative) are far
     # below it; the nonlinear terms are O(ε) = 1e-6.
@@ -175,7 +175,7 @@ def test_transversely_isotropic_fibres_across_the_load():
     X, model, right = cube_with_symmetry_bcs(pl.TransverselyIsotropic(MU, K, eta, (0, 3, 0)), s,
                                              dtype="float64")
     sim = pl.Simulation(model)
-    sim.solve_static(tol=1e-8, increments=10)
+    sim.relax(tol=1e-8, increments=10)
     P = model.internal_forces(sim.state)[right, 0].sum()
     assert abs(P - nominal(W, (s, ty, tz), 0)) <= 1e-5 * abs(P)   # exact in the FE space
     u = sim.displacements

@@ -133,7 +133,7 @@ def test_viewer_in_a_real_browser(chromium):
             target = v.model.tools[1].keys[-1][1:4]
             assert pos[2] - 0.035 < target[2] < pos[2] - 0.015  # dragged down by about 2.5 cm
             with v.lock:
-                v.sim.run_to(v.sim.time + 0.3)
+                v.sim.run(until=v.sim.time + 0.3)
             after = v.sim.displacements[under]
             assert np.abs(after - before).max() > 1e-3
             assert np.linalg.norm(v.sim.tool_force(1)[0]) > 0

@@ -20,7 +20,7 @@ def test_stress_relaxation_after_a_ramp_follows_the_prony_series():
     sim = pl.Simulation(_cube(material, stretch, L, t_r), dt=2e-6)
     P_e = uniaxial_reference(W_nh, stretch)[0] * L * L   # [N] on the face of area L²
     for t in (0.03, 0.05, 0.1, 0.2):
-        sim.run_to(t)
+        sim.run(until=t)
         F = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
         tt = sim.time
         D = alpha * P_e * (1 - tau / t_r * (math.exp(-(tt - t_r) / tau) - math.exp(-tt / tau)))
@@ -53,19 +53,19 @@ def test_quasi_static_solution_is_the_fully_relaxed_one_and_state_round_trips(tm
     alpha, stretch, L = 0.3, 1.001, 0.01
     material = pl.Viscoelastic(pl.NeoHookean(mu=MU, K=K), iso=[(alpha, 0.05)], vol=[(alpha, 0.05)])
     sim = pl.Simulation(_cube(material, stretch, L, 0.002), dt=2e-6)
-    sim.solve_static(tol=1e-10)
+    sim.relax(tol=1e-10)
     P_e = uniaxial_reference(W_nh, stretch)[0] * L * L
     F = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
     assert abs(F - (1 - alpha) * P_e) <= 1e-6 * P_e     # relaxation tolerance, exact FE space
-    sim.step(2000)
+    sim.run(steps=2000)
     F2 = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
     assert abs(F2 - F) <= 1e-6 * P_e
     sim.state.save(tmp_path / "s.npz")
-    sim.step(500)
+    sim.run(steps=500)
     u_ref = sim.displacements.copy()
     other = pl.Simulation(sim.model, dt=2e-6)
     other.state.load(tmp_path / "s.npz")
-    other.step(500)
+    other.run(steps=500)
     assert np.array_equal(other.displacements, u_ref)
 
 

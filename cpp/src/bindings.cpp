@@ -13,10 +13,7 @@
 #include <memory>
 #include <vector>
 
-#include "cpu_solver.hpp"
-#ifdef PLIANT_WITH_CUDA
-#include "cuda_backend.hpp"
-#endif
+#include "engine/backend.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -53,48 +50,16 @@ template <class T>
 struct PyState {
     State<T> s;
     index_t n_nodes;
-    std::uint64_t version = 0;  // bumped by every host-side change (device copy bookkeeping)
 };
 
+/// The model and the backend that steps it (cpu by default; use_backend switches).
 template <class T>
 struct Engine {
     Model<T> model;
-    CpuSolver<T> solver;
-#ifdef PLIANT_WITH_CUDA
-    std::unique_ptr<cuda::CudaEngine<T>> gpu;  // set by enable_cuda: run() then goes to the device
-    const void* resident = nullptr;            // the state whose copy the device holds
-    std::uint64_t resident_version = 0;
-#endif
-    std::vector<double> base_params;           // material parameters at build time
-    Engine(const ModelInput& in, int threads) : model(in), solver(model, threads) {}
-
-    RunReport run(PyState<T>& st, long n, double dt, double alpha, int check_every, double blowup) {
-#ifdef PLIANT_WITH_CUDA
-        if (gpu) {
-            State<T>& s = st.s;
-            if (keep_velocity(s, dt)) ++st.version;
-            if (resident != &st || resident_version != st.version) gpu->upload(s);
-            RunReport r = gpu->run(n, s.t, dt, alpha, check_every > 0 ? check_every : 1, blowup);
-            gpu->download(s);
-            s.t = s.t + r.steps * dt;
-            s.dt = dt;
-            s.step += r.steps;
-            if (r.status) r.t = s.t;
-            resident = &st;
-            resident_version = ++st.version;
-            return r;
-        }
-#endif
-        ++st.version;
-        return solver.run(st.s, n, dt, alpha, check_every, blowup);
-    }
-
-    std::vector<double> tool_history() const {
-#ifdef PLIANT_WITH_CUDA
-        if (gpu) return gpu->tool_history();
-#endif
-        return solver.tool_history();
-    }
+    int threads;
+    std::unique_ptr<Backend<T>> backend;
+    Engine(const ModelInput& in, int threads_)
+        : model(in), threads(threads_), backend(make_cpu_backend(model, threads_)) {}
 };
 
 // Node field (3, P) in the engine's padded SoA layout ↔ (N, 3) array.
@@ -120,8 +85,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
     using S = PyState<T>;
     nb::class_<S>(m, state_name)
         .def_prop_ro("n_nodes", [](const S& s) { return s.n_nodes; })
-        .def_prop_rw("t", [](const S& s) { return s.s.t; }, [](S& s, double t) { s.s.t = t; ++s.version; })
-        .def_prop_rw("dt", [](const S& s) { return s.s.dt; }, [](S& s, double v) { s.s.dt = v; ++s.version; })
+        .def_prop_rw("t", [](const S& s) { return s.s.t; }, [](S& s, double t) { s.s.t = t; s.s.touch(); })
+        .def_prop_rw("dt", [](const S& s) { return s.s.dt; }, [](S& s, double v) { s.s.dt = v; s.s.touch(); })
         .def_prop_rw("step", [](const S& s) { return s.s.step; }, [](S& s, long v) { s.s.step = v; })
         .def("get_u", [](const S& s) {
             const index_t P = static_cast<index_t>(s.s.u.size() / 3);
@@ -133,11 +98,11 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
         })
         .def("set_u", [](S& s, In<double> a) {
             scatter_nodes(a, s.s.u, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
-            ++s.version;
+            s.s.touch();
         })
         .def("set_u_prev", [](S& s, In<double> a) {
             scatter_nodes(a, s.s.u_prev, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
-            ++s.version;
+            s.s.touch();
         })
         .def("get_q", [](const S& s) {  // viscoelastic state, raw engine layout (save/restore)
             std::vector<double> q(s.s.q.begin(), s.s.q.end());
@@ -148,12 +113,12 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                 throw nb::value_error(("viscoelastic state: " + std::to_string(q.size()) +
                                        " values, expected " + std::to_string(s.s.q.size())).c_str());
             for (std::size_t i = 0; i < q.size(); ++i) s.s.q[i] = T(q[i]);
-            ++s.version;
+            s.s.touch();
         })
-        .def("copy", [](const S& s) { S c(s); c.version = 0; return c; })
-        .def("assign", [](S& s, const S& o) { const auto v = s.version; s = o; s.version = v + 1; });
+        .def("copy", [](const S& s) { S c(s); c.s.touch(); return c; })
+        .def("assign", [](S& s, const S& o) { s = o; s.s.touch(); });
 
-    nb::class_<E>(m, engine_name)
+    nb::class_<E>(m, engine_name, "A model (static, built once) and the backend that steps it.")
         .def("__init__",
              [](E* self, In<double> X, In<index_t> tets, In<double> density,
                 std::vector<index_t> group_end, std::vector<int> group_kind,
@@ -217,14 +182,16 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                      in.tools.push_back(t);
                  }
                  new (self) E(in, threads);
-             })
+             },
+             // The model crosses as named fields (keyword-only): units and layouts as ModelInput.
+             nb::kw_only(), "X"_a, "tets"_a, "density"_a, "group_end"_a, "group_kind"_a, "group_params"_a, "patterns"_a, "pattern_curve"_a, "cons_node"_a, "cons_dim"_a, "cons_value"_a, "cons_curve"_a, "curve_kind"_a, "curve_t0"_a, "curve_t1"_a, "curve_table_begin"_a, "curve_table_count"_a, "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a, "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a, "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a, "threads"_a)
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
         .def_prop_ro("dt_critical", [](const E& e) { return e.model.dt_critical; })
         .def_prop_ro("dt_critical_element", [](const E& e) { return e.model.dt_critical_elem; })
         .def_prop_ro("bytes", [](const E& e) { return e.model.bytes(); })
-        .def_prop_ro("threads", [](const E& e) { return e.solver.threads(); })
+        .def_prop_ro("threads", [](const E& e) { return e.backend->threads(); })
         .def("new_state", [](const E& e) {
             const std::size_t q = static_cast<std::size_t>(e.model.n_blocks) * kLanes * 6 *
                                   static_cast<std::size_t>(e.model.visco_terms);
@@ -244,8 +211,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e.solver.step(in.s, out.s, dt, alpha);
-                     ++out.version;
+                     r = e.backend->step(in.s, out.s, dt, alpha);
                  }
                  return report(r);
              }, "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
@@ -253,7 +219,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e.run(s, n, dt, alpha, check_every, blowup);
+                     r = e.backend->run(s.s, n, dt, alpha, check_every, blowup);
                  }
                  return report(r);
              })
@@ -262,85 +228,66 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e.solver.relax(s.s, t_eval, dt, tol, max_steps, check_every, blowup);
-                     ++s.version;
+                     r = e.backend->relax(s.s, t_eval, dt, tol, max_steps, check_every, blowup);
                  }
                  return report(r);
              })
         .def("measures", [](E& e, const S& s) {
             const size_t M = size_t(e.model.n_elems);
-            std::vector<T> J(M), W(M), PK2(6 * M), sig(6 * M), Eg(6 * M);
-            e.solver.measures(s.s, J.data(), W.data(), PK2.data(), sig.data(), Eg.data());
-            return nb::make_tuple(to_numpy(std::move(J), {M}), to_numpy(std::move(W), {M}),
-                                  to_numpy(std::move(PK2), {M, 6}), to_numpy(std::move(sig), {M, 6}),
-                                  to_numpy(std::move(Eg), {M, 6}));
+            ElementResults<T> r;
+            {
+                nb::gil_scoped_release g;
+                r = e.backend->measures(s.s);
+            }
+            return nb::make_tuple(to_numpy(std::move(r.J), {M}), to_numpy(std::move(r.W), {M}),
+                                  to_numpy(std::move(r.S), {M, 6}), to_numpy(std::move(r.sigma), {M, 6}),
+                                  to_numpy(std::move(r.E), {M, 6}));
         })
         .def("set_tool_keys", [](E& e, std::vector<std::vector<double>> keys) {
-            // Replace every tool's keyframes (8 numbers each: t, position, quaternion w x y z).
-            if (keys.size() != e.model.tools.size()) throw nb::value_error("one key list per tool");
-            e.model.tool_keys.clear();
-            for (std::size_t k = 0; k < keys.size(); ++k) {
-                if (keys[k].empty() || keys[k].size() % 8) throw nb::value_error("keys: 8 numbers each");
-                e.model.tools[k].key_begin = static_cast<index_t>(e.model.tool_keys.size() / 8);
-                e.model.tools[k].key_count = static_cast<index_t>(keys[k].size() / 8);
-                e.model.tool_keys.insert(e.model.tool_keys.end(), keys[k].begin(), keys[k].end());
+            try {
+                e.backend->set_tool_keys(keys);
+            } catch (const std::invalid_argument& x) {
+                throw nb::value_error(x.what());
             }
         })
         .def("scale_materials", [](E& e, double factor) {
             // Multiply every material's moduli by `factor` relative to the values at build time
             // (the viewer's stiffness slider). The critical time step scales by 1/sqrt(factor).
             if (!(factor > 0.0)) throw nb::value_error("factor must be > 0");
-            if (e.base_params.empty())
-                for (const auto& g : e.model.groups)
-                    for (int k = 0; k < kMaterialParams; ++k)
-                        e.base_params.push_back(double(g.material.p[k]));
-            for (std::size_t g = 0; g < e.model.groups.size(); ++g) {
-                auto& m = e.model.groups[g].material;
-                for (int k = 0; k < kMaterialParams; ++k)
-                    m.p[k] = T(e.base_params[kMaterialParams * g + k] *
-                               (is_modulus(m.kind, k) ? factor : 1.0));
+            e.backend->scale_materials(factor);
+        })
+        .def("use_backend", [](E& e, const std::string& name, int device) {
+            // Replace the backend: "cpu", "cuda-emulated" or "cuda" (device index). States stay
+            // on the host between calls, so existing states remain valid.
+            try {
+                if (name == "cpu")
+                    e.backend = make_cpu_backend(e.model, e.threads);
+                else if (name == "cuda-emulated")
+                    e.backend = make_emulated_backend(e.model);
+                else if (name == "cuda")
+                    e.backend = make_cuda_backend(e.model, device);
+                else
+                    throw std::invalid_argument("backend '" + name + "': expected cpu, cuda-emulated or cuda");
+            } catch (const std::invalid_argument& x) {
+                throw nb::value_error(x.what());
             }
-        })
-        .def("enable_cuda", [](E& e, int device) {
-#ifdef PLIANT_WITH_CUDA
-            if (e.model.visco_terms > 0)
-                throw nb::value_error("viscoelastic materials run on the CPU backend only for now");
-            std::string why;
-            const int n = cuda::device_count(why);
-            if (n == 0) throw nb::value_error(("no usable CUDA device: " + why).c_str());
-            if (device < 0 || device >= n)
-                throw nb::value_error(("CUDA device " + std::to_string(device) + " does not exist (" +
-                                       std::to_string(n) + " present)").c_str());
-            e.gpu = std::make_unique<cuda::CudaEngine<T>>(e.model, device);
-#else
-            (void)e;
-            (void)device;
-            throw nb::value_error("this build of pliant has no CUDA backend (nvcc was not found "
-                                  "when it was built)");
-#endif
-        })
-        .def_prop_ro("backend", [](const E& e) {
-#ifdef PLIANT_WITH_CUDA
-            if (e.gpu) return std::string("cuda");
-#endif
-            (void)e;
-            return std::string("cpu");
-        })
+        }, "name"_a, "device"_a = 0)
+        .def_prop_ro("backend", [](const E& e) { return e.backend->name(); })
         .def("tool_history", [](const E& e) {
-            std::vector<double> h = e.tool_history();
+            std::vector<double> h = e.backend->tool_history();
             const size_t nt = e.model.tools.size();
             const size_t steps = nt ? h.size() / (6 * nt) : 0;
             return to_numpy(std::move(h), {steps, nt, 6});
         })
         .def("contact_state", [](const E& e) {
-            std::vector<index_t> nodes = e.model.contact_nodes, tool = e.solver.contact_tool();
-            std::vector<double> f = e.solver.contact_force();
+            std::vector<index_t> nodes = e.model.contact_nodes;
+            ContactReport c = e.backend->contact_report();
             const size_t n = nodes.size();
-            return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(tool), {n}),
-                                  to_numpy(std::move(f), {n, 3}));
+            return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(c.tool), {n}),
+                                  to_numpy(std::move(c.force), {n, 3}));
         })
         .def("internal_forces", [](E& e, const S& s) {
-            std::vector<T> f = e.solver.internal_forces(s.s);
+            std::vector<T> f = e.backend->internal_forces(s.s);
             return to_numpy(gather_nodes(f, e.model.n_nodes, e.model.n_pad),
                             {size_t(e.model.n_nodes), 3});
         });
@@ -349,13 +296,15 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
 }  // namespace
 
 NB_MODULE(_core, m) {
-    m.doc() = "pliant engine: TLED on linear tetrahedra, CPU backend (OpenMP + SIMD)";
+    m.doc() = "pliant engine: TLED on linear tetrahedra; backends cpu (OpenMP + SIMD), cuda, cuda-emulated";
     // Engines can still be referenced at interpreter exit (viewer threads are daemons); nanobind's
     // exit-time leak report is then noise, not a refcounting bug.
     nb::set_leak_warnings(false);
     bind_engine<float>(m, "EngineF32", "StateF32");
     bind_engine<double>(m, "EngineF64", "StateF64");
     m.attr("lanes") = kLanes;
+    // The backends use_backend accepts: one engine (engine/engine.hpp) on three devices.
+    m.attr("backends") = nb::make_tuple("cpu", "cuda-emulated", "cuda");
     // Layout limits of the model description, so that Python restates none of them.
     m.attr("material_params") = kMaterialParams;  // parameters per material group
     m.attr("prony_max") = kPronyMax;              // Prony terms per group (half isochoric)
@@ -377,6 +326,11 @@ NB_MODULE(_core, m) {
         .value("SmoothRamp", CurveKind::SmoothRamp)
         .value("Table", CurveKind::Table)
         .value("Hilly", CurveKind::Hilly);
+    nb::enum_<RunStatus>(m, "RunStatus", nb::is_arithmetic(), "How a run or relaxation ended.")
+        .value("Ok", RunStatus::Ok)
+        .value("NonFinite", RunStatus::NonFinite)
+        .value("Inverted", RunStatus::Inverted)
+        .value("BlowUp", RunStatus::BlowUp);
     nb::enum_<ToolKind>(m, "ToolKind", nb::is_arithmetic(), "Rigid tool shapes.")
         .value("Plane", ToolKind::Plane)
         .value("Sphere", ToolKind::Sphere)
@@ -385,23 +339,12 @@ NB_MODULE(_core, m) {
         .value("Grid", ToolKind::Grid)
         .value("Cylinder", ToolKind::Cylinder);
     m.def("max_threads", []() { return omp_get_max_threads(); });
-    m.def("thread_limit", &pliant::thread_limit, "Most CPU threads a solver accepts.");
-    m.def("cuda_compiled", []() {
-#ifdef PLIANT_WITH_CUDA
-        return true;
-#else
-        return false;
-#endif
-    });
+    m.def("thread_limit", &pliant::thread_limit_value, "Most CPU threads a solver accepts.");
+    m.def("cuda_compiled", &pliant::cuda_compiled);
     m.def("cuda_devices", []() {
         // (names of usable devices, reason when there are none)
-        std::vector<std::string> names;
-        std::string why = "the CUDA backend is not compiled in this build";
-#ifdef PLIANT_WITH_CUDA
-        why.clear();
-        const int n = cuda::device_count(why);
-        for (int i = 0; i < n; ++i) names.push_back(cuda::device_name(i));
-#endif
+        std::string why;
+        std::vector<std::string> names = cuda_devices(why);
         return nb::make_tuple(names, why);
     });
     m.def("tet_geometry", [](In<double> X, In<index_t> tets) {

@@ -3,8 +3,14 @@
 #include "model.hpp"
 
 #include <algorithm>
+#include <atomic>
 
 namespace pliant {
+
+std::uint64_t new_version() {
+    static std::atomic<std::uint64_t> counter{0};
+    return ++counter;
+}
 
 template <class T>
 Model<T>::Model(const ModelInput& in) {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -126,16 +127,22 @@ private:
     void build_contact_and_tables(const ModelInput& in);
 };
 
+/// A stamp unique in the process (State::version).
+std::uint64_t new_version();
+
 /// Per-step state: displacements now and one step before [m], SoA (3, P); time t [s] and the last
-/// step Δt [s] (velocity v_{n−½} = (u − u⁻)/Δt).
+/// step Δt [s] (velocity v_{n−½} = (u − u⁻)/Δt). `version` changes with every change of the
+/// values (touch()): a backend whose device holds a copy of this state knows whether it is current.
 template <class T>
 struct State {
     std::vector<T> u, u_prev;
     std::vector<T> q;  // viscoelastic state: 6 × visco_terms per element slot, AoSoA (may be empty)
     double t = 0.0, dt = 0.0;
     long step = 0;
+    std::uint64_t version = new_version();
     explicit State(index_t n_pad, std::size_t q_size = 0)
         : u(3 * static_cast<std::size_t>(n_pad), T(0)), u_prev(u), q(q_size, T(0)) {}
+    void touch() { version = new_version(); }
 };
 
 /// Central differences assume equal steps: when Δt changes from s.dt to dt, rescale u⁻ so that the

@@ -66,7 +66,8 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
                                                    help="Unsupported NiftySim feature to skip."),
         allow_unstable: bool = typer.Option(False, help="Accept a Δt above the critical step."),
         progress: bool = typer.Option(True, help="Show a progress bar."),
-        backend: Optional[str] = typer.Option(None, help="cpu or cuda (default: the scene's).")):
+        backend: Optional[str] = typer.Option(
+            None, help="cpu, cuda or cuda-emulated (default: the scene's).")):
     """Run a scene or a NiftySim model; write result.pvd, frames, summary.json and result.png."""
     from .runner import run_scene
 
@@ -143,7 +144,8 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
           threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
           dtype: str = typer.Option("float32", help="float32 or float64."),
           contact: bool = typer.Option(False, help="Also time the contact cases (demo, liver)."),
-          backend: str = typer.Option("cpu", help="cpu or cuda (a GPU; e.g. --sizes up to 10000000).")):
+          backend: str = typer.Option(
+              "cpu", help="cpu, cuda (a GPU; e.g. --sizes up to 10000000) or cuda-emulated.")):
     """Reproduce the study's timing table (8,000 steps of 0.025 ms, Neo-Hookean) and larger meshes."""
     from .bench import bench_contact, run_benchmark
     from .mesh.primitives import MAX_BOX_TETS
@@ -167,8 +169,10 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
             check_output_file(json_out, "benchmark JSON")
         except InputError as e:
             _fail(e, 2)
-    if backend not in ("cpu", "cuda"):
-        _fail(InputError(f"--backend {backend!r}: expected cpu or cuda"), 2)
+    from .tled.model import BACKENDS
+
+    if backend not in BACKENDS:
+        _fail(InputError(f"--backend {backend!r}: expected one of {', '.join(BACKENDS)}"), 2)
     if os.getloadavg()[0] > 0.5:
         err_console.print(f"[yellow]warning:[/] load average {os.getloadavg()[0]:.1f}: other work is "
                           "running, timings will suffer")
@@ -218,7 +222,9 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
         "platform": platform.platform(),
         "backends": {"cpu": {"compiled": True, "usable": True, "threads": _core.max_threads(),
                              "simd_lanes": int(_core.lanes)},
-                     "cuda": cuda},
+                     "cuda": cuda,
+                     "cuda-emulated": {"compiled": True, "usable": True,
+                                       "note": "the CUDA engine on the host, for tests (slow)"}},
         "cpu_count": os.cpu_count(),
     }
     if as_json:
@@ -234,6 +240,7 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
         console.print(f"  cuda: compiled, {len(c['devices'])} device(s): {', '.join(c['devices'])}")
     else:
         console.print(f"  cuda: compiled, no device present ({c['reason']})")
+    console.print(f"  cuda-emulated: usable ({data['backends']['cuda-emulated']['note']})")
 
 
 def main(argv: list[str] | None = None) -> None:

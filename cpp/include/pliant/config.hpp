@@ -12,6 +12,15 @@
 #define PLIANT_HD inline __attribute__((always_inline))
 #endif
 
+// PLIANT_KERNEL marks a kernel body, a lambda that an executor launches once per item:
+// `[=] PLIANT_KERNEL (index_t i) { ... }` (a CUDA extended lambda under nvcc; on the host always
+// inlined, so that the CPU executor's SIMD loop over an element block vectorizes the body).
+#if defined(__CUDACC__)
+#define PLIANT_KERNEL __host__ __device__
+#else
+#define PLIANT_KERNEL __attribute__((always_inline))
+#endif
+
 // Fully unroll a small fixed-count loop: GCC vectorizes the element loop across lanes only when no
 // inner loop remains.
 #if defined(__CUDACC__) || defined(__clang__)
@@ -43,6 +52,18 @@ PLIANT_HD float bits_float(std::int32_t i) {
     return __int_as_float(i);
 #else
     return __builtin_bit_cast(float, i);
+#endif
+}
+
+/// Atomically lowers *p to v if v is smaller (CUDA atomicMin; host: a compare-and-swap loop).
+/// Used for "smallest offending index" searches, whose result does not depend on the order.
+PLIANT_HD void atomic_min(int* p, int v) {
+#if defined(__CUDA_ARCH__)
+    atomicMin(p, v);
+#else
+    int cur = __atomic_load_n(p, __ATOMIC_RELAXED);
+    while (v < cur && !__atomic_compare_exchange_n(p, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
 #endif
 }
 

@@ -10,9 +10,10 @@ import numpy as np
 
 from .. import _core
 from .. import materials as mat
-from ..errors import MeshError
+from ..errors import MeshError, PliantWarning
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
+from ..tled.model import BACKENDS
 from ..tled.solver import MAX_INCREMENTS
 from ..job import Scene
 from .mesh import load_mesh
@@ -32,9 +33,9 @@ __all__ = ["load_scene", "make_curve"]
 _MATERIALS = {
     "neo-hookean": (mat.NeoHookean, ("mu", "K")),
     "mooney-rivlin": (mat.MooneyRivlin, ("C10", "C01", "K")),
-    "neo-hookean-coupled": (mat.NeoHookeanCoupled, ("mu", "lambda")),
-    "st-venant-kirchhoff": (mat.StVenantKirchhoff, ("mu", "lambda")),
-    "linear-elastic": (mat.LinearElastic, ("mu", "lambda")),
+    "neo-hookean-coupled": (mat.NeoHookeanCoupled, ("mu", "lam")),
+    "st-venant-kirchhoff": (mat.StVenantKirchhoff, ("mu", "lam")),
+    "linear-elastic": (mat.LinearElastic, ("mu", "lam")),
     "polynomial": (lambda C10, C01, C20, C02, C11, K: mat.Polynomial(C10, C01, C20, C02, C11, K=K),
                    ("C10", "C01", "C20", "C02", "C11", "K")),
     "arruda-boyce": (mat.ArrudaBoyce, ("mu", "lambda_m", "K")),
@@ -135,8 +136,9 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
     if scene.dtype not in ("float32", "float64"):
         raise ctx.error("solver.dtype", f"dtype = {scene.dtype!r}: expected 'float32' or 'float64'")
     scene.backend = solver.get("backend", "cpu")
-    if scene.backend not in ("cpu", "cuda"):
-        raise ctx.error("solver.backend", f"backend = {scene.backend!r}: expected 'cpu' or 'cuda'")
+    if scene.backend not in BACKENDS:
+        raise ctx.error("solver.backend", f"backend = {scene.backend!r}: expected one of "
+                        f"{', '.join(BACKENDS)}")
     scene.threads = solver.get("threads")
     if scene.threads is not None and not 1 <= scene.threads <= _core.thread_limit():
         raise ctx.error("solver.threads", f"threads = {scene.threads}; expected 1 to "
@@ -164,7 +166,8 @@ def _materials(ctx: Ctx, tables: list, b: ModelBuilder, X, T, sets) -> None:
     for i, m in enumerate(tables):
         p = f"material[{i}]"
         check_keys(ctx, m, p, {"type": "str", "region": "table", "density": "number", "E": "number",
-                               "nu": "number", "mu": "number", "K": "number", "lambda": "number",
+                               "nu": "number", "mu": "number", "K": "number", "lam": "number",
+                               "lambda": "number",
                                "C10": "number", "C01": "number", "C20": "number", "C02": "number",
                                "C11": "number", "lambda_m": "number", "eta": "number",
                                "direction": "list", "prony_iso": "list", "prony_vol": "list",
@@ -181,6 +184,12 @@ def _materials(ctx: Ctx, tables: list, b: ModelBuilder, X, T, sets) -> None:
 
 def _material(ctx: Ctx, m: dict, p: str):
     cls, native = _MATERIALS[m["type"]]
+    if "lambda" in m:  # the key's old name: one name per parameter across Python and scenes
+        import warnings
+
+        warnings.warn(f"{ctx.file}: {p}.lambda is deprecated; name it 'lam' (as in Python)",
+                      PliantWarning, stacklevel=2)
+        m = {("lam" if k == "lambda" else k): v for k, v in m.items()}
     given = {k for k in m if k not in ("type", "region", "density", "name", "prony_iso",
                                        "prony_vol")}
     if m["type"] == "polynomial":  # higher-order constants default to 0

@@ -274,9 +274,10 @@ class ModelBuilder:
                  device: int = 0):
         """Validate everything and build the static Model (engine arrays in a cache-friendly order).
 
-        backend: "cpu" (OpenMP + SIMD) or "cuda" (the same kernels on an NVIDIA GPU, device-
-        resident); "cuda" without a GPU or a CUDA build raises BackendError."""
-        from .model import Model
+        backend: "cpu" (OpenMP + SIMD), "cuda" (the same engine on an NVIDIA GPU, device-resident)
+        or "cuda-emulated" (the CUDA engine run on the host: for tests and debugging); "cuda"
+        without a GPU or a CUDA build raises BackendError."""
+        from .model import Model, check_backend
 
         if self.n_elements == 0:
             raise MeshError(f"{self.source}: no tetrahedra; add a mesh before finalize()")
@@ -332,9 +333,8 @@ class ModelBuilder:
                 f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is inverted: volume "
                 f"{vol[e]:.3e} m^3; expected positive orientation (swap two nodes), "
                 f"{inverted.size} inverted element(s) in all", e)
-        if backend not in ("cpu", "cuda"):
-            raise InputError(f"backend = {shown(backend)}; expected 'cpu' or 'cuda'")
+        check_backend(backend)
         model = Model(self, owner, dtype, threads, geometry=(vol, alt))
-        if backend == "cuda":
-            model.use_cuda(device)
+        if backend != "cpu":
+            model.use_backend(backend, device)
         return model

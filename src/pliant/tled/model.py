@@ -95,6 +95,17 @@ def _auto_threads(n_elements: int) -> int:
     return max(1, min(_core.max_threads(), n_elements // 1000))
 
 
+#: The backends a model can run on (bound from the engine).
+BACKENDS: tuple[str, ...] = tuple(_core.backends)
+
+
+def check_backend(backend) -> str:
+    """``backend`` if it names a backend, else InputError saying which exist."""
+    if not isinstance(backend, str) or backend not in BACKENDS:
+        raise InputError(f"backend = {shown(backend)}; expected one of {', '.join(BACKENDS)}")
+    return backend
+
+
 class Model:
     """Static part of a simulation: mesh, materials, masses, constraints, loads (build it with
     :class:`~pliant.tled.builder.ModelBuilder`).
@@ -206,27 +217,32 @@ class Model:
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
         try:
             self._engine = Engine(
-                np.ascontiguousarray(X[node_order]),
-                np.ascontiguousarray(node_rank[T[elem_order]].astype(np.int32)),
-                np.ascontiguousarray(density),
-                [int(e) for e in group_end[keep]],
-                [int(self.sets[k].material.kind) for k in np.nonzero(keep)[0]],
-                params,
-                np.ascontiguousarray(patterns, dtype=float),
-                pattern_curve,
-                [int(node_rank[n]) for (n, d), _ in cons], [d for (n, d), _ in cons],
-                [v for _, (v, c) in cons], cons_curve,
-                [int(c.kind) for c in curves], [c.t0 for c in curves], [c.t1 for c in curves],
-                tb, tc, tt, tv, [float(x) for x in g], gcurve,
-                [int(node_rank[n]) for n in cn[cn_order]],  # engine order: sequential access
-                [int(m) for m in masks[cn_order]],
-                [int(t.kind) for t in self.tools], [p for t in self.tools for p in t.params()],
-                [m for t in self.tools for m in (t.mu_s, t.mu_k)],
-                [t.key_array().tolist() for t in self.tools],
-                [d for dims, _ in tool_grids for d in dims], [v.tolist() for _, v in tool_grids],
-                [int(v) for v in node_rank[press_F].ravel()], press_p.tolist(), press_c,
-                bool(builder.nodal_pressure), visco,
-                int(threads if threads else _auto_threads(M)),
+                X=np.ascontiguousarray(X[node_order]),
+                tets=np.ascontiguousarray(node_rank[T[elem_order]].astype(np.int32)),
+                density=np.ascontiguousarray(density),
+                group_end=[int(e) for e in group_end[keep]],
+                group_kind=[int(self.sets[k].material.kind) for k in np.nonzero(keep)[0]],
+                group_params=params,
+                patterns=np.ascontiguousarray(patterns, dtype=float),
+                pattern_curve=pattern_curve,
+                cons_node=[int(node_rank[n]) for (n, d), _ in cons], cons_dim=[d for (n, d), _ in cons],
+                cons_value=[v for _, (v, c) in cons], cons_curve=cons_curve,
+                curve_kind=[int(c.kind) for c in curves], curve_t0=[c.t0 for c in curves],
+                curve_t1=[c.t1 for c in curves], curve_table_begin=tb, curve_table_count=tc,
+                table_t=tt, table_v=tv, gravity=[float(x) for x in g], gravity_curve=gcurve,
+                # engine order: sequential access
+                contact_nodes=[int(node_rank[n]) for n in cn[cn_order]],
+                contact_masks=[int(m) for m in masks[cn_order]],
+                tool_kind=[int(t.kind) for t in self.tools],
+                tool_params=[p for t in self.tools for p in t.params()],
+                tool_mu=[m for t in self.tools for m in (t.mu_s, t.mu_k)],
+                tool_keys=[t.key_array().tolist() for t in self.tools],
+                tool_grid_dims=[d for dims, _ in tool_grids for d in dims],
+                tool_grids=[v.tolist() for _, v in tool_grids],
+                press_nodes=[int(v) for v in node_rank[press_F].ravel()],
+                press_value=press_p.tolist(), press_curve=press_c,
+                anp=bool(builder.nodal_pressure), group_visco=visco,
+                threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on
             raise MeshError(f"{builder.source}: {e}") from None
@@ -277,18 +293,28 @@ class Model:
     # --- states and results --------------------------------------------------------------------
     @property
     def backend(self) -> str:
-        """"cpu" or "cuda": where Solver.run steps this model."""
+        """Where this model's steps, relaxations and results run: "cpu", "cuda" or "cuda-emulated"."""
         return str(self._engine.backend)
 
-    def use_cuda(self, device: int = 0):
-        """Run this model's steps on CUDA device ``device`` (relax, step and results stay on the
-        host). Raises BackendError if this build has no CUDA backend or the machine no GPU."""
+    def use_backend(self, backend: str, device: int = 0):
+        """Run this model on ``backend`` (one of :data:`BACKENDS`): "cpu" (OpenMP + SIMD), "cuda"
+        (CUDA device ``device``) or "cuda-emulated" (the CUDA backend's engine run on the host, for
+        tests and debugging: slow). Every feature runs on each. States stay valid across a switch.
+        Raises BackendError if this build has no CUDA backend or the machine no GPU."""
         from ..errors import BackendError
 
         try:
-            self._engine.enable_cuda(int(device))
+            self._engine.use_backend(check_backend(backend), int(device))
         except ValueError as e:
-            raise BackendError(f"backend 'cuda': {e}") from None
+            raise BackendError(f"backend {backend!r}: {e}") from None
+
+    def use_cuda(self, device: int = 0):
+        """Deprecated: ``use_backend("cuda", device)``."""
+        import warnings
+
+        warnings.warn("Model.use_cuda(d) is deprecated; use Model.use_backend('cuda', d)",
+                      DeprecationWarning, stacklevel=2)
+        self.use_backend("cuda", device)
 
     def set_tool_keys(self):
         """Send the tools' keyframes to the engine (after changing a trajectory)."""

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._core import RunStatus
 from ..checks import finite_number, finite_vector, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
@@ -104,19 +105,19 @@ class Solver:
         self.tool_histories: dict[int, ToolHistory] = {}
 
     def _raise(self, rep: dict):
-        m, t, v = self.model, rep["t"], rep["value"]
-        if rep["status"] == 2 and not math.isfinite(v):
+        m, t, v, status = self.model, rep["t"], rep["value"], rep["status"]
+        if status == RunStatus.Inverted and not math.isfinite(v):
             e = m.user_element(rep["where"])
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: non-finite deformation in element {e} (J = {v}); "
                 f"reduce dt (now {self.dt:.3g} s) or the loads", t, "J", v, element=e)
-        if rep["status"] == 2:
+        if status == RunStatus.Inverted:
             e = m.user_element(rep["where"])
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: element {e} inverted (J = {v:.3g} <= 0); reduce dt "
                 f"(now {self.dt:.3g} s), the loads, or refine/soften around it", t, "J", v, element=e)
         node = m.user_node(rep["where"])
-        if rep["status"] == 1:
+        if status == RunStatus.NonFinite:
             raise InstabilityError(f"unstable at t = {t:.6g} s: non-finite displacement at node {node}"
                                    f" (value {v}); dt = {self.dt:.3g} s", t, "displacement", v, node=node)
         raise InstabilityError(f"unstable at t = {t:.6g} s: displacement {v:.3g} m at node {node} "
@@ -242,9 +243,10 @@ class Solver:
 
 
 class Simulation:
-    """Convenience wrapper: a model, a solver and the current state.
+    """Convenience wrapper: a model, a solver and the current state, with the solver's verbs.
 
-    ``sim.step(n)``, ``sim.run_to(T)``, ``sim.solve_static()``, ``sim.displacements``...
+    ``sim.step()``, ``sim.run(steps=n)`` or ``sim.run(until=T)``, ``sim.relax()``,
+    ``sim.displacements``...
     """
 
     def __init__(self, model: Model, **solver_options):
@@ -253,14 +255,45 @@ class Simulation:
         self.solver = Solver(model, **solver_options)
         self.state = model.state()
 
-    def step(self, n: int = 1) -> RunInfo:
-        return self.solver.run(self.state, steps=_step_count(n, "n"))
+    @property
+    def dt(self) -> float:
+        """The time step Δt [s] of the solver."""
+        return self.solver.dt
+
+    def step(self, n: int | None = None) -> RunInfo:
+        """One step of Δt (``step(n)``, n > 1, is deprecated: use ``run(steps=n)``)."""
+        if n is not None and not (isinstance(n, (int, np.integer)) and not isinstance(n, bool)
+                                  and n == 1):
+            import warnings
+
+            warnings.warn("Simulation.step(n) is deprecated; use Simulation.run(steps=n)",
+                          DeprecationWarning, stacklevel=2)
+            return self.solver.run(self.state, steps=_step_count(n, "n"))
+        return self.solver.run(self.state, steps=1)
+
+    def run(self, steps: int | None = None, until: float | None = None) -> RunInfo:
+        """Advance by ``steps`` steps or to time ``until`` [s] (Solver.run on the current state)."""
+        return self.solver.run(self.state, steps=steps, until=until)
+
+    def relax(self, **options) -> RelaxInfo:
+        """Quasi-static equilibrium of the current state (Solver.relax; same options)."""
+        return self.solver.relax(self.state, **options)
 
     def run_to(self, t: float) -> RunInfo:
-        return self.solver.run(self.state, until=t)
+        """Deprecated: ``run(until=t)``."""
+        import warnings
+
+        warnings.warn("Simulation.run_to(t) is deprecated; use Simulation.run(until=t)",
+                      DeprecationWarning, stacklevel=2)
+        return self.run(until=t)
 
     def solve_static(self, **options) -> RelaxInfo:
-        return self.solver.relax(self.state, **options)
+        """Deprecated: ``relax(...)``."""
+        import warnings
+
+        warnings.warn("Simulation.solve_static() is deprecated; use Simulation.relax()",
+                      DeprecationWarning, stacklevel=2)
+        return self.relax(**options)
 
     @property
     def time(self) -> float:

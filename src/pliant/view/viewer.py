@@ -113,7 +113,7 @@ class LiveViewer:
         @self.step_button.on_click
         def _(_):
             with self.lock:
-                self.sim.step(1)
+                self.sim.step()
 
         @self.reset_button.on_click
         def _(_):
@@ -191,7 +191,7 @@ class LiveViewer:
                 n = max(1, int(round(wall / dt)))
                 t0 = time.perf_counter()
                 try:
-                    self.sim.step(n)
+                    self.sim.run(steps=n)
                 except PliantError as e:  # show it, pause; Reset starts again
                     self.error = str(e)
                     self.playing = False

@@ -1,0 +1,163 @@
+// pliant — the CUDA device layer: the only code that calls the CUDA runtime (allocation, copies,
+// the three launch shapes, one stream, graphs). Everything else the CUDA backend does is the
+// engine of engine.hpp, which CI runs on the emulated device (device_emulated.hpp) without a GPU.
+// Keep this file small: it is what only a machine with a GPU tests (docs/engine.md lists it).
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "graphs.hpp"
+#include "pliant/config.hpp"
+
+namespace pliant {
+
+namespace cuda_detail {
+
+inline void check(cudaError_t e, const char* what) {
+    if (e != cudaSuccess)
+        throw std::runtime_error(std::string("CUDA error in ") + what + ": " + cudaGetErrorString(e));
+}
+
+constexpr int kThreads = 128;
+inline unsigned grid_for(long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+
+template <class F>
+__global__ void each_kernel(index_t n, F f) {
+    const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n) f(static_cast<index_t>(i));
+}
+
+template <class F>
+__global__ void blocks_kernel(index_t b0, index_t b1, F f) {
+    const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
+    const index_t b = b0 + static_cast<index_t>(i / kLanes);
+    if (b < b1) f(b, static_cast<int>(i % kLanes));
+}
+
+template <class F>
+__global__ void serial_kernel(F f) {
+    f();
+}
+
+struct ExecDeleter {
+    void operator()(CUgraphExec_st* g) const { cudaGraphExecDestroy(g); }
+};
+
+}  // namespace cuda_detail
+
+class CudaDevice {
+public:
+    static constexpr bool kSharesHost = false;
+    static constexpr const char* kName = "cuda";
+
+    explicit CudaDevice(int device) {
+        cuda_detail::check(cudaSetDevice(device), "cudaSetDevice");
+        cuda_detail::check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "stream");
+    }
+    ~CudaDevice() {
+        graphs_.clear();
+        if (stream_) cudaStreamDestroy(stream_);
+    }
+    CudaDevice(const CudaDevice&) = delete;
+    CudaDevice& operator=(const CudaDevice&) = delete;
+    int threads() const { return 1; }
+
+    void* allocate(std::size_t bytes) {
+        void* p = nullptr;
+        cuda_detail::check(cudaMalloc(&p, bytes ? bytes : 1), "cudaMalloc");
+        cuda_detail::check(cudaMemset(p, 0, bytes ? bytes : 1), "cudaMemset");
+        return p;
+    }
+    void release(void* p) { cudaFree(p); }
+    void copy_in(void* dst, const void* src, std::size_t bytes) {
+        if (!bytes) return;
+        cuda_detail::check(cudaStreamSynchronize(stream_), "sync");
+        cuda_detail::check(cudaMemcpy(dst, src, bytes, cudaMemcpyHostToDevice), "upload");
+    }
+    void copy_out(void* dst, const void* src, std::size_t bytes) {
+        if (!bytes) return;
+        cuda_detail::check(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost, stream_), "download");
+        cuda_detail::check(cudaStreamSynchronize(stream_), "download");
+    }
+
+    template <class F>
+    void region(F&& body) { body(); }
+    template <class F>
+    void each(index_t n, const F& f) {
+        if (dry_ || n <= 0) return;
+        cuda_detail::each_kernel<<<cuda_detail::grid_for(n), cuda_detail::kThreads, 0, stream_>>>(n, f);
+        cuda_detail::check(cudaPeekAtLastError(), "launch");
+    }
+    template <class F>
+    void blocks(index_t b0, index_t b1, const F& f) {
+        if (dry_ || b1 <= b0) return;
+        const long n = static_cast<long>(b1 - b0) * kLanes;
+        cuda_detail::blocks_kernel<<<cuda_detail::grid_for(n), cuda_detail::kThreads, 0, stream_>>>(b0, b1, f);
+        cuda_detail::check(cudaPeekAtLastError(), "launch");
+    }
+    void barrier() {}  // one stream: launches run in order
+    template <class F>
+    void serial(const F& f) {
+        if (dry_) return;
+        cuda_detail::serial_kernel<<<1, 1, 0, stream_>>>(f);
+        cuda_detail::check(cudaPeekAtLastError(), "launch");
+    }
+    template <class V>
+    V read(const V* p) {
+        V v;
+        copy_out(&v, p, sizeof(V));
+        return v;
+    }
+    template <class F>
+    void repeat(long k, long key, F&& body) { graphs_.repeat(*this, k, key, body); }
+    void forget_graphs() { graphs_.clear(); }
+    bool lead() const { return true; }
+    double wtime() const { return 0.0; }
+
+    // The graph interface of GraphCache.
+    using Graph = std::unique_ptr<CUgraphExec_st, cuda_detail::ExecDeleter>;
+    void begin_capture() {
+        cuda_detail::check(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal), "capture");
+    }
+    Graph end_capture() {
+        cudaGraph_t graph;
+        cuda_detail::check(cudaStreamEndCapture(stream_, &graph), "end capture");
+        cudaGraphExec_t exec;
+        const cudaError_t e = cudaGraphInstantiate(&exec, graph, 0);
+        cudaGraphDestroy(graph);
+        cuda_detail::check(e, "graph instantiate");
+        return Graph(exec);
+    }
+    void launch(const Graph& g) { cuda_detail::check(cudaGraphLaunch(g.get(), stream_), "graph launch"); }
+    void set_dry(bool dry) { dry_ = dry; }
+
+    /// Number of usable devices; 0 with the reason in `why` when there is no driver or device.
+    static int count(std::string& why) {
+        int n = 0;
+        const cudaError_t e = cudaGetDeviceCount(&n);
+        if (e != cudaSuccess) {
+            why = cudaGetErrorString(e);
+            cudaGetLastError();
+            return 0;
+        }
+        if (n == 0) why = "no CUDA device";
+        return n;
+    }
+    static std::string name(int device) {
+        cudaDeviceProp p{};
+        if (cudaGetDeviceProperties(&p, device) != cudaSuccess) return "unknown";
+        return p.name;
+    }
+
+private:
+    cudaStream_t stream_{};
+    bool dry_ = false;
+    GraphCache<Graph> graphs_;
+};
+
+}  // namespace pliant

@@ -1,0 +1,107 @@
+// pliant — the emulated CUDA device: the CUDA backend's engine, built for the host. Memory is
+// separate (the model is copied in and state is copied in and out, as to a GPU, so a missing
+// upload shows), kernels run as plain loops on one thread, and graphs are recorded launches
+// replayed later (with the arguments they had when captured, as a CUDA graph keeps them). For tests
+// and debugging on machines without a GPU: `backend="cuda-emulated"`. What it cannot check is the
+// CUDA runtime itself (device_cuda.cuh) and device-side arithmetic differences (docs/engine.md).
+#pragma once
+
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <new>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "graphs.hpp"
+#include "pliant/config.hpp"
+
+namespace pliant {
+
+class EmulatedDevice {
+public:
+    static constexpr bool kSharesHost = false;
+    static constexpr const char* kName = "cuda-emulated";
+
+    EmulatedDevice() = default;
+    EmulatedDevice(const EmulatedDevice&) = delete;
+    EmulatedDevice& operator=(const EmulatedDevice&) = delete;
+    int threads() const { return 1; }
+
+    void* allocate(std::size_t bytes) {
+        void* p = std::calloc(bytes ? bytes : 1, 1);
+        if (!p) throw std::bad_alloc();
+        return p;
+    }
+    void release(void* p) { std::free(p); }
+    void copy_in(void* dst, const void* src, std::size_t bytes) {
+        no_capture("copy_in");
+        if (bytes) std::memcpy(dst, src, bytes);
+    }
+    void copy_out(void* dst, const void* src, std::size_t bytes) {
+        no_capture("copy_out");
+        if (bytes) std::memcpy(dst, src, bytes);
+    }
+
+    template <class F>
+    void region(F&& body) { body(); }
+    template <class F>
+    void each(index_t n, const F& f) {
+        launch_or_record([n, f] { for (index_t i = 0; i < n; ++i) f(i); });
+    }
+    template <class F>
+    void blocks(index_t b0, index_t b1, const F& f) {
+        launch_or_record([b0, b1, f] {
+            for (index_t b = b0; b < b1; ++b)
+                for (int l = 0; l < kLanes; ++l) f(b, l);
+        });
+    }
+    void barrier() {}  // launches run in order, as on one CUDA stream
+    template <class F>
+    void serial(const F& f) { launch_or_record([f] { f(); }); }
+    template <class V>
+    V read(const V* p) {
+        no_capture("read");
+        return *p;
+    }
+    template <class F>
+    void repeat(long k, long key, F&& body) { graphs_.repeat(*this, k, key, body); }
+    void forget_graphs() { graphs_.clear(); }
+    bool lead() const { return true; }
+    double wtime() const { return 0.0; }
+
+    // The graph interface of GraphCache.
+    using Graph = std::vector<std::function<void()>>;
+    void begin_capture() {
+        capturing_ = true;
+        recorded_.clear();
+    }
+    Graph end_capture() {
+        capturing_ = false;
+        return std::move(recorded_);
+    }
+    void launch(const Graph& g) {
+        for (const auto& k : g) k();
+    }
+    void set_dry(bool dry) { dry_ = dry; }
+
+private:
+    void launch_or_record(std::function<void()> k) {
+        if (dry_) return;
+        if (capturing_)
+            recorded_.push_back(std::move(k));
+        else
+            k();
+    }
+    void no_capture(const char* what) const {
+        if (capturing_ || dry_)
+            throw std::logic_error(std::string("emulated CUDA device: ") + what +
+                                   " inside a graph capture (not allowed on a CUDA stream)");
+    }
+    bool capturing_ = false, dry_ = false;
+    Graph recorded_;
+    GraphCache<Graph> graphs_;
+};
+
+}  // namespace pliant

@@ -1,0 +1,103 @@
+// pliant — the CPU executor: host memory, OpenMP threads across items and SIMD across the lanes of
+// an element block. The engine's step (engine.hpp) runs inside one parallel region (region());
+// every kernel launch is an orphaned `omp for`, so a step costs a few barriers and no thread
+// start-up. Every thread count gives the same bits: an item is computed by the same code whatever
+// thread runs it, and sums run in a fixed order (chunked, never per thread).
+#pragma once
+
+#include <omp.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <stdexcept>
+#include <string>
+
+#include "pliant/config.hpp"
+
+namespace pliant {
+
+/// Most CPU threads a solver accepts: 4 per processor, at least 64 (far more make OpenMP fail to
+/// create them: a crash, refused instead).
+inline int thread_limit() { return omp_get_num_procs() * 4 > 64 ? omp_get_num_procs() * 4 : 64; }
+
+class ThreadsDevice {
+public:
+    static constexpr bool kSharesHost = true;  // model arrays are used in place, not copied
+    static constexpr const char* kName = "cpu";
+
+    // threads: 1 .. thread_limit(), or <= 0 for OpenMP's default.
+    explicit ThreadsDevice(int threads) : threads_(threads > 0 ? threads : omp_get_max_threads()) {
+        if (threads_ > thread_limit())
+            throw std::invalid_argument("threads = " + std::to_string(threads_) + ": expected 1 to " +
+                                        std::to_string(thread_limit()));
+    }
+    int threads() const { return threads_; }
+
+    // --- memory (zeroed allocations; copies are memcpy) ------------------------------------------
+    void* allocate(std::size_t bytes) {
+        void* p = std::calloc(bytes ? bytes : 1, 1);
+        if (!p) throw std::bad_alloc();
+        return p;
+    }
+    void release(void* p) { std::free(p); }
+    void copy_in(void* dst, const void* src, std::size_t bytes) { if (bytes) std::memcpy(dst, src, bytes); }
+    void copy_out(void* dst, const void* src, std::size_t bytes) { if (bytes) std::memcpy(dst, src, bytes); }
+
+    // --- launches ----------------------------------------------------------------------------------
+    /// Runs body on every thread of one parallel region; the launches below bind to it.
+    template <class F>
+    void region(F&& body) {
+#pragma omp parallel num_threads(threads_)
+        body();
+    }
+    /// f(i) for i in [0, n), split statically across threads; all threads wait at the end.
+    template <class F>
+    void each(index_t n, const F& f) {
+#pragma omp for schedule(static)
+        for (index_t i = 0; i < n; ++i) f(i);
+    }
+    /// f(b, l) for the element slots of blocks [b0, b1): blocks across threads, lanes in SIMD. No
+    /// wait at the end (a group's blocks are independent of the next group's): call barrier().
+    template <class F>
+    void blocks(index_t b0, index_t b1, const F& f) {
+#pragma omp for schedule(static) nowait
+        for (index_t b = b0; b < b1; ++b) {
+#pragma omp simd
+            for (int l = 0; l < kLanes; ++l) f(b, l);
+        }
+    }
+    void barrier() {
+#pragma omp barrier
+    }
+    /// f() on one thread; all threads wait at the end.
+    template <class F>
+    void serial(const F& f) {
+#pragma omp single
+        f();
+    }
+    /// A value the kernels wrote, the same on every thread.
+    template <class V>
+    V read(const V* p) {
+#pragma omp barrier
+        const V v = *p;
+#pragma omp barrier
+        return v;
+    }
+    /// k repetitions of a step's launches (CUDA: one graph; here simply the launches).
+    template <class F>
+    void repeat(long k, long /*key*/, F&& body) {
+        for (long s = 0; s < k; ++s) body();
+    }
+    void forget_graphs() {}
+
+    /// Whether this thread keeps the books (timings, reports): thread 0.
+    bool lead() const { return omp_get_thread_num() == 0; }
+    /// Wall time [s] for the kernel timings.
+    double wtime() const { return omp_get_wtime(); }
+
+private:
+    int threads_;
+};
+
+}  // namespace pliant

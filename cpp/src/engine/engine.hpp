@@ -1,0 +1,153 @@
+// pliant — the engine: the step sequence of Total Lagrangian Explicit Dynamics and of dynamic
+// relaxation, written once, over a device (executor) that provides memory, copies and three
+// launch shapes (each item, each element slot of a block range, one serial item), plus graphs.
+// Built for ThreadsDevice (CPU: OpenMP + SIMD), CudaDevice, and EmulatedDevice (the CUDA engine
+// on the host, for tests). The physics are the header-only kernels of tled.hpp / contact.hpp.
+//
+// A step (step_once): (1) step scalars: load-curve factors, tool poses, the step counter;
+// (2) element forces per material group (T4ANP: element pressures, nodal averages, then forces;
+// viscoelastic: the Prony state advances); (3) per node: gather, central difference update,
+// kinematic constraints; (4) contact with the rigid tools and the per-tool force sums. Stability
+// checks every `check_every` steps (J ≤ 0 or NaN per element; non-finite or blown-up nodes).
+// Everything a kernel needs is captured by value (a DeviceView of device pointers): CUDA kernels
+// cannot read the host object, and graphs keep the values they were captured with.
+#pragma once
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "backend.hpp"
+#include "buffers.hpp"
+
+namespace pliant {
+
+/// Device-resident scalars of a run: written by the step-scalars, check and measure kernels, read
+/// back by the host at checks.
+template <class T>
+struct Scalars {
+    double t0;       // time at step 0 of this call [s]
+    long step;       // steps taken in this call
+    long row;        // tool-history row of the current step
+    Integrator<T> it;
+    double alpha;    // relax: adaptive damping [1/s]
+    double residual; // relax: relative out-of-balance force at the last measure
+    int bad_slot, bad_node;  // check: smallest offending element slot / node (INT_MAX: none)
+    int status;      // check verdict (RunStatus)
+    index_t where;
+    double value;
+};
+
+/// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
+template <class T>
+struct DeviceView {
+    index_t n_nodes, P, n_blocks, slots, n_contact, chunks;
+    int n_curves, n_factors, n_tools, visco_w;
+    ElementData<T> el;
+    const index_t* elem_id;
+    NodeData<T> nodes, relax_nodes;  // physical / dynamic-relaxation inverse masses
+    const T *mass, *relax_mass, *free_mask, *node_volume, *cval;
+    const index_t *co, *cdof, *ccurve, *pattern_curve, *cnodes, *cbits;
+    const LoadCurve* curves;
+    const double *tt, *tv, *X, *grid;
+    const RigidTool* tools;
+    const double* keys;
+    T *u[3], *q, *f_elem, *J, *elem_p, *node_p, *f_node[2], *cnext, *pf;
+    Scalars<T>* sc;
+    Pose *pose0, *pose1;
+    double *cforce, *chunk, *hist, *fcon, *partial;
+    index_t* ctool;
+};
+
+/// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
+enum class Variant { Plain, Visco, Anp };
+
+/// Contact nodes per chunk: each chunk sums its per-tool forces, chunks are summed in order.
+constexpr index_t kContactChunk = 512;
+/// Nodes per chunk of the relaxation's residual sums (fixed: the same bits for any thread count).
+constexpr index_t kMeasureChunk = 1024;
+
+template <class T, class Dev>
+class Engine final : public Backend<T> {
+public:
+    template <class... A>
+    explicit Engine(const Model<T>& m, A&&... dev_args);
+
+    RunReport run(State<T>& s, long n, double dt, double alpha, int check_every,
+                  double blowup) override;
+    RunReport step(const State<T>& in, State<T>& out, double dt, double alpha) override;
+    RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
+                    int check_every, double blowup) override;
+    ElementResults<T> measures(const State<T>& s) override;
+    std::vector<T> internal_forces(const State<T>& s) override;
+    std::vector<double> tool_history() override;
+    ContactReport contact_report() override;
+    void set_tool_keys(const std::vector<std::vector<double>>& keys) override;
+    void scale_materials(double factor) override;
+    std::string name() const override { return Dev::kName; }
+    int threads() const override { return dev_.threads(); }
+
+    // --- kernels: public, as CUDA extended lambdas may not live in private member functions ----
+    /// The three displacement buffers: u at t (cur), at t − Δt (prev), and the step's output.
+    struct Phase {
+        int prev = 0, cur = 1, next = 2;
+        void rotate() {
+            const int p = prev;
+            prev = cur;
+            cur = next;
+            next = p;
+        }
+    };
+    void step_once(const Phase& ph, double dt, double time_dt, bool relaxing, T* f_node_out,
+                   RunReport& rep);
+    void step_scalars(double time_dt, bool fixed_row);
+    void forces(const T* u, int visco_mode, double dt);
+    void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
+    void contact_pass(const Phase& ph, bool relaxing);
+    bool check(const T* u_new, double t_elem, double t_node, double blowup, RunReport& rep);
+    void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt);
+    void copy(T* dst, const T* src, std::size_t n);
+    void fill(T* dst, T value, std::size_t n);
+    template <class M, Variant V>
+    void launch_pressure(const Group<T>& g, const M& mat, const T* u);
+    template <class M, Variant V>
+    void launch_forces(const Group<T>& g, const M& mat, const T* u, int visco_mode, double dt);
+    template <class M, Variant V>
+    void launch_measures(const Group<T>& g, const M& mat, const T* u, double dt, T* out);
+
+private:
+    template <class Visitor>
+    void dispatch(Visitor&& visit);
+    void load(const State<T>& s);
+    void store(State<T>& s);
+    void set_scalars(double t0, double dt, double alpha);
+    void ensure_history(long rows);
+    void refresh_view();
+
+    const Model<T>& m_;
+    Dev dev_;
+    std::vector<Group<T>> groups_;     // the model's, with scaled moduli (scale_materials)
+    std::vector<RigidTool> tools_;     // the model's, with replaced keyframes (set_tool_keys)
+    ModelBuffers<T, Dev> mb_;
+    DeviceBuffer<RigidTool, Dev> d_tools_;
+    DeviceBuffer<double, Dev> d_keys_, cforce_, chunk_, hist_, fcon_, partial_;
+    DeviceBuffer<T, Dev> u_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_;
+    DeviceBuffer<Scalars<T>, Dev> sc_;
+    DeviceBuffer<Pose, Dev> pose0_, pose1_;
+    DeviceBuffer<index_t, Dev> ctool_;
+    DeviceView<T> v_{};
+    Phase phase_;
+    const State<T>* resident_ = nullptr;  // the state whose values the device holds
+    std::uint64_t resident_version_ = 0;
+    long history_rows_ = 0;               // rows of the last run's tool history
+};
+
+}  // namespace pliant
+
+#include "engine_steps.hpp"
+#include "engine_calls.hpp"

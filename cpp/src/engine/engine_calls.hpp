@@ -1,0 +1,325 @@
+// pliant — the engine's calls (included by engine.hpp): set-up, state transfer, run, relax and
+// the results, the same for every device.
+#pragma once
+
+namespace pliant {
+
+template <class T, class Dev>
+template <class... A>
+Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
+    : m_(m), dev_(std::forward<A>(dev_args)...), groups_(m.groups), tools_(m.tools), mb_(dev_, m) {
+    const std::size_t S = static_cast<std::size_t>(m.n_blocks) * kLanes;
+    const std::size_t P3 = 3 * static_cast<std::size_t>(m.n_pad);
+    const std::size_t nt = m.tools.size(), nc = m.contact_nodes.size();
+    for (auto& u : u_) u = DeviceBuffer<T, Dev>(dev_, P3);
+    for (auto& f : f_node_) f = DeviceBuffer<T, Dev>(dev_, P3);
+    q_ = DeviceBuffer<T, Dev>(dev_, S * 6 * static_cast<std::size_t>(m.visco_terms));
+    f_elem_ = DeviceBuffer<T, Dev>(dev_, 12 * S);
+    J_ = DeviceBuffer<T, Dev>(dev_, S);
+    elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);
+    node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
+    cnext_ = DeviceBuffer<T, Dev>(dev_, m.curves.size());
+    pf_ = DeviceBuffer<T, Dev>(dev_, m.pattern_curve.size());
+    sc_ = DeviceBuffer<Scalars<T>, Dev>(dev_, 1);
+    pose0_ = DeviceBuffer<Pose, Dev>(dev_, nt);
+    pose1_ = DeviceBuffer<Pose, Dev>(dev_, nt);
+    const std::size_t chunks = (nc + kContactChunk - 1) / kContactChunk;
+    cforce_ = DeviceBuffer<double, Dev>(dev_, 3 * nc);
+    ctool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
+    chunk_ = DeviceBuffer<double, Dev>(dev_, chunks * 6 * nt);
+    fcon_ = DeviceBuffer<double, Dev>(dev_, nt ? P3 : 0);
+    partial_ = DeviceBuffer<double, Dev>(dev_, 4 * ((static_cast<std::size_t>(m.n_nodes) + kMeasureChunk - 1) /
+                                                    kMeasureChunk));
+    d_tools_ = DeviceBuffer<RigidTool, Dev>(dev_, nt);
+    d_tools_.upload(tools_.data(), nt);
+    d_keys_ = DeviceBuffer<double, Dev>(dev_, m.tool_keys.size());
+    d_keys_.upload(m.tool_keys.data(), m.tool_keys.size());
+    const std::vector<index_t> none(nc, -1);
+    ctool_.upload(none.data(), nc);
+    ensure_history(1);
+    refresh_view();
+    const std::vector<T> ones(S, T(1));  // J before any step: every element fine
+    J_.upload(ones.data(), S);
+}
+
+/// The kernels' view of every device array (after any of them was reallocated).
+template <class T, class Dev>
+void Engine<T, Dev>::refresh_view() {
+    DeviceView<T>& v = v_;
+    const Model<T>& m = m_;
+    v.n_nodes = m.n_nodes, v.P = m.n_pad, v.n_blocks = m.n_blocks;
+    v.slots = m.n_blocks * kLanes;
+    v.n_contact = static_cast<index_t>(m.contact_nodes.size());
+    v.chunks = (v.n_contact + kContactChunk - 1) / kContactChunk;
+    v.n_curves = static_cast<int>(m.curves.size());
+    v.n_factors = static_cast<int>(m.pattern_curve.size());
+    v.n_tools = static_cast<int>(tools_.size());
+    v.visco_w = 6 * m.visco_terms;
+    v.el = {mb_.elem_nodes.data(), mb_.elem_grad.data(), mb_.elem_vol.data()};
+    v.elem_id = mb_.elem_id.data();
+    v.nodes = {mb_.inc_off.data(), mb_.inc_idx.data(), mb_.inv_mass.data(), mb_.patterns.data(),
+               m.n_load_patterns, mb_.pf_off.data(), mb_.pf_idx.data(), mb_.pnodes.data(),
+               mb_.pedges.data(), mb_.pvalue.data(), mb_.pslot.data()};
+    v.relax_nodes = v.nodes;
+    v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
+    v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();
+    v.node_volume = mb_.node_vol.data(), v.cval = mb_.cval.data();
+    v.co = mb_.co.data(), v.cdof = mb_.cdof.data(), v.ccurve = mb_.ccurve.data();
+    v.pattern_curve = mb_.pcurve.data(), v.cnodes = mb_.cnodes.data(), v.cbits = mb_.cbits.data();
+    v.curves = mb_.curves.data(), v.tt = mb_.tt.data(), v.tv = mb_.tv.data(), v.X = mb_.X.data();
+    v.grid = mb_.grid.data(), v.tools = d_tools_.data(), v.keys = d_keys_.data();
+    for (int k = 0; k < 3; ++k) v.u[k] = u_[k].data();
+    v.q = q_.data(), v.f_elem = f_elem_.data(), v.J = J_.data();
+    v.elem_p = elem_p_.data(), v.node_p = node_p_.data();
+    v.f_node[0] = f_node_[0].data(), v.f_node[1] = f_node_[1].data();
+    v.cnext = cnext_.data(), v.pf = pf_.data(), v.sc = sc_.data();
+    v.pose0 = pose0_.data(), v.pose1 = pose1_.data();
+    v.cforce = cforce_.data(), v.chunk = chunk_.data(), v.hist = hist_.data();
+    v.fcon = fcon_.data(), v.partial = partial_.data(), v.ctool = ctool_.data();
+}
+
+/// Copies a state to the device unless the device holds it already (same object, same version).
+template <class T, class Dev>
+void Engine<T, Dev>::load(const State<T>& s) {
+    if (resident_ == &s && resident_version_ == s.version) return;
+    u_[phase_.cur].upload(s.u.data(), s.u.size());
+    u_[phase_.prev].upload(s.u_prev.data(), s.u_prev.size());
+    q_.upload(s.q.data(), s.q.size());
+    resident_ = &s;
+    resident_version_ = s.version;
+}
+
+/// Copies the device's state back into s, which becomes the resident state.
+template <class T, class Dev>
+void Engine<T, Dev>::store(State<T>& s) {
+    u_[phase_.cur].download(s.u.data(), s.u.size());
+    u_[phase_.prev].download(s.u_prev.data(), s.u_prev.size());
+    q_.download(s.q.data(), s.q.size());
+    s.touch();
+    resident_ = &s;
+    resident_version_ = s.version;
+}
+
+template <class T, class Dev>
+void Engine<T, Dev>::set_scalars(double t0, double dt, double alpha) {
+    Scalars<T> s{};
+    s.t0 = t0;
+    s.it = central_difference<T>(dt, alpha);
+    s.alpha = alpha;
+    sc_.upload(&s, 1);
+}
+
+template <class T, class Dev>
+void Engine<T, Dev>::ensure_history(long rows) {
+    const std::size_t need = static_cast<std::size_t>(rows < 1 ? 1 : rows) * 6 * tools_.size();
+    if (need > hist_.size() || hist_.data() == nullptr) {
+        hist_ = DeviceBuffer<double, Dev>(dev_, need);
+        refresh_view();
+    }
+}
+
+template <class T, class Dev>
+RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int check_every,
+                              double blowup) {
+    if (keep_velocity(s, dt)) s.touch();
+    load(s);
+    ensure_history(n);
+    set_scalars(s.t, dt, alpha);
+    RunReport rep;
+    const long G = check_every > 0 ? check_every : 1;
+    const double t0 = s.t;
+    long done = 0;
+    dev_.region([&] {
+        Phase ph = phase_;  // each thread keeps the same rotation
+        long d = 0;
+        while (d < n) {
+            const long k = std::min(G, n - d);
+            dev_.repeat(k, ph.cur, [&] {
+                step_once(ph, dt, dt, false, nullptr, rep);
+                ph.rotate();
+            });
+            d += k;
+            // J belongs to the last step's input (t), the newest u to t + Δt.
+            if (!check(v_.u[ph.cur], t0 + (d - 1) * dt, t0 + d * dt, blowup, rep)) break;
+        }
+        if (dev_.lead()) {
+            done = d;
+            phase_ = ph;
+        }
+    });
+    dev_.forget_graphs();
+    store(s);
+    s.t = t0 + done * dt;
+    s.dt = dt;
+    s.step += done;
+    history_rows_ = done;
+    rep.steps = done;
+    if (rep.status == RunStatus::Ok) rep.t = s.t;
+    return rep;
+}
+
+template <class T, class Dev>
+RunReport Engine<T, Dev>::step(const State<T>& in, State<T>& out, double dt, double alpha) {
+    State<T> tmp = in;
+    tmp.touch();
+    RunReport rep = run(tmp, 1, dt, alpha, 1, INFINITY);
+    out = std::move(tmp);
+    out.touch();
+    resident_ = nullptr;
+    return rep;
+}
+
+/// Dynamic relaxation with adaptive mass-proportional damping (Joldes, Wittek & Miller 2009,
+/// CMAME 198:3313, §3) over the fictitious masses of Model::relax_mass; stops when the residual
+/// falls below tol, or has not improved by 1 % over 1,000 checks (the round-off floor).
+template <class T, class Dev>
+RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
+                                int check_every, double blowup) {
+    load(s);
+    copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // start at rest
+    ensure_history(1);  // relax keeps the last step's tool forces
+    set_scalars(t_eval, dt, 0.0);
+    RunReport rep;
+    long done = 0;
+    dev_.region([&] {
+        Phase ph = phase_;
+        int fc = 0;  // f_node_[fc]: where the next step writes f(u_cur)
+        long d = 0, checks = 0, best_check = 0;
+        double best = INFINITY;
+        bool stop = false;
+        const long G = check_every > 0 ? check_every : 1;
+        while (d < max_steps && !stop) {
+            const long k = std::min(G, max_steps - d);
+            dev_.repeat(k, 2 * ph.cur + fc, [&] {
+                step_once(ph, dt, 0.0, true, v_.f_node[fc], rep);
+                ph.rotate();
+                fc = 1 - fc;
+            });
+            d += k;
+            if (d % G != 0 || d < 2) continue;
+            // The measures belong to the last step's input u[prev] (f_node[1 − fc]) and the one
+            // before, u[next] (f_node[fc]).
+            relax_measure(v_.u[ph.prev], v_.u[ph.next], v_.f_node[1 - fc], v_.f_node[fc], dt);
+            const bool ok = check(v_.u[ph.prev], t_eval, t_eval, blowup, rep);
+            const double residual = dev_.read(&v_.sc->residual);
+            ++checks;
+            if (residual < 0.99 * best) {
+                best = residual;
+                best_check = checks;
+            }
+            stop = !ok || residual < tol || checks - best_check > 1000;
+            if (dev_.lead()) rep.residual = residual;
+        }
+        if (dev_.lead()) {
+            done = d;
+            phase_ = ph;
+        }
+    });
+    dev_.forget_graphs();
+    if (m_.visco_terms > 0)  // the viscous state of the equilibrium: fully relaxed, stored
+        dev_.region([&] { forces(v_.u[phase_.cur], 3, dt); });
+    copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // equilibrium: at rest
+    rep.damping = dev_.read(&v_.sc->alpha);
+    store(s);
+    s.t = t_eval;
+    s.dt = dt;
+    history_rows_ = 1;
+    rep.steps = done;
+    if (rep.status == RunStatus::Ok) rep.t = t_eval;
+    return rep;
+}
+
+template <class T, class Dev>
+ElementResults<T> Engine<T, Dev>::measures(const State<T>& s) {
+    load(s);
+    const std::size_t M = static_cast<std::size_t>(m_.n_elems);
+    DeviceBuffer<T, Dev> out(dev_, 20 * M);
+    const T* u = v_.u[phase_.cur];
+    dev_.region([&] {
+        if (m_.anp) {  // T4ANP: the stresses the forces see, with the averaged pressure
+            forces(u, 1, s.dt);
+        }
+        dispatch([&]<class M_, Variant V>(const Group<T>& g, const M_& mat) {
+            launch_measures<M_, V>(g, mat, u, s.dt, out.data());
+        });
+        dev_.barrier();
+    });
+    const std::vector<T> h = out.to_host();
+    ElementResults<T> r;
+    r.J.resize(M), r.W.resize(M), r.S.resize(6 * M), r.sigma.resize(6 * M), r.E.resize(6 * M);
+    for (std::size_t e = 0; e < M; ++e) {
+        const T* o = &h[20 * e];
+        r.J[e] = o[0];
+        r.W[e] = o[1];
+        for (int c = 0; c < 6; ++c) {
+            r.S[6 * e + c] = o[2 + c];
+            r.sigma[6 * e + c] = o[8 + c];
+            r.E[6 * e + c] = o[14 + c];
+        }
+    }
+    return r;
+}
+
+/// f(u) [N] of the state's displacements, SoA (3, P): kernel 1 (stored viscoelastic state), then the
+/// gather of kernel 2 with no loads and a zero integrator.
+template <class T, class Dev>
+std::vector<T> Engine<T, Dev>::internal_forces(const State<T>& s) {
+    load(s);
+    const Integrator<T> zero{T(0), T(0)};
+    Scalars<T> sc = dev_.read(v_.sc);
+    sc.it = zero;
+    sc_.upload(&sc, 1);
+    fill(v_.pf, T(0), pf_.size());
+    const Phase ph = phase_;
+    dev_.region([&] {
+        forces(v_.u[ph.cur], 1, s.dt);
+        node_pass(Phase{ph.cur, ph.cur, 3 - ph.cur - ph.prev}, false, v_.f_node[0]);
+    });
+    return f_node_[0].to_host();
+}
+
+template <class T, class Dev>
+std::vector<double> Engine<T, Dev>::tool_history() {
+    std::vector<double> h(static_cast<std::size_t>(history_rows_) * 6 * tools_.size());
+    hist_.download(h.data(), h.size());
+    return h;
+}
+
+template <class T, class Dev>
+ContactReport Engine<T, Dev>::contact_report() {
+    return {ctool_.to_host(), cforce_.to_host()};
+}
+
+template <class T, class Dev>
+void Engine<T, Dev>::set_tool_keys(const std::vector<std::vector<double>>& keys) {
+    if (keys.size() != tools_.size())
+        throw std::invalid_argument("set_tool_keys: " + std::to_string(keys.size()) +
+                                    " key lists, expected one per tool (" + std::to_string(tools_.size()) + ")");
+    std::vector<double> all;
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+        if (keys[k].empty() || keys[k].size() % 8)
+            throw std::invalid_argument("set_tool_keys: tool " + std::to_string(k) + " has " +
+                                        std::to_string(keys[k].size()) +
+                                        " numbers; expected 8 per keyframe (t, position, quaternion)");
+        tools_[k].key_begin = static_cast<index_t>(all.size() / 8);
+        tools_[k].key_count = static_cast<index_t>(keys[k].size() / 8);
+        all.insert(all.end(), keys[k].begin(), keys[k].end());
+    }
+    if (all.size() > d_keys_.size()) d_keys_ = DeviceBuffer<double, Dev>(dev_, all.size());
+    d_keys_.upload(all.data(), all.size());
+    d_tools_.upload(tools_.data(), tools_.size());
+    refresh_view();
+}
+
+template <class T, class Dev>
+void Engine<T, Dev>::scale_materials(double factor) {
+    if (!(factor > 0.0 && std::isfinite(factor)))
+        throw std::invalid_argument("scale_materials: factor must be finite and > 0");
+    for (std::size_t g = 0; g < groups_.size(); ++g) {
+        MaterialParams<T>& mat = groups_[g].material;
+        for (int k = 0; k < kMaterialParams; ++k)
+            mat.p[k] = T(double(m_.groups[g].material.p[k]) * (is_modulus(mat.kind, k) ? factor : 1.0));
+    }
+}
+
+}  // namespace pliant

@@ -1,0 +1,298 @@
+// pliant — the engine's kernels and the step they make (included by engine.hpp). Each function
+// launches one kernel (or one per material group) through the device; the kernel bodies call the
+// physics of tled.hpp and contact.hpp.
+#pragma once
+
+namespace pliant {
+
+/// One step of central differences (relaxing: the dynamic-relaxation masses, loads held at t0).
+/// time_dt: how far the load time advances per step (Δt in a run, 0 in a relaxation).
+template <class T, class Dev>
+void Engine<T, Dev>::step_once(const Phase& ph, double dt, double time_dt, bool relaxing,
+                               T* f_node_out, RunReport& rep) {
+    step_scalars(time_dt, relaxing);
+    const double w0 = dev_.wtime();
+    forces(v_.u[ph.cur], relaxing ? 2 : 0, dt);
+    const double w1 = dev_.wtime();
+    node_pass(ph, relaxing, f_node_out);
+    const double w2 = dev_.wtime();
+    if (v_.n_tools) contact_pass(ph, relaxing);
+    if (dev_.lead()) {
+        rep.elem_seconds += w1 - w0;
+        rep.node_seconds += w2 - w1;
+        rep.contact_seconds += dev_.wtime() - w2;
+    }
+}
+
+/// Load-curve factors at t (load patterns, pressure) and t + Δt (prescribed displacements), tool
+/// poses at t and t + Δt, t = t0 + step · time_dt; then the step counter advances.
+template <class T, class Dev>
+void Engine<T, Dev>::step_scalars(double time_dt, bool fixed_row) {
+    const DeviceView<T> v = v_;
+    dev_.serial([=] PLIANT_KERNEL() {
+        Scalars<T>& s = *v.sc;
+        const double t = s.t0 + static_cast<double>(s.step) * time_dt;
+        for (int c = 0; c < v.n_curves; ++c) v.cnext[c] = T(curve_value(v.curves[c], t + time_dt, v.tt, v.tv));
+        for (int p = 0; p < v.n_factors; ++p)
+            v.pf[p] = T(curve_value(v.curves[v.pattern_curve[p]], t, v.tt, v.tv));
+        for (int k = 0; k < v.n_tools; ++k) {
+            v.pose0[k] = tool_pose(v.tools[k], t, v.keys);
+            v.pose1[k] = tool_pose(v.tools[k], t + time_dt, v.keys);
+        }
+        s.row = fixed_row ? 0 : s.step;
+        s.step += 1;
+    });
+}
+
+/// Calls visit.template operator()<M, Variant>(group, material) for every material group: the one
+/// place where material kinds, viscoelasticity and T4ANP choose the element function.
+template <class T, class Dev>
+template <class Visitor>
+void Engine<T, Dev>::dispatch(Visitor&& visit) {
+    for (const Group<T>& g : groups_) {
+        with_material(g.material, [&](const auto& mat) {
+            using M = std::decay_t<decltype(mat)>;
+            if constexpr (M::decoupled) {
+                if (g.visco.terms() > 0) return visit.template operator()<M, Variant::Visco>(g, mat);
+                if (m_.anp) return visit.template operator()<M, Variant::Anp>(g, mat);
+            }
+            return visit.template operator()<M, Variant::Plain>(g, mat);
+        });
+    }
+}
+
+template <class T, class Dev>
+template <class M, Variant V>
+void Engine<T, Dev>::launch_pressure(const Group<T>& g, const M& mat, const T* u) {
+    if constexpr (V == Variant::Anp) {
+        const DeviceView<T> v = v_;
+        dev_.blocks(g.block_begin, g.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+            element_pressure(b, l, mat, v.el, u, v.P, v.elem_p);
+        });
+    }
+}
+
+template <class T, class Dev>
+template <class M, Variant V>
+void Engine<T, Dev>::launch_forces(const Group<T>& g, const M& mat, const T* u, int visco_mode,
+                                   double dt) {
+    const DeviceView<T> v = v_;
+    const Prony<T> pr = g.visco;
+    const T tdt = T(dt);
+    dev_.blocks(g.block_begin, g.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+        (void)pr, (void)tdt, (void)visco_mode, (void)v, (void)mat, (void)u;  // captured before any `if constexpr` (nvcc)
+        if constexpr (V == Variant::Visco) {
+            const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, visco_mode};
+            element_forces(b, l, vm, v.el, u, v.P, v.f_elem, v.J);
+        } else if constexpr (V == Variant::Anp) {
+            element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.f_elem, v.J);
+        } else {
+            element_forces(b, l, mat, v.el, u, v.P, v.f_elem, v.J);
+        }
+    });
+}
+
+/// Kernel 1 (element forces f_elem and J), or with T4ANP its three passes. visco_mode: 0 advance
+/// the Prony state by dt, 1 use it, 2 fully relaxed, 3 fully relaxed and stored (ViscoMaterial).
+template <class T, class Dev>
+void Engine<T, Dev>::forces(const T* u, int visco_mode, double dt) {
+    if (m_.anp) {
+        dispatch([&]<class M, Variant V>(const Group<T>& g, const M& mat) { launch_pressure<M, V>(g, mat, u); });
+        dev_.barrier();
+        const DeviceView<T> v = v_;
+        dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
+            v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.nodes.inc_index, v.elem_p, v.node_volume);
+        });
+    }
+    dispatch([&]<class M, Variant V>(const Group<T>& g, const M& mat) {
+        launch_forces<M, V>(g, mat, u, visco_mode, dt);
+    });
+    dev_.barrier();
+}
+
+/// Kernel 2: per node, gather the element forces, central-difference update (u_next), then the
+/// node's kinematic constraints; f_node_out (may be null) receives the internal forces.
+template <class T, class Dev>
+void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
+    const DeviceView<T> v = v_;
+    const NodeData<T> nd = relaxing ? v.relax_nodes : v.nodes;
+    const T* uc = v.u[ph.cur];
+    const T* up = v.u[ph.prev];
+    T* un = v.u[ph.next];
+    dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
+        node_update(n, nd, v.f_elem, v.pf, v.sc->it, uc, up, v.P, un, f_node_out);
+        for (index_t i = v.co[n]; i < v.co[n + 1]; ++i) apply_constraint(i, v.cdof, v.cval, v.ccurve, v.cnext, un);
+    });
+}
+
+/// Contact of the surface nodes with the rigid tools, in fixed chunks of nodes each summing its
+/// per-tool force and torque; then one thread adds the chunks in order into the step's history
+/// row (the same bits for any thread count).
+template <class T, class Dev>
+void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
+    const DeviceView<T> v = v_;
+    const T* mass = relaxing ? v.relax_mass : v.mass;
+    const T* uc = v.u[ph.cur];
+    T* un = v.u[ph.next];
+    dev_.each(v.chunks, [=] PLIANT_KERNEL(index_t c) {
+        const int w = 6 * v.n_tools;
+        double* h = v.chunk + static_cast<std::size_t>(c) * w;
+        for (int k = 0; k < w; ++k) h[k] = 0.0;
+        const index_t end = (c + 1) * kContactChunk < v.n_contact ? (c + 1) * kContactChunk : v.n_contact;
+        const double g1 = double(v.sc->it.g1);
+        for (index_t i = c * kContactChunk; i < end; ++i) {
+            contact_node(i, v.cnodes, v.cbits, v.X, mass, uc, v.P, v.tools, v.n_tools, v.pose0, v.pose1,
+                         v.grid, g1, un, v.cforce, v.ctool);
+            add_tool_reaction(i, v.cnodes, v.X, un, v.P, v.pose1, v.cforce, v.ctool, h);
+        }
+    });
+    dev_.serial([=] PLIANT_KERNEL() {
+        const int w = 6 * v.n_tools;
+        double* row = v.hist + v.sc->row * w;
+        for (int k = 0; k < w; ++k) {
+            double s = 0.0;
+            for (index_t c = 0; c < v.chunks; ++c) s += v.chunk[static_cast<std::size_t>(c) * w + k];
+            row[k] = s;
+        }
+    });
+}
+
+/// Stability check of the last step: an element slot with J ≤ 0 or NaN (J of the step's input, at
+/// t_elem), else a node whose new displacement is non-finite or beyond blowup [m] (at t_node); the
+/// smallest such index, so the verdict does not depend on the order of the search. Returns ok.
+template <class T, class Dev>
+bool Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, double blowup,
+                           RunReport& rep) {
+    const DeviceView<T> v = v_;
+    dev_.serial([=] PLIANT_KERNEL() { v.sc->bad_slot = v.sc->bad_node = INT_MAX; });
+    const index_t n = v.slots > v.n_nodes ? v.slots : v.n_nodes;
+    dev_.each(n, [=] PLIANT_KERNEL(index_t i) {
+        if (i < v.slots && v.elem_id[i] >= 0 && !(v.J[i] > T(0))) atomic_min(&v.sc->bad_slot, i);
+        if (i < v.n_nodes)
+            for (int d = 0; d < 3; ++d)
+                if (!(std::fabs(double(u_new[d * v.P + i])) <= blowup)) atomic_min(&v.sc->bad_node, i);
+    });
+    dev_.serial([=] PLIANT_KERNEL() {
+        Scalars<T>& s = *v.sc;
+        s.status = 0;
+        if (s.bad_slot != INT_MAX) {
+            s.status = static_cast<int>(RunStatus::Inverted);
+            s.where = v.elem_id[s.bad_slot];
+            s.value = double(v.J[s.bad_slot]);
+        } else if (s.bad_node != INT_MAX) {
+            for (int d = 2; d >= 0; --d) {  // the first offending component
+                const double x = double(u_new[d * v.P + s.bad_node]);
+                if (std::fabs(x) <= blowup) continue;
+                s.status = static_cast<int>(std::isfinite(x) ? RunStatus::BlowUp : RunStatus::NonFinite);
+                s.value = x;
+            }
+            s.where = s.bad_node;
+        }
+    });
+    const Scalars<T> s = dev_.read(v.sc);
+    if (s.status == 0) return true;
+    if (dev_.lead()) {
+        rep.status = static_cast<RunStatus>(s.status);
+        rep.where = s.where;
+        rep.value = s.value;
+        rep.t = rep.status == RunStatus::Inverted ? t_elem : t_node;
+    }
+    return false;
+}
+
+/// Dynamic relaxation's measures (Joldes, Wittek & Miller 2009, CMAME 198:3313, §3): the relative
+/// out-of-balance force on the free DOFs (external loads: patterns, follower pressure and contact,
+/// against the internal forces) and the adaptive damping α = 2 √(Rayleigh quotient of the
+/// stiffness change) from u and f at the step and the one before; α sets the integrator.
+template <class T, class Dev>
+void Engine<T, Dev>::relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev,
+                                   double dt) {
+    const DeviceView<T> v = v_;
+    if (v.n_tools) {  // contact forces are external loads at equilibrium
+        dev_.each(3 * v.P, [=] PLIANT_KERNEL(index_t i) { v.fcon[i] = 0.0; });
+        dev_.each(v.n_contact, [=] PLIANT_KERNEL(index_t c) {
+            if (v.ctool[c] < 0) return;
+            for (int d = 0; d < 3; ++d) v.fcon[d * v.P + v.cnodes[c]] = v.cforce[3 * c + d];
+        });
+    }
+    const index_t chunks = (v.n_nodes + kMeasureChunk - 1) / kMeasureChunk;
+    dev_.each(chunks, [=] PLIANT_KERNEL(index_t c) {
+        double sum[4] = {0.0, 0.0, 0.0, 0.0};  // residual², scale², Rayleigh numerator, denominator
+        const index_t end = (c + 1) * kMeasureChunk < v.n_nodes ? (c + 1) * kMeasureChunk : v.n_nodes;
+        for (index_t n = c * kMeasureChunk; n < end; ++n) {
+            T q[3];
+            pressure_force(n, v.relax_nodes, v.pf, u_cur, v.P, q);
+            for (int d = 0; d < 3; ++d) {
+                const std::size_t i = static_cast<std::size_t>(d) * v.P + n;
+                double r = double(q[d]) + (v.n_tools ? v.fcon[i] : 0.0);
+                for (int p = 0; p < v.nodes.n_patterns; ++p)
+                    r += double(v.pf[p]) * v.nodes.load_patterns[p * 3 * static_cast<std::size_t>(v.P) + i];
+                const double fm = v.free_mask[i], fc = f_cur[i];
+                const double du = double(u_cur[i]) - u_prev[i];
+                sum[0] += fm * (r - fc) * (r - fc);
+                sum[1] += r * r + (1.0 - fm) * fc * fc;
+                sum[2] += fm * du * (fc - f_prev[i]);
+                sum[3] += fm * double(v.relax_mass[n]) * du * du;
+            }
+        }
+        for (int k = 0; k < 4; ++k) v.partial[4 * c + k] = sum[k];
+    });
+    dev_.serial([=] PLIANT_KERNEL() {
+        double s[4] = {0.0, 0.0, 0.0, 0.0};
+        for (index_t c = 0; c < chunks; ++c)
+            for (int k = 0; k < 4; ++k) s[k] += v.partial[4 * c + k];
+        Scalars<T>& sc = *v.sc;
+        sc.residual = s[1] > 0.0 ? std::sqrt(s[0] / s[1]) : 0.0;
+        if (s[3] > 0.0) {
+            sc.alpha = 2.0 * std::sqrt(s[2] / s[3] > 0.0 ? s[2] / s[3] : 0.0);
+            sc.it = central_difference<T>(dt, sc.alpha);
+        }
+    });
+}
+
+template <class T, class Dev>
+void Engine<T, Dev>::copy(T* dst, const T* src, std::size_t n) {
+    dev_.each(static_cast<index_t>(n), [=] PLIANT_KERNEL(index_t i) { dst[i] = src[i]; });
+}
+
+template <class T, class Dev>
+void Engine<T, Dev>::fill(T* dst, T value, std::size_t n) {
+    dev_.each(static_cast<index_t>(n), [=] PLIANT_KERNEL(index_t i) { dst[i] = value; });
+}
+
+/// Per element slot: J, W, S, σ, E into out (20 values per builder element: J, W, S (6), σ (6),
+/// E (6)); viscoelastic groups use their stored state, T4ANP the averaged pressure.
+template <class T, class Dev>
+template <class M, Variant V>
+void Engine<T, Dev>::launch_measures(const Group<T>& g, const M& mat, const T* u, double dt, T* out) {
+    const DeviceView<T> v = v_;
+    const Prony<T> pr = g.visco;
+    const T tdt = T(dt);
+    dev_.blocks(g.block_begin, g.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+        (void)pr, (void)tdt, (void)mat, (void)u, (void)out;  // captured before any `if constexpr` (nvcc)
+        const index_t e = v.elem_id[b * kLanes + l];
+        if (e < 0) return;
+        ElementMeasures<T> r;
+        if constexpr (V == Variant::Visco) {
+            const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, 1};
+            r = element_measures(b, l, vm, v.el, u, v.P);
+        } else if constexpr (V == Variant::Anp) {
+            T p = T(0);
+            for (int a = 0; a < 4; ++a) p += v.node_p[v.el.nodes[aosoa(b, l, a, 4)]];
+            r = element_measures(b, l, AveragedPressure<M, T>{mat, p / T(4)}, v.el, u, v.P);
+        } else {
+            r = element_measures(b, l, mat, v.el, u, v.P);
+        }
+        T* o = out + 20 * static_cast<std::size_t>(e);
+        o[0] = r.J;
+        o[1] = r.energy;
+        const Sym3<T>* src[3] = {&r.S, &r.sigma, &r.E};
+        for (int k = 0; k < 3; ++k) {
+            const Sym3<T>& m = *src[k];
+            const T vals[6] = {m.xx, m.yy, m.zz, m.xy, m.yz, m.xz};
+            for (int c = 0; c < 6; ++c) o[2 + 6 * k + c] = vals[c];
+        }
+    });
+}
+
+}  // namespace pliant
