@@ -58,7 +58,7 @@ def main() -> None:
     for k, d in enumerate(depths):
         t = time.perf_counter()
         info = sim.solver.relax(sim.state, at_time=k + 1.0, tol=a.tol, strict=False)
-        F = 4 * sim.solver.relaxed_tool_forces[0][0][2]
+        F = 4 * sim.contact_report().relaxed[0][0][2]
         forces.append(F)
         a_c = math.sqrt(R * d)
         print(f"  δ/R = {d / R:.4f}  a/h = {a_c / (a.h * R):4.1f}  F/F_Hertz = {F / hertz(d):.4f}  "

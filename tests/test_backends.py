@@ -143,12 +143,13 @@ def test_tools_forces_and_contact_report(backend, kind):
     sa.run(until=T_END)
     sb.run(until=T_END)
     close(sa.displacements, sb.displacements, "float64", kind)
-    fa, fb = sa.solver.tool_histories[0].force, sb.solver.tool_histories[0].force
+    fa, fb = (s.contact_report().tools[0].force for s in (sa, sb))
     assert len(fa) == len(fb) == 400
     assert np.abs(fa[-1]).max() > 1e-4, "the tool should push on the bar"
     close(fa, fb, "float64", kind + " tool force history")
-    na, ta, ca = a.contact_forces()
-    nb, tb, cb = b.contact_forces()
+    ra, rb = sa.contact_report(), sb.contact_report()
+    na, ta, ca = ra.nodes, ra.node_tool, ra.node_force
+    nb, tb, cb = rb.nodes, rb.node_tool, rb.node_force
     assert (ta >= 0).any(), "some nodes touch the tool"
     np.testing.assert_array_equal(na, nb)
     np.testing.assert_array_equal(ta, tb)
@@ -188,7 +189,7 @@ def test_relax_with_a_tool(backend):
     assert ia.converged and ib.converged
     assert ia.steps == ib.steps  # the same decisions
     close(sa.displacements, sb.displacements, "float64", "relaxed")
-    close(sa.solver.relaxed_tool_forces[0][0], sb.solver.relaxed_tool_forces[0][0], "float64",
+    close(sa.contact_report().relaxed[0][0], sb.contact_report().relaxed[0][0], "float64",
           "relaxed tool force")
 
 

@@ -60,7 +60,7 @@ def test_block_slides_with_coulomb_acceleration(tan_theta, mu_k):
     a_ref = G * (math.sin(theta) - mu_k * math.cos(theta))
     # Elastic vibration of the block rides on the rigid-body motion: 3 %.
     assert a == pytest.approx(a_ref, rel=0.03)
-    H = sim.solver.tool_histories[0]
+    H = sim.contact_report().tools[0]
     f = H.force[H.time > 0.1].mean(axis=0)  # time average: the block rings on its contact
     W = model.mass.sum() * G
     # The plane feels the normal load W cos θ and the friction μk W cos θ down the slope (+x).
@@ -98,7 +98,7 @@ def test_moving_tool_momentum_matches_reported_impulse():
     model = b.finalize("float64")
     sim = pl.Simulation(model)
     sim.run(until=0.06)
-    H = sim.solver.tool_histories[0]
+    H = sim.contact_report().tools[0]
     impulse = -H.force.sum(axis=0) * sim.solver.dt
     p = np.sum(model.mass[:, None] * sim.velocities, axis=0)
     assert np.abs(impulse).max() > 1e-4  # the tool did push
@@ -124,7 +124,7 @@ def test_no_node_inside_a_pressing_tool(tool):
     sim = pl.Simulation(model)
     for k in range(10):
         sim.run(until=0.01 * (k + 1))
-        nodes, _, _ = model.contact_forces()
+        nodes = sim.contact_report().nodes
         assert tool.signed_distance(sim.positions[nodes], sim.time).min() > -1e-9
     assert sim.tool_force(0)[0][2] > 0  # the body pushes the tool up: force along +z
 

@@ -195,10 +195,10 @@ def test_state_load_checks_values(tmp_path):
 
 
 @pytest.mark.parametrize("call, text", [
-    (lambda s: s.step(2**70), "expected 0 to"),
-    (lambda s: s.step(-1), "expected 0 to"),
-    (lambda s: s.step(2.5), "whole number"),
-    (lambda s: s.step("10"), "whole number"),
+    (lambda s: s.run(steps=2**70), "expected 0 to"),
+    (lambda s: s.run(steps=-1), "expected 0 to"),
+    (lambda s: s.run(steps=2.5), "whole number"),
+    (lambda s: s.run(steps="10"), "whole number"),
     (lambda s: s.run(until=float("nan")), "until = nan; expected a finite number"),
     (lambda s: s.run(until=float("inf")), "until = inf; expected a finite number"),
     (lambda s: s.run(until=1e30), "steps"),

@@ -39,7 +39,7 @@ def hertz_forces():
     for k in range(len(DEPTHS)):
         # tol: relative out-of-balance force; 1e-4 and 1e-6 gave the same force to 5 digits.
         sim.solver.relax(sim.state, at_time=k + 1.0, tol=1e-5)
-        forces.append(4 * sim.solver.relaxed_tool_forces[0][0][2])   # quarter model → whole
+        forces.append(4 * sim.contact_report().relaxed[0][0][2])   # quarter model → whole
         f = sim.model.internal_forces(sim.state)
         reactions.append(4 * f[bottom, 2].sum())
         u = sim.displacements

@@ -130,7 +130,7 @@ def test_viewer_in_a_real_browser(chromium):
             while v._last_drag[1] == dragged_at and time.time() < deadline:
                 time.sleep(0.1)
             assert v._last_drag[1] > dragged_at, "the mouse drag did not reach the tool's gizmo"
-            target = v.model.tools[1].keys[-1][1:4]
+            target = v.sim.solver.tools[1].keys[-1][1:4]  # the solver owns the trajectories
             assert pos[2] - 0.035 < target[2] < pos[2] - 0.015  # dragged down by about 2.5 cm
             with v.lock:
                 v.sim.run(until=v.sim.time + 0.3)

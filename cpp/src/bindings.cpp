@@ -52,15 +52,34 @@ struct PyState {
     index_t n_nodes;
 };
 
-/// The model and the backend that steps it (cpu by default; use_backend switches).
+/// The static model (built once, immutable) and its CPU thread count.
 template <class T>
 struct Engine {
     Model<T> model;
     int threads;
-    std::unique_ptr<Backend<T>> backend;
-    Engine(const ModelInput& in, int threads_)
-        : model(in), threads(threads_), backend(make_cpu_backend(model, threads_)) {}
+    Engine(const ModelInput& in, int threads_) : model(in), threads(threads_) {
+        if (threads_ > thread_limit_value())
+            throw std::invalid_argument("threads = " + std::to_string(threads_) + ": expected 1 to " +
+                                        std::to_string(thread_limit_value()));
+    }
 };
+
+/// A backend stepping one model (a Solver owns one): "cpu", "cuda-emulated" or "cuda".
+template <class T>
+struct PyBackend {
+    const Engine<T>* engine;
+    std::unique_ptr<Backend<T>> backend;
+    Backend<T>* operator->() const { return backend.get(); }
+};
+
+template <class T>
+std::unique_ptr<Backend<T>> make_backend(const Engine<T>& e, const std::string& name, int device,
+                                         int threads) {
+    if (name == "cpu") return make_cpu_backend(e.model, threads > 0 ? threads : e.threads);
+    if (name == "cuda-emulated") return make_emulated_backend(e.model);
+    if (name == "cuda") return make_cuda_backend(e.model, device);
+    throw std::invalid_argument("backend '" + name + "': expected cpu, cuda-emulated or cuda");
+}
 
 // Node field (3, P) in the engine's padded SoA layout ↔ (N, 3) array.
 template <class T>
@@ -80,8 +99,10 @@ void scatter_nodes(const In<double>& a, std::vector<T>& soa, index_t n, index_t 
 }
 
 template <class T>
-void bind_engine(nb::module_& m, const char* engine_name, const char* state_name) {
+void bind_engine(nb::module_& m, const char* engine_name, const char* backend_name,
+                 const char* state_name) {
     using E = Engine<T>;
+    using B = PyBackend<T>;
     using S = PyState<T>;
     nb::class_<S>(m, state_name)
         .def_prop_ro("n_nodes", [](const S& s) { return s.n_nodes; })
@@ -191,7 +212,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
         .def_prop_ro("dt_critical", [](const E& e) { return e.model.dt_critical; })
         .def_prop_ro("dt_critical_element", [](const E& e) { return e.model.dt_critical_elem; })
         .def_prop_ro("bytes", [](const E& e) { return e.model.bytes(); })
-        .def_prop_ro("threads", [](const E& e) { return e.backend->threads(); })
+        .def_prop_ro("threads", [](const E& e) { return e.threads; })
         .def("new_state", [](const E& e) {
             const std::size_t q = static_cast<std::size_t>(e.model.n_blocks) * kLanes * 6 *
                                   static_cast<std::size_t>(e.model.visco_terms);
@@ -207,89 +228,84 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* state_name
             std::vector<T> m(e.model.mass.begin(), e.model.mass.begin() + e.model.n_nodes);
             return to_numpy(std::move(m), {size_t(e.model.n_nodes)});
         })
-        .def("step", [](E& e, const S& in, S& out, double dt, double alpha) {
+        .def("make_backend", [](const E& e, const std::string& name, int device, int threads) {
+            // A new backend for this model (the returned object keeps the model alive).
+            try {
+                return PyBackend<T>{&e, make_backend(e, name, device, threads)};
+            } catch (const std::invalid_argument& x) {
+                throw nb::value_error(x.what());
+            }
+        }, "name"_a, "device"_a = 0, "threads"_a = 0, nb::keep_alive<0, 1>());
+
+    nb::class_<B>(m, backend_name, "A backend stepping one model: run, step, relax, results, tools.")
+        .def("step", [](B& e, const S& in, S& out, double dt, double alpha) {
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e.backend->step(in.s, out.s, dt, alpha);
+                     r = e->step(in.s, out.s, dt, alpha);
                  }
                  return report(r);
              }, "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
-        .def("run", [](E& e, S& s, long n, double dt, double alpha, int check_every, double blowup) {
+        .def("run", [](B& e, S& s, long n, double dt, double alpha, int check_every, double blowup) {
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e.backend->run(s.s, n, dt, alpha, check_every, blowup);
+                     r = e->run(s.s, n, dt, alpha, check_every, blowup);
                  }
                  return report(r);
              })
-        .def("relax", [](E& e, S& s, double t_eval, double dt, double tol, long max_steps,
+        .def("relax", [](B& e, S& s, double t_eval, double dt, double tol, long max_steps,
                          int check_every, double blowup) {
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e.backend->relax(s.s, t_eval, dt, tol, max_steps, check_every, blowup);
+                     r = e->relax(s.s, t_eval, dt, tol, max_steps, check_every, blowup);
                  }
                  return report(r);
              })
-        .def("measures", [](E& e, const S& s) {
-            const size_t M = size_t(e.model.n_elems);
+        .def("measures", [](B& e, const S& s) {
+            const size_t M = size_t(e.engine->model.n_elems);
             ElementResults<T> r;
             {
                 nb::gil_scoped_release g;
-                r = e.backend->measures(s.s);
+                r = e->measures(s.s);
             }
             return nb::make_tuple(to_numpy(std::move(r.J), {M}), to_numpy(std::move(r.W), {M}),
                                   to_numpy(std::move(r.S), {M, 6}), to_numpy(std::move(r.sigma), {M, 6}),
                                   to_numpy(std::move(r.E), {M, 6}));
         })
-        .def("set_tool_keys", [](E& e, std::vector<std::vector<double>> keys) {
+        .def("set_tool_keys", [](B& e, std::vector<std::vector<double>> keys) {
             try {
-                e.backend->set_tool_keys(keys);
+                e->set_tool_keys(keys);
             } catch (const std::invalid_argument& x) {
                 throw nb::value_error(x.what());
             }
         })
-        .def("scale_materials", [](E& e, double factor) {
+        .def("scale_materials", [](B& e, double factor) {
             // Multiply every material's moduli by `factor` relative to the values at build time
             // (the viewer's stiffness slider). The critical time step scales by 1/sqrt(factor).
             if (!(factor > 0.0)) throw nb::value_error("factor must be > 0");
-            e.backend->scale_materials(factor);
+            e->scale_materials(factor);
         })
-        .def("use_backend", [](E& e, const std::string& name, int device) {
-            // Replace the backend: "cpu", "cuda-emulated" or "cuda" (device index). States stay
-            // on the host between calls, so existing states remain valid.
-            try {
-                if (name == "cpu")
-                    e.backend = make_cpu_backend(e.model, e.threads);
-                else if (name == "cuda-emulated")
-                    e.backend = make_emulated_backend(e.model);
-                else if (name == "cuda")
-                    e.backend = make_cuda_backend(e.model, device);
-                else
-                    throw std::invalid_argument("backend '" + name + "': expected cpu, cuda-emulated or cuda");
-            } catch (const std::invalid_argument& x) {
-                throw nb::value_error(x.what());
-            }
-        }, "name"_a, "device"_a = 0)
-        .def_prop_ro("backend", [](const E& e) { return e.backend->name(); })
-        .def("tool_history", [](const E& e) {
-            std::vector<double> h = e.backend->tool_history();
-            const size_t nt = e.model.tools.size();
+        .def_prop_ro("name", [](const B& e) { return e->name(); })
+        .def_prop_ro("threads", [](const B& e) { return e->threads(); })
+        .def("tool_history", [](const B& e) {
+            std::vector<double> h = e->tool_history();
+            const size_t nt = e.engine->model.tools.size();
             const size_t steps = nt ? h.size() / (6 * nt) : 0;
             return to_numpy(std::move(h), {steps, nt, 6});
         })
-        .def("contact_state", [](const E& e) {
-            std::vector<index_t> nodes = e.model.contact_nodes;
-            ContactReport c = e.backend->contact_report();
+        .def("contact_state", [](const B& e) {
+            std::vector<index_t> nodes = e.engine->model.contact_nodes;
+            ContactReport c = e->contact_report();
             const size_t n = nodes.size();
             return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(c.tool), {n}),
                                   to_numpy(std::move(c.force), {n, 3}));
         })
-        .def("internal_forces", [](E& e, const S& s) {
-            std::vector<T> f = e.backend->internal_forces(s.s);
-            return to_numpy(gather_nodes(f, e.model.n_nodes, e.model.n_pad),
-                            {size_t(e.model.n_nodes), 3});
+        .def("internal_forces", [](B& e, const S& s) {
+            std::vector<T> f = e->internal_forces(s.s);
+            return to_numpy(gather_nodes(f, e.engine->model.n_nodes, e.engine->model.n_pad),
+                            {size_t(e.engine->model.n_nodes), 3});
         });
 }
 
@@ -300,8 +316,8 @@ NB_MODULE(_core, m) {
     // Engines can still be referenced at interpreter exit (viewer threads are daemons); nanobind's
     // exit-time leak report is then noise, not a refcounting bug.
     nb::set_leak_warnings(false);
-    bind_engine<float>(m, "EngineF32", "StateF32");
-    bind_engine<double>(m, "EngineF64", "StateF64");
+    bind_engine<float>(m, "EngineF32", "BackendF32", "StateF32");
+    bind_engine<double>(m, "EngineF64", "BackendF64", "StateF64");
     m.attr("lanes") = kLanes;
     // The backends use_backend accepts: one engine (engine/engine.hpp) on three devices.
     m.attr("backends") = nb::make_tuple("cpu", "cuda-emulated", "cuda");
@@ -338,6 +354,12 @@ NB_MODULE(_core, m) {
         .value("Box", ToolKind::Box)
         .value("Grid", ToolKind::Grid)
         .value("Cylinder", ToolKind::Cylinder);
+    m.def("is_decoupled", [](MaterialKind kind) {
+        // Whether a material kind splits W into isochoric and volumetric parts (T4ANP and
+        // viscoelasticity need it): the engine's own M::decoupled, so Python restates no list.
+        const MaterialParams<double> p{kind, {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0}};
+        return with_material(p, [](const auto& mat) { return std::decay_t<decltype(mat)>::decoupled; });
+    }, "kind"_a);
     m.def("max_threads", []() { return omp_get_max_threads(); });
     m.def("thread_limit", &pliant::thread_limit_value, "Most CPU threads a solver accepts.");
     m.def("cuda_compiled", &pliant::cuda_compiled);

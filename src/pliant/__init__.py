@@ -14,13 +14,14 @@ from .errors import (BackendError, ConvergenceError, DegenerateElementError, Fil
 from .materials import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoHookean,
                         NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic,
                         Viscoelastic)
-from .tled import (Constant, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo, Simulation,
-                   SmoothRamp, Hilly, Solver, State, Step, Table)
+from .tled import (Constant, ContactReport, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo,
+                   Simulation, SmoothRamp, Hilly, Solver, State, Step, Table, ToolHistory)
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
+    "ContactReport", "ToolHistory",
     "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table",
     "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
     "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "Viscoelastic",

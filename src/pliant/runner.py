@@ -150,16 +150,13 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
         if model.tools:
             summary["tools"] = []
             hist = {}
-            for k, tool in enumerate(model.tools):
-                H = solver.tool_histories.get(k)
-                last = H.force[-1].tolist() if H is not None and len(H.time) else [0.0] * 3
-                if scene.static and getattr(solver, "relaxed_tool_forces", None):
-                    last = solver.relaxed_tool_forces[k][0].tolist()
-                peak = float(np.linalg.norm(H.force, axis=1).max()) if H is not None and len(H.time) else 0.0
-                summary["tools"].append({"name": tool.name, "force": last, "max_force": peak,
-                                         "torque": (H.torque[-1].tolist() if H is not None and
-                                                    len(H.time) else [0.0] * 3)})
-                if H is not None:
+            report = solver.contact_report()
+            for k, (tool, H) in enumerate(zip(model.tools, report.tools)):
+                force, torque = report.force(k)  # the equilibrium's after a relaxation
+                peak = float(np.linalg.norm(H.force, axis=1).max()) if len(H.time) else 0.0
+                summary["tools"].append({"name": tool.name, "force": force.tolist(), "max_force": peak,
+                                         "torque": torque.tolist()})
+                if len(H.time):
                     hist[tool.name] = {"time": H.time.tolist(), "force": H.force.tolist(),
                                        "torque": H.torque.tolist()}
             atomic_write_text(out / "tools.json", json.dumps(hist))

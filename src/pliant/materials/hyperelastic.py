@@ -43,6 +43,12 @@ class Material:
         raise NotImplementedError
 
     @property
+    def decoupled(self) -> bool:
+        """Whether W splits into isochoric and volumetric parts (what T4ANP and viscoelasticity
+        need); the engine says, per kind."""
+        return self.kind is not None and bool(_core.is_decoupled(self.kind))
+
+    @property
     def bulk_modulus(self) -> float:
         """Small-strain bulk modulus K = λ + 2μ/3 [Pa]."""
         return self.lam + 2.0 * self.mu / 3.0

@@ -12,7 +12,13 @@ from .hyperelastic import Material
 
 __all__ = ["Viscoelastic"]
 
-_DECOUPLED = ("NeoHookean", "MooneyRivlin", "Polynomial", "ArrudaBoyce", "TransverselyIsotropic")
+def decoupled_materials() -> list[str]:
+    """Names of the decoupled material classes (the engine decides which kinds are)."""
+    from . import hyperelastic as h
+
+    return [c.__name__ for c in vars(h).values() if isinstance(c, type) and issubclass(c, Material)
+            and isinstance(getattr(c, "kind", None), _core.MaterialKind)
+            and _core.is_decoupled(c.kind)]
 
 
 class Viscoelastic(Material):
@@ -24,9 +30,9 @@ class Viscoelastic(Material):
 
     def __init__(self, base: Material, iso=(), vol=()):
         c = "Viscoelastic"
-        if not isinstance(base, Material) or type(base).__name__ not in _DECOUPLED:
+        if not isinstance(base, Material) or isinstance(base, Viscoelastic) or not base.decoupled:
             raise MaterialError(f"{c}: base {shown(base)}; expected a decoupled material "
-                                f"({', '.join(_DECOUPLED)})")
+                                f"({', '.join(decoupled_materials())})")
         terms = []
         for name, series in (("iso", iso), ("vol", vol)):
             most = _core.prony_max // 2

@@ -3,7 +3,9 @@
 from .builder import ModelBuilder
 from .curves import Constant, LoadCurve, Ramp, SmoothRamp, Hilly, Step, Table
 from .model import Model, State
-from .solver import RelaxInfo, RunInfo, Simulation, Solver
+from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory
+from .solver import Simulation, Solver
 
 __all__ = ["ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
+           "ContactReport", "ToolHistory",
            "LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table"]

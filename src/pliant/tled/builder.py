@@ -302,12 +302,12 @@ class ModelBuilder:
                 if getattr(s.material, "prony", None):
                     raise MaterialError(f"element set {shown(s.name)}: viscoelastic materials and "
                                         "average nodal pressure (T4ANP) cannot be combined yet")
-                if type(s.material).__name__ in ("NeoHookeanCoupled", "StVenantKirchhoff",
-                                                 "LinearElastic"):
+                if not s.material.decoupled:
+                    from ..materials.viscoelastic import decoupled_materials
+
                     raise MaterialError(f"element set {shown(s.name)}: {type(s.material).__name__} has no "
                                         "separate volumetric term; average nodal pressure (T4ANP) "
-                                        "needs a decoupled material (NeoHookean, MooneyRivlin, "
-                                        "Polynomial, ArrudaBoyce, TransverselyIsotropic)")
+                                        f"needs a decoupled material ({', '.join(decoupled_materials())})")
         X = np.ascontiguousarray(self.nodes)
         T32 = np.ascontiguousarray(self.tets.astype(np.int32))
         vol, alt = _core.tet_geometry(X, T32)
@@ -335,6 +335,5 @@ class ModelBuilder:
                 f"{inverted.size} inverted element(s) in all", e)
         check_backend(backend)
         model = Model(self, owner, dtype, threads, geometry=(vol, alt))
-        if backend != "cpu":
-            model.use_backend(backend, device)
+        model._set_default_backend(backend, device)
         return model

@@ -248,6 +248,10 @@ class Model:
             raise MeshError(f"{builder.source}: {e}") from None
         self.n_nodes, self.n_elements = N, M
         self.fingerprint = _fingerprint(X, T, self.sets, dtype, self._cons_user)
+        # Results (stresses, internal forces) of any state, computed on the host.
+        self._results = self._engine.make_backend("cpu", 0, 0)
+        self._backend, self._device = "cpu", 0  # the default backend of its solvers
+        self._solver = None                     # weak reference: the last solver that ran
         self.dt_critical = float(self._engine.dt_critical)
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
@@ -290,48 +294,72 @@ class Model:
         """Engine memory for the model's arrays [bytes] (states and scratch not included)."""
         return int(self._engine.bytes)
 
-    # --- states and results --------------------------------------------------------------------
+    # --- backends, states and results -----------------------------------------------------------
     @property
     def backend(self) -> str:
-        """Where this model's steps, relaxations and results run: "cpu", "cuda" or "cuda-emulated"."""
-        return str(self._engine.backend)
+        """The backend a Solver of this model uses unless told otherwise: "cpu", "cuda" or
+        "cuda-emulated" (``finalize(backend=...)``)."""
+        return self._backend
 
-    def use_backend(self, backend: str, device: int = 0):
-        """Run this model on ``backend`` (one of :data:`BACKENDS`): "cpu" (OpenMP + SIMD), "cuda"
-        (CUDA device ``device``) or "cuda-emulated" (the CUDA backend's engine run on the host, for
-        tests and debugging: slow). Every feature runs on each. States stay valid across a switch.
-        Raises BackendError if this build has no CUDA backend or the machine no GPU."""
+    @property
+    def device(self) -> int:
+        """The CUDA device a Solver of this model uses unless told otherwise."""
+        return self._device
+
+    def make_backend(self, backend: str | None = None, device: int | None = None):
+        """A new engine backend stepping this model (what a Solver owns): ``backend`` one of
+        :data:`BACKENDS` (default :attr:`backend`). Raises BackendError if this build has no CUDA
+        backend or the machine no such GPU."""
         from ..errors import BackendError
 
+        name = check_backend(self._backend if backend is None else backend)
+        dev = self._device if device is None else int(device)
         try:
-            self._engine.use_backend(check_backend(backend), int(device))
+            return self._engine.make_backend(name, dev, self.threads)
         except ValueError as e:
-            raise BackendError(f"backend {backend!r}: {e}") from None
+            raise BackendError(f"backend {name!r}: {e}") from None
+
+    def use_backend(self, backend: str, device: int = 0):
+        """Deprecated: the Solver owns its backend (``Solver(model, backend=...)``, or
+        ``finalize(backend=...)`` for every solver of the model). Sets the default."""
+        warnings.warn("Model.use_backend() is deprecated; pass backend= to Solver or finalize()",
+                      DeprecationWarning, stacklevel=2)
+        self._set_default_backend(backend, device)
+
+    def _set_default_backend(self, backend: str, device: int = 0):
+        if check_backend(backend) != "cpu":
+            self.make_backend(backend, device)  # refuses an unusable one now, by name
+        self._backend, self._device = backend, int(device)
 
     def use_cuda(self, device: int = 0):
-        """Deprecated: ``use_backend("cuda", device)``."""
-        import warnings
-
-        warnings.warn("Model.use_cuda(d) is deprecated; use Model.use_backend('cuda', d)",
+        """Deprecated: ``Solver(model, backend="cuda", device=d)``."""
+        warnings.warn("Model.use_cuda(d) is deprecated; use Solver(model, backend='cuda', device=d)",
                       DeprecationWarning, stacklevel=2)
-        self.use_backend("cuda", device)
+        self._set_default_backend("cuda", device)
+
+    def _last_solver(self, what: str):
+        warnings.warn(f"Model.{what} is deprecated; use Solver.contact_report() (one report of tool "
+                      "forces and contact)", DeprecationWarning, stacklevel=3)
+        solver = self._solver() if self._solver else None
+        if solver is None:
+            raise InputError(f"Model.{what}: no solver has run this model")
+        return solver
 
     def set_tool_keys(self):
-        """Send the tools' keyframes to the engine (after changing a trajectory)."""
-        self._engine.set_tool_keys([t.key_array().tolist() for t in self.tools])
+        """Deprecated: ``Solver.set_tool_keys()`` (tool trajectories belong to the solver)."""
+        solver = self._last_solver("set_tool_keys()")
+        for mine, theirs in zip(self.tools, solver.tools):
+            theirs.keys, theirs._fixed = list(mine.keys), mine._fixed
+        solver.set_tool_keys()
 
     def tool_history(self) -> np.ndarray:
-        """Force [N] and torque [N·m] received by each tool at each step of the last run, shape
-        (steps, tools, 6)."""
-        return np.asarray(self._engine.tool_history())
+        """Deprecated: ``Solver.contact_report().tools``."""
+        return np.asarray(self._last_solver("tool_history()")._backend.tool_history())
 
     def contact_forces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Last step: contact nodes (user numbering), tool index per node (−1: no contact), force
-        the tool exerts on each node [N] (n, 3)."""
-        nodes, tool, f = self._engine.contact_state()
-        tool, f = np.asarray(tool), np.array(f)
-        f[tool < 0] = 0.0
-        return self._node_order[np.asarray(nodes)], tool, f
+        """Deprecated: ``Solver.contact_report()`` (nodes, node_tool, node_force)."""
+        r = self._last_solver("contact_forces()").contact_report()
+        return r.nodes, r.node_tool, r.node_force
 
     def state(self) -> "State":
         """A new state at rest, t = 0, zero displacement."""
@@ -340,7 +368,7 @@ class Model:
     def element_results(self, state: "State") -> dict[str, np.ndarray]:
         """Per element (user order): ``J``; ``energy_density`` W [Pa]; ``pk2`` S, ``cauchy`` σ [Pa] and
         ``green_strain`` E, each (M, 6) as xx, yy, zz, xy, yz, xz; ``von_mises`` [Pa] (M,)."""
-        J, W, S, sig, E = self._engine.measures(state._s)
+        J, W, S, sig, E = self._results.measures(state._s)
         out = {k: self.to_user_elements(np.asarray(v, dtype=float)) for k, v in
                dict(J=J, energy_density=W, pk2=S, cauchy=sig, green_strain=E).items()}
         s = out["cauchy"]
@@ -356,7 +384,7 @@ class Model:
     def internal_forces(self, state: "State") -> np.ndarray:
         """Internal nodal forces f(u) [N], (N, 3); at constrained DOFs of an equilibrium state they
         are the reaction forces the supports exert, with opposite sign."""
-        return self.to_user_nodes(np.asarray(self._engine.internal_forces(state._s), dtype=float))
+        return self.to_user_nodes(np.asarray(self._results.internal_forces(state._s), dtype=float))
 
     def strain_energy(self, state: "State") -> float:
         """Total strain energy Σ V0 W [J]."""

@@ -8,7 +8,8 @@ and dynamic relaxation for quasi-static solutions.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import copy
+import weakref
 
 import numpy as np
 
@@ -16,6 +17,7 @@ from .._core import RunStatus
 from ..checks import finite_number, finite_vector, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
+from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory
 
 __all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation", "MAX_STEPS"]
 
@@ -41,43 +43,19 @@ def _check_model(model, who: str) -> None:
         raise InputError(f"{who}: got a {type(model).__name__}; expected a pliant Model{hint}")
 
 
-@dataclass
-class RunInfo:
-    steps: int
-    time: float  # [s]
-    element_seconds: float = 0.0  # wall time in kernel 1 (element forces) [s]
-    node_seconds: float = 0.0  # wall time in kernel 2 (gather + update + constraints) [s]
-    contact_seconds: float = 0.0  # wall time in the contact kernel [s]
-
-
-@dataclass
-class ToolHistory:
-    """Per tool: ``time`` [s] (steps,), ``force`` [N] (steps, 3), ``torque`` [N·m] (steps, 3)."""
-
-    name: str
-    time: np.ndarray
-    force: np.ndarray
-    torque: np.ndarray
-
-
-@dataclass
-class RelaxInfo:
-    steps: int
-    residual: float  # ||r − f|| on free DOFs / ||(r, reactions)||
-    converged: bool
-    damping: float  # final adaptive α [1/s]
-
-
 class Solver:
     """Explicit solver for a :class:`Model`.
 
     dt: time step [s]; default ``safety × model.dt_critical``. A dt above the critical step is refused
     (:class:`TimeStepError`) unless ``allow_unstable=True``. damping: α [1/s], default the model's.
-    check_every: steps between stability checks (NaN, J ≤ 0, blow-up).
+    check_every: steps between stability checks (NaN, J ≤ 0, blow-up). backend: where it runs,
+    "cpu", "cuda" (CUDA device ``device``) or "cuda-emulated" (default: the model's, from
+    ``finalize``); the solver owns its backend and its own copy of the tools' trajectories.
     """
 
     def __init__(self, model: Model, dt: float | None = None, safety: float = 0.8,
-                 damping: float | None = None, allow_unstable: bool = False, check_every: int = 16):
+                 damping: float | None = None, allow_unstable: bool = False, check_every: int = 16,
+                 backend: str | None = None, device: int | None = None):
         _check_model(model, "Solver(model)")
         self.model = model
         if not (0 < safety <= 1):
@@ -102,7 +80,59 @@ class Solver:
         X = model.reference_positions
         # Blow-up: any displacement beyond 100 × the body's size.
         self.blowup = 100.0 * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
-        self.tool_histories: dict[int, ToolHistory] = {}
+        self._histories = [ToolHistory(t.name) for t in model.tools]
+        self._relaxed: list | None = None
+        self.tools = [copy.copy(t) for t in model.tools]  # trajectories: set_tool_pose edits them
+        for t in self.tools:
+            t.keys = [np.array(k, copy=True) for k in t.keys]
+        self._backend = model.make_backend(backend, device)
+
+    @property
+    def backend(self) -> str:
+        """The backend this solver runs on: "cpu", "cuda" or "cuda-emulated"."""
+        return str(self._backend.name)
+
+    def _ran(self):
+        self.model._solver = weakref.ref(self)
+
+    def set_tool_keys(self):
+        """Send the solver's tool trajectories (``solver.tools[k].keys``) to its backend."""
+        self._backend.set_tool_keys([t.key_array().tolist() for t in self.tools])
+
+    def scale_materials(self, factor: float):
+        """Multiply every material's moduli by ``factor`` relative to the model's (a stiffness
+        slider); the critical time step scales by 1/√factor: keep dt below it."""
+        factor = finite_number(factor, "factor")
+        if not factor > 0:
+            raise InputError(f"factor = {shown(factor)}; expected > 0")
+        self._backend.scale_materials(factor)
+
+    def contact_report(self) -> ContactReport:
+        """The tools' force histories, the last step's contact forces per node and, after a
+        relaxation, the equilibrium tool forces (:class:`ContactReport`)."""
+        nodes, tool, f = self._backend.contact_state()
+        tool, f = np.asarray(tool), np.array(f)
+        f[tool < 0] = 0.0
+        return ContactReport(self._histories, self.model._node_order[np.asarray(nodes)], tool, f,
+                             self._relaxed)
+
+    @property
+    def tool_histories(self) -> dict[int, ToolHistory]:
+        """Deprecated: ``contact_report().tools``."""
+        import warnings
+
+        warnings.warn("Solver.tool_histories is deprecated; use Solver.contact_report().tools",
+                      DeprecationWarning, stacklevel=2)
+        return dict(enumerate(self._histories))
+
+    @property
+    def relaxed_tool_forces(self):
+        """Deprecated: ``contact_report().relaxed``."""
+        import warnings
+
+        warnings.warn("Solver.relaxed_tool_forces is deprecated; use Solver.contact_report().relaxed",
+                      DeprecationWarning, stacklevel=2)
+        return self._relaxed
 
     def _raise(self, rep: dict):
         m, t, v, status = self.model, rep["t"], rep["value"], rep["status"]
@@ -140,7 +170,9 @@ class Solver:
         if dt > self.model.dt_critical and self.dt <= self.model.dt_critical:
             raise TimeStepError(f"dt = {dt:.4g} s exceeds the critical time step "
                                 f"{self.model.dt_critical:.4g} s")
-        rep = self.model._engine.step(state_in._s, state_out._s, dt, self.damping)
+        rep = self._backend.step(state_in._s, state_out._s, dt, self.damping)
+        self._ran()
+        self._relaxed = None
         if rep["status"]:
             self._raise(rep)
 
@@ -160,8 +192,10 @@ class Solver:
         if steps == 0:
             return RunInfo(0, state.time)
         t0 = state.time
-        rep = self.model._engine.run(state._s, steps, self.dt, self.damping, self.check_every,
-                                     self.blowup)
+        rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every,
+                                self.blowup)
+        self._ran()
+        self._relaxed = None
         self._record_tools(t0, int(rep["steps"]))
         if rep["status"]:
             self._raise(rep)
@@ -171,11 +205,9 @@ class Solver:
     def _record_tools(self, t0: float, steps: int):
         if not self.model.tools:
             return
-        h = self.model.tool_history()[:steps]
+        h = np.asarray(self._backend.tool_history())[:steps]
         t = t0 + self.dt * np.arange(1, steps + 1)
-        for k, tool in enumerate(self.model.tools):
-            H = self.tool_histories.setdefault(k, ToolHistory(tool.name, np.zeros(0), np.zeros((0, 3)),
-                                                              np.zeros((0, 3))))
+        for k, H in enumerate(self._histories):
             H.time = np.concatenate([H.time, t])
             H.force = np.concatenate([H.force, h[:, k, :3]])
             H.torque = np.concatenate([H.torque, h[:, k, 3:]])
@@ -188,11 +220,9 @@ class Solver:
         return int(k)
 
     def tool_force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
-        """Force [N] and torque [N·m] tool k received at the last step (zeros before any step)."""
-        H = self.tool_histories.get(self._tool_index(k))
-        if H is None or len(H.time) == 0:
-            return np.zeros(3), np.zeros(3)
-        return H.force[-1].copy(), H.torque[-1].copy()
+        """Force [N] and torque [N·m] tool k received at the last step, or at the equilibrium after
+        a relaxation (zeros before any step): ``contact_report().force(k)``."""
+        return self.contact_report().force(self._tool_index(k))
 
     def relax(self, state: State, at_time: float | None = None, tol: float = 1e-5,
               max_steps: int = 200_000, increments: int = 1, check_every: int = 10,
@@ -217,17 +247,17 @@ class Solver:
             raise InputError(f"max_steps = {shown(max_steps)}; expected 1 to {MAX_STEPS:.0e}")
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
-            rep = self.model._engine.relax(state._s, float(t), self.dt, float(tol), int(max_steps),
-                                           int(check_every), self.blowup)
+            rep = self._backend.relax(state._s, float(t), self.dt, float(tol), int(max_steps),
+                                      int(check_every), self.blowup)
+            self._ran()
             steps += int(rep["steps"])
             if rep["status"]:
                 self._raise(rep)
         info = RelaxInfo(steps, float(rep["residual"]), rep["residual"] < tol,
                          float(rep["damping"]))
         if self.model.tools:  # the equilibrium contact forces
-            h = self.model.tool_history()[0]
-            self.relaxed_tool_forces = [(h[k, :3].copy(), h[k, 3:].copy())
-                                        for k in range(len(self.model.tools))]
+            h = np.asarray(self._backend.tool_history())[0]
+            self._relaxed = [(h[k, :3].copy(), h[k, 3:].copy()) for k in range(len(self.model.tools))]
         if strict and not info.converged:
             if self.model.dtype == np.float32 and info.residual < 1e-3:
                 hint = "the float32 round-off floor: use float64 for tighter tolerances"
@@ -325,7 +355,7 @@ class Simulation:
         this one, then stays. The move takes at least one step, and longer if needed to keep the
         tool's speed under 0.1 × the smallest element altitude per step (a sudden jump deeper than
         an element would invert it)."""
-        tool = self.model.tools[self.solver._tool_index(k)]
+        tool = self.solver.tools[self.solver._tool_index(k)]
         R, p = tool.pose(self.state.time)
         from ..contact import quat_from_matrix
 
@@ -336,11 +366,15 @@ class Simulation:
         tool.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
         tool._fixed = False
         tool.at(t + duration, target, rotation)
-        self.model.set_tool_keys()
+        self.solver.set_tool_keys()
 
     def tool_force(self, k: int = 0):
-        """(force [N], torque [N·m]) tool k received at the last step."""
+        """(force [N], torque [N·m]) tool k received: ``contact_report().force(k)``."""
         return self.solver.tool_force(k)
+
+    def contact_report(self) -> ContactReport:
+        """The solver's :class:`ContactReport`."""
+        return self.solver.contact_report()
 
     def save(self, path):
         self.state.save(path)

@@ -120,9 +120,9 @@ class LiveViewer:
             with self.lock:
                 self.sim.state = self.model.state()
                 self.error = ""
-                for k, t in enumerate(self.model.tools):
+                for k, t in enumerate(self.sim.solver.tools):
                     t.keys = [k0.copy() for k0 in self._initial_keys[k]]
-                self.model.set_tool_keys() if self.model.tools else None
+                self.sim.solver.set_tool_keys() if self.model.tools else None
 
         @self.field_dropdown.on_update
         def _(_):
@@ -131,7 +131,7 @@ class LiveViewer:
         @self.stiffness.on_update
         def _(_):
             with self.lock:
-                self.model._engine.scale_materials(float(self.stiffness.value))
+                self.sim.solver.scale_materials(float(self.stiffness.value))
                 # Stiffer material, faster waves: the stable step shrinks as 1/sqrt(factor).
                 self.sim.solver.dt = self.dt0 / np.sqrt(max(1.0, float(self.stiffness.value)))
 
@@ -142,7 +142,7 @@ class LiveViewer:
 
     def _build_scene(self):
         sc = self.server.scene
-        self._initial_keys = [[k.copy() for k in t.keys] for t in self.model.tools]
+        self._initial_keys = [[k.copy() for k in t.keys] for t in self.sim.solver.tools]
         self.controls = []
         ext = float(np.ptp(self.model.reference_positions, axis=0).max())
         for k, tool in enumerate(self.model.tools):
@@ -213,7 +213,7 @@ class LiveViewer:
             u = self.sim.displacements
             t = self.sim.time
             forces = [self.sim.tool_force(k) for k in range(len(self.model.tools))]
-            poses = [tool.pose(t) for tool in self.model.tools]
+            poses = [tool.pose(t) for tool in self.sim.solver.tools]
         if self.embedding is not None:  # the fine surface follows the tets
             emb = self.embedding
             V, F = emb.positions(self.model.tets, P), emb.faces

@@ -1,0 +1,64 @@
+"""What a solver's runs report: run and relaxation outcomes, and the one contact report (tool force
+histories, the last step's contact forces per node, the equilibrium forces of a relaxation)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class RunInfo:
+    steps: int
+    time: float  # [s]
+    element_seconds: float = 0.0  # wall time in kernel 1 (element forces) [s]
+    node_seconds: float = 0.0  # wall time in kernel 2 (gather + update + constraints) [s]
+    contact_seconds: float = 0.0  # wall time in the contact kernel [s]
+
+
+@dataclass
+class RelaxInfo:
+    steps: int
+    residual: float  # ||r − f|| on free DOFs / ||(r, reactions)||
+    converged: bool
+    damping: float  # final adaptive α [1/s]
+
+
+@dataclass
+class ToolHistory:
+    """Per tool: ``time`` [s] (steps,), ``force`` [N] (steps, 3), ``torque`` [N·m] (steps, 3) about
+    the tool's position, as received by the tool at each step run so far."""
+
+    name: str
+    time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    torque: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+
+@dataclass
+class ContactReport:
+    """Everything a solver knows about contact with its rigid tools (``Solver.contact_report()``).
+
+    ``tools``: a :class:`ToolHistory` per tool (every step run so far). ``nodes``: the contact
+    nodes (user numbering) (n,); ``node_tool``: the tool touching each at the last step (−1: none)
+    (n,); ``node_force``: the force that tool exerts on it [N] (n, 3). ``relaxed``: after
+    ``Solver.relax``, per tool (force [N], torque [N·m]) at the equilibrium; else None.
+    """
+
+    tools: list[ToolHistory]
+    nodes: np.ndarray
+    node_tool: np.ndarray
+    node_force: np.ndarray
+    relaxed: list[tuple[np.ndarray, np.ndarray]] | None = None
+
+    def force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """(force [N], torque [N·m]) tool k received: at the equilibrium if the last call was a
+        relaxation, else at the last step (zeros before any step)."""
+        if self.relaxed is not None:
+            f, m = self.relaxed[k]
+            return f.copy(), m.copy()
+        H = self.tools[k]
+        if len(H.time) == 0:
+            return np.zeros(3), np.zeros(3)
+        return H.force[-1].copy(), H.torque[-1].copy()

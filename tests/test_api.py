@@ -1,0 +1,123 @@
+"""One vocabulary: the same verbs on Solver and Simulation, old names still working with a
+DeprecationWarning, and the one contact report."""
+
+import numpy as np
+import pytest
+
+import pliant as pl
+from pliant.contact import Sphere
+
+
+def _model(backend="cpu"):
+    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (10, 2, 2))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=2e4, nu=0.45), density=1000.0)
+    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
+    b.set_gravity((0.0, 0.0, -9.81))
+    b.add_tool(Sphere(0.01).at(0.0, (0.06, 0.01, -0.0101)).at(0.02, (0.06, 0.01, -0.008)))
+    return b.finalize("float64", backend=backend)
+
+
+def test_simulation_verbs_match_the_solver():
+    m = _model()
+    sim = pl.Simulation(m, dt=1e-4)
+    assert sim.dt == sim.solver.dt == 1e-4
+    sim.step()
+    assert sim.time == pytest.approx(1e-4)
+    sim.run(steps=9)
+    sim.run(until=0.002)
+    assert sim.time == pytest.approx(0.002)
+    ref = m.state()
+    solver = pl.Solver(m, dt=1e-4)
+    solver.run(ref, until=0.002)
+    # three calls restart the time as t0 + kΔt from different t0: the tool's keyframed pose sees
+    # times a few ulps apart, so equal to round-off, not bitwise
+    np.testing.assert_allclose(sim.displacements, ref.displacements, rtol=1e-9, atol=1e-18)
+    info = sim.relax(tol=1e-6)
+    assert isinstance(info, pl.RelaxInfo) and info.converged
+
+
+@pytest.mark.parametrize("call, new", [
+    (lambda s: s.run_to(0.001), "run(until=t)"),
+    (lambda s: s.solve_static(tol=1e-3), "relax()"),
+    (lambda s: s.step(3), "run(steps=n)"),
+    (lambda s: s.solver.tool_histories, "contact_report().tools"),
+    (lambda s: s.model.use_cuda(0), "Solver(model, backend='cuda'"),
+])
+def test_old_names_warn_and_still_work(call, new):
+    sim = pl.Simulation(_model(), dt=1e-4)
+    with pytest.warns(DeprecationWarning, match=new.replace("(", r"\(").replace(")", r"\)")):
+        try:
+            call(sim)
+        except pl.BackendError:  # use_cuda without a GPU: warned first, then refused by name
+            pass
+
+
+def test_contact_report_is_one_object():
+    sim = pl.Simulation(_model(), dt=1e-4)
+    sim.run(until=0.02)
+    r = sim.contact_report()
+    assert isinstance(r, pl.ContactReport) and r.relaxed is None
+    H = r.tools[0]
+    assert len(H.time) == 200 and H.force.shape == (200, 3)
+    f, m = r.force(0)
+    np.testing.assert_array_equal(f, H.force[-1])
+    np.testing.assert_array_equal(sim.tool_force(0)[0], f)
+    touching = r.node_tool >= 0
+    assert touching.any()
+    # The tool receives the opposite of what it exerts on the nodes (Newton's third law).
+    np.testing.assert_allclose(-r.node_force[touching].sum(axis=0), f, rtol=1e-12, atol=1e-15)
+    sim.relax(at_time=0.02, tol=1e-7)
+    r = sim.contact_report()
+    assert r.relaxed is not None
+    np.testing.assert_array_equal(r.force(0)[0], r.relaxed[0][0])
+
+
+def test_solvers_own_their_backends_and_tool_trajectories():
+    """Two solvers of one (static) model: different backends, one tool moved in one of them only."""
+    m = _model()
+    a, b = pl.Simulation(m, dt=1e-4), pl.Simulation(m, dt=1e-4, backend="cuda-emulated")
+    assert (a.solver.backend, b.solver.backend, m.backend) == ("cpu", "cuda-emulated", "cpu")
+    b.set_tool_pose(0, (0.06, 0.01, -0.006))
+    a.run(until=0.02)
+    b.run(until=0.02)
+    assert m.tools[0].keys[-1][0] == 0.02  # the model's trajectory is untouched
+    peak = [np.abs(s.contact_report().tools[0].force[:, 2]).max() for s in (a, b)]
+    assert peak[1] > peak[0] > 0  # the deeper tool pushed harder
+
+
+def test_scene_key_lambda_is_deprecated_for_lam(tmp_path):
+    from pliant.scene import load_scene
+
+    text = '''[mesh]
+primitive = "box"
+size = [0.1, 0.02, 0.02]
+cells = [4, 1, 1]
+[[material]]
+type = "st-venant-kirchhoff"
+mu = 1000.0
+{key} = 2000.0
+density = 1000.0
+[solver]
+duration = 0.01
+'''
+    for key, warns in (("lam", False), ("lambda", True)):
+        p = tmp_path / f"{key}.toml"
+        p.write_text(text.format(key=key))
+        with pytest.warns(pl.PliantWarning, match="'lam'") if warns else _no_warning():
+            scene = load_scene(p)
+        assert scene.builder.sets[0].material.lam == 2000.0
+
+
+class _no_warning:
+    def __enter__(self):
+        import warnings
+
+        self._w = warnings.catch_warnings()
+        self._w.__enter__()
+        warnings.simplefilter("error")
+
+    def __exit__(self, *exc):
+        self._w.__exit__(*exc)
+        return False
