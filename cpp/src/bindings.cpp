@@ -347,6 +347,12 @@ NB_MODULE(_core, m) {
         .value("NonFinite", RunStatus::NonFinite)
         .value("Inverted", RunStatus::Inverted)
         .value("BlowUp", RunStatus::BlowUp);
+    nb::enum_<ViscoMode>(m, "ViscoMode", nb::is_arithmetic(),
+                         "What a viscoelastic element does with its Prony state in a pass.")
+        .value("Advance", ViscoMode::Advance)
+        .value("Stored", ViscoMode::Stored)
+        .value("Relaxed", ViscoMode::Relaxed)
+        .value("RelaxedStore", ViscoMode::RelaxedStore);
     nb::enum_<ToolKind>(m, "ToolKind", nb::is_arithmetic(), "Rigid tool shapes.")
         .value("Plane", ToolKind::Plane)
         .value("Sphere", ToolKind::Sphere)

@@ -319,13 +319,20 @@ struct Prony {
     PLIANT_HD int terms() const { return n_iso + n_vol; }  // 0: elastic
 };
 
+/// How a viscoelastic element treats its Prony state (ViscoMaterial::mode).
+enum class ViscoMode : int {
+    Advance = 0,       // a time step: advance the state by Δt
+    Stored = 1,        // use the stored state (outputs, reactions)
+    Relaxed = 2,       // fully relaxed, D_i = α_i S_e (quasi-static solutions)
+    RelaxedStore = 3,  // the same, and store it (the state after a quasi-static solution)
+};
+
 /// Visco-hyperelastic response of a decoupled material (Taylor et al. 2009, "Modelling anisotropic
 /// viscoelasticity for real-time soft tissue simulation", MICCAI, eqs. 9-12; NiftySim's NHV): each
 /// Prony term keeps a stress-like state D_i, advanced per step by backward Euler,
 /// D_i ← τ_i/(Δt + τ_i) D_i + Δt α_i/(Δt + τ_i) S_e (S_e its isochoric or volumetric elastic part),
-/// and S = S_e,iso + S_e,vol − Σ D_i. mode 0: advance the state (a time step); 1: use the stored
-/// state (outputs, reactions); 2: fully relaxed, D_i = α_i S_e (quasi-static solutions); 3: the
-/// same, and store it (the state after a quasi-static solution).
+/// and S = S_e,iso + S_e,vol − Σ D_i. `mode` (ViscoMode): advance the state, use it, or the fully
+/// relaxed response D_i = α_i S_e (and store it).
 /// q: the element's 6·(n_iso + n_vol) state values, stride `stride` between components.
 template <class M, class T>
 struct ViscoMaterial {
@@ -333,7 +340,8 @@ struct ViscoMaterial {
     const Prony<T>& pr;
     T dt;
     T* q;
-    int stride, mode;
+    int stride;
+    ViscoMode mode;
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         const Sym3<T> Ci = inverse_cauchy_green(k);
         const Sym3<T> Se[2] = {m.pk2_iso(k, Ci), scale(k.J * m.pressure(k), Ci)};
@@ -348,10 +356,10 @@ struct ViscoMaterial {
                                 Se[part].xz};
                 T D[6];
                 for (int c = 0; c < 6; ++c) {
-                    if (mode >= 2) {
+                    if (mode == ViscoMode::Relaxed || mode == ViscoMode::RelaxedStore) {
                         D[c] = pr.alpha[t] * e[c];
-                        if (mode == 3) d[c * stride] = D[c];
-                    } else if (mode == 1) {
+                        if (mode == ViscoMode::RelaxedStore) d[c * stride] = D[c];
+                    } else if (mode == ViscoMode::Stored) {
                         D[c] = d[c * stride];
                     } else {
                         const T den = dt + pr.tau[t];

@@ -70,14 +70,16 @@ public:
     void* allocate(std::size_t bytes) {
         void* p = nullptr;
         cuda_detail::check(cudaMalloc(&p, bytes ? bytes : 1), "cudaMalloc");
-        cuda_detail::check(cudaMemset(p, 0, bytes ? bytes : 1), "cudaMemset");
+        // On this stream (non-blocking: it does not wait for the legacy default stream).
+        cuda_detail::check(cudaMemsetAsync(p, 0, bytes ? bytes : 1, stream_), "cudaMemset");
+        cuda_detail::check(cudaStreamSynchronize(stream_), "cudaMemset");
         return p;
     }
     void release(void* p) { cudaFree(p); }
     void copy_in(void* dst, const void* src, std::size_t bytes) {
-        if (!bytes) return;
-        cuda_detail::check(cudaStreamSynchronize(stream_), "sync");
-        cuda_detail::check(cudaMemcpy(dst, src, bytes, cudaMemcpyHostToDevice), "upload");
+        if (!bytes) return;  // ordered on this stream, complete on return (src may go away)
+        cuda_detail::check(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyHostToDevice, stream_), "upload");
+        cuda_detail::check(cudaStreamSynchronize(stream_), "upload");
     }
     void copy_out(void* dst, const void* src, std::size_t bytes) {
         if (!bytes) return;

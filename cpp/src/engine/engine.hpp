@@ -106,7 +106,7 @@ public:
     void step_once(const Phase& ph, double dt, double time_dt, bool relaxing, T* f_node_out,
                    RunReport& rep);
     void step_scalars(double time_dt, bool fixed_row);
-    void forces(const T* u, int visco_mode, double dt);
+    void forces(const T* u, ViscoMode visco_mode, double dt);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
     void contact_pass(const Phase& ph, bool relaxing);
     bool check(const T* u_new, double t_elem, double t_node, double blowup, RunReport& rep);
@@ -116,7 +116,7 @@ public:
     template <class M, Variant V>
     void launch_pressure(const Group<T>& g, const M& mat, const T* u);
     template <class M, Variant V>
-    void launch_forces(const Group<T>& g, const M& mat, const T* u, int visco_mode, double dt);
+    void launch_forces(const Group<T>& g, const M& mat, const T* u, ViscoMode visco_mode, double dt);
     template <class M, Variant V>
     void launch_measures(const Group<T>& g, const M& mat, const T* u, double dt, T* out);
 

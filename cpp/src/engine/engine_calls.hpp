@@ -217,7 +217,7 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
     });
     dev_.forget_graphs();
     if (m_.visco_terms > 0)  // the viscous state of the equilibrium: fully relaxed, stored
-        dev_.region([&] { forces(v_.u[phase_.cur], 3, dt); });
+        dev_.region([&] { forces(v_.u[phase_.cur], ViscoMode::RelaxedStore, dt); });
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // equilibrium: at rest
     rep.damping = dev_.read(&v_.sc->alpha);
     store(s);
@@ -237,7 +237,7 @@ ElementResults<T> Engine<T, Dev>::measures(const State<T>& s) {
     const T* u = v_.u[phase_.cur];
     dev_.region([&] {
         if (m_.anp) {  // T4ANP: the stresses the forces see, with the averaged pressure
-            forces(u, 1, s.dt);
+            forces(u, ViscoMode::Stored, s.dt);
         }
         dispatch([&]<class M_, Variant V>(const Group<T>& g, const M_& mat) {
             launch_measures<M_, V>(g, mat, u, s.dt, out.data());
@@ -272,7 +272,7 @@ std::vector<T> Engine<T, Dev>::internal_forces(const State<T>& s) {
     fill(v_.pf, T(0), pf_.size());
     const Phase ph = phase_;
     dev_.region([&] {
-        forces(v_.u[ph.cur], 1, s.dt);
+        forces(v_.u[ph.cur], ViscoMode::Stored, s.dt);
         node_pass(Phase{ph.cur, ph.cur, 3 - ph.cur - ph.prev}, false, v_.f_node[0]);
     });
     return f_node_[0].to_host();

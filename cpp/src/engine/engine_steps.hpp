@@ -12,7 +12,7 @@ void Engine<T, Dev>::step_once(const Phase& ph, double dt, double time_dt, bool 
                                T* f_node_out, RunReport& rep) {
     step_scalars(time_dt, relaxing);
     const double w0 = dev_.wtime();
-    forces(v_.u[ph.cur], relaxing ? 2 : 0, dt);
+    forces(v_.u[ph.cur], relaxing ? ViscoMode::Relaxed : ViscoMode::Advance, dt);
     const double w1 = dev_.wtime();
     node_pass(ph, relaxing, f_node_out);
     const double w2 = dev_.wtime();
@@ -74,8 +74,8 @@ void Engine<T, Dev>::launch_pressure(const Group<T>& g, const M& mat, const T* u
 
 template <class T, class Dev>
 template <class M, Variant V>
-void Engine<T, Dev>::launch_forces(const Group<T>& g, const M& mat, const T* u, int visco_mode,
-                                   double dt) {
+void Engine<T, Dev>::launch_forces(const Group<T>& g, const M& mat, const T* u,
+                                   ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
     const Prony<T> pr = g.visco;
     const T tdt = T(dt);
@@ -92,10 +92,10 @@ void Engine<T, Dev>::launch_forces(const Group<T>& g, const M& mat, const T* u, 
     });
 }
 
-/// Kernel 1 (element forces f_elem and J), or with T4ANP its three passes. visco_mode: 0 advance
-/// the Prony state by dt, 1 use it, 2 fully relaxed, 3 fully relaxed and stored (ViscoMaterial).
+/// Kernel 1 (element forces f_elem and J), or with T4ANP its three passes; visco_mode: what the
+/// viscoelastic groups do with their Prony state (ViscoMode).
 template <class T, class Dev>
-void Engine<T, Dev>::forces(const T* u, int visco_mode, double dt) {
+void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
     if (m_.anp) {
         dispatch([&]<class M, Variant V>(const Group<T>& g, const M& mat) { launch_pressure<M, V>(g, mat, u); });
         dev_.barrier();
@@ -274,7 +274,8 @@ void Engine<T, Dev>::launch_measures(const Group<T>& g, const M& mat, const T* u
         if (e < 0) return;
         ElementMeasures<T> r;
         if constexpr (V == Variant::Visco) {
-            const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, 1};
+            const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes,
+                                         ViscoMode::Stored};
             r = element_measures(b, l, vm, v.el, u, v.P);
         } else if constexpr (V == Variant::Anp) {
             T p = T(0);
