@@ -366,6 +366,14 @@ NB_MODULE(_core, m) {
         const MaterialParams<double> p{kind, {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0}};
         return with_material(p, [](const auto& mat) { return std::decay_t<decltype(mat)>::decoupled; });
     }, "kind"_a);
+    m.def("log_J", [](In<double> x, bool single) {
+        // The engine's ln J from J − 1 (materials.hpp, log_J), in float32 or float64, for tests.
+        const size_t n = x.size();
+        std::vector<double> out(n);
+        for (size_t i = 0; i < n; ++i)
+            out[i] = single ? double(log_J(float(x.data()[i]))) : log_J(x.data()[i]);
+        return to_numpy(std::move(out), {n});
+    }, "jm1"_a, "single"_a);
     m.def("max_threads", []() { return omp_get_max_threads(); });
     m.def("thread_limit", &pliant::thread_limit_value, "Most CPU threads a solver accepts.");
     m.def("cuda_compiled", &pliant::cuda_compiled);

@@ -54,6 +54,21 @@ PLIANT_HD float bits_float(std::int32_t i) {
     return __builtin_bit_cast(float, i);
 #endif
 }
+/// The same for double and 64-bit integers.
+PLIANT_HD std::int64_t double_bits(double x) {
+#if defined(__CUDA_ARCH__)
+    return __double_as_longlong(x);
+#else
+    return __builtin_bit_cast(std::int64_t, x);
+#endif
+}
+PLIANT_HD double bits_double(std::int64_t i) {
+#if defined(__CUDA_ARCH__)
+    return __longlong_as_double(i);
+#else
+    return __builtin_bit_cast(double, i);
+#endif
+}
 
 /// Atomically lowers *p to v if v is smaller (CUDA atomicMin; host: a compare-and-swap loop).
 /// Used for "smallest offending index" searches, whose result does not depend on the order.

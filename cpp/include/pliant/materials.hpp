@@ -102,13 +102,14 @@ struct NeoHookean {
     }
 };
 
-/// ln J from J − 1 without cancellation: the series x − x²/2 + x³/3 − x⁴/4 + x⁵/5 below
-/// |x| = 1e-2 (truncation error x⁶/6 < 2e-13), std::log(1 + x) above.
+/// ln J from J − 1 without cancellation: u = 1 + x rounded, ln J = ln u + (x − (u − 1))/u (the
+/// first-order correction for the rounding of u; Goldberg 1991, "What every computer scientist
+/// should know about floating-point arithmetic", Theorem 4), ln u by log_plain: branch-free, so
+/// it vectorizes, and within a few ulps for every J > 0.
 template <class T>
 PLIANT_HD T log_J(T Jm1) {
-    const T x = Jm1;
-    const T series = x * (T(1) + x * (T(-0.5) + x * (T(1) / T(3) + x * (T(-0.25) + x * T(0.2)))));
-    return std::fabs(x) < T(1e-2) ? series : std::log(T(1) + x);
+    const T u = T(1) + Jm1;
+    return log_plain(u) + (Jm1 - (u - T(1))) / u;
 }
 
 /// Isochoric 2nd Piola–Kirchhoff stress of a decoupled W(Ī1, Ī2) with W1 = ∂W/∂Ī1, W2 = ∂W/∂Ī2:
@@ -346,15 +347,21 @@ struct ViscoMaterial {
         const Sym3<T> Ci = inverse_cauchy_green(k);
         const Sym3<T> Se[2] = {m.pk2_iso(k, Ci), scale(k.J * m.pressure(k), Ci)};
         Sym3<T> S = axpby(T(1), Se[0], T(1), Se[1]);
-        int slot = 0;
+        // Fixed trip counts (every possible term, the absent ones skipped by a uniform test):
+        // fully unrolled, so that the CPU's lane loop vectorizes around them.
+        PLIANT_UNROLL
         for (int part = 0; part < 2; ++part) {
-            const int n = part == 0 ? pr.n_iso : pr.n_vol;
-            for (int i = 0; i < n; ++i, ++slot) {
+            PLIANT_UNROLL
+            for (int i = 0; i < kPronyMax / 2; ++i) {
+                if (i >= (part == 0 ? pr.n_iso : pr.n_vol)) continue;
+                const int slot = part == 0 ? i : pr.n_iso + i;
                 const int t = part * (kPronyMax / 2) + i;
                 T* d = q + 6 * slot * stride;
                 const T e[6] = {Se[part].xx, Se[part].yy, Se[part].zz, Se[part].xy, Se[part].yz,
                                 Se[part].xz};
+                const T den = dt + pr.tau[t];
                 T D[6];
+                PLIANT_UNROLL
                 for (int c = 0; c < 6; ++c) {
                     if (mode == ViscoMode::Relaxed || mode == ViscoMode::RelaxedStore) {
                         D[c] = pr.alpha[t] * e[c];
@@ -362,7 +369,6 @@ struct ViscoMaterial {
                     } else if (mode == ViscoMode::Stored) {
                         D[c] = d[c * stride];
                     } else {
-                        const T den = dt + pr.tau[t];
                         D[c] = pr.tau[t] / den * d[c * stride] + dt * pr.alpha[t] / den * e[c];
                         d[c * stride] = D[c];
                     }
