@@ -311,7 +311,13 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
 
 }  // namespace
 
-NB_MODULE(_core, m) {
+// One module per instruction set (CMakeLists.txt): its name comes from the build.
+#ifndef PLIANT_MODULE_NAME
+#define PLIANT_MODULE_NAME _core_generic
+#endif
+#define PLIANT_NB_MODULE(name, var) NB_MODULE(name, var)
+
+PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
     m.doc() = "pliant engine: TLED on linear tetrahedra; backends cpu (OpenMP + SIMD), cuda, cuda-emulated";
     // Engines can still be referenced at interpreter exit (viewer threads are daemons); nanobind's
     // exit-time leak report is then noise, not a refcounting bug.

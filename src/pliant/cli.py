@@ -244,7 +244,8 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
         "python": sys.version.split()[0],
         "platform": platform.platform(),
         "backends": {"cpu": {"compiled": True, "usable": True, "threads": _core.max_threads(),
-                             "simd_lanes": int(_core.lanes)},
+                             "simd_lanes": int(_core.lanes), "isa": _core.isa,
+                             "isas_built": list(_core.isas)},
                      "cuda": cuda,
                      "cuda-emulated": {"compiled": True, "usable": True,
                                        "note": "the CUDA engine on the host, for tests (slow)"}},
@@ -255,7 +256,9 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
         return
     console.print(f"pliant {data['version']} (Python {data['python']}, {data['platform']})")
     cpu = data["backends"]["cpu"]
-    console.print(f"  cpu : compiled, usable, {cpu['threads']} threads, {cpu['simd_lanes']} lanes per block")
+    console.print(f"  cpu : compiled, usable, {cpu['threads']} threads, {cpu['simd_lanes']} lanes per block, "
+                  f"instruction set {cpu['isa']} (built: {', '.join(cpu['isas_built'])}; PLIANT_ISA "
+                  "forces one)")
     c = data["backends"]["cuda"]
     if not c["compiled"]:
         console.print(f"  cuda: not compiled ({c['reason']})")
