@@ -82,3 +82,16 @@ def test_bad_option_exits_2():
     r = runner.invoke(app, ["bench", "--sizes", "abc"])
     assert r.exit_code == 2
     assert "expected comma-separated integers" in r.output
+
+
+def test_version_comes_from_pyproject():
+    import sys
+    from pathlib import Path
+
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:
+        import tomli as tomllib
+    want = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]["version"]
+    r = runner.invoke(app, ["--version"])
+    assert r.exit_code == 0 and r.output.strip() == f"pliant {want}"

@@ -17,7 +17,17 @@ from .materials import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoH
 from .tled import (Constant, ContactReport, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo,
                    Simulation, SmoothRamp, Hilly, Solver, State, Step, Table, ToolHistory)
 
-__version__ = "0.1.0"
+def _version() -> str:
+    """The installed distribution's version: one source, pyproject.toml."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("pliant")
+    except PackageNotFoundError:  # run from a source tree without installing
+        return "0+unknown"
+
+
+__version__ = _version()
 
 __all__ = [
     "ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",

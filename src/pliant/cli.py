@@ -33,6 +33,18 @@ console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
 
 
+def _print_version(value: bool):
+    if value:
+        console.print(f"pliant {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
+                                       help="Print the version and exit.")):
+    """pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra."""
+
+
 def _add_mesh_commands():
     from .cli_mesh import mesh_app
 
