@@ -57,7 +57,8 @@ def _cube_xml(extra_constraint="", material='<Material Type="NH"><ElasticParams 
   <Constraint DOF="0" LoadShape="POLY345" NumNodes="{len(right)}" Type="Disp">
     <Nodes>{fmt(right)}</Nodes><Magnitudes Type="UNIFORM">0.01</Magnitudes></Constraint>
   <Constraint DOF="2" LoadShape="RAMP" NumNodes="{len(right)}" Type="Force">
-    <Nodes>{fmt(right)}</Nodes><Magnitudes Type="DIFFORM">{fmt(np.linspace(-1, -2, len(right)))}</Magnitudes></Constraint>
+    <Nodes>{fmt(right)}</Nodes>
+    <Magnitudes Type="DIFFORM">{fmt(np.linspace(-1, -2, len(right)))}</Magnitudes></Constraint>
   {extra_constraint}
   <SystemParams><TimeStep>1e-4</TimeStep><TotalTime>0.05</TotalTime><DampingCoeff>20</DampingCoeff>
     <Density>1000</Density></SystemParams>

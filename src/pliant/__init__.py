@@ -7,7 +7,7 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
     sim = pl.Simulation(b.finalize())
 """
 
-from . import _core, contact, io, mesh
+from . import _core, contact, io, mesh  # noqa: F401 (sub-packages, re-exported)
 from .errors import (BackendError, ConvergenceError, DegenerateElementError, FileError, InputError,
                      InstabilityError, InvertedElementError, MaterialError, MeshError, PliantError,
                      PliantWarning, TimeStepError)
@@ -36,6 +36,7 @@ __all__ = [
     "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
     "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "Viscoelastic",
     "LinearElastic",
-    "PliantError", "InputError", "FileError", "BackendError", "MaterialError", "MeshError", "InvertedElementError",
+    "PliantError", "InputError", "FileError", "BackendError", "MaterialError", "MeshError",
+    "InvertedElementError",
     "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError", "PliantWarning",
 ]

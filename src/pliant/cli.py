@@ -117,7 +117,8 @@ def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Outp
     except PliantError as e:
         _fail(e, 1)
     console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.3g} s in "
-                  f"{summary['wall_time']:.1f} s. Results in [bold]{escape(str(out))}[/]: result.pvd (open it "
+                  f"{summary['wall_time']:.1f} s. Results in [bold]{escape(str(out))}[/]: "
+                  "result.pvd (open it "
                   "in ParaView), result.png, summary.json")
 
 

@@ -30,10 +30,10 @@ def _guard(fn):
             return fn(*a, **k)
         except InputError as e:
             err.print(f"[bold red]error:[/] {escape(one_line(str(e)))}", highlight=False)
-            raise typer.Exit(2)
+            raise typer.Exit(2) from None
         except PliantError as e:
             err.print(f"[bold red]error:[/] {escape(one_line(str(e)))}", highlight=False)
-            raise typer.Exit(1)
+            raise typer.Exit(1) from None
     return wrapper
 
 

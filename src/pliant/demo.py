@@ -1,6 +1,7 @@
 """The embedded default job (`pliant demo`): Spot the cow (CC0, shipped in the package),
 tetrahedralized, standing on the ground under gravity and indented on its back by a tool
-(``data/demo.toml``: the ground and the tool are rigid contact tools). Writes a ParaView series, summary.json and result.png."""
+(``data/demo.toml``: the ground and the tool are rigid contact tools). Writes a ParaView series,
+summary.json and result.png."""
 
 from __future__ import annotations
 

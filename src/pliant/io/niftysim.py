@@ -56,7 +56,8 @@ def _numbers(el, path, what, dtype=float):
         a = np.array(words, dtype=np.float64 if dtype is float else dtype)
     except (ValueError, OverflowError):
         bad = next((w for w in words if not _parses(w, dtype)), "?")
-        raise NiftySimError(f"<{what}>: {bad[:40]!r} is not {'an integer' if dtype is not float else 'a number'}",
+        kind = 'an integer' if dtype is not float else 'a number'
+        raise NiftySimError(f"<{what}>: {bad[:40]!r} is not {kind}",
                             str(path), what) from None
     if dtype is float and not np.all(np.isfinite(a)):
         i = int(np.argmax(~np.isfinite(a)))

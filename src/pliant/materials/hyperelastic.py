@@ -81,7 +81,8 @@ class Material:
 def _mu_k(cls: str, mu, K, E, nu, k_name: str = "K") -> tuple[float, float]:
     if E is not None or nu is not None:
         if E is None or nu is None or mu is not None or K is not None:
-            raise MaterialError(f"{cls}: give either (E, nu) or ({'mu' if cls != 'MooneyRivlin' else 'C10, C01'}, {k_name})")
+            native = 'mu' if cls != 'MooneyRivlin' else 'C10, C01'
+            raise MaterialError(f"{cls}: give either (E, nu) or ({native}, {k_name})")
         m, lam = lame_from_young(E, nu, cls)
         return m, lam + 2.0 * m / 3.0
     if mu is None or K is None:

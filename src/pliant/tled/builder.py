@@ -193,7 +193,8 @@ class ModelBuilder:
                 old = self._cons.get(key)
                 if old is not None and old != new:
                     raise InputError(f"node {int(n)} DOF {'xyz'[d]} is constrained twice: "
-                                     f"{old[0]:g} m with {shown(old[1])} and {new[0]:g} m with {shown(new[1])}")
+                                     f"{old[0]:g} m with {shown(old[1])} and {new[0]:g} m with "
+                                     f"{shown(new[1])}")
                 self._cons[key] = new
 
     def add_force(self, nodes, force, curve: LoadCurve | None = None):

@@ -31,7 +31,8 @@ def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.
     # Colour range: 1st to 99th percentile, so that a few stress peaks (at supports, tool edges)
     # do not flatten the picture; the colour bar says so.
     lo_v, hi_v = np.percentile(vals, [1, 99]) if vals.size > 100 else (vals.min(), vals.max())
-    norm = matplotlib.colors.Normalize(vmin=float(lo_v), vmax=float(hi_v) if hi_v > lo_v else float(lo_v) + 1.0)
+    top = float(hi_v) if hi_v > lo_v else float(lo_v) + 1.0
+    norm = matplotlib.colors.Normalize(vmin=float(lo_v), vmax=top)
     cmap = matplotlib.colormaps["viridis"]
     tri = P[faces]
     # Simple Lambert shading from a fixed light, on top of the field colours.
