@@ -27,6 +27,10 @@ def test_demo_writes_a_readable_series(tmp_path):
     r = runner.invoke(app, ["demo", "-o", str(out), "--duration", "0.4", "--no-progress"])
     assert r.exit_code == 0, r.output
     summary = json.loads((out / "summary.json").read_text())
+    # The real-time factor: simulated seconds per wall second, output included (in the line too).
+    rtf = summary["real_time_factor"]
+    assert rtf == pytest.approx(summary["simulated_time"] / summary["wall_time"], rel=1e-9)
+    assert f"({rtf:.2g}x real time)" in r.output
     pvd = (out / "result.pvd").read_text()
     assert pvd.count("<DataSet") == summary["frames"] == 21
     assert (out / "result.png").stat().st_size > 10_000

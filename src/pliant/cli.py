@@ -95,9 +95,12 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
         err_console.print(f"interrupted at t = {summary['simulated_time']:.4g} s; "
                           f"{summary['frames']} frames kept in {out}")
         raise typer.Exit(130)
+    rtf = summary.get("real_time_factor")
+    speed = f" ({rtf:.2g}x real time)" if rtf is not None else ""
     console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.4g} s in "
-                  f"{summary['wall_time']:.2f} s; results in [bold]{escape(str(out))}[/] (result.pvd for "
-                  f"ParaView, {', '.join(f for f in summary['files'] if f != 'result.pvd')})",
+                  f"{summary['wall_time']:.2f} s{speed}; results in [bold]{escape(str(out))}[/] "
+                  f"(result.pvd for ParaView, "
+                  f"{', '.join(f for f in summary['files'] if f != 'result.pvd')})",
                   highlight=False)
 
 
@@ -116,8 +119,10 @@ def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Outp
         _fail(e, 2)
     except PliantError as e:
         _fail(e, 1)
+    rtf = summary.get("real_time_factor")
+    speed = f" ({rtf:.2g}x real time)" if rtf is not None else ""
     console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.3g} s in "
-                  f"{summary['wall_time']:.1f} s. Results in [bold]{escape(str(out))}[/]: "
+                  f"{summary['wall_time']:.1f} s{speed}. Results in [bold]{escape(str(out))}[/]: "
                   "result.pvd (open it "
                   "in ParaView), result.png, summary.json")
 

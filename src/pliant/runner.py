@@ -132,6 +132,9 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
         summary["wall_time"] = time.perf_counter() - t0
         summary["steps"] = state.steps if not scene.static else summary.get("relax_steps", 0)
         summary["simulated_time"] = state.time
+        # Simulated seconds per wall second, output included (None for a quasi-static solve).
+        summary["real_time_factor"] = (None if scene.static else
+                                       state.time / max(summary["wall_time"], 1e-12))
         summary["frames"] = len(writer.frames)
         u = state.displacements
         if np.all(np.isfinite(u)):
