@@ -59,6 +59,21 @@ def exact_count_mesh(n_tets: int, size: float | None = None, seed: int = 0):
     return X[used], remap[T]
 
 
+def timed_run(solver: Solver, steps: int, warmup: int = 50):
+    """Run ``warmup`` steps, then time ``steps`` more on a new state: (wall time [s], RunInfo)."""
+    state = solver.model.state()
+    solver.run(state, steps=warmup)
+    t0 = time.perf_counter()
+    info = solver.run(state, steps=steps)
+    return time.perf_counter() - t0, info
+
+
+def _bench_solver(model, backend: str) -> Solver:
+    """The study's step; on the GPU, stability checks every 1,000 steps (each is a host round
+    trip), else every 16."""
+    return Solver(model, dt=DT, check_every=1000 if backend == "cuda" else 16)
+
+
 def bench_one(n_tets: int, steps: int, threads: int | None = None, dtype: str = "float32",
               warmup: int = 50, backend: str = "cpu") -> BenchRow:
     X, T = exact_count_mesh(n_tets)
@@ -69,13 +84,7 @@ def bench_one(n_tets: int, steps: int, threads: int | None = None, dtype: str = 
     b.set_gravity()
     b.damping = 10.0
     model = b.finalize(dtype, threads=threads, backend=backend)
-    # On the GPU, check stability every 1,000 steps: each check is a host round trip.
-    solver = Solver(model, dt=DT, check_every=1000 if backend == "cuda" else 16)
-    state = model.state()
-    solver.run(state, steps=warmup)
-    t0 = time.perf_counter()
-    info = solver.run(state, steps=steps)
-    wall = time.perf_counter() - t0
+    wall, info = timed_run(_bench_solver(model, backend), steps, warmup)
     itemsize = np.dtype(dtype).itemsize
     pad = -(-model.n_nodes // 16) * 16
     mem = model.memory_bytes + itemsize * (2 * 2 * 3 * pad + 3 * pad) + \
@@ -130,12 +139,7 @@ def bench_contact(steps: int = 2000, echo=print) -> list[dict]:
     rows = []
     for name, sc in cases:
         model = sc.builder.finalize(sc.dtype)
-        solver = Solver(model)
-        state = model.state()
-        solver.run(state, steps=50)
-        t0 = time.perf_counter()
-        info = solver.run(state, steps=steps)
-        wall = time.perf_counter() - t0
+        wall, info = timed_run(Solver(model), steps)
         row = {"case": name, "tets": model.n_elements, "contact_nodes": int(len(model.contact_nodes)),
                "tools": len(model.tools), "steps": steps, "seconds": wall,
                "contact_share": info.contact_seconds / wall,
@@ -185,12 +189,7 @@ def bench_materials(steps: int = 2000, threads: int | None = None, dtype: str = 
         b.damping = 10.0
         b.nodal_pressure = anp
         model = b.finalize(dtype, threads=threads, backend=backend)
-        solver = Solver(model, dt=DT, check_every=1000 if backend == "cuda" else 16)
-        state = model.state()
-        solver.run(state, steps=50)
-        t0 = time.perf_counter()
-        info = solver.run(state, steps=steps)
-        wall = time.perf_counter() - t0
+        wall, info = timed_run(_bench_solver(model, backend), steps)
         per_step = wall / steps
         ref = per_step if ref is None else ref
         row = {"material": name, "tets": len(T), "steps": steps, "threads": model.threads,

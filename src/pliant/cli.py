@@ -45,6 +45,12 @@ def _main(version: bool = typer.Option(False, "--version", callback=_print_versi
     """pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra."""
 
 
+def _speed(summary: dict) -> str:
+    """" (Nx real time)" for a run's summary line; empty for a quasi-static solve."""
+    rtf = summary.get("real_time_factor")
+    return f" ({rtf:.2g}x real time)" if rtf is not None else ""
+
+
 def _add_mesh_commands():
     from .cli_mesh import mesh_app
 
@@ -95,10 +101,8 @@ def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim m
         err_console.print(f"interrupted at t = {summary['simulated_time']:.4g} s; "
                           f"{summary['frames']} frames kept in {out}")
         raise typer.Exit(130)
-    rtf = summary.get("real_time_factor")
-    speed = f" ({rtf:.2g}x real time)" if rtf is not None else ""
     console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.4g} s in "
-                  f"{summary['wall_time']:.2f} s{speed}; results in [bold]{escape(str(out))}[/] "
+                  f"{summary['wall_time']:.2f} s{_speed(summary)}; results in [bold]{escape(str(out))}[/] "
                   f"(result.pvd for ParaView, "
                   f"{', '.join(f for f in summary['files'] if f != 'result.pvd')})",
                   highlight=False)
@@ -119,10 +123,8 @@ def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Outp
         _fail(e, 2)
     except PliantError as e:
         _fail(e, 1)
-    rtf = summary.get("real_time_factor")
-    speed = f" ({rtf:.2g}x real time)" if rtf is not None else ""
     console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.3g} s in "
-                  f"{summary['wall_time']:.1f} s{speed}. Results in [bold]{escape(str(out))}[/]: "
+                  f"{summary['wall_time']:.1f} s{_speed(summary)}. Results in [bold]{escape(str(out))}[/]: "
                   "result.pvd (open it "
                   "in ParaView), result.png, summary.json")
 

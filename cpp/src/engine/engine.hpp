@@ -46,7 +46,7 @@ struct Scalars {
 /// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
 template <class T>
 struct DeviceView {
-    index_t n_nodes, P, n_blocks, slots, n_contact, chunks;
+    index_t n_nodes, P, slots, n_contact, chunks;
     int n_curves, n_factors, n_tools, visco_w;
     ElementData<T> el;
     const index_t* elem_id;
@@ -109,7 +109,7 @@ public:
     void forces(const T* u, ViscoMode visco_mode, double dt);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
     void contact_pass(const Phase& ph, bool relaxing);
-    bool check(const T* u_new, double t_elem, double t_node, double blowup, RunReport& rep);
+    Scalars<T> check(const T* u_new, double t_elem, double t_node, double blowup, RunReport& rep);
     void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt);
     void copy(T* dst, const T* src, std::size_t n);
     void fill(T* dst, T value, std::size_t n);

@@ -47,7 +47,7 @@ template <class T, class Dev>
 void Engine<T, Dev>::refresh_view() {
     DeviceView<T>& v = v_;
     const Model<T>& m = m_;
-    v.n_nodes = m.n_nodes, v.P = m.n_pad, v.n_blocks = m.n_blocks;
+    v.n_nodes = m.n_nodes, v.P = m.n_pad;
     v.slots = m.n_blocks * kLanes;
     v.n_contact = static_cast<index_t>(m.contact_nodes.size());
     v.chunks = (v.n_contact + kContactChunk - 1) / kContactChunk;
@@ -140,7 +140,7 @@ RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int 
             });
             d += k;
             // J belongs to the last step's input (t), the newest u to t + Δt.
-            if (!check(v_.u[ph.cur], t0 + (d - 1) * dt, t0 + d * dt, blowup, rep)) break;
+            if (check(v_.u[ph.cur], t0 + (d - 1) * dt, t0 + d * dt, blowup, rep).status) break;
         }
         if (dev_.lead()) {
             done = d;
@@ -200,8 +200,10 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
             // The measures belong to the last step's input u[prev] (f_node[1 − fc]) and the one
             // before, u[next] (f_node[fc]).
             relax_measure(v_.u[ph.prev], v_.u[ph.next], v_.f_node[1 - fc], v_.f_node[fc], dt);
-            const bool ok = check(v_.u[ph.prev], t_eval, t_eval, blowup, rep);
-            const double residual = dev_.read(&v_.sc->residual);
+            // One read of the device scalars: the check's verdict and the measure's residual.
+            const Scalars<T> seen = check(v_.u[ph.prev], t_eval, t_eval, blowup, rep);
+            const bool ok = seen.status == 0;
+            const double residual = seen.residual;
             ++checks;
             if (residual < 0.99 * best) {
                 best = residual;

@@ -159,9 +159,10 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
 
 /// Stability check of the last step: an element slot with J ≤ 0 or NaN (J of the step's input, at
 /// t_elem), else a node whose new displacement is non-finite or beyond blowup [m] (at t_node); the
-/// smallest such index, so the verdict does not depend on the order of the search. Returns ok.
+/// smallest such index, so the verdict does not depend on the order of the search. Returns the
+/// device scalars as read back (status 0: fine), so that callers need no second round trip.
 template <class T, class Dev>
-bool Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, double blowup,
+Scalars<T> Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, double blowup,
                            RunReport& rep) {
     const DeviceView<T> v = v_;
     dev_.serial([=] PLIANT_KERNEL() { v.sc->bad_slot = v.sc->bad_node = INT_MAX; });
@@ -190,14 +191,13 @@ bool Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, double 
         }
     });
     const Scalars<T> s = dev_.read(v.sc);
-    if (s.status == 0) return true;
-    if (dev_.lead()) {
+    if (s.status != 0 && dev_.lead()) {
         rep.status = static_cast<RunStatus>(s.status);
         rep.where = s.where;
         rep.value = s.value;
         rep.t = rep.status == RunStatus::Inverted ? t_elem : t_node;
     }
-    return false;
+    return s;
 }
 
 /// Dynamic relaxation's measures (Joldes, Wittek & Miller 2009, CMAME 198:3313, §3): the relative

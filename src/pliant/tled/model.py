@@ -248,8 +248,7 @@ class Model:
             raise MeshError(f"{builder.source}: {e}") from None
         self.n_nodes, self.n_elements = N, M
         self.fingerprint = _fingerprint(X, T, self.sets, dtype, self._cons_user)
-        # Results (stresses, internal forces) of any state, computed on the host.
-        self._results = self._engine.make_backend("cpu", 0, 0)
+        self._results_backend = None  # made on first use (element_results, internal_forces)
         self._backend, self._device = "cpu", 0  # the default backend of its solvers
         self._solver = None                     # weak reference: the last solver that ran
         self.dt_critical = float(self._engine.dt_critical)
@@ -337,6 +336,13 @@ class Model:
                       DeprecationWarning, stacklevel=2)
         self._set_default_backend("cuda", device)
 
+    def _results(self):
+        """The host (CPU) backend that computes results of any state, made on first use: a model
+        that is only stepped on a GPU, or never asked for stresses, allocates none."""
+        if self._results_backend is None:
+            self._results_backend = self._engine.make_backend("cpu", 0, 0)
+        return self._results_backend
+
     def _last_solver(self, what: str):
         warnings.warn(f"Model.{what} is deprecated; use Solver.contact_report() (one report of tool "
                       "forces and contact)", DeprecationWarning, stacklevel=3)
@@ -368,7 +374,7 @@ class Model:
     def element_results(self, state: "State") -> dict[str, np.ndarray]:
         """Per element (user order): ``J``; ``energy_density`` W [Pa]; ``pk2`` S, ``cauchy`` σ [Pa] and
         ``green_strain`` E, each (M, 6) as xx, yy, zz, xy, yz, xz; ``von_mises`` [Pa] (M,)."""
-        J, W, S, sig, E = self._results.measures(state._s)
+        J, W, S, sig, E = self._results().measures(state._s)
         out = {k: self.to_user_elements(np.asarray(v, dtype=float)) for k, v in
                dict(J=J, energy_density=W, pk2=S, cauchy=sig, green_strain=E).items()}
         s = out["cauchy"]
@@ -384,7 +390,7 @@ class Model:
     def internal_forces(self, state: "State") -> np.ndarray:
         """Internal nodal forces f(u) [N], (N, 3); at constrained DOFs of an equilibrium state they
         are the reaction forces the supports exert, with opposite sign."""
-        return self.to_user_nodes(np.asarray(self._results.internal_forces(state._s), dtype=float))
+        return self.to_user_nodes(np.asarray(self._results().internal_forces(state._s), dtype=float))
 
     def strain_energy(self, state: "State") -> float:
         """Total strain energy Σ V0 W [J]."""

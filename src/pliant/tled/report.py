@@ -55,10 +55,16 @@ class ContactReport:
     def force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """(force [N], torque [N·m]) tool k received: at the equilibrium if the last call was a
         relaxation, else at the last step (zeros before any step)."""
-        if self.relaxed is not None:
-            f, m = self.relaxed[k]
-            return f.copy(), m.copy()
-        H = self.tools[k]
-        if len(H.time) == 0:
-            return np.zeros(3), np.zeros(3)
-        return H.force[-1].copy(), H.torque[-1].copy()
+        return tool_force(self.tools, self.relaxed, k)
+
+
+def tool_force(tools: list[ToolHistory], relaxed, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Tool k's (force [N], torque [N·m]): the relaxed equilibrium's if given, else the last
+    recorded step's (zeros before any step). ContactReport.force and Solver.tool_force."""
+    if relaxed is not None:
+        f, m = relaxed[k]
+        return f.copy(), m.copy()
+    H = tools[k]
+    if len(H.time) == 0:
+        return np.zeros(3), np.zeros(3)
+    return H.force[-1].copy(), H.torque[-1].copy()

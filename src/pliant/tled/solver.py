@@ -17,7 +17,7 @@ from .._core import RunStatus
 from ..checks import finite_number, finite_vector, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
-from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory
+from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory, tool_force
 
 __all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation", "MAX_STEPS"]
 
@@ -221,8 +221,9 @@ class Solver:
 
     def tool_force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """Force [N] and torque [N·m] tool k received at the last step, or at the equilibrium after
-        a relaxation (zeros before any step): ``contact_report().force(k)``."""
-        return self.contact_report().force(self._tool_index(k))
+        a relaxation (zeros before any step): ``contact_report().force(k)``, without fetching the
+        per-node contact forces (the viewer asks every frame)."""
+        return tool_force(self._histories, self._relaxed, self._tool_index(k))
 
     def relax(self, state: State, at_time: float | None = None, tol: float = 1e-5,
               max_steps: int = 200_000, increments: int = 1, check_every: int = 10,
