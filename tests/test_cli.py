@@ -23,13 +23,19 @@ def test_demo_writes_a_readable_series(tmp_path):
     """The embedded demo: Spot on a frictional ground plane under gravity, pressed by a moving
     sphere (data/demo.toml). Checks: readable series, nothing inside the ground or the tool, and
     vertical balance on average: ground force − tool force ≈ weight (momentum change small)."""
+    import time
+
     out = tmp_path / "demo"
+    t0 = time.perf_counter()
     r = runner.invoke(app, ["demo", "-o", str(out), "--duration", "0.4", "--no-progress"])
+    outside = time.perf_counter() - t0  # this test's own clock around the whole command
     assert r.exit_code == 0, r.output
     summary = json.loads((out / "summary.json").read_text())
-    # The real-time factor: simulated seconds per wall second, output included (in the line too).
+    # The real-time factor: 0.4 simulated seconds over at most the wall time measured here (the
+    # command's clock runs inside ours), and the line says it.
     rtf = summary["real_time_factor"]
-    assert rtf == pytest.approx(summary["simulated_time"] / summary["wall_time"], rel=1e-9)
+    assert summary["simulated_time"] == pytest.approx(0.4, abs=1e-3)
+    assert rtf >= summary["simulated_time"] / outside
     assert f"({rtf:.2g}x real time)" in r.output
     pvd = (out / "result.pvd").read_text()
     assert pvd.count("<DataSet") == summary["frames"] == 21
