@@ -1,4 +1,4 @@
-"""Command line: ``pliant run | demo | view | mesh | bench | info``.
+"""Command line: ``pliant run | demo | sweep | view | mesh | bench | info``.
 
 Exit codes: 0 success; 1 the simulation failed (instability, no convergence) or ``mesh check``
 found problems; 2 bad input (one line naming the file, key or element and what was expected);
@@ -65,15 +65,11 @@ def _fail(e: Exception, code: int) -> None:
     raise typer.Exit(code)
 
 
-def load_any(path: Path, ignore: list[str] | None = None):
-    """A scene (.toml) or a NiftySim model (.xml)."""
-    from .scene import load_scene
+def load_any(path: Path, ignore: list[str] | None = None, overrides: dict | None = None):
+    """A scene (.toml) or a NiftySim model (.xml), with optional overrides by key path."""
+    from .job import load_job
 
-    if path.suffix.lower() == ".xml":
-        from .io.niftysim import load_niftysim
-
-        return load_niftysim(path, tuple(ignore or ()))
-    return load_scene(path)
+    return load_job(path, ignore, overrides)
 
 
 @app.command()
@@ -127,6 +123,44 @@ def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Outp
                   f"{summary['wall_time']:.1f} s{_speed(summary)}. Results in [bold]{escape(str(out))}[/]: "
                   "result.pvd (open it "
                   "in ParaView), result.png, summary.json")
+
+
+@app.command()
+def sweep(spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene, parameters, design."),
+          out: Path = typer.Option(..., "-o", "--out", help="Output folder (resumed if it holds "
+                                   "this sweep)."),
+          scheduler: Optional[str] = typer.Option(None, help="Dask scheduler address (default: a "
+                                                  "local cluster sized to this machine)."),
+          workers: Optional[int] = typer.Option(None, help="Local workers (default: cores // "
+                                                "threads per run)."),
+          analyze: bool = typer.Option(False, "--analyze", help="Sobol indices of every output "
+                                       "(a 'saltelli' design): sensitivity.csv and .png."),
+          retry_failed: bool = typer.Option(False, help="Run the failed runs again on resume."),
+          progress: bool = typer.Option(True, help="Show a progress bar.")):
+    """Run a parameter sweep on Dask: OUT/results.parquet (a row per run), resumable."""
+    from .sweep import load_sweep, run_sweep
+
+    if workers is not None and workers < 1:
+        _fail(InputError(f"--workers {workers}: expected at least 1"), 2)
+    try:
+        sp = load_sweep(spec)
+        if analyze and sp.design.type != "saltelli":
+            raise InputError(f"{spec}: --analyze computes Sobol indices from a 'saltelli' design; "
+                             f"this sweep's design is '{sp.design.type}'")
+        result = run_sweep(sp, out, scheduler=scheduler, workers=workers, analyze=analyze,
+                           retry_failed=retry_failed, progress=progress)
+    except InputError as e:
+        _fail(e, 2)
+    for note in result.notes:
+        err_console.print(f"[yellow]note:[/] {escape(note)}", highlight=False)
+    bad = result.failed
+    for _, row in bad.head(5).iterrows():
+        err_console.print(f"run {row['run']} failed: {escape(str(row['error']))}", highlight=False)
+    console.print(f"{len(result.table)} runs: {len(result.table) - len(bad)} done, {len(bad)} failed; "
+                  f"results in [bold]{escape(str(out))}[/] ({', '.join(result.files)})",
+                  highlight=False)
+    if len(bad):
+        raise typer.Exit(1)
 
 
 @app.command()

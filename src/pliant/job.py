@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 from .tled import ModelBuilder
 
-__all__ = ["Scene"]
+__all__ = ["Scene", "load_job"]
 
 
 @dataclass
@@ -35,3 +35,19 @@ class Scene:
     title: str = ""
     warnings: list[str] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
+
+
+def load_job(path, ignore=None, overrides: dict | None = None) -> Scene:
+    """A scene (.toml) or a NiftySim model (.xml) as a :class:`Scene`. ``ignore``: unsupported
+    NiftySim features to skip; ``overrides``: key path → value set before validation (scene keys
+    as in :mod:`pliant.scene.keys`, NiftySim element paths as in ``set_xml_key``)."""
+    from pathlib import Path
+
+    path = Path(path)
+    if path.suffix.lower() == ".xml":
+        from .io.niftysim import load_niftysim
+
+        return load_niftysim(path, tuple(ignore or ()), overrides)
+    from .scene import load_scene
+
+    return load_scene(path, overrides)

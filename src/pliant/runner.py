@@ -53,15 +53,29 @@ def _extra_args(e: Exception) -> tuple:
     return (e.element,) if hasattr(e, "element") else ()
 
 
+class _NoFiles:
+    """The writer of a run that keeps no files (a sweep's run without fields): counts frames."""
+
+    def __init__(self):
+        self.frames: list[tuple[float, str]] = []
+
+    def write(self, state) -> None:
+        self.frames.append((state.time, ""))
+
+
 def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool = False,
-              threads: int | None = None, echo=print, backend: str | None = None) -> dict:
-    """Run ``scene`` and write OUTDIR/result.pvd, frame_*.vtu, summary.json and result.png.
+              threads: int | None = None, echo=print, backend: str | None = None,
+              inspect=None) -> dict:
+    """Run ``scene`` and write OUTDIR/result.pvd, frame_*.vtu, summary.json and result.png
+    (``out_dir=None``: no files, the summary alone). ``inspect(model, solver, state) -> dict``, when
+    given, adds its entries to the summary once the run has ended (a sweep's outputs).
     Returns the summary. Raises InstabilityError (after writing what it has) when the run fails;
     on KeyboardInterrupt the summary says ``interrupted`` and the frames so far are kept."""
     from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
                                TimeRemainingColumn)
 
-    out = check_output_dir(out_dir)  # checked first, created only once the model is valid
+    # checked first, created only once the model is valid
+    out = None if out_dir is None else check_output_dir(out_dir)
     t_build = time.perf_counter()
     with warnings.catch_warnings(record=True) as held:  # a refused build prints its error alone
         warnings.simplefilter("always")
@@ -73,12 +87,13 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
     total = max(1, math.ceil(scene.duration / solver.dt - 1e-9))
     state = model.state()
     embedding = None
-    if scene.meta.get("embed_surface"):
+    if out is not None and scene.meta.get("embed_surface"):
         from .mesh import embed_surface
 
         Ve, Fe = scene.meta["embed_surface"]
         embedding = embed_surface(model.reference_positions, model.tets, Ve, Fe)
-    writer = ResultWriter(out, model, fields=scene.fields, embedding=embedding)
+    writer = _NoFiles() if out is None else ResultWriter(out, model, fields=scene.fields,
+                                                         embedding=embedding)
     writer.write(state)
     build_s = time.perf_counter() - t_build
     summary = {"pliant": __version__, "scene": scene.source, "title": scene.title,
@@ -144,7 +159,7 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
                            kinetic_energy=model.kinetic_energy(state),
                            strain_energy=float(np.dot(model.element_volumes(),
                                                       res["energy_density"])))
-            if scene.png:
+            if scene.png and out is not None:
                 from .view import render_png
 
                 render_png(out / "result.png", state.positions, model.tets, res["von_mises"],
@@ -162,7 +177,13 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
                 if len(H.time):
                     hist[tool.name] = {"time": H.time.tolist(), "force": H.force.tolist(),
                                        "torque": H.torque.tolist()}
-            atomic_write_text(out / "tools.json", json.dumps(hist))
-            summary["files"].append("tools.json")
-        atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
+            if out is not None:
+                atomic_write_text(out / "tools.json", json.dumps(hist))
+                summary["files"].append("tools.json")
+        if inspect is not None and np.all(np.isfinite(u)):
+            summary.update(inspect(model, solver, state))
+        if out is None:
+            summary["files"] = []
+        else:
+            atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
     return summary

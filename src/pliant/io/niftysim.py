@@ -98,15 +98,61 @@ def _named(f: str, key: str):
         raise NiftySimError(str(e), f, key) from None
 
 
-def load_niftysim(path, ignore: tuple[str, ...] = ()) -> Scene:
+def set_xml_key(root, key: str, value, f: str = "") -> None:
+    """Set the text of the element at ``key`` below ``root``: ``'SystemParams.TimeStep'``,
+    ``'ElementSet[1].Material.ElasticParams'`` (the n-th element of that tag with ``[n]``, the
+    first without) to ``value`` (a number, or a list of numbers written space-separated); a second
+    index on the last element, ``'ElementSet.Material.ElasticParams[0][1]'``, sets one number of
+    its text. A sweep's parameters on a NiftySim model are set this way."""
+    import re
+
+    el = root
+    segments = key.split(".")
+    for n, seg in enumerate(segments):
+        m = re.fullmatch(r"([A-Za-z_][\w-]*)((?:\[\d+\])*)", seg)
+        if not m:
+            raise NiftySimError(f"segment {seg!r}: expected an element name with optional [index]es",
+                                f, key)
+        idx = [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
+        found = el.findall(m.group(1))
+        at = idx[0] if idx else 0
+        if at >= len(found):
+            raise NiftySimError(f"<{el.tag}> has {len(found)} <{m.group(1)}> element(s); "
+                                f"expected at least {at + 1}", f, key)
+        el = found[at]
+        if len(idx) > 2 or (len(idx) == 2 and n < len(segments) - 1):
+            raise NiftySimError(f"segment {seg!r}: a second [index] (a number in the text) "
+                                "is allowed on the last element only", f, key)
+    words = (el.text or "").split()
+    if len(idx) == 2:
+        if idx[1] >= len(words):
+            raise NiftySimError(f"<{el.tag}> holds {len(words)} value(s); [{idx[1]}] is out of "
+                                "range", f, key)
+        words[idx[1]] = _word(value)
+        el.text = " ".join(words)
+    else:
+        el.text = " ".join(map(_word, value)) if isinstance(value, (list, tuple)) else _word(value)
+
+
+def _word(v) -> str:
+    """A number as NiftySim reads it: integers as integers, floats to the last bit."""
+    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
+        return str(int(v))
+    return repr(float(v))
+
+
+def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = None) -> Scene:
     """Import a NiftySim XML model. ``ignore`` names unsupported features to skip with a warning
-    (e.g. 'DoDeformableCollision'); any other unsupported feature is an error naming it."""
+    (e.g. 'DoDeformableCollision'); any other unsupported feature is an error naming it.
+    ``overrides`` maps element paths to values set before import (see :func:`set_xml_key`)."""
     path = Path(path)
     try:
         root = ET.parse(path).getroot()
     except (ET.ParseError, OSError) as e:
         raise NiftySimError(f"not a readable XML file ({e})", str(path)) from None
     f = str(path)
+    for key, value in (overrides or {}).items():
+        set_xml_key(root, key, value, f)
     if root.tag != "Model":
         raise NiftySimError(f"root element <{root.tag}>; expected <Model>", f)
     warnings: list[str] = []

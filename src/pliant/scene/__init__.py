@@ -6,7 +6,8 @@ See docs/scenes.md for the full reference, and examples/ for complete scenes.
 """
 
 from ..job import Scene
+from .keys import get_key, set_key
 from .loader import load_scene, make_curve
 from .schema import SceneError
 
-__all__ = ["Scene", "load_scene", "SceneError", "make_curve"]
+__all__ = ["Scene", "load_scene", "SceneError", "make_curve", "get_key", "set_key"]

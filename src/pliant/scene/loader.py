@@ -17,6 +17,7 @@ from ..tled.model import BACKENDS
 from ..tled.solver import MAX_INCREMENTS
 from ..job import Scene
 from .mesh import load_mesh
+from .keys import apply_overrides
 from .schema import Ctx, SceneError, check_keys, vector
 from .tools import make_tool
 from ..mesh.topology import boundary_faces
@@ -70,10 +71,14 @@ def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
                     "smooth-ramp or table")
 
 
-def load_scene(path) -> Scene:
-    """Read and validate a scene file (TOML). Raises SceneError naming file, key and line."""
+def load_scene(path, overrides: dict | None = None) -> Scene:
+    """Read and validate a scene file (TOML). Raises SceneError naming file, key and line.
+
+    ``overrides`` maps dotted key paths (``'material.liver.E'``, ``'tool[1].keyframes[2].position[2]'``,
+    see :mod:`pliant.scene.keys`) to values set before validation (a sweep's parameters)."""
     path = Path(path)
     text, data = _read_toml(path)
+    data = apply_overrides(data, overrides, str(path))
     ctx = Ctx(str(path), text)
     check_keys(ctx, data, "", {"title": "str", "mesh": "table", "material": "list",
                                "solver": "table", "constraint": "list", "load": "list",
@@ -213,7 +218,7 @@ def _constraints(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) ->
     for i, c in enumerate(tables):
         p = f"constraint[{i}]"
         check_keys(ctx, c, p, {"type": "str", "nodes": "table", "dofs": "str", "value": "number|list",
-                               "curve": "str|table"}, ("type", "nodes"))
+                               "curve": "str|table", "name": "str"}, ("type", "nodes"))
         ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T)
         dofs = c.get("dofs", "xyz")
         with ctx.under(p):
@@ -237,7 +242,7 @@ def _loads(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) -> None:
         p = f"load[{i}]"
         check_keys(ctx, ld, p, {"type": "str", "nodes": "table", "force": "list",
                                 "total_force": "list", "g": "list", "value": "number",
-                                "curve": "str|table"}, ("type",))
+                                "curve": "str|table", "name": "str"}, ("type",))
         with ctx.under(p):
             _add_load(ctx, b, ld, p, X, T, scene)
 

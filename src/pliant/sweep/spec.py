@@ -1,0 +1,230 @@
+"""Sweep files (TOML): a base scene or NiftySim model, the parameters to vary by key path, the
+design that picks their values, fixed settings, the outputs to collect and the thread budget.
+See docs/sweeps.md for the reference; :func:`load_sweep` validates and names file, key and line.
+
+Example::
+
+    base = "liver_indentation.toml"      # relative to this file
+    threads = 1                          # per run
+    [design]
+    type = "lhs"                         # grid | list | lhs | sobol | saltelli
+    samples = 16
+    seed = 7
+    [[parameter]]
+    key = "material[0].E"
+    range = [2.0e3, 8.0e3]               # lhs, sobol, saltelli (uniform; scale = "log" for log-uniform)
+    [[parameter]]
+    key = "tool.probe.keyframes[1].position[2]"
+    values = [0.01, 0.02]                # grid, list
+    [set]
+    "solver.duration" = 0.05             # every run
+    [output]
+    points = { tip = [0.0, 0.0, 0.05] }  # displacement at the node nearest each point [m]
+    tool_history = true
+    fields = false                       # per-run result folders and OUT/dataset.h5
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..scene.schema import Ctx, SceneError, check_keys, vector
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Parameter", "Design", "Outputs", "SweepSpec", "load_sweep", "DESIGNS"]
+
+DESIGNS = ("grid", "list", "lhs", "sobol", "saltelli")
+_SAMPLED = ("lhs", "sobol", "saltelli")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One varied input: its key path, and either explicit ``values`` (grid, list designs) or a
+    ``range`` [low, high] sampled uniformly (``scale='log'``: log-uniform; lhs, sobol, saltelli)."""
+
+    key: str
+    values: tuple | None = None
+    range: tuple[float, float] | None = None
+    scale: str = "linear"
+
+
+@dataclass(frozen=True)
+class Design:
+    """How parameter values are combined: ``grid`` (every combination of the values), ``list``
+    (the i-th value of each parameter together), ``lhs`` (Latin hypercube), ``sobol`` (scrambled
+    Sobol' sequence), ``saltelli`` (Saltelli's scheme for Sobol indices: samples·(D + 2) runs).
+    ``samples`` counts runs for lhs and sobol, base samples for saltelli; ``seed`` fixes them."""
+
+    type: str = "grid"
+    samples: int = 0
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """What each run reports beyond its summary (max displacement, max von Mises, energies, tool
+    forces): displacement at the node nearest each named point [m], tool force histories, and
+    ``fields`` (per-run result folders, and OUT/dataset.h5 with final fields for all runs)."""
+
+    points: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    tool_history: bool = False
+    fields: bool = False
+
+
+@dataclass
+class SweepSpec:
+    """A validated sweep: ``base`` (scene or NiftySim model), ``parameters``, ``design``, ``fixed``
+    settings (key path → value for every run), ``outputs``, ``threads`` per run, NiftySim features
+    to ``ignore``, and ``source`` (the sweep file)."""
+
+    base: Path
+    parameters: list[Parameter]
+    design: Design = field(default_factory=Design)
+    fixed: dict[str, Any] = field(default_factory=dict)
+    outputs: Outputs = field(default_factory=Outputs)
+    threads: int = 1
+    ignore: tuple[str, ...] = ()
+    source: str = ""
+
+    def fingerprint(self) -> str:
+        """A hash of everything that decides the runs' results (the spec and the base file's
+        bytes), so that a resumed sweep can tell whether its finished runs still hold."""
+        base = self.base.read_bytes() if self.base.is_file() else b""
+        spec = json.dumps({"parameters": [p.__dict__ for p in self.parameters],
+                           "design": self.design.__dict__, "fixed": self.fixed,
+                           "outputs": self.outputs.__dict__, "ignore": self.ignore},
+                          sort_keys=True, default=str)
+        return hashlib.sha256(spec.encode() + b"\0" + base).hexdigest()[:16]
+
+
+def load_sweep(path) -> SweepSpec:
+    """Read and validate a sweep file. Raises SceneError naming file, key and line."""
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(f"no such sweep file: {path}", str(path))
+    text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"not valid TOML: {e}", str(path)) from None
+    ctx = Ctx(str(path), text)
+    check_keys(ctx, data, "", {"base": "str", "threads": "int", "ignore": "list", "design": "table",
+                               "parameter": "list", "set": "table", "output": "table"},
+               ("base", "parameter"))
+    base = (path.parent / data["base"]).resolve()
+    if not base.is_file():
+        raise ctx.error("base", f"no such scene or NiftySim model: {base}")
+    threads = data.get("threads", 1)
+    if threads < 1:
+        raise ctx.error("threads", f"threads = {threads}: expected at least 1 thread per run")
+    design = _design(ctx, data.get("design", {}))
+    params = [_parameter(ctx, p, f"parameter[{i}]", design) for i, p in enumerate(data["parameter"])]
+    if not params:
+        raise ctx.error("parameter", "expected at least one [[parameter]]")
+    keys = [p.key for p in params]
+    dup = next((k for k in keys if keys.count(k) > 1), None)
+    if dup:
+        raise ctx.error("parameter", f"key {dup!r} is varied twice; expected each key once")
+    if design.type == "list" and len({len(p.values) for p in params}) > 1:
+        raise ctx.error("parameter", "a 'list' design pairs the i-th values of every parameter; "
+                        f"expected lists of one length (got {[len(p.values) for p in params]})")
+    ignore = data.get("ignore", [])
+    if not all(isinstance(x, str) for x in ignore):
+        raise ctx.error("ignore", "expected a list of NiftySim feature names")
+    spec = SweepSpec(base, params, design, dict(data.get("set", {})),
+                     _outputs(ctx, data.get("output", {})), threads, tuple(ignore), str(path))
+    _check_key_paths(ctx, spec)
+    return spec
+
+
+def _check_key_paths(ctx: Ctx, spec: SweepSpec) -> None:
+    """Every varied and set key path reaches into the base file (before any run starts: a wrong
+    path would otherwise fail every run alike)."""
+    from ..errors import InputError
+
+    if spec.base.suffix.lower() == ".xml":
+        import xml.etree.ElementTree as ET
+
+        from ..io.niftysim import set_xml_key
+
+        try:
+            root = ET.parse(spec.base).getroot()
+        except (ET.ParseError, OSError) as e:
+            raise ctx.error("base", f"{spec.base}: not a readable XML file ({e})") from None
+
+        def put(key, value):
+            set_xml_key(root, key, value, str(spec.base))
+    else:
+        from ..scene.keys import set_key
+
+        try:
+            data = tomllib.loads(spec.base.read_text(encoding="utf-8", errors="replace"))
+        except tomllib.TOMLDecodeError as e:
+            raise ctx.error("base", f"{spec.base}: not valid TOML: {e}") from None
+
+        def put(key, value):
+            set_key(data, key, value, str(spec.base))
+    where = {**{k: f"set.{k}" for k in spec.fixed},
+             **{p.key: f"parameter[{i}].key" for i, p in enumerate(spec.parameters)}}
+    for key, value in {**spec.fixed, **{p.key: p.values[0] if p.values else p.range[0]
+                                         for p in spec.parameters}}.items():
+        try:
+            put(key, value)
+        except InputError as e:
+            raise SceneError(f"{key!r} does not fit the base file: {e}", ctx.file, where[key],
+                             ctx.line_of(where[key].split(".")[0])) from None
+
+
+def _design(ctx: Ctx, d: dict) -> Design:
+    check_keys(ctx, d, "design", {"type": "str", "samples": "int", "seed": "int"})
+    kind = d.get("type", "grid")
+    if kind not in DESIGNS:
+        raise ctx.error("design.type", f"type = {kind!r}: expected one of {', '.join(DESIGNS)}")
+    samples = d.get("samples", 0)
+    if kind in _SAMPLED and samples < 1:
+        raise ctx.error("design.samples", f"a '{kind}' design needs samples >= 1")
+    if kind == "saltelli" and samples & (samples - 1):
+        raise ctx.error("design.samples", f"samples = {samples}: Saltelli's scheme on a Sobol' "
+                        "sequence needs a power of 2")
+    return Design(kind, samples, d.get("seed", 0))
+
+
+def _parameter(ctx: Ctx, p: dict, where: str, design: Design) -> Parameter:
+    check_keys(ctx, p, where, {"key": "str", "values": "list", "range": "list", "scale": "str"},
+               ("key",))
+    if design.type in _SAMPLED:
+        if "range" not in p:
+            raise ctx.error(where, f"a '{design.type}' design samples a range; expected "
+                            "range = [low, high]")
+        low, high = vector(ctx, p["range"], f"{where}.range", 2)
+        scale = p.get("scale", "linear")
+        if scale not in ("linear", "log"):
+            raise ctx.error(f"{where}.scale", f"scale = {scale!r}: expected 'linear' or 'log'")
+        if not low < high or (scale == "log" and not low > 0):
+            raise ctx.error(f"{where}.range", f"range = [{low:g}, {high:g}]: expected low < high"
+                            + (" and low > 0 for a log scale" if scale == "log" else ""))
+        return Parameter(p["key"], range=(low, high), scale=scale)
+    if "values" not in p or not p["values"]:
+        raise ctx.error(where, f"a '{design.type}' design takes explicit values; expected "
+                        "values = [...] (non-empty)")
+    for v in p["values"]:
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ctx.error(f"{where}.values", f"{v!r}: expected finite numbers")
+    return Parameter(p["key"], values=tuple(p["values"]))
+
+
+def _outputs(ctx: Ctx, o: dict) -> Outputs:
+    check_keys(ctx, o, "output", {"points": "table", "tool_history": "bool", "fields": "bool"})
+    points = {name: tuple(vector(ctx, v, f"output.points.{name}"))
+              for name, v in o.get("points", {}).items()}
+    return Outputs(points, o.get("tool_history", False), o.get("fields", False))
