@@ -286,3 +286,25 @@ def test_niftysim_base_with_element_paths(tmp_path):
         assert row["status"] == "ok" and row["max_displacement"] == s["max_displacement"]
         assert row["strain_energy"] == s["strain_energy"]
     assert table["strain_energy"].iloc[0] != table["strain_energy"].iloc[1]
+
+
+def test_batched_sweep_equals_runs_alone(bar_sweep, tmp_path):
+    """batch = 3 with a fixed time step: every run's figures equal the unbatched sweep's, bit for
+    bit. A refused value (E < 0) fails alone while the rest of its batch runs together; a modulus
+    too stiff for the fixed step makes its batch fall back to runs one by one, so that only that
+    run fails."""
+    grid = SWEEP.format(Es=[4.0e5, -1.0, 1.0e9, 8.0e5]) + '[set]\n"solver.dt" = 1e-5\n'
+    bar_sweep.write_text(grid)
+    alone = run_sweep(load_sweep(bar_sweep), tmp_path / "alone", workers=2, progress=False).table
+    bar_sweep.write_text("batch = 3\n" + grid)
+    batched = run_sweep(load_sweep(bar_sweep), tmp_path / "batched", workers=2,
+                        progress=False).table
+    assert list(batched["status"]) == ["ok", "ok", "failed", "failed", "failed", "failed", "ok", "ok"]
+    assert "material" in batched["error"][2] and "time step" in batched["error"][4].lower()
+    assert list(batched["batch"].fillna(1)) == [2, 2, 1, 1, 1, 1, 2, 2]
+    for col in ("max_displacement", "max_von_mises", "strain_energy", "kinetic_energy", "steps",
+                "point.tip.ux", "point.tip.uz", "status"):
+        pd.testing.assert_series_equal(batched[col], alone[col], check_names=False)
+    with pytest.raises(Exception, match="needs each run alone"):
+        bar_sweep.write_text("batch = 2\n" + SWEEP.format(Es=ES) + "fields = true\n")
+        load_sweep(bar_sweep)

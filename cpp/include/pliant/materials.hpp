@@ -17,6 +17,8 @@
 // I1 I − C − 2/3 I2 C⁻¹ = C⁻¹ dev(I1 C − C²) = C⁻¹ [(2 I1 − 4) dev E − 4 dev E²].
 #pragma once
 
+#include <type_traits>
+
 #include <cmath>
 
 #include "mat3.hpp"
@@ -400,20 +402,35 @@ PLIANT_HD bool is_modulus(MaterialKind kind, int k) {
     return true;
 }
 
-/// Call `f(material)` with the concrete functor for `m` (dispatch once per element group).
+/// The functor M (whose kind the caller knows) from its parameters: kernels build it per block
+/// from the group's parameters in device memory, so that groups of one kind run in one launch.
+template <class M, class T>
+PLIANT_HD M make_material(const MaterialParams<T>& m) {
+    if constexpr (std::is_same_v<M, MooneyRivlin<T>>) {
+        return MooneyRivlin<T>(m.p[0], m.p[1], m.p[2]);
+    } else if constexpr (std::is_same_v<M, Polynomial<T>>) {
+        return Polynomial<T>{m.p[0], m.p[1], m.p[2], m.p[3], m.p[4], m.p[5]};
+    } else if constexpr (std::is_same_v<M, ArrudaBoyce<T>>) {
+        return ArrudaBoyce<T>{m.p[0], m.p[1], m.p[2]};
+    } else if constexpr (std::is_same_v<M, TransverselyIsotropic<T>>) {
+        return TransverselyIsotropic<T>{m.p[0], m.p[1], m.p[2], {m.p[3], m.p[4], m.p[5]}};
+    } else {  // two-parameter models: NeoHookean, NeoHookeanCoupled, StVenantKirchhoff, LinearElastic
+        return M{m.p[0], m.p[1]};
+    }
+}
+
+/// Call `f(material)` with the concrete functor for `m` (dispatch once per span of groups).
 template <class T, class Fn>
 inline auto with_material(const MaterialParams<T>& m, Fn&& f) {
     switch (m.kind) {
-        case MaterialKind::NeoHookean: return f(NeoHookean<T>{m.p[0], m.p[1]});
-        case MaterialKind::MooneyRivlin: return f(MooneyRivlin<T>(m.p[0], m.p[1], m.p[2]));
-        case MaterialKind::Polynomial:
-            return f(Polynomial<T>{m.p[0], m.p[1], m.p[2], m.p[3], m.p[4], m.p[5]});
-        case MaterialKind::ArrudaBoyce: return f(ArrudaBoyce<T>{m.p[0], m.p[1], m.p[2]});
-        case MaterialKind::TransverselyIsotropic:
-            return f(TransverselyIsotropic<T>{m.p[0], m.p[1], m.p[2], {m.p[3], m.p[4], m.p[5]}});
-        case MaterialKind::NeoHookeanCoupled: return f(NeoHookeanCoupled<T>{m.p[0], m.p[1]});
-        case MaterialKind::StVenantKirchhoff: return f(StVenantKirchhoff<T>{m.p[0], m.p[1]});
-        case MaterialKind::LinearElastic: default: return f(LinearElastic<T>{m.p[0], m.p[1]});
+        case MaterialKind::NeoHookean: return f(make_material<NeoHookean<T>>(m));
+        case MaterialKind::MooneyRivlin: return f(make_material<MooneyRivlin<T>>(m));
+        case MaterialKind::Polynomial: return f(make_material<Polynomial<T>>(m));
+        case MaterialKind::ArrudaBoyce: return f(make_material<ArrudaBoyce<T>>(m));
+        case MaterialKind::TransverselyIsotropic: return f(make_material<TransverselyIsotropic<T>>(m));
+        case MaterialKind::NeoHookeanCoupled: return f(make_material<NeoHookeanCoupled<T>>(m));
+        case MaterialKind::StVenantKirchhoff: return f(make_material<StVenantKirchhoff<T>>(m));
+        case MaterialKind::LinearElastic: default: return f(make_material<LinearElastic<T>>(m));
     }
 }
 

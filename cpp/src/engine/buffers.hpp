@@ -69,8 +69,8 @@ private:
 /// The model's arrays that the kernels read, on the device.
 template <class T, class Dev>
 struct ModelBuffers {
-    DeviceBuffer<index_t, Dev> elem_nodes, elem_id, inc_off, inc_idx, pcurve, co, cdof, ccurve,
-        cnodes, cbits, pf_off, pf_idx, pnodes, pslot;
+    DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, pcurve, co, cdof,
+        ccurve, cnodes, cbits, pf_off, pf_idx, pnodes, pslot;
     DeviceBuffer<T, Dev> elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
         patterns, cval, pedges, pvalue, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
@@ -82,6 +82,7 @@ struct ModelBuffers {
         auto R = [&](const std::vector<T>& v) { return DeviceBuffer<T, Dev>::mirror(d, v); };
         auto D = [&](const std::vector<double>& v) { return DeviceBuffer<double, Dev>::mirror(d, v); };
         elem_nodes = I(m.elem_nodes), elem_id = I(m.elem_id), inc_off = I(m.inc_offsets);
+        block_group = I(m.block_group);
         inc_idx = I(m.inc_index), pcurve = I(m.pattern_curve), co = I(m.cons_offsets);
         cdof = I(m.cons_dof), ccurve = I(m.cons_curve), cnodes = I(m.contact_nodes);
         cbits = I(m.contact_bits), pf_off = I(m.pface_offsets), pf_idx = I(m.pface_index);

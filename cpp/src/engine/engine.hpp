@@ -50,6 +50,9 @@ struct DeviceView {
     int n_curves, n_factors, n_tools, visco_w;
     ElementData<T> el;
     const index_t* elem_id;
+    const index_t* block_group;         // block → material group
+    const MaterialParams<T>* mats;      // per group (scaled moduli: scale_materials)
+    const Prony<T>* prony;              // per group
     NodeData<T> nodes, relax_nodes;  // physical / dynamic-relaxation inverse masses
     const T *mass, *relax_mass, *free_mask, *node_volume, *cval;
     const index_t *co, *cdof, *ccurve, *pattern_curve, *cnodes, *cbits;
@@ -66,6 +69,14 @@ struct DeviceView {
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
 enum class Variant { Plain, Visco, Anp };
+
+/// Consecutive blocks whose groups share a material kind and variant: one launch. The kernels
+/// read each block's material parameters from the device, so groups that differ only in their
+/// values (the copies of a batch, a model's element sets of one kind) cost a single launch.
+struct Span {
+    index_t block_begin, block_end;
+    index_t group;  // the first group (its kind decides the element function)
+};
 
 /// Contact nodes per chunk: each chunk sums its per-tool forces, chunks are summed in order.
 constexpr index_t kContactChunk = 512;
@@ -114,11 +125,11 @@ public:
     void copy(T* dst, const T* src, std::size_t n);
     void fill(T* dst, T value, std::size_t n);
     template <class M, Variant V>
-    void launch_pressure(const Group<T>& g, const M& mat, const T* u);
+    void launch_pressure(const Span& sp, const T* u);
     template <class M, Variant V>
-    void launch_forces(const Group<T>& g, const M& mat, const T* u, ViscoMode visco_mode, double dt);
+    void launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt);
     template <class M, Variant V>
-    void launch_measures(const Group<T>& g, const M& mat, const T* u, double dt, T* out);
+    void launch_measures(const Span& sp, const T* u, double dt, T* out);
 
 private:
     template <class Visitor>
@@ -128,10 +139,12 @@ private:
     void set_scalars(double t0, double dt, double alpha);
     void ensure_history(long rows);
     void refresh_view();
+    void upload_materials();
 
     const Model<T>& m_;
     Dev dev_;
     std::vector<Group<T>> groups_;     // the model's, with scaled moduli (scale_materials)
+    std::vector<Span> spans_;          // launches of the element kernels
     std::vector<RigidTool> tools_;     // the model's, with replaced keyframes (set_tool_keys)
     ModelBuffers<T, Dev> mb_;
     DeviceBuffer<RigidTool, Dev> d_tools_;
@@ -140,6 +153,8 @@ private:
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_;
+    DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
+    DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceView<T> v_{};
     Phase phase_;
     const State<T>* resident_ = nullptr;  // the state whose values the device holds

@@ -36,6 +36,21 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     d_keys_.upload(m.tool_keys.data(), m.tool_keys.size());
     const std::vector<index_t> none(nc, -1);
     ctool_.upload(none.data(), nc);
+    const std::size_t ng = groups_.size();
+    std::vector<Prony<T>> prony(ng);
+    for (std::size_t g = 0; g < ng; ++g) {  // spans: runs of groups of one kind and variant
+        const Group<T>& a = groups_[g];
+        prony[g] = a.visco;
+        const Group<T>* last = spans_.empty() ? nullptr : &groups_[spans_.back().group];
+        if (last && a.material.kind == last->material.kind &&
+            (a.visco.terms() > 0) == (last->visco.terms() > 0))
+            spans_.back().block_end = a.block_end;
+        else spans_.push_back({groups_[g].block_begin, groups_[g].block_end, static_cast<index_t>(g)});
+    }
+    d_prony_ = DeviceBuffer<Prony<T>, Dev>(dev_, ng);
+    d_prony_.upload(prony.data(), ng);
+    d_mats_ = DeviceBuffer<MaterialParams<T>, Dev>(dev_, ng);
+    upload_materials();
     ensure_history(1);
     refresh_view();
     const std::vector<T> ones(S, T(1));  // J before any step: every element fine
@@ -57,6 +72,9 @@ void Engine<T, Dev>::refresh_view() {
     v.visco_w = 6 * m.visco_terms;
     v.el = {mb_.elem_nodes.data(), mb_.elem_grad.data(), mb_.elem_vol.data()};
     v.elem_id = mb_.elem_id.data();
+    v.block_group = mb_.block_group.data();
+    v.mats = d_mats_.data();
+    v.prony = d_prony_.data();
     v.nodes = {mb_.inc_off.data(), mb_.inc_idx.data(), mb_.inv_mass.data(), mb_.patterns.data(),
                m.n_load_patterns, mb_.pf_off.data(), mb_.pf_idx.data(), mb_.pnodes.data(),
                mb_.pedges.data(), mb_.pvalue.data(), mb_.pslot.data()};
@@ -241,8 +259,8 @@ ElementResults<T> Engine<T, Dev>::measures(const State<T>& s) {
         if (m_.anp) {  // T4ANP: the stresses the forces see, with the averaged pressure
             forces(u, ViscoMode::Stored, s.dt);
         }
-        dispatch([&]<class M_, Variant V>(const Group<T>& g, const M_& mat) {
-            launch_measures<M_, V>(g, mat, u, s.dt, out.data());
+        dispatch([&]<class M_, Variant V>(const Span& sp) {
+            launch_measures<M_, V>(sp, u, s.dt, out.data());
         });
         dev_.barrier();
     });
@@ -322,6 +340,15 @@ void Engine<T, Dev>::scale_materials(double factor) {
         for (int k = 0; k < kMaterialParams; ++k)
             mat.p[k] = T(double(m_.groups[g].material.p[k]) * (is_modulus(mat.kind, k) ? factor : 1.0));
     }
+    upload_materials();
+}
+
+/// The groups' material parameters to the device (where the element kernels read them).
+template <class T, class Dev>
+void Engine<T, Dev>::upload_materials() {
+    std::vector<MaterialParams<T>> mats(groups_.size());
+    for (std::size_t g = 0; g < groups_.size(); ++g) mats[g] = groups_[g].material;
+    d_mats_.upload(mats.data(), mats.size());
 }
 
 }  // namespace pliant

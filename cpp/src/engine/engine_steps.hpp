@@ -44,29 +44,31 @@ void Engine<T, Dev>::step_scalars(double time_dt, bool fixed_row) {
     });
 }
 
-/// Calls visit.template operator()<M, Variant>(group, material) for every material group: the one
-/// place where material kinds, viscoelasticity and T4ANP choose the element function.
+/// Calls visit.template operator()<M, Variant>(span) for every span of groups: the one place where
+/// material kinds, viscoelasticity and T4ANP choose the element function.
 template <class T, class Dev>
 template <class Visitor>
 void Engine<T, Dev>::dispatch(Visitor&& visit) {
-    for (const Group<T>& g : groups_) {
+    for (const Span& sp : spans_) {
+        const Group<T>& g = groups_[sp.group];
         with_material(g.material, [&](const auto& mat) {
             using M = std::decay_t<decltype(mat)>;
             if constexpr (M::decoupled) {
-                if (g.visco.terms() > 0) return visit.template operator()<M, Variant::Visco>(g, mat);
-                if (m_.anp) return visit.template operator()<M, Variant::Anp>(g, mat);
+                if (g.visco.terms() > 0) return visit.template operator()<M, Variant::Visco>(sp);
+                if (m_.anp) return visit.template operator()<M, Variant::Anp>(sp);
             }
-            return visit.template operator()<M, Variant::Plain>(g, mat);
+            return visit.template operator()<M, Variant::Plain>(sp);
         });
     }
 }
 
 template <class T, class Dev>
 template <class M, Variant V>
-void Engine<T, Dev>::launch_pressure(const Group<T>& g, const M& mat, const T* u) {
+void Engine<T, Dev>::launch_pressure(const Span& sp, const T* u) {
     if constexpr (V == Variant::Anp) {
         const DeviceView<T> v = v_;
-        dev_.blocks(g.block_begin, g.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+        dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+            const M mat = make_material<M>(v.mats[v.block_group[b]]);
             element_pressure(b, l, mat, v.el, u, v.P, v.elem_p);
         });
     }
@@ -74,14 +76,14 @@ void Engine<T, Dev>::launch_pressure(const Group<T>& g, const M& mat, const T* u
 
 template <class T, class Dev>
 template <class M, Variant V>
-void Engine<T, Dev>::launch_forces(const Group<T>& g, const M& mat, const T* u,
-                                   ViscoMode visco_mode, double dt) {
+void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
-    const Prony<T> pr = g.visco;
     const T tdt = T(dt);
-    dev_.blocks(g.block_begin, g.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
-        (void)pr, (void)tdt, (void)visco_mode, (void)v, (void)mat, (void)u;  // captured before any `if constexpr` (nvcc)
+    dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+        (void)tdt, (void)visco_mode, (void)v, (void)u;  // captured before any `if constexpr` (nvcc)
+        const M mat = make_material<M>(v.mats[v.block_group[b]]);
         if constexpr (V == Variant::Visco) {
+            const Prony<T>& pr = v.prony[v.block_group[b]];
             const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, visco_mode};
             element_forces(b, l, vm, v.el, u, v.P, v.f_elem, v.J);
         } else if constexpr (V == Variant::Anp) {
@@ -97,16 +99,14 @@ void Engine<T, Dev>::launch_forces(const Group<T>& g, const M& mat, const T* u,
 template <class T, class Dev>
 void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
     if (m_.anp) {
-        dispatch([&]<class M, Variant V>(const Group<T>& g, const M& mat) { launch_pressure<M, V>(g, mat, u); });
+        dispatch([&]<class M, Variant V>(const Span& sp) { launch_pressure<M, V>(sp, u); });
         dev_.barrier();
         const DeviceView<T> v = v_;
         dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
             v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.nodes.inc_index, v.elem_p, v.node_volume);
         });
     }
-    dispatch([&]<class M, Variant V>(const Group<T>& g, const M& mat) {
-        launch_forces<M, V>(g, mat, u, visco_mode, dt);
-    });
+    dispatch([&]<class M, Variant V>(const Span& sp) { launch_forces<M, V>(sp, u, visco_mode, dt); });
     dev_.barrier();
 }
 
@@ -264,16 +264,17 @@ void Engine<T, Dev>::fill(T* dst, T value, std::size_t n) {
 /// E (6)); viscoelastic groups use their stored state, T4ANP the averaged pressure.
 template <class T, class Dev>
 template <class M, Variant V>
-void Engine<T, Dev>::launch_measures(const Group<T>& g, const M& mat, const T* u, double dt, T* out) {
+void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* out) {
     const DeviceView<T> v = v_;
-    const Prony<T> pr = g.visco;
     const T tdt = T(dt);
-    dev_.blocks(g.block_begin, g.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
-        (void)pr, (void)tdt, (void)mat, (void)u, (void)out;  // captured before any `if constexpr` (nvcc)
+    dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+        (void)tdt, (void)u, (void)out;  // captured before any `if constexpr` (nvcc)
         const index_t e = v.elem_id[b * kLanes + l];
         if (e < 0) return;
+        const M mat = make_material<M>(v.mats[v.block_group[b]]);
         ElementMeasures<T> r;
         if constexpr (V == Variant::Visco) {
+            const Prony<T>& pr = v.prony[v.block_group[b]];
             const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes,
                                          ViscoMode::Stored};
             r = element_measures(b, l, vm, v.el, u, v.P);

@@ -48,15 +48,21 @@ class SceneCase:
                             inspect=lambda m, s, st: self._inspect(m, s, st, run_dir))
         return _flatten(summary)
 
+    def point_outputs(self, X: np.ndarray, u: np.ndarray) -> dict[str, Any]:
+        """Displacement [m] at the node nearest each named point (first on ties) of a body with
+        reference positions X [m] and displacements u [m], shapes (N, 3)."""
+        out: dict[str, Any] = {}
+        for name, p in self.outputs.points.items():
+            node = int(np.argmin(np.einsum("ij,ij->i", X - p, X - p)))
+            out.update({f"point.{name}.u{c}": float(u[node, j]) for j, c in enumerate("xyz")})
+            out[f"point.{name}.node"] = node
+        return out
+
     def _inspect(self, model, solver, state, run_dir: Path | None) -> dict[str, Any]:
         """Outputs that need the final state: displacement at named points, force histories, and
         (with fields) the final fields saved for the dataset."""
-        out: dict[str, Any] = {}
         X, u = model.reference_positions, state.displacements
-        for name, p in self.outputs.points.items():
-            node = int(np.argmin(np.einsum("ij,ij->i", X - p, X - p)))  # nearest node, first on ties
-            out.update({f"point.{name}.u{c}": float(u[node, j]) for j, c in enumerate("xyz")})
-            out[f"point.{name}.node"] = node
+        out = self.point_outputs(X, u)
         if self.outputs.tool_history and model.tools:
             for tool, H in zip(model.tools, solver.contact_report().tools):
                 out[f"tool.{tool.name}.time"] = H.time.tolist()

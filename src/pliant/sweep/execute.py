@@ -116,13 +116,28 @@ def _client(scheduler: str | None, workers: int | None, threads: int):
         yield client
 
 
+def _submit(client, case: Callable, runs: list[dict], todo: list[int], out: Path, fingerprint: str,
+            fields: bool, batch: int) -> dict:
+    """One task per run, or per ``batch`` runs (run together by pliant.sweep.batched)."""
+    if batch > 1:
+        from .batched import run_batch
+
+        chunks = [todo[i:i + batch] for i in range(0, len(todo), batch)]
+        return {client.submit(run_batch, case, ids, [runs[i] for i in ids],
+                              key=f"pliant-{fingerprint}-batch-{ids[0]}", pure=False): ids
+                for ids in chunks}
+    return {client.submit(run_one, case, i, runs[i], str(out / "runs" / f"{i:05d}") if fields else None,
+                          key=f"pliant-{fingerprint}-run-{i}", pure=False): [i] for i in todo}
+
+
 def execute(runs: list[dict[str, Any]], case: Callable, out, *, fingerprint: str = "",
             threads: int = 1, fields: bool = False, scheduler: str | None = None,
-            workers: int | None = None, retry_failed: bool = False,
+            workers: int | None = None, retry_failed: bool = False, batch: int = 1,
             on_record: Callable[[dict, int, int], None] | None = None) -> list[dict]:
     """Run ``case`` for each of ``runs`` (parameter dicts) on Dask, skipping those recorded in
-    ``out`` by an earlier call with the same ``fingerprint``. ``on_record(record, done, total)``
-    follows progress. Returns every run's record, in run order (the parameters included)."""
+    ``out`` by an earlier call with the same ``fingerprint``; ``batch`` > 1 runs that many together
+    (a SceneCase: one model, pliant.sweep.batched). ``on_record(record, done, total)`` follows
+    progress. Returns every run's record, in run order (the parameters included)."""
     out = make_output_dir(out)
     _check_manifest(out, fingerprint, runs)
     (out / "runs").mkdir(exist_ok=True)
@@ -134,22 +149,21 @@ def execute(runs: list[dict[str, Any]], case: Callable, out, *, fingerprint: str
         from distributed import as_completed
 
         with _client(scheduler, workers, threads) as client:
-            futures = {client.submit(run_one, case, i, runs[i],
-                                     str(out / "runs" / f"{i:05d}") if fields else None,
-                                     key=f"pliant-{fingerprint}-run-{i}", pure=False): i
-                       for i in todo}
+            futures = _submit(client, case, runs, todo, out, fingerprint, fields, batch)
             for fut in as_completed(futures):
-                i = futures[fut]
                 try:
-                    rec = fut.result()
+                    got = fut.result()
+                    got = got if isinstance(got, list) else [got]
                 except Exception as e:  # noqa: BLE001 (a task Dask gave up on: KilledWorker...)
-                    rec = {"run": i, "status": "failed", "wall_time": None,
-                           "error": one_line(f"{type(e).__name__}: {e}")}
-                rec = {"run": i, **runs[i], **rec}
-                atomic_write_text(out / "runs" / f"{i:05d}.json", json.dumps(rec))
-                records[i] = rec
-                if on_record:
-                    on_record(rec, len(records), len(runs))
+                    got = [{"run": i, "status": "failed", "wall_time": None,
+                            "error": one_line(f"{type(e).__name__}: {e}")} for i in futures[fut]]
+                for rec in got:
+                    i = rec["run"]
+                    rec = {"run": i, **runs[i], **rec}
+                    atomic_write_text(out / "runs" / f"{i:05d}.json", json.dumps(rec))
+                    records[i] = rec
+                    if on_record:
+                        on_record(rec, len(records), len(runs))
     return [records[i] for i in range(len(runs))]
 
 

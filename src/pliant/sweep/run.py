@@ -56,7 +56,8 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
 
         records = execute(runs, SceneCase.from_spec(spec), out, fingerprint=spec.fingerprint(),
                           threads=spec.threads, fields=spec.outputs.fields, scheduler=scheduler,
-                          workers=workers, retry_failed=retry_failed, on_record=follow)
+                          workers=workers, retry_failed=retry_failed, batch=spec.batch,
+                          on_record=follow)
     result = SweepResult(records_table(records, out), ["results.parquet", "runs/", "sweep.json"])
     if spec.outputs.fields:
         from .dataset import write_dataset

@@ -95,6 +95,7 @@ class SweepSpec:
     threads: int = 1
     ignore: tuple[str, ...] = ()
     source: str = ""
+    batch: int = 1  # runs stepped together in one model (pliant.sweep.batched)
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the runs' results (the spec and the base file's
@@ -102,7 +103,8 @@ class SweepSpec:
         base = self.base.read_bytes() if self.base.is_file() else b""
         spec = json.dumps({"parameters": [p.__dict__ for p in self.parameters],
                            "design": self.design.__dict__, "fixed": self.fixed,
-                           "outputs": self.outputs.__dict__, "ignore": self.ignore},
+                           "outputs": self.outputs.__dict__, "ignore": self.ignore,
+                           "batch": self.batch},
                           sort_keys=True, default=str)
         return hashlib.sha256(spec.encode() + b"\0" + base).hexdigest()[:16]
 
@@ -119,8 +121,8 @@ def load_sweep(path) -> SweepSpec:
         raise SceneError(f"not valid TOML: {e}", str(path)) from None
     ctx = Ctx(str(path), text)
     check_keys(ctx, data, "", {"base": "str", "threads": "int", "ignore": "list", "design": "table",
-                               "parameter": "list", "set": "table", "output": "table"},
-               ("base", "parameter"))
+                               "parameter": "list", "set": "table", "output": "table",
+                               "batch": "int"}, ("base", "parameter"))
     base = (path.parent / data["base"]).resolve()
     if not base.is_file():
         raise ctx.error("base", f"no such scene or NiftySim model: {base}")
@@ -142,7 +144,8 @@ def load_sweep(path) -> SweepSpec:
     if not all(isinstance(x, str) for x in ignore):
         raise ctx.error("ignore", "expected a list of NiftySim feature names")
     spec = SweepSpec(base, params, design, dict(data.get("set", {})),
-                     _outputs(ctx, data.get("output", {})), threads, tuple(ignore), str(path))
+                     _outputs(ctx, data.get("output", {})), threads, tuple(ignore), str(path),
+                     _batch(ctx, data))
     _check_key_paths(ctx, spec)
     return spec
 
@@ -183,6 +186,20 @@ def _check_key_paths(ctx: Ctx, spec: SweepSpec) -> None:
         except InputError as e:
             raise SceneError(f"{key!r} does not fit the base file: {e}", ctx.file, where[key],
                              ctx.line_of(where[key].split(".")[0])) from None
+
+
+def _batch(ctx: Ctx, data: dict) -> int:
+    """Runs per batch: 1 (alone) or more, without per-run fields or force histories (a batch
+    reports each run's closing figures)."""
+    batch = data.get("batch", 1)
+    if batch < 1:
+        raise ctx.error("batch", f"batch = {batch}: expected at least 1 run per batch")
+    out = data.get("output", {})
+    for key in ("fields", "tool_history"):
+        if batch > 1 and out.get(key):
+            raise ctx.error(f"output.{key}", f"{key} = true needs each run alone; expected batch "
+                            "= 1 (a batch reports each run's closing figures)")
+    return batch
 
 
 def _design(ctx: Ctx, d: dict) -> Design:
