@@ -308,3 +308,21 @@ def test_batched_sweep_equals_runs_alone(bar_sweep, tmp_path):
     with pytest.raises(Exception, match="needs each run alone"):
         bar_sweep.write_text("batch = 2\n" + SWEEP.format(Es=ES) + "fields = true\n")
         load_sweep(bar_sweep)
+
+
+def test_existing_scheduler_by_address(bar_sweep, tmp_path):
+    """--scheduler: the runs go to a cluster started elsewhere (here a LocalCluster of this test),
+    with the same numbers; a malformed address is refused naming it (exit 2)."""
+    from distributed import LocalCluster
+
+    spec = load_sweep(bar_sweep)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as c:
+        there = run_sweep(spec, tmp_path / "there", scheduler=c.scheduler_address,
+                          progress=False).table
+    here = run_sweep(spec, tmp_path / "here", workers=2, progress=False).table
+    for col in ("max_displacement", "strain_energy", "point.tip.uz"):
+        pd.testing.assert_series_equal(there[col], here[col])
+    r = subprocess.run([str(PLIANT), "sweep", str(bar_sweep), "-o", str(tmp_path / "bad"),
+                        "--scheduler", "nonsense://nowhere", "--no-progress"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "nonsense://nowhere" in r.stderr and "Traceback" not in r.stderr, r.stderr
