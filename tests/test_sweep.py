@@ -212,6 +212,14 @@ def _ishigami_free(params, run_dir):
      'key = "solver.damping"\nrange = [1.0, 2.0]\n', "power of 2"),
     ('base = "nothere.toml"\n[[parameter]]\nkey = "solver.damping"\nvalues = [1.0]\n', "no such"),
     ('base = "base.toml"\n[[parameter]]\nkey = "solver..damping"\nvalues = [1.0]\n', "segment"),
+    ('base = "base.toml"\n' + "".join(f'[[parameter]]\nkey = "solver.x{i}"\nvalues = {list(range(60))}\n'
+                                       for i in range(8)), "expected at most 1,000,000"),  # 60^8 runs
+    ('base = "base.toml"\n[design]\ntype = "lhs"\nsamples = 1000000000\n[[parameter]]\n'
+     'key = "solver.damping"\nrange = [1.0, 2.0]\n', "expected at most 1,000,000"),
+    ('base = "base.toml"\nthreads = 1000000\n[[parameter]]\nkey = "solver.damping"\nvalues = [1.0]\n',
+     "threads per run"),
+    ('base = "base.toml"\n[[parameter]]\nkey = "solver.damping"\n', "takes explicit values"),
+    ('base = "base.toml"\nparameter = 3\n', "parameter"),
 ])
 def test_bad_sweep_files_exit_2_naming_the_key(tmp_path, text, culprit):
     (tmp_path / "base.toml").write_text(BASE.format(E=5.0e5, F=-0.5))

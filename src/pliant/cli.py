@@ -11,6 +11,7 @@ import json
 import os
 import platform
 import sys
+import time
 from pathlib import Path
 from typing import Optional
 
@@ -140,10 +141,15 @@ def sweep(spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene,
     """Run a parameter sweep on Dask: OUT/results.parquet (a row per run), resumable."""
     from .sweep import load_sweep, run_sweep
 
-    if workers is not None and workers < 1:
-        _fail(InputError(f"--workers {workers}: expected at least 1"), 2)
+    limit = int(_core.thread_limit())
+    if workers is not None and not 1 <= workers <= limit:
+        _fail(InputError(f"--workers {workers}: expected 1 to {limit} on this machine"), 2)
+    t0 = time.perf_counter()
     try:
         sp = load_sweep(spec)
+        if workers is not None and workers * sp.threads > limit:
+            raise InputError(f"--workers {workers} × threads {sp.threads} = {workers * sp.threads} "
+                             f"threads; expected at most {limit} on this machine")
         if analyze and sp.design.type != "saltelli":
             raise InputError(f"{spec}: --analyze computes Sobol indices from a 'saltelli' design; "
                              f"this sweep's design is '{sp.design.type}'")
@@ -156,9 +162,9 @@ def sweep(spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene,
     bad = result.failed
     for _, row in bad.head(5).iterrows():
         err_console.print(f"run {row['run']} failed: {escape(str(row['error']))}", highlight=False)
-    console.print(f"{len(result.table)} runs: {len(result.table) - len(bad)} done, {len(bad)} failed; "
-                  f"results in [bold]{escape(str(out))}[/] ({', '.join(result.files)})",
-                  highlight=False)
+    console.print(f"{len(result.table)} runs: {len(result.table) - len(bad)} done, {len(bad)} failed, "
+                  f"in {time.perf_counter() - t0:.1f} s; results in [bold]{escape(str(out))}[/] "
+                  f"({', '.join(result.files)})", highlight=False)
     if len(bad):
         raise typer.Exit(1)
 

@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .. import _core
 from ..scene.schema import Ctx, SceneError, check_keys, vector
 
 if sys.version_info >= (3, 11):
@@ -45,6 +46,7 @@ __all__ = ["Parameter", "Design", "Outputs", "SweepSpec", "load_sweep", "DESIGNS
 
 DESIGNS = ("grid", "list", "lhs", "sobol", "saltelli")
 _SAMPLED = ("lhs", "sobol", "saltelli")
+MAX_RUNS = 1_000_000  # a sweep's runs are listed in memory and on disk (a record each)
 
 
 @dataclass(frozen=True)
@@ -127,8 +129,9 @@ def load_sweep(path) -> SweepSpec:
     if not base.is_file():
         raise ctx.error("base", f"no such scene or NiftySim model: {base}")
     threads = data.get("threads", 1)
-    if threads < 1:
-        raise ctx.error("threads", f"threads = {threads}: expected at least 1 thread per run")
+    limit = int(_core.thread_limit())
+    if not 1 <= threads <= limit:
+        raise ctx.error("threads", f"threads = {threads}: expected 1 to {limit} threads per run")
     design = _design(ctx, data.get("design", {}))
     params = [_parameter(ctx, p, f"parameter[{i}]", design) for i, p in enumerate(data["parameter"])]
     if not params:
@@ -140,6 +143,9 @@ def load_sweep(path) -> SweepSpec:
     if design.type == "list" and len({len(p.values) for p in params}) > 1:
         raise ctx.error("parameter", "a 'list' design pairs the i-th values of every parameter; "
                         f"expected lists of one length (got {[len(p.values) for p in params]})")
+    n = _run_count(design, params)
+    if n > MAX_RUNS:
+        raise ctx.error("design", f"the design makes {n:.3g} runs; expected at most {MAX_RUNS:,}")
     ignore = data.get("ignore", [])
     if not all(isinstance(x, str) for x in ignore):
         raise ctx.error("ignore", "expected a list of NiftySim feature names")
@@ -188,12 +194,21 @@ def _check_key_paths(ctx: Ctx, spec: SweepSpec) -> None:
                              ctx.line_of(where[key].split(".")[0])) from None
 
 
+def _run_count(design: Design, params: list[Parameter]) -> int:
+    """Runs the design makes (counted, not listed)."""
+    if design.type == "grid":
+        return math.prod(len(p.values) for p in params)
+    if design.type == "list":
+        return len(params[0].values)
+    return design.samples * (len(params) + 2) if design.type == "saltelli" else design.samples
+
+
 def _batch(ctx: Ctx, data: dict) -> int:
     """Runs per batch: 1 (alone) or more, without per-run fields or force histories (a batch
     reports each run's closing figures)."""
     batch = data.get("batch", 1)
-    if batch < 1:
-        raise ctx.error("batch", f"batch = {batch}: expected at least 1 run per batch")
+    if not 1 <= batch <= MAX_RUNS:
+        raise ctx.error("batch", f"batch = {batch}: expected 1 to {MAX_RUNS:,} runs per batch")
     out = data.get("output", {})
     for key in ("fields", "tool_history"):
         if batch > 1 and out.get(key):
