@@ -120,6 +120,9 @@ void Model<T>::build_masses(const ModelInput& in, const NodeSums& sums) {
     const std::size_t P = static_cast<std::size_t>(n_pad);
     const std::vector<double>&mass_d = sums.mass, &stiff_d = sums.stiff, &vol_d = sums.vol;
     anp = in.anp;
+    if (!(in.stiffness_damping >= 0.0 && std::isfinite(in.stiffness_damping)))
+        throw std::invalid_argument("stiffness damping must be finite and >= 0 [s]");
+    stiffness_damping = in.stiffness_damping;
     if (anp && visco_terms > 0)
         throw std::invalid_argument("average nodal pressure (T4ANP) and viscoelastic materials "
                                     "cannot be combined yet");

@@ -55,6 +55,7 @@ struct ModelInput {
     std::vector<double> press_value;       // [Pa] per triangle (positive: against its normal)
     std::vector<index_t> press_curve;      // curve per triangle
     bool anp = false;                      // average nodal pressure (T4ANP)
+    double stiffness_damping = 0.0;        // Rayleigh β [s] (tled.hpp: add_damping_forces)
 };
 
 template <class T>
@@ -77,6 +78,7 @@ struct Model {
     std::vector<index_t> pface_offsets, pface_index, press_nodes, press_slot;
     std::vector<T> press_edges, press_value;
     bool anp = false;                  // average nodal pressure tetrahedra (T4ANP)
+    double stiffness_damping = 0.0;    // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
     int visco_terms = 0;               // max Prony terms of any group: the State's q holds 6 each
     std::vector<T> node_volume;        // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node

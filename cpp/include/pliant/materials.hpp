@@ -5,7 +5,8 @@
 //   pk2(k)    second Piola–Kirchhoff stress S [Pa]
 //   pk1(k)    first Piola–Kirchhoff stress P = F S [Pa] (what TLED's nodal forces need)
 //   energy(k) strain-energy density W [J/m³ = Pa]
-// and the parameter-only `dilatational_modulus()` = λ + 2μ [Pa] for the critical time step.
+// and the parameter-only `dilatational_modulus()` = λ + 2μ [Pa] for the critical time step and
+// `shear_modulus()` = μ [Pa] at small strain (with it, stiffness-proportional damping's viscous stress).
 // Conventions: C = FᵀF = I + 2E, J = det F, I1 = tr C, I2 = ½(I1² − tr C²), Ī1 = J^(−2/3) I1,
 // Ī2 = J^(−4/3) I2.
 //
@@ -92,6 +93,7 @@ struct NeoHookean {
     T mu, K;
     static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(4) / T(3) * mu; }
+    PLIANT_HD T shear_modulus() const { return mu; }
     PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }  // U'(J)
     PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
         return scale(T(2) * mu * inv_cbrt(k.J * k.J), mul_commuting(Ci, dev(k.E)));
@@ -145,6 +147,7 @@ struct Polynomial {
     T C10, C01, C20, C02, C11, K;
     static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * (C10 + C01); }
+    PLIANT_HD T shear_modulus() const { return T(2) * (C10 + C01); }
     PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }
     PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
         const T j23 = inv_cbrt(k.J * k.J);
@@ -186,6 +189,7 @@ struct ArrudaBoyce {
     }
     static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * W1(T(3)); }
+    PLIANT_HD T shear_modulus() const { return T(2) * W1(T(3)); }
     PLIANT_HD T pressure(const Kinematics<T>& k) const {  // U'(J) = K/2 (J − 1/J)
         return K / T(2) * k.Jm1 * (k.J + T(1)) / k.J;
     }
@@ -217,6 +221,7 @@ struct TransverselyIsotropic {
     T mu, K, eta, a[3];
     static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(4) / T(3) * mu + T(4) * eta; }
+    PLIANT_HD T shear_modulus() const { return mu; }  // of the matrix (the fibre adds along a)
     PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }
     PLIANT_HD T I4(const Kinematics<T>& k) const {  // a·Ca = 1 + 2 a·Ea
         const Sym3<T>& E = k.E;
@@ -249,6 +254,7 @@ struct NeoHookeanCoupled {
     T mu, lambda;
     static constexpr bool decoupled = false;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
+    PLIANT_HD T shear_modulus() const { return mu; }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         const Sym3<T> Ci = inverse_cauchy_green(k);
         return axpby(T(2) * mu, mul_commuting(Ci, k.E), lambda * log_J(k.Jm1), Ci);
@@ -267,6 +273,7 @@ struct StVenantKirchhoff {
     T mu, lambda;
     static constexpr bool decoupled = false;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
+    PLIANT_HD T shear_modulus() const { return mu; }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         return add_identity(lambda * trace(k.E), scale(T(2) * mu, k.E));
     }
@@ -285,6 +292,7 @@ struct LinearElastic {
     T mu, lambda;
     static constexpr bool decoupled = false;
     PLIANT_HD T dilatational_modulus() const { return lambda + T(2) * mu; }
+    PLIANT_HD T shear_modulus() const { return mu; }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         const Sym3<T> e = sym(k.H);
         return add_identity(lambda * trace(e), scale(T(2) * mu, e));

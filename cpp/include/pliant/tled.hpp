@@ -54,15 +54,10 @@ PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& 
     return H;
 }
 
-/// Kernel 1, one element per lane: element nodal forces f_a = V0 · F S ∇X N_a
-/// (Miller et al. 2007, CNME 23:121, eq. 12; Taylor et al. 2008, IEEE TMI 27(5), eq. 6).
-/// Inputs: material, element data, displacements u [m] SoA (3, P).
-/// Outputs: f_out [N] AoSoA K=12; J_out (det F, K=1) for the instability check.
-template <class T, class Material>
-PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                              const T* u, index_t P, T* f_out, T* J_out) {
-    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
-    const Mat3<T> Pk = mat.pk1(k);
+/// Element nodal forces of a first Piola–Kirchhoff stress Pk [Pa]: f_a = V0 · Pk ∇X N_a for
+/// a < 3 and f_3 = −Σ f_a, stored (Add = false) or added (Add = true) into f_out [N] AoSoA K=12.
+template <bool Add, class T>
+PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Mat3<T>& Pk, T* f_out) {
     const T V0 = el.vol[aosoa(b, l, 0, 1)];
     T g[9];
     PLIANT_UNROLL
@@ -74,12 +69,57 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
         for (int a = 0; a < 3; ++a) {
             const T fa = V0 * (Pk.a[3 * i] * g[3 * a] + Pk.a[3 * i + 1] * g[3 * a + 1] +
                                Pk.a[3 * i + 2] * g[3 * a + 2]);
-            f_out[aosoa(b, l, 3 * a + i, 12)] = fa;
+            if constexpr (Add) f_out[aosoa(b, l, 3 * a + i, 12)] += fa;
+            else f_out[aosoa(b, l, 3 * a + i, 12)] = fa;
             f3 -= fa;
         }
-        f_out[aosoa(b, l, 9 + i, 12)] = f3;
+        if constexpr (Add) f_out[aosoa(b, l, 9 + i, 12)] += f3;
+        else f_out[aosoa(b, l, 9 + i, 12)] = f3;
     }
+}
+
+/// Kernel 1, one element per lane: element nodal forces f_a = V0 · F S ∇X N_a
+/// (Miller et al. 2007, CNME 23:121, eq. 12; Taylor et al. 2008, IEEE TMI 27(5), eq. 6).
+/// Inputs: material, element data, displacements u [m] SoA (3, P).
+/// Outputs: f_out [N] AoSoA K=12; J_out (det F, K=1) for the instability check.
+template <class T, class Material>
+PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                              const T* u, index_t P, T* f_out, T* J_out) {
+    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
+    store_forces<false>(b, l, el, mat.pk1(k), f_out);
     J_out[aosoa(b, l, 0, 1)] = k.J;
+}
+
+/// Stiffness-proportional (Rayleigh β) damping as a viscous stress, added to the element forces:
+/// S_d = β (λ0 tr(Ė) I + 2μ0 Ė), Ė = sym(Fᵀ Ḟ), Ḟ = ∇X v with the half-step velocity
+/// v = (u − u⁻)/Δt, and f_a += V0 · F S_d ∇X N_a. At small strain this is C = βK with the
+/// material's small-strain moduli (μ0 = shear_modulus(), λ0 = dilatational_modulus() − 2μ0);
+/// rigid motion has Ė = 0 and is not damped (Belytschko, Liu & Moran 2000, §6.2.2 and Box 6.1;
+/// Abaqus/Explicit's β damping stress σ_d = β D^el : ε̇). Central differences with it are stable
+/// for Δt ≤ (2/ω_max)(√(1 + ξ²) − ξ), ξ = β ω_max / 2 (Belytschko et al. 2000, eq. 6.3.18).
+/// Inputs: material, element data, u and u⁻ [m] SoA (3, P), β/Δt [1]. Output: f_inout [N] (+=).
+template <class T, class Material>
+PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                                  const T* u, const T* u_prev, index_t P, T beta_over_dt, T* f_inout) {
+    const Mat3<T> H = displacement_gradient(b, l, el, u, P);
+    const Mat3<T> Hp = displacement_gradient(b, l, el, u_prev, P);
+    Mat3<T> FtFdot;  // Fᵀ Ḟ Δt, Ḟ Δt = H − H⁻, F = I + H
+    PLIANT_UNROLL
+    for (int i = 0; i < 3; ++i) {
+        PLIANT_UNROLL
+        for (int j = 0; j < 3; ++j) {
+            T s = H.a[3 * i + j] - Hp.a[3 * i + j];
+            PLIANT_UNROLL
+            for (int k = 0; k < 3; ++k) s += H.a[3 * k + i] * (H.a[3 * k + j] - Hp.a[3 * k + j]);
+            FtFdot.a[3 * i + j] = s;
+        }
+    }
+    const Sym3<T> Edt = sym(FtFdot);  // Ė Δt
+    const T mu = mat.shear_modulus(), lam = mat.dilatational_modulus() - T(2) * mu;
+    const Sym3<T> Sd = scale(beta_over_dt, add_identity(lam * trace(Edt), scale(T(2) * mu, Edt)));
+    Mat3<T> F = H;
+    F.a[0] += T(1), F.a[4] += T(1), F.a[8] += T(1);
+    store_forces<true>(b, l, el, mul(F, Sd), f_inout);
 }
 
 /// Average nodal pressure tetrahedron (T4ANP; Bonet & Burton 1998, Commun. Numer. Meth. Eng.

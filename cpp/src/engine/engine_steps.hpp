@@ -13,6 +13,7 @@ void Engine<T, Dev>::step_once(const Phase& ph, double dt, double time_dt, bool 
     step_scalars(time_dt, relaxing);
     const double w0 = dev_.wtime();
     forces(v_.u[ph.cur], relaxing ? ViscoMode::Relaxed : ViscoMode::Advance, dt);
+    if (m_.stiffness_damping > 0.0 && !relaxing) damping(ph, dt);
     const double w1 = dev_.wtime();
     node_pass(ph, relaxing, f_node_out);
     const double w2 = dev_.wtime();
@@ -108,6 +109,27 @@ void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
     }
     dispatch([&]<class M, Variant V>(const Span& sp) { launch_forces<M, V>(sp, u, visco_mode, dt); });
     dev_.barrier();
+}
+
+/// Stiffness-proportional damping (β [s]): each element's viscous forces from its half-step
+/// velocity (u − u⁻)/Δt, added to its element forces (tled.hpp: add_damping_forces).
+template <class T, class Dev>
+void Engine<T, Dev>::damping(const Phase& ph, double dt) {
+    const T* u = v_.u[ph.cur];
+    const T* u_prev = v_.u[ph.prev];
+    const T beta_over_dt = T(m_.stiffness_damping / dt);
+    dispatch([&]<class M, Variant V>(const Span& sp) { launch_damping<M, V>(sp, u, u_prev, beta_over_dt); });
+    dev_.barrier();
+}
+
+template <class T, class Dev>
+template <class M, Variant V>
+void Engine<T, Dev>::launch_damping(const Span& sp, const T* u, const T* u_prev, T beta_over_dt) {
+    const DeviceView<T> v = v_;
+    dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+        const M mat = make_material<M>(v.mats[v.block_group[b]]);
+        add_damping_forces(b, l, mat, v.el, u, u_prev, v.P, beta_over_dt, v.f_elem);
+    });
 }
 
 /// Kernel 2: per node, gather the element forces, central-difference update (u_next), then the

@@ -120,6 +120,7 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
     """The [solver] table: time, step, precision, backend, threads, quasi-static options, damping."""
     check_keys(ctx, solver, "solver", {
         "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
+        "stiffness_damping": "number",
         "nodal_pressure": "bool",
         "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
         "check_every": "int", "backend": "str"})
@@ -162,6 +163,10 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
     if damping < 0:
         raise ctx.error("solver.damping", "expected damping >= 0 [1/s]")
     scene.builder.damping = damping
+    beta = float(solver.get("stiffness_damping", 0.0))
+    if beta < 0:
+        raise ctx.error("solver.stiffness_damping", "expected stiffness_damping >= 0 [s]")
+    scene.builder.stiffness_damping = beta
     scene.builder.nodal_pressure = bool(solver.get("nodal_pressure", False))
 
 

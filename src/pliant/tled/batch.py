@@ -6,10 +6,10 @@ block's material parameters from memory, so that bodies of one material kind wit
 share a single launch (the leading batch dimension of the material parameters).
 
 The bodies do not interact (no contact between them). What a model holds once is shared and must
-be the same in every body: damping α, the element formulation (T4ANP or not), gravity and the rigid
-tools (each body meets the same tools; a tool's force history is the sum over the bodies: per-body
-forces come from :meth:`Batch.tool_forces`). One time step serves all: the smallest critical step
-of any body, unless a step is given.
+be the same in every body: damping (α and β), the element formulation (T4ANP or not), gravity and
+the rigid tools (each body meets the same tools; a tool's force history is the sum over the
+bodies: per-body forces come from :meth:`Batch.tool_forces`). One time step serves all: the
+smallest critical step of any body, unless a step is given.
 
     batch = Batch.replicate(builder, materials=[NeoHookean(E=E, nu=0.45) for E in (2e3, 4e3, 8e3)])
     sim = Simulation(batch.model)
@@ -49,6 +49,7 @@ def _check_shared(builders: list[ModelBuilder]) -> None:
     body that differs and the setting."""
     first = builders[0]
     shared = {"damping": lambda b: float(b.damping),
+              "stiffness_damping": lambda b: float(b.stiffness_damping),
               "nodal_pressure (T4ANP)": lambda b: bool(b.nodal_pressure),
               "gravity": lambda b: b._gravity,
               "tools": lambda b: [_tool_signature(t) for t in b.tools],
@@ -72,7 +73,8 @@ def merge_builders(builders: list[ModelBuilder]) -> tuple[ModelBuilder, np.ndarr
     _check_shared(builders)
     out = ModelBuilder()
     first = builders[0]
-    out.damping, out.nodal_pressure, out._gravity = first.damping, first.nodal_pressure, first._gravity
+    out.damping, out.stiffness_damping = first.damping, first.stiffness_damping
+    out.nodal_pressure, out._gravity = first.nodal_pressure, first._gravity
     out.tools = list(first.tools)
     node_off = np.concatenate([[0], np.cumsum([b.n_nodes for b in builders])]).astype(np.int64)
     elem_off = np.concatenate([[0], np.cumsum([b.n_elements for b in builders])]).astype(np.int64)

@@ -61,6 +61,9 @@ class ModelBuilder:
         self.tets = np.zeros((0, 4), dtype=np.int64)
         self.sets: list[_ElementSet] = []
         self.damping = 0.0  # mass-proportional damping α [1/s]
+        # Stiffness-proportional (Rayleigh β) damping [s]: a viscous stress β C0 : Ė per element
+        # that spares rigid motion; the critical time step shrinks with it (see Model.dt_critical).
+        self.stiffness_damping = 0.0
         # Average nodal pressure tetrahedra (T4ANP, NiftySim's element): the pressure of each
         # element is the mean of its nodes' volume-averaged pressures, which much reduces the
         # volumetric locking of linear tets in nearly incompressible tissue. Decoupled materials.
@@ -288,6 +291,10 @@ class ModelBuilder:
         a = float(self.damping)
         if not math.isfinite(a) or a < 0:
             raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")
+        beta = float(self.stiffness_damping)
+        if not math.isfinite(beta) or beta < 0:
+            raise InputError(f"stiffness_damping = {shown(self.stiffness_damping)}; expected a finite "
+                             "value >= 0 [s]")
         owner = np.full(self.n_elements, -1, dtype=np.int64)
         for k, s in enumerate(self.sets):
             clash = s.elements[owner[s.elements] >= 0]

@@ -8,6 +8,7 @@ array back, so users never see that order.
 from __future__ import annotations
 
 import hashlib
+import math
 import warnings
 from pathlib import Path
 
@@ -89,6 +90,14 @@ def _prony_row(prony) -> list[float]:
     return row
 
 
+def _damped_critical_step(dt0: float, beta: float) -> float:
+    """The critical step of central differences with stiffness-proportional damping β [s]:
+    Δt = (2/ω_max)(√(1 + ξ²) − ξ), ξ = β ω_max / 2 (Belytschko, Liu & Moran 2000, eq. 6.3.18),
+    with ω_max = 2/Δt0 from the undamped critical step Δt0 = min h/c [s]."""
+    xi = beta / dt0
+    return dt0 * (math.sqrt(1.0 + xi * xi) - xi)
+
+
 def _auto_threads(n_elements: int) -> int:
     """Threads for a model: all cores, but one per ~1,000 elements at most: every step has
     barriers (two to four) that cost a few microseconds each, more than a tiny model's work."""
@@ -110,8 +119,9 @@ class Model:
     """Static part of a simulation: mesh, materials, masses, constraints, loads (build it with
     :class:`~pliant.tled.builder.ModelBuilder`).
 
-    Attributes: ``n_nodes``, ``n_elements``, ``dtype``, ``damping`` α [1/s], ``dt_critical`` [s]
-    (smallest h_min/c_d over elements), ``dt_critical_element`` (user element index),
+    Attributes: ``n_nodes``, ``n_elements``, ``dtype``, ``damping`` α [1/s],
+    ``stiffness_damping`` β [s], ``dt_critical`` [s] (smallest h_min/c_d over elements, reduced for
+    β by the factor √(1 + ξ²) − ξ, ξ = β/(h_min/c_d)), ``dt_critical_element`` (user element index),
     ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,).
     """
 
@@ -123,6 +133,7 @@ class Model:
         self.tets = T.copy()
         self.dtype = dtype
         self.damping = float(builder.damping)
+        self.stiffness_damping = float(builder.stiffness_damping)
         self.sets = list(builder.sets)
         N, M = X.shape[0], T.shape[0]
 
@@ -242,6 +253,7 @@ class Model:
                 press_nodes=[int(v) for v in node_rank[press_F].ravel()],
                 press_value=press_p.tolist(), press_curve=press_c,
                 anp=bool(builder.nodal_pressure), group_visco=visco,
+                stiffness_damping=self.stiffness_damping,
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on
@@ -251,7 +263,8 @@ class Model:
         self._results_backend = None  # made on first use (element_results, internal_forces)
         self._backend, self._device = "cpu", 0  # the default backend of its solvers
         self._solver = None                     # weak reference: the last solver that ran
-        self.dt_critical = float(self._engine.dt_critical)
+        self.dt_critical = _damped_critical_step(float(self._engine.dt_critical),
+                                                 self.stiffness_damping)
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
