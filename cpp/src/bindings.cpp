@@ -157,7 +157,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 std::vector<index_t> tool_grid_dims, std::vector<std::vector<double>> tool_grids,
                 std::vector<index_t> press_nodes, std::vector<double> press_value,
                 std::vector<index_t> press_curve, bool anp, std::vector<double> group_visco,
-                double stiffness_damping, int threads) {
+                double stiffness_damping, double anp_stabilization, int threads) {
                  ModelInput in;
                  in.X = X.data();
                  in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -188,6 +188,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  in.press_curve = std::move(press_curve);
                  in.anp = anp;
                  in.stiffness_damping = stiffness_damping;
+                 in.anp_stabilization = anp_stabilization;
                  in.group_visco = std::move(group_visco);
                  for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                      RigidTool t{};
@@ -206,7 +207,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  new (self) E(in, threads);
              },
              // The model crosses as named fields (keyword-only): units and layouts as ModelInput.
-             nb::kw_only(), "X"_a, "tets"_a, "density"_a, "group_end"_a, "group_kind"_a, "group_params"_a, "patterns"_a, "pattern_curve"_a, "cons_node"_a, "cons_dim"_a, "cons_value"_a, "cons_curve"_a, "curve_kind"_a, "curve_t0"_a, "curve_t1"_a, "curve_table_begin"_a, "curve_table_count"_a, "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a, "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a, "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a, "stiffness_damping"_a, "threads"_a)
+             nb::kw_only(), "X"_a, "tets"_a, "density"_a, "group_end"_a, "group_kind"_a, "group_params"_a, "patterns"_a, "pattern_curve"_a, "cons_node"_a, "cons_dim"_a, "cons_value"_a, "cons_curve"_a, "curve_kind"_a, "curve_t0"_a, "curve_t1"_a, "curve_table_begin"_a, "curve_table_count"_a, "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a, "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a, "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a, "stiffness_damping"_a, "anp_stabilization"_a, "threads"_a)
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })

@@ -123,6 +123,9 @@ void Model<T>::build_masses(const ModelInput& in, const NodeSums& sums) {
     if (!(in.stiffness_damping >= 0.0 && std::isfinite(in.stiffness_damping)))
         throw std::invalid_argument("stiffness damping must be finite and >= 0 [s]");
     stiffness_damping = in.stiffness_damping;
+    if (!(in.anp_stabilization >= 0.0 && in.anp_stabilization <= 1.0))
+        throw std::invalid_argument("the T4ANP stabilization must be between 0 and 1");
+    anp_stabilization = in.anp_stabilization;
     if (anp && visco_terms > 0)
         throw std::invalid_argument("average nodal pressure (T4ANP) and viscoelastic materials "
                                     "cannot be combined yet");

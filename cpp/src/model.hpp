@@ -56,6 +56,7 @@ struct ModelInput {
     std::vector<index_t> press_curve;      // curve per triangle
     bool anp = false;                      // average nodal pressure (T4ANP)
     double stiffness_damping = 0.0;        // Rayleigh β [s] (tled.hpp: add_damping_forces)
+    double anp_stabilization = 0.0;        // T4ANP: fraction γ of the element's own pressure
 };
 
 template <class T>
@@ -79,6 +80,7 @@ struct Model {
     std::vector<T> press_edges, press_value;
     bool anp = false;                  // average nodal pressure tetrahedra (T4ANP)
     double stiffness_damping = 0.0;    // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
+    double anp_stabilization = 0.0;    // T4ANP: p = p̄ + γ (p(J_e) − p̄) (AveragedPressure)
     int visco_terms = 0;               // max Prony terms of any group: the State's q holds 6 each
     std::vector<T> node_volume;        // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node

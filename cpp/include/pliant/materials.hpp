@@ -310,12 +310,19 @@ struct LinearElastic {
 
 /// A decoupled material whose pressure is replaced by the element's average of the nodal pressures
 /// (the average nodal pressure tetrahedron, T4ANP: Bonet & Burton 1998, Commun. Numer. Meth. Eng.
-/// 14:437; Joldes, Wittek & Miller 2009, Commun. Numer. Meth. Eng. 25:827): S = S_iso + J p̄ C⁻¹.
+/// 14:437; Joldes, Wittek & Miller 2009, Commun. Numer. Meth. Eng. 25:827): S = S_iso + J p C⁻¹,
+/// p = p̄ + γ (p(J_e) − p̄). γ = 0 is plain T4ANP, whose averaging leaves element-level volume
+/// modes (a checkerboard of J) unresisted; γ > 0 mixes back that fraction of the element's own
+/// pressure, a stabilization in the manner of Puso & Solberg (2006, IJNME 67:841, eq. 33: the
+/// nodal strain plus α times the element's deviation from it).
 template <class M, class T>
 struct AveragedPressure {
     const M& m;
-    T p;  // p̄ [Pa]
-    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(m, k, p); }
+    T p;      // p̄ [Pa]
+    T stab;   // γ [1]
+    PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        return decoupled_pk2(m, k, p + stab * (m.pressure(k) - p));
+    }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const { return m.energy(k); }
 };

@@ -148,14 +148,22 @@ PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t*
     return sum / node_volume[n];
 }
 
-/// (3) Element forces of slot (b, l) with its corners' mean nodal pressure p̄ [Pa] (node_p).
-template <class T, class Material>
-PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                                  const T* u, index_t P, const T* node_p, T* f_out, T* J_out) {
+/// The mean p̄ = ¼ Σ p̄_a [Pa] of slot (b, l)'s corners' nodal pressures (node_p).
+template <class T>
+PLIANT_HD T corner_pressure(index_t b, int l, const ElementData<T>& el, const T* node_p) {
     T p = T(0);
     PLIANT_UNROLL
     for (int a = 0; a < 4; ++a) p += node_p[el.nodes[aosoa(b, l, a, 4)]];
-    element_forces(b, l, AveragedPressure<Material, T>{mat, p / T(4)}, el, u, P, f_out, J_out);
+    return p / T(4);
+}
+
+/// (3) Element forces of slot (b, l) with its corners' mean nodal pressure p̄ [Pa] (node_p), with
+/// the fraction stab (γ) of its own pressure mixed back in (AveragedPressure).
+template <class T, class Material>
+PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                                  const T* u, index_t P, const T* node_p, T stab, T* f_out, T* J_out) {
+    element_forces(b, l, AveragedPressure<Material, T>{mat, corner_pressure(b, l, el, node_p), stab}, el,
+                   u, P, f_out, J_out);
 }
 
 /// Time-integration coefficients of central differences with mass-proportional damping α [1/s]:

@@ -48,6 +48,7 @@ template <class T>
 struct DeviceView {
     index_t n_nodes, P, slots, n_contact, chunks;
     int n_curves, n_factors, n_tools, visco_w;
+    T anp_stab;                          // T4ANP stabilization γ (AveragedPressure)
     ElementData<T> el;
     const index_t* elem_id;
     const index_t* block_group;         // block → material group

@@ -70,6 +70,7 @@ void Engine<T, Dev>::refresh_view() {
     v.n_factors = static_cast<int>(m.pattern_curve.size());
     v.n_tools = static_cast<int>(tools_.size());
     v.visco_w = 6 * m.visco_terms;
+    v.anp_stab = T(m.anp_stabilization);
     v.el = {mb_.elem_nodes.data(), mb_.elem_grad.data(), mb_.elem_vol.data()};
     v.elem_id = mb_.elem_id.data();
     v.block_group = mb_.block_group.data();

@@ -88,7 +88,7 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
             const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, visco_mode};
             element_forces(b, l, vm, v.el, u, v.P, v.f_elem, v.J);
         } else if constexpr (V == Variant::Anp) {
-            element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.f_elem, v.J);
+            element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.anp_stab, v.f_elem, v.J);
         } else {
             element_forces(b, l, mat, v.el, u, v.P, v.f_elem, v.J);
         }
@@ -301,9 +301,8 @@ void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* o
                                          ViscoMode::Stored};
             r = element_measures(b, l, vm, v.el, u, v.P);
         } else if constexpr (V == Variant::Anp) {
-            T p = T(0);
-            for (int a = 0; a < 4; ++a) p += v.node_p[v.el.nodes[aosoa(b, l, a, 4)]];
-            r = element_measures(b, l, AveragedPressure<M, T>{mat, p / T(4)}, v.el, u, v.P);
+            const T p = corner_pressure(b, l, v.el, v.node_p);
+            r = element_measures(b, l, AveragedPressure<M, T>{mat, p, v.anp_stab}, v.el, u, v.P);
         } else {
             r = element_measures(b, l, mat, v.el, u, v.P);
         }

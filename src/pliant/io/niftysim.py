@@ -175,6 +175,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         b.add_mesh(X, T, source=f)
     b.damping = damping
     b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
+    b.nodal_pressure_stabilization = 0.0  # NiftySim's T4ANP: the plain average
     _element_sets(root, b, len(T), default_rho, f, unsupported)
     shapes = {"RAMP": lambda: Ramp(total), "STEP": lambda: Step(0.0),
               "POLY345": lambda: SmoothRamp(total), "HILLY": lambda: Hilly(total),

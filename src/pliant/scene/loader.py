@@ -121,7 +121,7 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
     check_keys(ctx, solver, "solver", {
         "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
         "stiffness_damping": "number",
-        "nodal_pressure": "bool",
+        "nodal_pressure": "bool", "nodal_pressure_stabilization": "number",
         "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
         "check_every": "int", "backend": "str"})
     scene.duration = float(solver.get("duration", 1.0))
@@ -168,6 +168,11 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
         raise ctx.error("solver.stiffness_damping", "expected stiffness_damping >= 0 [s]")
     scene.builder.stiffness_damping = beta
     scene.builder.nodal_pressure = bool(solver.get("nodal_pressure", False))
+    gamma = float(solver.get("nodal_pressure_stabilization", scene.builder.nodal_pressure_stabilization))
+    if not 0.0 <= gamma <= 1.0:
+        raise ctx.error("solver.nodal_pressure_stabilization", f"{gamma:g}: expected a fraction from 0 "
+                        "(plain T4ANP) to 1 (plain T4)")
+    scene.builder.nodal_pressure_stabilization = gamma
 
 
 def _materials(ctx: Ctx, tables: list, b: ModelBuilder, X, T, sets) -> None:

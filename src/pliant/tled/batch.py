@@ -50,7 +50,8 @@ def _check_shared(builders: list[ModelBuilder]) -> None:
     first = builders[0]
     shared = {"damping": lambda b: float(b.damping),
               "stiffness_damping": lambda b: float(b.stiffness_damping),
-              "nodal_pressure (T4ANP)": lambda b: bool(b.nodal_pressure),
+              "nodal_pressure (T4ANP)": lambda b: (bool(b.nodal_pressure),
+                                                   float(b.nodal_pressure_stabilization)),
               "gravity": lambda b: b._gravity,
               "tools": lambda b: [_tool_signature(t) for t in b.tools],
               "tool node restrictions": lambda b: [s is None for s in b.tool_nodes]}
@@ -75,6 +76,7 @@ def merge_builders(builders: list[ModelBuilder]) -> tuple[ModelBuilder, np.ndarr
     first = builders[0]
     out.damping, out.stiffness_damping = first.damping, first.stiffness_damping
     out.nodal_pressure, out._gravity = first.nodal_pressure, first._gravity
+    out.nodal_pressure_stabilization = first.nodal_pressure_stabilization
     out.tools = list(first.tools)
     node_off = np.concatenate([[0], np.cumsum([b.n_nodes for b in builders])]).astype(np.int64)
     elem_off = np.concatenate([[0], np.cumsum([b.n_elements for b in builders])]).astype(np.int64)

@@ -21,6 +21,8 @@ from .curves import Constant, LoadCurve
 __all__ = ["ModelBuilder"]
 
 _DOFS = {"x": 0, "y": 1, "z": 2}
+# Default T4ANP stabilization γ (docs/engine.md, "T4ANP"): measured on a thick-walled sphere.
+ANP_STABILIZATION = 0.0
 
 
 def _dofs(dofs) -> list[int]:
@@ -68,6 +70,9 @@ class ModelBuilder:
         # element is the mean of its nodes' volume-averaged pressures, which much reduces the
         # volumetric locking of linear tets in nearly incompressible tissue. Decoupled materials.
         self.nodal_pressure = False
+        # T4ANP stabilization γ: the fraction of each element's own pressure mixed back into the
+        # averaged one, so that element-level volume modes are resisted (docs/engine.md).
+        self.nodal_pressure_stabilization = ANP_STABILIZATION
         self._cons: dict[tuple[int, int], tuple[float, LoadCurve]] = {}
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
@@ -291,6 +296,10 @@ class ModelBuilder:
         a = float(self.damping)
         if not math.isfinite(a) or a < 0:
             raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")
+        gamma = float(self.nodal_pressure_stabilization)
+        if not 0.0 <= gamma <= 1.0:
+            raise InputError(f"nodal_pressure_stabilization = {shown(self.nodal_pressure_stabilization)}; "
+                             "expected a fraction from 0 (plain T4ANP) to 1 (plain T4)")
         beta = float(self.stiffness_damping)
         if not math.isfinite(beta) or beta < 0:
             raise InputError(f"stiffness_damping = {shown(self.stiffness_damping)}; expected a finite "

@@ -254,6 +254,7 @@ class Model:
                 press_value=press_p.tolist(), press_curve=press_c,
                 anp=bool(builder.nodal_pressure), group_visco=visco,
                 stiffness_damping=self.stiffness_damping,
+                anp_stabilization=float(builder.nodal_pressure_stabilization),
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on
