@@ -11,6 +11,7 @@ import pytest
 
 import pliant as pl
 from pliant.contact import Plane
+from pliant.validate.models import decay_of_first_mode, ringing_cantilever
 
 G = 9.81
 
@@ -59,21 +60,6 @@ def test_sliding_keeps_coulomb_acceleration():
     assert a == pytest.approx(G * (math.sin(theta) - mu_k * math.cos(theta)), rel=0.03)
 
 
-def _cantilever(beta: float):
-    """A 10 × 2 × 1 cm Neo-Hookean cantilever clamped at x = 0, bent by a 2 mN tip load that is
-    removed at t = 0⁺ (the load's curve: 1 at t = 0, 0 from 1 ns on). Not square: the tets' split
-    couples bending in y and z a little, and equal frequencies would beat."""
-    X, T = pl.mesh.box_tets((0.1, 0.02, 0.01), (20, 4, 2))
-    b = pl.ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(pl.NeoHookean(E=1e6, nu=0.3), density=1000.0)
-    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
-    tip = np.nonzero(X[:, 0] > 0.1 - 1e-9)[0]
-    b.add_force(tip, (0.0, 0.0, -2e-3 / len(tip)), curve=pl.Table([0.0, 1e-9], [1.0, 0.0]))
-    b.stiffness_damping = beta
-    return X, tip, b.finalize("float64")
-
-
 def test_first_bending_mode_decays_at_beta_omega_squared_over_two():
     """Released from its static deflection, the tip rings at the first bending frequency ω and
     decays as exp(−σt) with σ = ζω = β ω²/2 (C = βK: ζ = βω/2 in every mode; Chopra, Dynamics of
@@ -83,24 +69,8 @@ def test_first_bending_mode_decays_at_beta_omega_squared_over_two():
     half-step velocity's lag and peak sampling (T/400) each err below 0.1 %; what is left is the
     fit over five peaks of a signal that carries a little of other modes (1.0 % here)."""
     beta = 4e-4
-    X, tip, model = _cantilever(beta)
-    sim = pl.Simulation(model)
-    sim.relax(at_time=0.0, tol=1e-10)
-    assert sim.displacements[tip, 2].mean() < -1e-4  # bent by 0.2 mm
-    t, z = [], []
-    while sim.time < 1.0:
-        sim.run(steps=40)
-        t.append(sim.time)
-        z.append(sim.displacements[tip, 2].mean())
-    t, z = np.array(t), np.array(z)
-    up = np.nonzero((z[:-1] < 0) & (z[1:] >= 0))[0]  # upward zero crossings, interpolated
-    tc = t[up] - z[up] * (t[up + 1] - t[up]) / (z[up + 1] - z[up])
-    Td = np.mean(np.diff(tc))
-    peaks = [k for k in range(1, len(z) - 1) if z[k] < z[k - 1] and z[k] <= z[k + 1]
-             and t[k] > 2 * Td]
-    assert len(peaks) >= 4 and len(t) / (t[-1] / Td) > 300  # samples per period
-    sigma = -np.polyfit(t[peaks], np.log(-z[peaks]), 1)[0]
-    omega = math.sqrt((2 * math.pi / Td) ** 2 + sigma ** 2)  # ω_n² = ω_d² + σ²
+    model, tip = ringing_cantilever(beta=beta)
+    omega, sigma = decay_of_first_mode(model, tip)
     assert 0.005 < beta * omega / 2 < 0.1  # a damping ratio that the test can measure (0.9 %)
     assert sigma == pytest.approx(beta * omega ** 2 / 2, rel=0.02)
 
@@ -110,8 +80,8 @@ def test_stable_step_shrinks_with_beta():
     the model says so, a run at 0.9 Δt_cr stays bounded, and a step 3 Δt_cr (stable without β)
     blows up with it."""
     beta = 5e-4
-    plain = _cantilever(0.0)[2]
-    X, tip, model = _cantilever(beta)
+    plain = ringing_cantilever()[0]
+    model = ringing_cantilever(beta=beta)[0]
     dt0 = plain.dt_critical
     xi = beta / dt0
     assert model.dt_critical == pytest.approx(dt0 * (math.sqrt(1 + xi * xi) - xi), rel=1e-12)

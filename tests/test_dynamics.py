@@ -4,36 +4,9 @@ import numpy as np
 import pytest
 
 import pliant as pl
-
-
-def _free_block(dtype="float64", damping=0.0, threads=None, cells=(6, 3, 3)):
-    X, T = pl.mesh.box_tets((0.2, 0.1, 0.1), cells, jitter=0.2, seed=5)
-    b = pl.ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(pl.NeoHookean(E=5e4, nu=0.4), density=1000.0)
-    b.damping = damping
-    return X, b.finalize(dtype, threads=threads)
-
-
-def _energy_history(sim, n_frames, steps_per_frame):
-    """Total energy ½ v_nᵀ M v_n + U(u_n) with the centred velocity v_n = (u_{n+1} − u_{n−1})/2Δt."""
-    E, t = [], []
-    model, s = sim.model, sim.state
-    for _ in range(n_frames):
-        sim.run(steps=steps_per_frame)
-        nxt = model.state()
-        sim.solver.step(s, nxt)
-        u_prev = s.displacements - s.velocities * s.dt
-        v = (nxt.displacements - u_prev) / (2 * s.dt)
-        E.append(0.5 * np.sum(model.mass[:, None] * v * v) + model.strain_energy(s))
-        t.append(sim.time)
-    return np.array(t), np.array(E)
-
-
-def _bend(X):
-    """A smooth initial displacement (bending-like), exciting mainly low modes."""
-    x = X[:, 0] / 0.2
-    return np.stack([np.zeros_like(x), 0.01 * np.sin(np.pi * x), np.zeros_like(x)], axis=1)
+from pliant.validate.models import bend as _bend
+from pliant.validate.models import energy_history as _energy_history
+from pliant.validate.models import free_block as _free_block
 
 
 def test_undamped_energy_is_conserved():

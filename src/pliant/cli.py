@@ -1,4 +1,4 @@
-"""Command line: ``pliant run | demo | sweep | view | mesh | bench | info``.
+"""Command line: ``pliant run | demo | sweep | validate | view | mesh | bench | info``.
 
 Exit codes: 0 success; 1 the simulation failed (instability, no convergence) or ``mesh check``
 found problems; 2 bad input (one line naming the file, key or element and what was expected);
@@ -166,6 +166,27 @@ def sweep(spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene,
                   f"in {time.perf_counter() - t0:.1f} s; results in [bold]{escape(str(out))}[/] "
                   f"({', '.join(result.files)})", highlight=False)
     if len(bad):
+        raise typer.Exit(1)
+
+
+@app.command()
+def validate(out: Path = typer.Option(Path("pliant-validation"), "-o", "--out", help="Output folder."),
+             quick: bool = typer.Option(False, "--quick", help="The CI subset (under two minutes).")):
+    """Verify pliant against closed forms: OUT/report.md, results.json and plots; exit 1 if a
+    check fails."""
+    from .validate import run_validation
+
+    try:
+        rows = run_validation(out, quick=quick, echo=console.print)
+    except InputError as e:
+        _fail(e, 2)
+    failed = [r for r in rows if not r.passed]
+    for r in failed:
+        err_console.print(f"failed: {escape(r.case)}, {escape(r.quantity)}: {r.value:.6g} against "
+                          f"{r.reference:.6g}", highlight=False)
+    console.print(f"{len(rows) - len(failed)} of {len(rows)} checks passed; report in "
+                  f"[bold]{escape(str(out))}[/]/report.md", highlight=False)
+    if failed:
         raise typer.Exit(1)
 
 

@@ -1,0 +1,168 @@
+"""The verification models: small bodies whose answers the closed forms of
+:mod:`pliant.validate.references` give. Each returns what a check compares; used by
+``pliant validate`` and by the test suite."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import mesh
+from ..tled import ModelBuilder, Ramp, Simulation, Table
+from .references import lame_radial_displacement
+
+__all__ = ["cube_with_symmetry_bcs", "cantilever_tip_deflection", "hollow_sphere", "lame_solve",
+           "ringing_cantilever", "decay_of_first_mode", "free_block", "bend", "energy_history"]
+
+
+def cube_with_symmetry_bcs(material, stretch, cells=3, jitter=0.25, dtype="float32", L=1.0):
+    """Unstructured tet cube [0, L]³ under uniaxial stretch along x with symmetry planes x=0, y=0,
+    z=0 and free lateral faces: the exact solution is homogeneous, so linear tets represent it.
+    Returns (nodes [m] (N, 3), model, ids of the loaded face's nodes)."""
+    X, T = mesh.box_tets((L, L, L), (cells,) * 3, jitter=jitter, seed=1)
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(material, density=1000.0)
+    tol = 1e-9 * L
+    b.fix(np.nonzero(X[:, 0] < tol)[0], "x")
+    b.fix(np.nonzero(X[:, 1] < tol)[0], "y")
+    b.fix(np.nonzero(X[:, 2] < tol)[0], "z")
+    right = np.nonzero(X[:, 0] > L - tol)[0]
+    b.prescribe(right, (stretch - 1.0) * L, "x", curve=Ramp(1.0))
+    return X, b.finalize(dtype), right
+
+
+def cantilever_tip_deflection(n, material, nodal_pressure=False, L=1.0, H=0.1, P=1.0e-2):
+    """Tip deflection [m] of an L × H × H cantilever (10n × n × n cells) clamped at x = 0 under a
+    uniform shear traction of resultant P [N] on its tip face, quasi-static (float64)."""
+    X, T = mesh.box_tets((L, H, H), (10 * n, n, n))
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(material, density=1000.0)
+    b.nodal_pressure = nodal_pressure
+    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
+    tip = np.nonzero(X[:, 0] > L - 1e-9)[0]
+    w = np.ones(tip.size)  # trapezoid-rule nodal weights: the resultant is exactly P
+    for d in (1, 2):
+        edge = (X[tip, d] < 1e-9) | (X[tip, d] > H - 1e-9)
+        w[edge] *= 0.5
+    b.add_force(tip, np.outer(-P * w / w.sum(), [0, 0, 1]), curve=Ramp(1.0))
+    sim = Simulation(b.finalize("float64"))
+    sim.relax(tol=1e-9, max_steps=1_000_000)
+    return -sim.displacements[tip, 2].mean()
+
+
+def hollow_sphere(a=0.02, b=0.04, edge_length=0.006):
+    """A hollow sphere (radii a < b [m]) meshed by fTetWild from an outer icosphere and an inner one
+    reversed: (nodes [m], tets, inner boundary faces)."""
+    import trimesh
+
+    from ..mesh.topology import boundary_faces
+
+    o = trimesh.creation.icosphere(subdivisions=4, radius=b)
+    i = trimesh.creation.icosphere(subdivisions=3, radius=a)
+    V = np.vstack([o.vertices, i.vertices])
+    F = np.vstack([o.faces, i.faces[:, ::-1] + len(o.vertices)])
+    X, T = mesh.tetrahedralize(V, F, edge_length=edge_length)
+    faces, _ = boundary_faces(T)
+    inner = faces[np.linalg.norm(X[faces].mean(axis=1), axis=1) < (a + b) / 2]
+    return X, T, inner
+
+
+def lame_solve(shell, nu, anp, gamma=0.0, a=0.02, b=0.04, E=3e3, p=30.0):
+    """Lamé's sphere under internal pressure p [Pa], quasi-static: (RMS error of u_r over the nodes
+    relative to the largest exact u_r, element J − 1)."""
+    from ..materials import NeoHookean
+
+    X, T, inner = shell
+    bl = ModelBuilder()
+    bl.add_mesh(X, T)
+    bl.set_material(NeoHookean(E=E, nu=nu), density=1000.0)
+    bl.nodal_pressure, bl.nodal_pressure_stabilization = anp, gamma
+    near = [int(np.argmin(np.linalg.norm(X - c, axis=1))) for c in ((b, 0, 0), (0, b, 0), (0, 0, b))]
+    bl.fix(near[:1], "yz")  # 3-2-1: rigid motion only, no stress
+    bl.fix(near[1:2], "xz")
+    bl.fix(near[2:], "x")
+    bl.add_pressure(inner, p)
+    sim = Simulation(bl.finalize("float64"))
+    sim.relax(tol=1e-6)
+    r = np.linalg.norm(X, axis=1)
+    exact = lame_radial_displacement(r, a, b, p, E, nu)
+    ur = np.einsum("ij,ij->i", sim.displacements, X / r[:, None])
+    return np.sqrt(np.mean((ur - exact) ** 2)) / exact.max(), sim.element_results()["J"] - 1
+
+
+def ringing_cantilever(alpha=0.0, beta=0.0):
+    """A 10 × 2 × 1 cm Neo-Hookean cantilever (E = 1 MPa) clamped at x = 0, bent by a 2 mN tip
+    load removed at t = 0⁺, with damping α [1/s] and β [s]: (model, tip node ids). Not square:
+    the tets' split couples bending in y and z a little, and equal frequencies would beat."""
+    from ..materials import NeoHookean
+
+    X, T = mesh.box_tets((0.1, 0.02, 0.01), (20, 4, 2))
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(NeoHookean(E=1e6, nu=0.3), density=1000.0)
+    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
+    tip = np.nonzero(X[:, 0] > 0.1 - 1e-9)[0]
+    b.add_force(tip, (0.0, 0.0, -2e-3 / len(tip)), curve=Table([0.0, 1e-9], [1.0, 0.0]))
+    b.damping, b.stiffness_damping = alpha, beta
+    return b.finalize("float64"), tip
+
+
+def decay_of_first_mode(model, tip, duration=1.0):
+    """Release the cantilever from its static deflection and follow its tip: (undamped natural
+    frequency ω_n [rad/s], decay rate σ [1/s]). ω_d from the mean interval of upward zero crossings,
+    σ from a log fit of the peaks after the first two periods (higher modes are gone by then),
+    ω_n² = ω_d² + σ²."""
+    sim = Simulation(model)
+    sim.relax(at_time=0.0, tol=1e-10)
+    t, z = [], []
+    while sim.time < duration:
+        sim.run(steps=40)
+        t.append(sim.time)
+        z.append(sim.displacements[tip, 2].mean())
+    t, z = np.array(t), np.array(z)
+    up = np.nonzero((z[:-1] < 0) & (z[1:] >= 0))[0]
+    tc = t[up] - z[up] * (t[up + 1] - t[up]) / (z[up + 1] - z[up])
+    Td = float(np.mean(np.diff(tc)))
+    peaks = [k for k in range(1, len(z) - 1) if z[k] < z[k - 1] and z[k] <= z[k + 1] and t[k] > 2 * Td]
+    if len(peaks) < 4:
+        raise RuntimeError(f"only {len(peaks)} peaks after two periods in {duration} s")
+    sigma = float(-np.polyfit(t[peaks], np.log(-z[peaks]), 1)[0])
+    return math.sqrt((2 * math.pi / Td) ** 2 + sigma**2), sigma
+
+
+def free_block(dtype="float64", damping=0.0, threads=None, cells=(6, 3, 3)):
+    """A free 20 × 10 × 10 cm jittered Neo-Hookean block (E = 50 kPa, ν = 0.4), damping α [1/s]:
+    (nodes [m], model)."""
+    from ..materials import NeoHookean
+
+    X, T = mesh.box_tets((0.2, 0.1, 0.1), cells, jitter=0.2, seed=5)
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(NeoHookean(E=5e4, nu=0.4), density=1000.0)
+    b.damping = damping
+    return X, b.finalize(dtype, threads=threads)
+
+
+def bend(X):
+    """A smooth initial displacement [m] of the free block (bending-like), exciting mainly low modes."""
+    x = X[:, 0] / 0.2
+    return np.stack([np.zeros_like(x), 0.01 * np.sin(np.pi * x), np.zeros_like(x)], axis=1)
+
+
+def energy_history(sim, n_frames, steps_per_frame):
+    """(times [s], total energies [J]) ½ v_nᵀ M v_n + U(u_n) with the centred velocity
+    v_n = (u_{n+1} − u_{n−1})/2Δt, every ``steps_per_frame`` steps."""
+    E, t = [], []
+    model, s = sim.model, sim.state
+    for _ in range(n_frames):
+        sim.run(steps=steps_per_frame)
+        nxt = model.state()
+        sim.solver.step(s, nxt)
+        u_prev = s.displacements - s.velocities * s.dt
+        v = (nxt.displacements - u_prev) / (2 * s.dt)
+        E.append(0.5 * np.sum(model.mass[:, None] * v * v) + model.strain_energy(s))
+        t.append(sim.time)
+    return np.array(t), np.array(E)

@@ -1,0 +1,118 @@
+"""Closed-form references for verification, written independently of the engine's stress code:
+strain energies in principal stretches (differentiated numerically), beam theory, Lamé's thick
+sphere. Used by ``pliant validate`` and by the test suite.
+"""
+
+from __future__ import annotations
+
+import math
+
+from scipy.optimize import brentq
+
+from .. import materials as mat
+
+__all__ = ["MU", "K", "LAM", "UNIAXIAL", "nominal", "uniaxial_reference", "timoshenko_tip_deflection",
+           "lame_radial_displacement", "lame_volumetric_strain"]
+
+MU, K = 1.0e3, 10.0e3  # Pa; K/μ = 10 (ν ≈ 0.45), soft tissue-like
+LAM = K - 2 * MU / 3
+
+
+def _J(l):
+    return l[0] * l[1] * l[2]
+
+
+def _I2(l):
+    return l[0] ** 2 * l[1] ** 2 + l[1] ** 2 * l[2] ** 2 + l[2] ** 2 * l[0] ** 2
+
+
+def W_nh(l, mu=MU, k=K):
+    J = _J(l)
+    return mu / 2 * (J ** (-2 / 3) * sum(x * x for x in l) - 3) + k / 2 * (J - 1) ** 2
+
+
+def W_mr(l, c10=0.3 * MU, c01=0.2 * MU, k=K):
+    J = _J(l)
+    return c10 * (J ** (-2 / 3) * sum(x * x for x in l) - 3) + c01 * (J ** (-4 / 3) * _I2(l) - 3) + \
+        k / 2 * (J - 1) ** 2
+
+
+def W_nhc(l, mu=MU, lam=LAM):
+    lnJ = math.log(_J(l))
+    return mu / 2 * (sum(x * x for x in l) - 3) - mu * lnJ + lam / 2 * lnJ**2
+
+
+def W_svk(l, mu=MU, lam=LAM):
+    E = [(x * x - 1) / 2 for x in l]
+    return lam / 2 * sum(E) ** 2 + mu * sum(e * e for e in E)
+
+
+def W_py(l, c=(0.3 * MU, 0.2 * MU, 0.1 * MU, 0.05 * MU, 0.08 * MU), k=K):
+    J = _J(l)
+    x, y = J ** (-2 / 3) * sum(v * v for v in l) - 3, J ** (-4 / 3) * _I2(l) - 3
+    return c[0] * x + c[1] * y + c[2] * x * x + c[3] * y * y + c[4] * x * y + k / 2 * (J - 1) ** 2
+
+
+def W_ab(l, mu=MU, lm=2.0, k=K):
+    J = _J(l)
+    I1b = J ** (-2 / 3) * sum(x * x for x in l)
+    C = (1 / 2, 1 / 20, 11 / 1050, 19 / 7000, 519 / 673750)
+    w = sum(C[i] / lm ** (2 * i) * (I1b ** (i + 1) - 3 ** (i + 1)) for i in range(5))
+    return mu * w + k / 2 * ((J * J - 1) / 2 - math.log(J))
+
+
+def W_ti(l, mu=MU, k=K, eta=2 * MU):  # fibres along x, the loading axis
+    J = _J(l)
+    I1b = J ** (-2 / 3) * sum(x * x for x in l)
+    I4b = J ** (-2 / 3) * l[0] ** 2
+    return mu / 2 * (I1b - 3) + eta / 2 * (I4b - 1) ** 2 + k / 2 * (J - 1) ** 2
+
+
+# Material name → (pliant material, strain energy W(λ1, λ2, λ3) [Pa], stretches where the
+# homogeneous solution is what a quasi-static solve finds: the polynomial's C20/C02 stiffening at
+# 1.5 outruns the step set by its small-strain modulus (1.4 is fine), and fibres in compression (TI
+# at 0.7) lose ellipticity (η/2 (Ī4 − 1)² is not convex for Ī4 < 1: the cube deforms unevenly)).
+UNIAXIAL = {
+    "NeoHookean": (mat.NeoHookean(mu=MU, K=K), W_nh, (0.7, 1.2, 1.5)),
+    "MooneyRivlin": (mat.MooneyRivlin(C10=0.3 * MU, C01=0.2 * MU, K=K), W_mr, (0.7, 1.2, 1.5)),
+    "NeoHookeanCoupled": (mat.NeoHookeanCoupled(mu=MU, lam=LAM), W_nhc, (0.7, 1.2, 1.5)),
+    "StVenantKirchhoff": (mat.StVenantKirchhoff(mu=MU, lam=LAM), W_svk, (0.7, 1.2, 1.5)),
+    "Polynomial": (mat.Polynomial(0.3 * MU, 0.2 * MU, 0.1 * MU, 0.05 * MU, 0.08 * MU, K=K), W_py,
+                   (0.7, 1.2, 1.4)),
+    "ArrudaBoyce": (mat.ArrudaBoyce(mu=MU, lambda_m=2.0, K=K), W_ab, (0.7, 1.2, 1.5)),
+    "TransverselyIsotropic": (mat.TransverselyIsotropic(MU, K, 2 * MU, (2.0, 0.0, 0.0)), W_ti,
+                              (0.9, 1.2, 1.5)),
+}
+
+
+def nominal(W, l, i, h=1e-6):
+    """Principal nominal stress P_i = ∂W/∂λ_i [Pa] (Ogden 1984, §4.3), central difference."""
+    a, b = list(l), list(l)
+    a[i] += h
+    b[i] -= h
+    return (W(a) - W(b)) / (2 * h)
+
+
+def uniaxial_reference(W, stretch):
+    """Uniaxial stress along x at ``stretch``: (P_x [Pa], lateral stretch) with P_y = P_z = 0."""
+    lt = brentq(lambda t: nominal(W, (stretch, t, t), 1), 0.3, 3.0, xtol=1e-14)
+    return nominal(W, (stretch, lt, lt), 0), lt
+
+
+def timoshenko_tip_deflection(P, L, H, E, nu):
+    """Tip deflection [m] of a square (H × H) cantilever of length L under a tip load P [N]:
+    δ = PL³/(3EI) + PL/(κGA), κ = 5/6 (Timoshenko & Gere, Mechanics of Materials; Cowper 1966)."""
+    I, A, G, kappa = H**4 / 12, H * H, E / (2 * (1 + nu)), 5.0 / 6.0
+    return P * L**3 / (3 * E * I) + P * L / (kappa * G * A)
+
+
+def lame_radial_displacement(r, a, b, p, E, nu):
+    """Radial displacement [m] at radius r of a thick-walled sphere (radii a < b) under internal
+    pressure p [Pa]: u_r = p a³ / (E (b³ − a³)) [(1 − 2ν) r + (1 + ν) b³ / (2 r²)] (Timoshenko &
+    Goodier, Theory of Elasticity, §141)."""
+    return p * a**3 / (E * (b**3 - a**3)) * ((1 - 2 * nu) * r + (1 + nu) * b**3 / (2 * r**2))
+
+
+def lame_volumetric_strain(a, b, p, E, nu):
+    """The uniform volumetric strain tr ε = 3 (1 − 2ν) p a³ / (E (b³ − a³)) of Lamé's sphere."""
+    return 3 * (1 - 2 * nu) * p * a**3 / (E * (b**3 - a**3))

@@ -1,0 +1,36 @@
+"""`pliant validate`: the quick run passes every check and writes its report; a failing check
+makes the command exit 1 naming it."""
+
+from __future__ import annotations
+
+import json
+
+from typer.testing import CliRunner
+
+import pliant.validate.cases as cases
+from pliant.cli import app
+from pliant.validate import Check
+
+
+def test_quick_validation_passes_and_reports(tmp_path):
+    r = CliRunner().invoke(app, ["validate", "--quick", "-o", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    data = json.loads((tmp_path / "results.json").read_text())
+    assert data["rows"] and all(row["passed"] for row in data["rows"])
+    assert {row["case"] for row in data["rows"]} >= {"uniaxial stress", "patch test", "simple shear",
+                                                     "cantilever bending", "Lamé sphere (T4ANP)",
+                                                     "damped decay"}
+    report = (tmp_path / "report.md").read_text()
+    assert f"{len(data['rows'])} of {len(data['rows'])} checks passed" in report
+    for png in ("uniaxial.png", "cantilever.png"):
+        assert (tmp_path / png).stat().st_size > 5000 and f"]({png})" in report
+
+
+def test_a_failing_check_exits_1_naming_it(tmp_path, monkeypatch):
+    wrong = Check("made up", "two against one", 2.0, 1.0, "1", "a check that must fail", 0.1)
+    monkeypatch.setattr(cases, "CASES", {"bad": lambda quick: ([wrong], {})})
+    monkeypatch.setattr("pliant.validate.report.CASES", cases.CASES)
+    r = CliRunner().invoke(app, ["validate", "--quick", "-o", str(tmp_path)])
+    assert r.exit_code == 1
+    assert "made up, two against one" in r.output
+    assert "**FAIL**" in (tmp_path / "report.md").read_text()
