@@ -67,6 +67,8 @@ def _plots(out: Path, figures: dict) -> list[str]:
         e0 = c["errors"][-1]
         ax.loglog(c["levels"], [e0 * (c["levels"][-1] / n) ** 2 for n in c["levels"]], "--",
                   label="O(h²)")
+        ax.set_xticks(c["levels"], [str(n) for n in c["levels"]])
+        ax.minorticks_off()
         ax.set_xlabel("elements through the depth")
         ax.set_ylabel("tip deflection error vs Timoshenko")
         ax.legend(fontsize=8)
