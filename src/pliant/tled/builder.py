@@ -48,7 +48,8 @@ class _ElementSet:
 
 
 class ModelBuilder:
-    """Collects what a model needs. Typical use::
+    """Collects what a model needs (mesh, materials, constraints, loads, tools) and builds the
+    static model. Typical use::
 
         b = ModelBuilder()
         b.add_mesh(nodes, tets)

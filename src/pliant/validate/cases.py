@@ -20,8 +20,9 @@ __all__ = ["Check", "CASES"]
 @dataclass
 class Check:
     """One compared figure: ``value`` against ``reference`` in ``unit``. ``kind`` "match": the
-    relative error |value − reference| / |reference| at most ``tolerance``; "at most" / "at least":
-    value ≤ or ≥ reference (a bound). ``why``: where the tolerance or bound comes from."""
+    relative error ``abs(value − reference) / abs(reference)`` at most ``tolerance``; "at most" /
+    "at least": value ≤ or ≥ reference (a bound). ``why``: where the tolerance or bound comes
+    from."""
 
     case: str
     quantity: str
