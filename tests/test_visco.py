@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pliant as pl
-from test_uniaxial import K, MU, W_nh, uniaxial_reference
+from pliant.validate.references import K, MU, W_nh, uniaxial_reference
 
 
 def test_stress_relaxation_after_a_ramp_follows_the_prony_series():

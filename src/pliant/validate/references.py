@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 from .. import materials as mat
 
 __all__ = ["MU", "K", "LAM", "UNIAXIAL", "nominal", "uniaxial_reference", "timoshenko_tip_deflection",
-           "lame_radial_displacement", "lame_volumetric_strain"]
+           "lame_radial_displacement", "lame_volumetric_strain", "hertz_force"]
 
 MU, K = 1.0e3, 10.0e3  # Pa; K/μ = 10 (ν ≈ 0.45), soft tissue-like
 LAM = K - 2 * MU / 3
@@ -116,3 +116,9 @@ def lame_radial_displacement(r, a, b, p, E, nu):
 def lame_volumetric_strain(a, b, p, E, nu):
     """The uniform volumetric strain tr ε = 3 (1 − 2ν) p a³ / (E (b³ − a³)) of Lamé's sphere."""
     return 3 * (1 - 2 * nu) * p * a**3 / (E * (b**3 - a**3))
+
+
+def hertz_force(delta, R, E, nu):
+    """Force [N] of a rigid sphere of radius R pressed δ [m] into an elastic half-space:
+    F = 4/3 E* √R δ^1.5, E* = E / (1 − ν²) (Johnson, Contact Mechanics, 1985, §4.2, eq. 4.22-4.23)."""
+    return 4.0 / 3.0 * E / (1 - nu**2) * math.sqrt(R) * delta**1.5
