@@ -1,7 +1,6 @@
 import pytest
 
 
-
 @pytest.fixture(params=["float32", "float64"])
 def dtype(request):
     return request.param
@@ -41,5 +40,6 @@ def pytest_terminal_summary(terminalreporter):
     if any(counts.values()):
         terminalreporter.section("tests per backend")
         for b, c in counts.items():
-            terminalreporter.write_line(f"{b:>14}: " + (", ".join(f"{n} {o}" for o, n in c.items())
-                                                        or "none run"))
+            terminalreporter.write_line(
+                f"{b:>14}: " + (", ".join(f"{n} {o}" for o, n in c.items()) or "none run")
+            )

@@ -38,13 +38,16 @@ def test_simulation_verbs_match_the_solver():
     assert isinstance(info, pl.RelaxInfo) and info.converged
 
 
-@pytest.mark.parametrize("call, new", [
-    (lambda s: s.run_to(0.001), "run(until=t)"),
-    (lambda s: s.solve_static(tol=1e-3), "relax()"),
-    (lambda s: s.step(3), "run(steps=n)"),
-    (lambda s: s.solver.tool_histories, "contact_report().tools"),
-    (lambda s: s.model.use_cuda(0), "Solver(model, backend='cuda'"),
-])
+@pytest.mark.parametrize(
+    "call, new",
+    [
+        (lambda s: s.run_to(0.001), "run(until=t)"),
+        (lambda s: s.solve_static(tol=1e-3), "relax()"),
+        (lambda s: s.step(3), "run(steps=n)"),
+        (lambda s: s.solver.tool_histories, "contact_report().tools"),
+        (lambda s: s.model.use_cuda(0), "Solver(model, backend='cuda'"),
+    ],
+)
 def test_old_names_warn_and_still_work(call, new):
     sim = pl.Simulation(_model(), dt=1e-4)
     with pytest.warns(DeprecationWarning, match=new.replace("(", r"\(").replace(")", r"\)")):
@@ -90,7 +93,7 @@ def test_solvers_own_their_backends_and_tool_trajectories():
 def test_scene_key_lambda_is_deprecated_for_lam(tmp_path):
     from pliant.scene import load_scene
 
-    text = '''[mesh]
+    text = """[mesh]
 primitive = "box"
 size = [0.1, 0.02, 0.02]
 cells = [4, 1, 1]
@@ -101,7 +104,7 @@ mu = 1000.0
 density = 1000.0
 [solver]
 duration = 0.01
-'''
+"""
     for key, warns in (("lam", False), ("lambda", True)):
         p = tmp_path / f"{key}.toml"
         p.write_text(text.format(key=key))
@@ -126,16 +129,20 @@ class _no_warning:
 E_NU = {"NeoHookean", "NeoHookeanCoupled", "StVenantKirchhoff", "LinearElastic"}  # docs/engine.md
 
 
-@pytest.mark.parametrize("cls, native", [
-    (pl.NeoHookean, dict(mu=1e3, K=1e4)),
-    (pl.MooneyRivlin, dict(C10=400.0, C01=100.0, K=1e4)),
-    (pl.NeoHookeanCoupled, dict(mu=1e3, lam=5e3)),
-    (pl.StVenantKirchhoff, dict(mu=1e3, lam=5e3)),
-    (pl.LinearElastic, dict(mu=1e3, lam=5e3)),
-    (pl.Polynomial, dict(C10=400.0, C01=100.0, K=1e4)),
-    (pl.ArrudaBoyce, dict(mu=1e3, lambda_m=2.0, K=1e4)),
-    (pl.TransverselyIsotropic, dict(mu=1e3, K=1e4, eta=500.0, direction=(1.0, 0.0, 0.0))),
-], ids=lambda v: getattr(v, "__name__", ""))
+@pytest.mark.parametrize(
+    "cls, native",
+    [
+        (pl.NeoHookean, dict(mu=1e3, K=1e4)),
+        (pl.MooneyRivlin, dict(C10=400.0, C01=100.0, K=1e4)),
+        (pl.NeoHookeanCoupled, dict(mu=1e3, lam=5e3)),
+        (pl.StVenantKirchhoff, dict(mu=1e3, lam=5e3)),
+        (pl.LinearElastic, dict(mu=1e3, lam=5e3)),
+        (pl.Polynomial, dict(C10=400.0, C01=100.0, K=1e4)),
+        (pl.ArrudaBoyce, dict(mu=1e3, lambda_m=2.0, K=1e4)),
+        (pl.TransverselyIsotropic, dict(mu=1e3, K=1e4, eta=500.0, direction=(1.0, 0.0, 0.0))),
+    ],
+    ids=lambda v: getattr(v, "__name__", ""),
+)
 def test_material_constructors_do_what_the_docs_say(cls, native):
     """Native constants by keyword (K= everywhere it exists, lam for the Lamé constant), and
     E=, nu= exactly where docs/engine.md says so; the small-strain moduli agree with E, ν."""
@@ -155,8 +162,13 @@ def test_engine_log_matches_libm(single):
     J − 1 from −0.99 to 1e3 (down to 1e-12 on both sides of J = 1): relative error within 3 ulps
     of the type (log_plain's truncation < ½ ulp, the rounding-of-(1 + x) correction, and the
     rounding of a dozen operations; measured 1.5–1.7 ulps)."""
-    x = np.concatenate([-np.logspace(-12, np.log10(0.99), 400), np.logspace(-12, 3, 400),
-                        [-1e-2, 1e-2, np.nextafter(1e-2, 0), np.nextafter(-1e-2, 0), 0.0]])
+    x = np.concatenate(
+        [
+            -np.logspace(-12, np.log10(0.99), 400),
+            np.logspace(-12, 3, 400),
+            [-1e-2, 1e-2, np.nextafter(1e-2, 0), np.nextafter(-1e-2, 0), 0.0],
+        ]
+    )
     dt = np.float32 if single else np.float64
     xs = x.astype(dt).astype(float)  # what the engine receives
     got = np.asarray(pl._core.log_J(np.ascontiguousarray(xs), single))

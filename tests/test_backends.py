@@ -58,8 +58,7 @@ MATERIALS = {
     "Polynomial": pl.Polynomial(3e3, 500.0, 200.0, K=5e4),
     "ArrudaBoyce": pl.ArrudaBoyce(6e3, 2.0, 5e4),
     "TransverselyIsotropic": pl.TransverselyIsotropic(6e3, 5e4, 3.0, (1.0, 0.0, 0.0)),
-    "Viscoelastic": pl.Viscoelastic(pl.NeoHookean(E=2e4, nu=0.45), iso=[(0.4, 0.005)],
-                                    vol=[(0.2, 0.01)]),
+    "Viscoelastic": pl.Viscoelastic(pl.NeoHookean(E=2e4, nu=0.45), iso=[(0.4, 0.005)], vol=[(0.2, 0.01)]),
 }
 
 
@@ -76,14 +75,19 @@ def test_materials_under_gravity(backend, name, dtype):
     close(sa.velocities, sb.velocities, dtype, name + " velocity")
     ra, rb = a.element_results(sa.state), b.element_results(sb.state)
     for key in ("J", "cauchy", "green_strain", "energy_density"):
-        close(ra[key] - (1.0 if key == "J" else 0.0), rb[key] - (1.0 if key == "J" else 0.0),
-              dtype, f"{name} {key}")
+        close(
+            ra[key] - (1.0 if key == "J" else 0.0),
+            rb[key] - (1.0 if key == "J" else 0.0),
+            dtype,
+            f"{name} {key}",
+        )
     close(a.internal_forces(sa.state), b.internal_forces(sb.state), dtype, name + " f(u)")
 
 
 def test_t4anp_pressure_and_load_curves(backend):
     """T4ANP, a follower pressure on the top faces (Hilly curve), a prescribed end displacement
     (Table curve) and a point-load pattern (Step curve), with gravity."""
+
     def make():
         b, X, T = bar(backend, pl.NeoHookean(E=2e4, nu=0.49), anp=True)
         B, _ = boundary_faces(T)
@@ -94,13 +98,18 @@ def test_t4anp_pressure_and_load_curves(backend):
         mid = np.nonzero(np.isclose(X[:, 0], L / 2))[0]
         b.add_force(mid, (0.0, 0.0, -1e-3), curve=pl.Step(0.01))
         return b
+
     a, b = pair(make, backend)
     sa, sb = pl.Simulation(a, dt=DT), pl.Simulation(b, dt=DT)
     sa.run(until=T_END)
     sb.run(until=T_END)
     close(sa.displacements, sb.displacements, "float64", "T4ANP + pressure + curves")
-    close(a.element_results(sa.state)["cauchy"], b.element_results(sb.state)["cauchy"], "float64",
-          "T4ANP stresses")
+    close(
+        a.element_results(sa.state)["cauchy"],
+        b.element_results(sb.state)["cauchy"],
+        "float64",
+        "T4ANP stresses",
+    )
 
 
 def _tool(kind):
@@ -138,6 +147,7 @@ def test_tools_forces_and_contact_report(backend, kind):
         b = bar(backend)[0]
         b.add_tool(_poke(_tool(kind), kind))
         return b
+
     a, b = pair(make, backend)
     sa, sb = pl.Simulation(a, dt=DT), pl.Simulation(b, dt=DT)
     sa.run(until=T_END)
@@ -161,10 +171,12 @@ def test_tools_forces_and_contact_report(backend, kind):
 def test_set_tool_pose_mid_run_reaches_the_device(backend):
     """The viewer's tool dragging: a pose set between runs must move the tool on every backend
     (the old CUDA backend kept the keyframes it uploaded first)."""
+
     def make():
         b = bar(backend)[0]
         b.add_tool(Sphere(0.01, position=(0.06, 0.01, -0.0102)))
         return b
+
     a, b = pair(make, backend)
     sims = [pl.Simulation(m, dt=DT) for m in (a, b)]
     for s in sims:
@@ -181,6 +193,7 @@ def test_relax_with_a_tool(backend):
         b = bar(backend)[0]
         b.add_tool(_poke(Sphere(0.01), "sphere"))
         return b
+
     a, b = pair(make, backend)
     sa, sb = pl.Simulation(a, dt=DT), pl.Simulation(b, dt=DT)
     # load-stepped: the sphere's 3 mm indentation applied at once inverts elements
@@ -189,8 +202,9 @@ def test_relax_with_a_tool(backend):
     assert ia.converged and ib.converged
     assert ia.steps == ib.steps  # the same decisions
     close(sa.displacements, sb.displacements, "float64", "relaxed")
-    close(sa.contact_report().relaxed[0][0], sb.contact_report().relaxed[0][0], "float64",
-          "relaxed tool force")
+    close(
+        sa.contact_report().relaxed[0][0], sb.contact_report().relaxed[0][0], "float64", "relaxed tool force"
+    )
 
 
 def test_relax_viscoelastic_stores_the_relaxed_state(backend):
@@ -248,6 +262,7 @@ def test_instability_names_element_and_quantity(backend, how):
     """A crushing prescribed displacement inverts elements; a NaN load makes every J NaN. Both
     backends report the same element, quantity and a real value (the old CUDA check reported
     'displacement 0 m' for a NaN)."""
+
     def make():
         b, X, T = bar(backend)
         tip = np.nonzero(X[:, 0] > L - 1e-9)[0]
@@ -257,6 +272,7 @@ def test_instability_names_element_and_quantity(backend, how):
         else:
             b.prescribe(tip, value, "x", curve=pl.Ramp(0.02))
         return b
+
     dtype = "float32" if how == "nan" else "float64"
     errs = []
     for backend_ in ("cpu", backend):
@@ -285,7 +301,7 @@ def test_cli_runs_a_scene_on_the_backend(backend, tmp_path):
     from pliant.cli import app
 
     scene = tmp_path / "bar.toml"
-    scene.write_text('''title = "bar"
+    scene.write_text("""title = "bar"
 [mesh]
 primitive = "box"
 size = [0.10, 0.02, 0.02]
@@ -305,12 +321,11 @@ nodes = { plane = { point = [-0.05, 0.0, 0.0], normal = [1.0, 0.0, 0.0] } }
 type = "gravity"
 [output]
 frames = 1
-''')
+""")
     fields = {}
     for name in ("cpu", backend):
         out = tmp_path / name
-        r = CliRunner().invoke(app, ["run", str(scene), "-o", str(out), "--backend", name,
-                                     "--no-progress"])
+        r = CliRunner().invoke(app, ["run", str(scene), "-o", str(out), "--backend", name, "--no-progress"])
         assert r.exit_code == 0, r.output
         assert json.loads((out / "summary.json").read_text())["backend"] == name
         last = sorted(out.glob("*.vtu"))[-1]

@@ -28,9 +28,12 @@ def body(material, tool: bool = False, X=X, T=T) -> pl.ModelBuilder:
     return b
 
 
-MATERIALS = [pl.NeoHookean(E=3e4, nu=0.45), pl.NeoHookean(E=6e4, nu=0.4),
-             pl.MooneyRivlin(C10=4e3, C01=2e3, K=1e5),
-             pl.Viscoelastic(pl.NeoHookean(E=3e4, nu=0.45), iso=[(0.3, 0.002)])]
+MATERIALS = [
+    pl.NeoHookean(E=3e4, nu=0.45),
+    pl.NeoHookean(E=6e4, nu=0.4),
+    pl.MooneyRivlin(C10=4e3, C01=2e3, K=1e5),
+    pl.Viscoelastic(pl.NeoHookean(E=3e4, nu=0.45), iso=[(0.3, 0.002)]),
+]
 
 
 @pytest.mark.parametrize("tool", [False, True], ids=["free", "tool"])
@@ -60,8 +63,9 @@ def test_each_body_moves_as_it_does_alone(backend, tool):
             assert np.allclose(f_batch, f_alone, rtol=1e-12, atol=1e-15)
     if tool:  # the tool's own sum is over every body
         total = sim.contact_report().force(0)[0]
-        assert np.allclose(batch.tool_forces(sim.contact_report())[:, 0].sum(axis=0), total,
-                           rtol=1e-12, atol=1e-15)
+        assert np.allclose(
+            batch.tool_forces(sim.contact_report())[:, 0].sum(axis=0), total, rtol=1e-12, atol=1e-15
+        )
 
 
 def test_different_bodies_and_material_dicts():
@@ -81,12 +85,15 @@ def test_different_bodies_and_material_dicts():
         Batch.replicate(b, [{"liver": MATERIALS[0]}])
 
 
-@pytest.mark.parametrize("change, what", [
-    (lambda b: setattr(b, "damping", 3.0), "damping"),
-    (lambda b: b.set_gravity((0.0, 0.0, -1.0)), "gravity"),
-    (lambda b: setattr(b, "nodal_pressure", True), "nodal_pressure"),
-    (lambda b: b.add_tool(Sphere(0.01, name="other")), "tools"),
-])
+@pytest.mark.parametrize(
+    "change, what",
+    [
+        (lambda b: setattr(b, "damping", 3.0), "damping"),
+        (lambda b: b.set_gravity((0.0, 0.0, -1.0)), "gravity"),
+        (lambda b: setattr(b, "nodal_pressure", True), "nodal_pressure"),
+        (lambda b: b.add_tool(Sphere(0.01, name="other")), "tools"),
+    ],
+)
 def test_shared_settings_must_agree(change, what):
     other = body(MATERIALS[0])
     change(other)

@@ -19,16 +19,19 @@ D = 0.05  # distance between the two overlapping spheres' centres [m]
 
 def _spheres():
     """Two spheres overlapping (centres D apart) and a third one apart, as one surface."""
-    parts = [trimesh.creation.icosphere(subdivisions=4, radius=R).apply_translation(c)
-             for c in ((0, 0, 0), (D, 0, 0), (0, 0.3, 0))]
+    parts = [
+        trimesh.creation.icosphere(subdivisions=4, radius=R).apply_translation(c)
+        for c in ((0, 0, 0), (D, 0, 0), (0, 0.3, 0))
+    ]
     m = trimesh.util.concatenate(parts)
     return np.asarray(m.vertices), np.asarray(m.faces), parts
 
 
 def _tet_volume(X, T):
     e = X[T]
-    return float(np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]),
-                           e[:, 3] - e[:, 0]).sum() / 6)
+    return float(
+        np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]).sum() / 6
+    )
 
 
 def _components(T):
@@ -92,8 +95,12 @@ def test_tetrahedralize_command_reports_the_union(spheres, tmp_path):
     meshio.write(src, meshio.Mesh(V, [("triangle", F)]))
     out = tmp_path / "three.vtu"
     exe = str(__import__("pathlib").Path(sys.executable).with_name("pliant"))
-    r = subprocess.run([exe, "mesh", "tetrahedralize", str(src), str(out), "--target-tets",
-                        "5000"], capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [exe, "mesh", "tetrahedralize", str(src), str(out), "--target-tets", "5000"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     assert "3 bodies meshed as their union" in r.stdout
     m = meshio.read(out)
@@ -123,8 +130,12 @@ duration = 0.0005
 png = false
 """)
     exe = str(__import__("pathlib").Path(sys.executable).with_name("pliant"))
-    r = subprocess.run([exe, "run", str(scene), "-o", str(tmp_path / "o"), "--no-progress"],
-                       capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [exe, "run", str(scene), "-o", str(tmp_path / "o"), "--no-progress"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     assert "3 bodies in the surface, meshed as their union" in r.stdout
     s = json.loads((tmp_path / "o" / "summary.json").read_text())

@@ -57,8 +57,10 @@ def test_demo_writes_a_readable_series(tmp_path):
     Fg = np.array(hist["ground"]["force"])[window, 2].mean()
     Ft = np.array(hist["tool"]["force"])[window, 2].mean()
     P = X[T]
-    vol = np.abs(np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]),
-                           P[:, 3] - P[:, 0])).sum() / 6
+    vol = (
+        np.abs(np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0])).sum()
+        / 6
+    )
     weight = 1000.0 * vol * 9.81
     # The ground receives the weight plus the tool's push (both downward on the ground: −z).
     assert -Fg == pytest.approx(weight - Ft, rel=0.15)
@@ -79,8 +81,9 @@ def test_demo_writes_a_readable_series(tmp_path):
 
 def test_bench_json(tmp_path):
     f = tmp_path / "b.json"
-    r = runner.invoke(app, ["bench", "--sizes", "600,7456", "--steps", "20", "--large-steps", "5",
-                            "--json", str(f)])
+    r = runner.invoke(
+        app, ["bench", "--sizes", "600,7456", "--steps", "20", "--large-steps", "5", "--json", str(f)]
+    )
     assert r.exit_code == 0, r.output
     rows = json.loads(f.read_text())["rows"]
     assert [row["tets"] for row in rows] == [600, 7456]

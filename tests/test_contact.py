@@ -107,9 +107,15 @@ def test_moving_tool_momentum_matches_reported_impulse():
     assert tool.signed_distance(sim.positions, sim.time).min() > -1e-12
 
 
-@pytest.mark.parametrize("tool", [Capsule(0.006, 0.03, rotation=(0.7071068, 0.7071068, 0, 0)),
-                                  Cylinder(0.006, 0.012),
-                                  Box((0.03, 0.006, 0.006))], ids=["capsule", "cylinder", "box"])
+@pytest.mark.parametrize(
+    "tool",
+    [
+        Capsule(0.006, 0.03, rotation=(0.7071068, 0.7071068, 0, 0)),
+        Cylinder(0.006, 0.012),
+        Box((0.03, 0.006, 0.006)),
+    ],
+    ids=["capsule", "cylinder", "box"],
+)
 def test_no_node_inside_a_pressing_tool(tool):
     """A tool pressed 2 mm into a block (nodal contact: smaller than the surface spacing): no
     surface node ever lies inside it, and the body pushes back on it."""
@@ -134,8 +140,9 @@ def test_cylinder_distance_matches_geometry():
     6 mm, 2 mm deep) has every node under the face pushed to exactly the face's height, and the
     NumPy signed distance agrees with the closed form at sample points."""
     cyl = Cylinder(0.01, 0.04)
-    y = np.array([[0.0, 0.0, 0.0], [0.02, 0.0, 0.0], [0.0, 0.0, 0.03], [0.013, 0.0, 0.024],
-                  [0.005, 0.0, 0.019]])
+    y = np.array(
+        [[0.0, 0.0, 0.0], [0.02, 0.0, 0.0], [0.0, 0.0, 0.03], [0.013, 0.0, 0.024], [0.005, 0.0, 0.019]]
+    )
     ref = [-0.01, 0.01, 0.01, 0.005, -0.001]  # inside, beside, above, beyond the rim (3-4-5), inside
     np.testing.assert_allclose(cyl.signed_distance(y), ref, atol=1e-15)
     X, b = _block((0.04, 0.04, 0.02), (8, 8, 4), E=3e4)
@@ -163,8 +170,8 @@ def test_tool_restricted_to_a_node_set():
     b.add_tool(Plane((0, 0, 0), (0, 0, 1)), nodes=np.arange(len(X1)))
     sim = pl.Simulation(b.finalize("float64"))
     sim.run(until=0.1)
-    first, second = sim.positions[: len(X1)], sim.positions[len(X1):]
-    assert first[:, 2].min() >= -1e-12          # the first block rests on the plane
+    first, second = sim.positions[: len(X1)], sim.positions[len(X1) :]
+    assert first[:, 2].min() >= -1e-12  # the first block rests on the plane
     # The second falls freely; mass-proportional damping α = 20/s slows it: z'' = −g − α z' gives
     # z(t) = z0 − g/α (t − (1 − e^(−αt))/α). Central differences started with u⁻ = u are at rest
     # at t = −Δt/2, hence the shifted time; 1e-6 m covers the scheme's O(Δt²) error.

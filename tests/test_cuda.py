@@ -36,8 +36,7 @@ def _sphere_model(backend="cpu", extras=False):
     T = pl.mesh.orient_positive(X, T)
     b = pl.ModelBuilder()
     b.add_mesh(X, T)
-    b.set_material(pl.ArrudaBoyce(1e3, 2.0, 2e4) if extras else pl.NeoHookean(mu=1e3, K=2e4),
-                   density=1000.0)
+    b.set_material(pl.ArrudaBoyce(1e3, 2.0, 2e4) if extras else pl.NeoHookean(mu=1e3, K=2e4), density=1000.0)
     b.fix(np.nonzero(X[:, 2] < -0.8)[0])
     b.set_gravity((0.0, 0.0, -9.81), curve=pl.SmoothRamp(0.05))
     b.damping = 5.0

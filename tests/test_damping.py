@@ -72,7 +72,7 @@ def test_first_bending_mode_decays_at_beta_omega_squared_over_two():
     model, tip = ringing_cantilever(beta=beta)
     omega, sigma = decay_of_first_mode(model, tip)
     assert 0.005 < beta * omega / 2 < 0.1  # a damping ratio that the test can measure (0.9 %)
-    assert sigma == pytest.approx(beta * omega ** 2 / 2, rel=0.02)
+    assert sigma == pytest.approx(beta * omega**2 / 2, rel=0.02)
 
 
 def test_stable_step_shrinks_with_beta():

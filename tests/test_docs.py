@@ -11,8 +11,23 @@ ROOT = Path(__file__).parents[1]
 
 
 def test_site_builds_without_warnings(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
-                        str(ROOT / "docs"), str(tmp_path)], capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "sphinx",
+            "-W",
+            "--keep-going",
+            "-q",
+            "-b",
+            "html",
+            str(ROOT / "docs"),
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr[-3000:]
     api = (tmp_path / "api.html").read_text(encoding="utf-8")
     for name in ("ModelBuilder", "Simulation", "NeoHookean", "run_sweep", "Batch", "run_validation"):

@@ -85,8 +85,7 @@ def test_dt_above_critical_is_refused():
     assert f"{1.5 * model.dt_critical:.4g}" in msg and f"{model.dt_critical:.4g}" in msg
 
 
-@pytest.mark.parametrize("dtype, extras", [("float32", False), ("float64", False),
-                                           ("float32", True)])
+@pytest.mark.parametrize("dtype, extras", [("float32", False), ("float64", False), ("float32", True)])
 def test_threads_give_identical_bits(dtype, extras):
     """Same input, same bits: 1 and 2 threads give bitwise equal displacements (gather assembly in a
     fixed order, no atomics, no thread-dependent reductions). `extras`: with average nodal pressure
@@ -100,8 +99,10 @@ def test_threads_give_identical_bits(dtype, extras):
         b = pl.ModelBuilder()
         b.add_mesh(X, T)
         b.set_material(pl.NeoHookean(E=5e4, nu=0.45), density=1000.0, elements=np.arange(len(T) // 2))
-        b.set_material(pl.ArrudaBoyce(1e4, 2.0, 2e5) if extras else
-                       pl.MooneyRivlin(C10=5e3, C01=2e3, K=2e5), density=1100.0)
+        b.set_material(
+            pl.ArrudaBoyce(1e4, 2.0, 2e5) if extras else pl.MooneyRivlin(C10=5e3, C01=2e3, K=2e5),
+            density=1100.0,
+        )
         b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
         b.set_gravity((0, 0, -9.81), curve=pl.SmoothRamp(0.01))
         b.add_force(np.nonzero(X[:, 0] > 0.2 - 1e-9)[0], (0.0, 0.05, 0.0), curve=pl.Ramp(0.02))

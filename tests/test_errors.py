@@ -41,9 +41,15 @@ def test_degenerate_element_is_reported_by_id():
     assert err.value.element == 1 and "element 1" in str(err.value)
 
 
-@pytest.mark.parametrize("kwargs, text", [
-    (dict(E=1e3, nu=0.5), "nu"), (dict(E=-1.0, nu=0.3), "E"), (dict(mu=0.0, K=1.0), "mu"),
-    (dict(mu=1.0, K=float("nan")), "K")])
+@pytest.mark.parametrize(
+    "kwargs, text",
+    [
+        (dict(E=1e3, nu=0.5), "nu"),
+        (dict(E=-1.0, nu=0.3), "E"),
+        (dict(mu=0.0, K=1.0), "mu"),
+        (dict(mu=1.0, K=float("nan")), "K"),
+    ],
+)
 def test_bad_material_parameters(kwargs, text):
     with pytest.raises(pl.MaterialError, match=text):
         pl.NeoHookean(**kwargs)
@@ -146,12 +152,15 @@ def _sim(E=1e6, tool=False):
     return pl.Simulation(b.finalize("float64")), b
 
 
-@pytest.mark.parametrize("content, text", [
-    (None, "no such state file"),
-    (b"", "not a readable pliant state file"),
-    (b"PK\x03\x04 truncated zip", "not a readable pliant state file"),
-    (b"\x93NUMPY garbage" * 10, "not a readable pliant state file"),
-])
+@pytest.mark.parametrize(
+    "content, text",
+    [
+        (None, "no such state file"),
+        (b"", "not a readable pliant state file"),
+        (b"PK\x03\x04 truncated zip", "not a readable pliant state file"),
+        (b"\x93NUMPY garbage" * 10, "not a readable pliant state file"),
+    ],
+)
 def test_state_load_of_missing_or_corrupt_files(tmp_path, content, text):
     sim, _ = _sim()
     p = tmp_path / "s.npz"
@@ -194,20 +203,23 @@ def test_state_load_checks_values(tmp_path):
         sim.load(tmp_path / "nan.npz")
 
 
-@pytest.mark.parametrize("call, text", [
-    (lambda s: s.run(steps=2**70), "expected 0 to"),
-    (lambda s: s.run(steps=-1), "expected 0 to"),
-    (lambda s: s.run(steps=2.5), "whole number"),
-    (lambda s: s.run(steps="10"), "whole number"),
-    (lambda s: s.run(until=float("nan")), "until = nan; expected a finite number"),
-    (lambda s: s.run(until=float("inf")), "until = inf; expected a finite number"),
-    (lambda s: s.run(until=1e30), "steps"),
-    (lambda s: s.tool_force(5), "tool index 5"),
-    (lambda s: s.set_tool_pose(-1, (0, 0, 0)), "tool index -1"),
-    (lambda s: s.set_tool_pose(0, (0, 0, float("nan"))), "position"),
-    (lambda s: s.solver.step(s.state, s.state.copy(), float("nan")), "dt"),
-    (lambda s: s.state.set_displacements(np.zeros((3, 3))), "expected shape"),
-])
+@pytest.mark.parametrize(
+    "call, text",
+    [
+        (lambda s: s.run(steps=2**70), "expected 0 to"),
+        (lambda s: s.run(steps=-1), "expected 0 to"),
+        (lambda s: s.run(steps=2.5), "whole number"),
+        (lambda s: s.run(steps="10"), "whole number"),
+        (lambda s: s.run(until=float("nan")), "until = nan; expected a finite number"),
+        (lambda s: s.run(until=float("inf")), "until = inf; expected a finite number"),
+        (lambda s: s.run(until=1e30), "steps"),
+        (lambda s: s.tool_force(5), "tool index 5"),
+        (lambda s: s.set_tool_pose(-1, (0, 0, 0)), "tool index -1"),
+        (lambda s: s.set_tool_pose(0, (0, 0, float("nan"))), "position"),
+        (lambda s: s.solver.step(s.state, s.state.copy(), float("nan")), "dt"),
+        (lambda s: s.state.set_displacements(np.zeros((3, 3))), "expected shape"),
+    ],
+)
 def test_simulation_calls_with_bad_arguments(call, text):
     sim, _ = _sim(tool=True)
     with pytest.raises(pl.InputError, match=text):
@@ -217,11 +229,18 @@ def test_simulation_calls_with_bad_arguments(call, text):
 
 def test_simulation_of_a_builder_and_node_ids_of_the_wrong_type():
     _, b = _sim()
-    with pytest.raises(pl.InputError, match="ModelBuilder; expected a pliant Model; call "
-                                            r"builder.finalize\(\) first"):
+    with pytest.raises(
+        pl.InputError,
+        match="ModelBuilder; expected a pliant Model; call "
+        r"builder.finalize\(\) first",
+    ):
         pl.Simulation(b)
-    for ids, text in (([1.5], "node id 1.5"), (["a"], "type <U1"), ([True], "type bool"),
-                      ([float("nan")], "node id nan")):
+    for ids, text in (
+        ([1.5], "node id 1.5"),
+        (["a"], "type <U1"),
+        ([True], "type bool"),
+        ([float("nan")], "node id nan"),
+    ):
         with pytest.raises(pl.InputError, match=re.escape(text)):
             b.add_force(ids, (0, 0, 1))
     b.add_force(np.array([1.0, 2.0]), (0, 0, 1))  # integral floats are node ids

@@ -11,8 +11,9 @@ import pytest
 from pliant.runner import run_scene
 from pliant.scene import load_scene
 
-EXAMPLES = sorted(p for p in (Path(__file__).parents[1] / "examples").glob("*.toml")
-                  if "sweep" not in p.stem)  # sweeps: tests/test_sweep.py
+EXAMPLES = sorted(
+    p for p in (Path(__file__).parents[1] / "examples").glob("*.toml") if "sweep" not in p.stem
+)  # sweeps: tests/test_sweep.py
 
 
 def test_there_are_examples():

@@ -25,14 +25,20 @@ from test_niftysim import _cube_xml
 # CI's budget: 120 examples per test, the same ones every run. PLIANT_FUZZ_EXAMPLES=5000 explores
 # more, with fresh random cases each time (a developer's hunt; failures print their input).
 _EXPLORE = int(os.environ.get("PLIANT_FUZZ_EXAMPLES", "0"))
-BUDGET = settings(max_examples=_EXPLORE or 120, deadline=None, derandomize=not _EXPLORE,
-                  database=None,
-                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+BUDGET = settings(
+    max_examples=_EXPLORE or 120,
+    deadline=None,
+    derandomize=not _EXPLORE,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 
 # The hostile-input tests' minimal scene, with more of everything for the mutations to hit.
-BASE = SCENE.replace('title = "bar"', 'title = "fuzz"').replace(
-    "density = 1000.0", "density = 1000.0\nprony_iso = [[0.3, 0.1]]").replace(
-    "duration = 0.001", 'duration = 0.0005\ndamping = 5.0\ndtype = "float64"') + """[[constraint]]
+BASE = (
+    SCENE.replace('title = "bar"', 'title = "fuzz"')
+    .replace("density = 1000.0", "density = 1000.0\nprony_iso = [[0.3, 0.1]]")
+    .replace("duration = 0.001", 'duration = 0.0005\ndamping = 5.0\ndtype = "float64"')
+    + """[[constraint]]
 type = "displacement"
 nodes = { box = [[0.04, -1, -1], [1, 1, 1]] }
 value = 0.001
@@ -47,10 +53,34 @@ position = [0.0, 0.0, 0.02]
 [output]
 frames = 2
 """
+)
 
-HOSTILE = ["nan", "inf", "-inf", "0", "-1", "1e308", "1e-308", "100000", "99999999999999999999",
-           '""', '"x"', '"' + "y" * 300 + '"', "[]", "[[]]", "[1, 2]", "[nan, 0, 0]", "{}",
-           "{ a = 1 }", "true", "false", "2.5", "[0.0, 0.0, 0.0]", "[1e30, 1, 1]", "-0.0"]
+HOSTILE = [
+    "nan",
+    "inf",
+    "-inf",
+    "0",
+    "-1",
+    "1e308",
+    "1e-308",
+    "100000",
+    "99999999999999999999",
+    '""',
+    '"x"',
+    '"' + "y" * 300 + '"',
+    "[]",
+    "[[]]",
+    "[1, 2]",
+    "[nan, 0, 0]",
+    "{}",
+    "{ a = 1 }",
+    "true",
+    "false",
+    "2.5",
+    "[0.0, 0.0, 0.0]",
+    "[1e30, 1, 1]",
+    "-0.0",
+]
 
 
 def _check_error(e: Exception, path: Path):
@@ -81,8 +111,9 @@ def _loads_or_fails_by_name(load, p: Path):
 def _write(text: str, suffix: str) -> Path:
     d = Path(tempfile.mkdtemp(prefix="pliant-fuzz-"))
     p = d / f"case{suffix}"
-    p.write_text(text, encoding="utf-8", errors="surrogatepass") if isinstance(text, str) \
-        else p.write_bytes(text)
+    p.write_text(text, encoding="utf-8", errors="surrogatepass") if isinstance(text, str) else p.write_bytes(
+        text
+    )
     return p
 
 
@@ -103,16 +134,21 @@ def scene_texts(draw):
             x = draw(st.floats(allow_nan=True, allow_infinity=True))
             lines[i] = key + "= " + (repr(x) if math.isfinite(x) else str(x).replace("inf", "inf"))
         elif kind == 2:
-            lines[i] = key + "= " + str(draw(st.integers(-2**70, 2**70)))
+            lines[i] = key + "= " + str(draw(st.integers(-(2**70), 2**70)))
         elif kind == 3:
             lines[i] = ""
         elif kind == 4:
-            name = draw(st.text(st.characters(codec="utf-8", exclude_characters='"\\\n\r'),
-                                max_size=12))
+            name = draw(st.text(st.characters(codec="utf-8", exclude_characters='"\\\n\r'), max_size=12))
             lines[i] = lines[i] + f'\n"{name}" = 1'
         else:
-            lines.insert(i, draw(st.sampled_from(["[solver]", "[[tool]]", "[[material]]",
-                                                  "[mesh]", "[output]", "[[load]]", "x = ["])))
+            lines.insert(
+                i,
+                draw(
+                    st.sampled_from(
+                        ["[solver]", "[[tool]]", "[[material]]", "[mesh]", "[output]", "[[load]]", "x = ["]
+                    )
+                ),
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -124,8 +160,23 @@ def test_scene_files_load_or_fail_by_name(text):
 
 # --- NiftySim ---------------------------------------------------------------------------------
 _, _, _, _, CUBE = _cube_xml()
-NIFTY_HOSTILE = HOSTILE + ["all", "T4", "T4ANP", "H8", "NH", "RAMP", "HILLY", "0 0 0", "1 2 3 4 5",
-                           "-5", "0.5 0.5", "1e-300", "NODES", "UNIFORM", "DIFFORM"]
+NIFTY_HOSTILE = HOSTILE + [
+    "all",
+    "T4",
+    "T4ANP",
+    "H8",
+    "NH",
+    "RAMP",
+    "HILLY",
+    "0 0 0",
+    "1 2 3 4 5",
+    "-5",
+    "0.5 0.5",
+    "1e-300",
+    "NODES",
+    "UNIFORM",
+    "DIFFORM",
+]
 
 
 @st.composite
@@ -157,8 +208,10 @@ def test_niftysim_files_load_or_fail_by_name(text):
 
 
 # --- mesh files ---------------------------------------------------------------------------------
-OBJ = "".join(f"v {x} {y} {z}\n" for x, y, z in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]) + \
-    "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+OBJ = (
+    "".join(f"v {x} {y} {z}\n" for x, y, z in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)])
+    + "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+)
 
 
 @st.composite
@@ -168,8 +221,26 @@ def obj_texts(draw):
         i = draw(st.integers(0, len(lines) - 1))
         words = lines[i].split()
         j = draw(st.integers(0, len(words) - 1))
-        words[j] = draw(st.sampled_from(["nan", "inf", "0", "-1", "5", "99999999999999999999",
-                                         "1/2/3", "x", "", "-0", "1e400", "f", "v", "vt"]))
+        words[j] = draw(
+            st.sampled_from(
+                [
+                    "nan",
+                    "inf",
+                    "0",
+                    "-1",
+                    "5",
+                    "99999999999999999999",
+                    "1/2/3",
+                    "x",
+                    "",
+                    "-0",
+                    "1e400",
+                    "f",
+                    "v",
+                    "vt",
+                ]
+            )
+        )
         lines[i] = " ".join(words)
     return "\n".join(lines) + "\n"
 
@@ -187,8 +258,7 @@ def test_obj_files_read_or_fail_by_name(text):
 
 
 @BUDGET
-@given(st.binary(max_size=400), st.sampled_from([".stl", ".ply", ".off", ".vtk", ".vtu", ".msh",
-                                                 ".obj"]))
+@given(st.binary(max_size=400), st.sampled_from([".stl", ".ply", ".off", ".vtk", ".vtu", ".msh", ".obj"]))
 def test_binary_garbage_is_refused_by_name(data, suffix):
     p = _write(data, suffix)
     for read in (pl.mesh.read_surface, pl.io.read_volume_mesh):

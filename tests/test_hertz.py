@@ -10,8 +10,8 @@ import pytest
 from pliant.validate.models import hertz_indentation
 from pliant.validate.references import hertz_force
 
-R, E, NU = 0.01, 1e4, 0.3          # sphere radius [m], Young's modulus [Pa], Poisson ratio
-DEPTHS = np.array([0.0025, 0.005, 0.01]) * R   # δ [m]: contact radius a = √(Rδ) = 0.05–0.1 R
+R, E, NU = 0.01, 1e4, 0.3  # sphere radius [m], Young's modulus [Pa], Poisson ratio
+DEPTHS = np.array([0.0025, 0.005, 0.01]) * R  # δ [m]: contact radius a = √(Rδ) = 0.05–0.1 R
 
 
 @pytest.fixture(scope="module")

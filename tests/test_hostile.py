@@ -43,8 +43,9 @@ def cli(*args, cwd=None, timeout=120):
     assert PLIANT.exists(), f"the pliant program is not installed in this environment ({PLIANT})"
     env = {**os.environ, "PYTHONWARNINGS": "default"}  # warnings would show if not routed
     env.pop("PLIANT_DEBUG", None)
-    return subprocess.run([str(PLIANT), *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout, cwd=cwd, env=env)
+    return subprocess.run(
+        [str(PLIANT), *map(str, args)], capture_output=True, text=True, timeout=timeout, cwd=cwd, env=env
+    )
 
 
 def refused(r, *words):
@@ -75,8 +76,7 @@ def test_thread_counts_out_of_range_are_refused_in_scenes(tmp_path, value):
 
 @pytest.mark.parametrize("value", ["100000", "0", "-1"])
 def test_thread_counts_out_of_range_are_refused_on_the_command_line(tmp_path, value):
-    refused(cli("run", scene(tmp_path), "-o", tmp_path / "o", "--threads", value), "threads",
-            value)
+    refused(cli("run", scene(tmp_path), "-o", tmp_path / "o", "--threads", value), "threads", value)
 
 
 def test_thread_limit_in_the_api_and_the_engine():
@@ -99,17 +99,20 @@ def test_huge_duration_is_refused_before_anything_runs(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("patch, key", [
-    (("<TotalTime>0.05</TotalTime>", "<TotalTime>1e30</TotalTime>"), "steps"),
-    (("<TimeStep>1e-4</TimeStep>", "<TimeStep>nan</TimeStep>"), "TimeStep"),
-    (("<TimeStep>1e-4</TimeStep>", "<TimeStep>-1</TimeStep>"), "TimeStep"),
-    (("<DampingCoeff>20</DampingCoeff>", "<DampingCoeff>fast</DampingCoeff>"), "DampingCoeff"),
-    (("<Density>1000</Density>", "<Density>inf</Density>"), "Density"),
-    (('NumEls="48"', 'NumEls="53"'), "NumEls"),
-    (('NumNodes="27"', 'NumNodes="x"'), "NumNodes"),
-    (('<Nodes>0 ', '<Nodes>99999 '), "node 99999"),
-    (("0.01</Magnitudes>", "nan</Magnitudes>"), "Magnitudes"),
-])
+@pytest.mark.parametrize(
+    "patch, key",
+    [
+        (("<TotalTime>0.05</TotalTime>", "<TotalTime>1e30</TotalTime>"), "steps"),
+        (("<TimeStep>1e-4</TimeStep>", "<TimeStep>nan</TimeStep>"), "TimeStep"),
+        (("<TimeStep>1e-4</TimeStep>", "<TimeStep>-1</TimeStep>"), "TimeStep"),
+        (("<DampingCoeff>20</DampingCoeff>", "<DampingCoeff>fast</DampingCoeff>"), "DampingCoeff"),
+        (("<Density>1000</Density>", "<Density>inf</Density>"), "Density"),
+        (('NumEls="48"', 'NumEls="53"'), "NumEls"),
+        (('NumNodes="27"', 'NumNodes="x"'), "NumNodes"),
+        (("<Nodes>0 ", "<Nodes>99999 "), "node 99999"),
+        (("0.01</Magnitudes>", "nan</Magnitudes>"), "Magnitudes"),
+    ],
+)
 def test_niftysim_bad_values_are_named(tmp_path, patch, key):
     """Each NiftySim value that used to crash or pass silently (TotalTime 1e30, TimeStep nan,
     NumEls larger than the list, a constraint on node 99999 reported without the file)."""
@@ -155,10 +158,12 @@ def test_an_element_that_ruins_the_time_step_is_named(tmp_path):
 # --- files: unreadable input, unwritable output ----------------------------------------------
 def _bad_outputs(tmp_path):
     (tmp_path / "file").write_text("x")
-    return {"missing folder": (tmp_path / "no" / "such" / "out.{ext}", "does not exist"),
-            "under a file": (tmp_path / "file" / "out.{ext}", "not a folder"),
-            "read-only folder": (Path("/proc") / "out.{ext}", "/proc/out"),
-            "a folder": (tmp_path, "folder")}
+    return {
+        "missing folder": (tmp_path / "no" / "such" / "out.{ext}", "does not exist"),
+        "under a file": (tmp_path / "file" / "out.{ext}", "not a folder"),
+        "read-only folder": (Path("/proc") / "out.{ext}", "/proc/out"),
+        "a folder": (tmp_path, "folder"),
+    }
 
 
 @pytest.mark.parametrize("case", ["missing folder", "under a file", "read-only folder", "a folder"])
@@ -173,8 +178,11 @@ def test_unwritable_mesh_outputs_are_named(tmp_path, command, case):
 
 
 def test_unknown_output_format_is_named(tmp_path):
-    refused(cli("mesh", "repair", ROOT / "examples" / "data" / "kidney.obj", tmp_path / "k.xyz"),
-            "k.xyz", "format")
+    refused(
+        cli("mesh", "repair", ROOT / "examples" / "data" / "kidney.obj", tmp_path / "k.xyz"),
+        "k.xyz",
+        "format",
+    )
 
 
 def test_results_folder_that_cannot_be_made(tmp_path):
@@ -232,11 +240,15 @@ def test_png_false_does_not_announce_a_picture(tmp_path):
 
 def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path):
     """Ctrl-C between a frame's file and the index left result.pvd one frame short."""
-    p = scene(tmp_path, SCENE.replace("duration = 0.001", "duration = 100.0") +
-              "[output]\nevery = 1\npng = false\n")
-    proc = subprocess.Popen([str(PLIANT), "run", str(p), "-o", str(tmp_path / "o"),
-                             "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    p = scene(
+        tmp_path, SCENE.replace("duration = 0.001", "duration = 100.0") + "[output]\nevery = 1\npng = false\n"
+    )
+    proc = subprocess.Popen(
+        [str(PLIANT), "run", str(p), "-o", str(tmp_path / "o"), "--no-progress"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.time() + 60
     while time.time() < deadline and len(list((tmp_path / "o").glob("frame_*.vtu"))) < 20:
         time.sleep(0.05)
@@ -318,13 +330,18 @@ def test_usage_errors_exit_2():
 
 
 # --- more resource bounds (found by a second probe) -------------------------------------------
-@pytest.mark.parametrize("patch, words", [
-    (("size = [0.1, 0.02, 0.02]", "size = [1e300, 1e300, 1e300]"), ["non-finite volume"]),
-    (("E = 5e5", "E = 1e300"), ["steps"]),
-    (("density = 1000.0", "density = 1e-300"), ["steps"]),
-    (("duration = 0.001", "duration = 0.001\nstatic = true\nincrements = 1000000000"),
-     ["solver.increments"]),
-])
+@pytest.mark.parametrize(
+    "patch, words",
+    [
+        (("size = [0.1, 0.02, 0.02]", "size = [1e300, 1e300, 1e300]"), ["non-finite volume"]),
+        (("E = 5e5", "E = 1e300"), ["steps"]),
+        (("density = 1000.0", "density = 1e-300"), ["steps"]),
+        (
+            ("duration = 0.001", "duration = 0.001\nstatic = true\nincrements = 1000000000"),
+            ["solver.increments"],
+        ),
+    ],
+)
 def test_extreme_values_are_refused_in_one_line(tmp_path, patch, words):
     """Coordinates that overflow the geometry (an internal error before), materials and densities
     that make the stable step absurdly small, and a billion load increments (a hang)."""
@@ -335,24 +352,34 @@ def test_extreme_values_are_refused_in_one_line(tmp_path, patch, words):
 
 def test_volume_meshes_with_other_cells_are_refused(tmp_path):
     """Hexahedra beside tets were dropped silently: the run simulated a part of the body."""
-    X = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1],
-                  [0, 1, 1], [2, 0, 0.0]])
+    X = np.array(
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1], [2, 0, 0.0]]
+    )
     p = tmp_path / "hex.vtu"
-    meshio.write(p, meshio.Mesh(X, [("hexahedron", np.array([[0, 1, 2, 3, 4, 5, 6, 7]])),
-                                    ("tetra", np.array([[1, 8, 2, 5]]))]))
+    meshio.write(
+        p,
+        meshio.Mesh(
+            X, [("hexahedron", np.array([[0, 1, 2, 3, 4, 5, 6, 7]])), ("tetra", np.array([[1, 8, 2, 5]]))]
+        ),
+    )
     refused(cli("mesh", "quality", p), str(p), "1 hexahedron")
 
 
-@pytest.mark.parametrize("args, words", [
-    (["demo", "--duration", "-1"], ["--duration"]),
-    (["demo", "--duration", "nan"], ["--duration"]),
-    (["bench", "--dtype", "float16"], ["--dtype"]),
-    (["bench", "--sizes", "1000000000000"], ["--sizes"]),
-    (["bench", "--steps", "1000000000000"], ["--steps"]),
-    (["view", "x.toml", "--port", "0"], ["--port"]),
-    (["mesh", "subdivide", ROOT / "src" / "pliant" / "data" / "spot.obj", "OUT", "--levels", "6"],
-     ["6 levels"]),
-])
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["demo", "--duration", "-1"], ["--duration"]),
+        (["demo", "--duration", "nan"], ["--duration"]),
+        (["bench", "--dtype", "float16"], ["--dtype"]),
+        (["bench", "--sizes", "1000000000000"], ["--sizes"]),
+        (["bench", "--steps", "1000000000000"], ["--steps"]),
+        (["view", "x.toml", "--port", "0"], ["--port"]),
+        (
+            ["mesh", "subdivide", ROOT / "src" / "pliant" / "data" / "spot.obj", "OUT", "--levels", "6"],
+            ["6 levels"],
+        ),
+    ],
+)
 def test_command_options_out_of_range(tmp_path, args, words):
     args = [tmp_path / "s.obj" if a == "OUT" else a for a in args]
     if args[0] == "demo":

@@ -53,8 +53,9 @@ def test_every_imported_module_is_a_declared_dependency():
     declared = _declared()
     missing = {}
     # tomli is declared for Python < 3.11 only, where tomllib does not exist.
-    for mod in sorted((_imported_modules() | set(INDIRECT)) - ({"tomli"} if sys.version_info >=
-                                                                (3, 11) else set())):
+    for mod in sorted(
+        (_imported_modules() | set(INDIRECT)) - ({"tomli"} if sys.version_info >= (3, 11) else set())
+    ):
         owners = {d.lower().replace("_", "-") for d in dists.get(mod, [])}
         assert owners, f"module {mod!r} is imported but no installed distribution provides it"
         if not owners & declared:
@@ -85,15 +86,30 @@ def test_every_command_answers_help(words):
 
 def test_the_commands_are_all_there():
     names = {" ".join(w) for w in _commands(app)}
-    assert names >= {"run", "demo", "view", "bench", "info", "mesh", "mesh simplify",
-                     "mesh subdivide", "mesh check", "mesh repair", "mesh tetrahedralize",
-                     "mesh quality"}
+    assert names >= {
+        "run",
+        "demo",
+        "view",
+        "bench",
+        "info",
+        "mesh",
+        "mesh simplify",
+        "mesh subdivide",
+        "mesh check",
+        "mesh repair",
+        "mesh tetrahedralize",
+        "mesh quality",
+    }
 
 
 def test_the_installed_program_runs_the_demo(tmp_path):
     """The README's first command, shortened (the full demo is test_cli's)."""
-    r = subprocess.run([str(PLIANT), "demo", "-o", str(tmp_path / "d"), "--duration", "0.02",
-                        "--no-progress"], capture_output=True, text=True, timeout=600)
+    r = subprocess.run(
+        [str(PLIANT), "demo", "-o", str(tmp_path / "d"), "--duration", "0.02", "--no-progress"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
     assert (tmp_path / "d" / "result.pvd").exists() and (tmp_path / "d" / "result.png").exists()
 
@@ -104,18 +120,35 @@ def test_kinds_are_the_engines_enums():
     import pliant as pl
     from pliant import _core
 
-    mats = [pl.NeoHookean(E=1e3, nu=0.3), pl.MooneyRivlin(100, 50, 1e4),
-            pl.NeoHookeanCoupled(E=1e3, nu=0.3), pl.StVenantKirchhoff(E=1e3, nu=0.3),
-            pl.LinearElastic(E=1e3, nu=0.3), pl.Polynomial(100, 50, 1, 1, 1, K=1e4),
-            pl.ArrudaBoyce(100, 3, 1e4), pl.TransverselyIsotropic(100, 1e4, 50, (1, 0, 0))]
+    mats = [
+        pl.NeoHookean(E=1e3, nu=0.3),
+        pl.MooneyRivlin(100, 50, 1e4),
+        pl.NeoHookeanCoupled(E=1e3, nu=0.3),
+        pl.StVenantKirchhoff(E=1e3, nu=0.3),
+        pl.LinearElastic(E=1e3, nu=0.3),
+        pl.Polynomial(100, 50, 1, 1, 1, K=1e4),
+        pl.ArrudaBoyce(100, 3, 1e4),
+        pl.TransverselyIsotropic(100, 1e4, 50, (1, 0, 0)),
+    ]
     assert sorted(type(m.kind).__name__ for m in mats) == ["MaterialKind"] * 8
     assert {m.kind.name for m in mats} == set(_core.MaterialKind.__members__)
-    curves = [pl.Constant(), pl.Step(0.1), pl.Ramp(1), pl.SmoothRamp(1), pl.Hilly(1),
-              pl.Table([0, 1], [0, 1])]
+    curves = [
+        pl.Constant(),
+        pl.Step(0.1),
+        pl.Ramp(1),
+        pl.SmoothRamp(1),
+        pl.Hilly(1),
+        pl.Table([0, 1], [0, 1]),
+    ]
     assert {c.kind.name for c in curves} == set(_core.CurveKind.__members__)
     c = pl.contact
-    tools = [c.Plane((0, 0, 0), (0, 0, 1)), c.Sphere(0.1), c.Capsule(0.1, 0.2), c.Box((1, 1, 1)),
-             c.Cylinder(0.1, 0.2)]
+    tools = [
+        c.Plane((0, 0, 0), (0, 0, 1)),
+        c.Sphere(0.1),
+        c.Capsule(0.1, 0.2),
+        c.Box((1, 1, 1)),
+        c.Cylinder(0.1, 0.2),
+    ]
     assert {type(t.kind).__name__ for t in tools} == {"ToolKind"}
     assert {t.kind.name for t in tools} | {"Grid"} == set(_core.ToolKind.__members__)
 

@@ -34,8 +34,7 @@ print(json.dumps(out))
 
 def _run(isa):
     env = dict(os.environ, PLIANT_ISA=isa)
-    r = subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True,
-                       timeout=300)
+    r = subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout)
 
@@ -89,8 +88,13 @@ def test_each_path_is_deterministic_and_agrees(isa):
 
 def test_an_unknown_path_is_named_and_the_best_one_used():
     env = dict(os.environ, PLIANT_ISA="sse9")
-    r = subprocess.run([sys.executable, "-c", "import pliant; print(pliant._core.isa)"], env=env,
-                       capture_output=True, text=True, timeout=120)
+    r = subprocess.run(
+        [sys.executable, "-c", "import pliant; print(pliant._core.isa)"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 0, r.stderr
     assert "PLIANT_ISA='sse9' is not in this build" in r.stderr and "generic" in r.stderr
     assert r.stdout.strip() == _core.isa

@@ -37,10 +37,16 @@ def test_patch_test_affine_field(dtype):
     assert np.abs(sig - sig.mean(axis=0)).max() <= (1e-3 if dtype == "float32" else 1e-6) * scale
 
 
-@pytest.mark.parametrize("material", [pl.NeoHookean(mu=1e3, K=1e4), pl.MooneyRivlin(300, 200, 1e4),
-                                      pl.NeoHookeanCoupled(mu=1e3, lam=1e4),
-                                      pl.StVenantKirchhoff(mu=1e3, lam=1e4)],
-                         ids=lambda m: type(m).__name__)
+@pytest.mark.parametrize(
+    "material",
+    [
+        pl.NeoHookean(mu=1e3, K=1e4),
+        pl.MooneyRivlin(300, 200, 1e4),
+        pl.NeoHookeanCoupled(mu=1e3, lam=1e4),
+        pl.StVenantKirchhoff(mu=1e3, lam=1e4),
+    ],
+    ids=lambda m: type(m).__name__,
+)
 def test_rigid_rotation_is_stress_free(material, dtype):
     """A rigid rotation by 90° about an oblique axis gives zero stress and zero internal force
     (objectivity of the hyperelastic laws)."""

@@ -10,8 +10,9 @@ SPHERE = Path(__file__).parent / "data" / "niftysim_sphere.vtk"
 
 
 def _boundary_nodes(T):
-    faces = np.sort(np.concatenate([T[:, [0, 1, 2]], T[:, [0, 1, 3]], T[:, [0, 2, 3]],
-                                    T[:, [1, 2, 3]]]), axis=1)
+    faces = np.sort(
+        np.concatenate([T[:, [0, 1, 2]], T[:, [0, 1, 3]], T[:, [0, 2, 3]], T[:, [1, 2, 3]]]), axis=1
+    )
     uniq, count = np.unique(faces, axis=0, return_counts=True)
     return np.unique(uniq[count == 1])
 

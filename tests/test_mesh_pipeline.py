@@ -23,8 +23,7 @@ def shared(name):
 
 
 def _euler(F):
-    e = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1),
-                  axis=0)
+    e = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
     return len(e)
 
 
@@ -96,8 +95,7 @@ def test_torus_of_the_study():
     Checked against the closed-form volume 2π²Rr² (the polyhedral surface is inscribed: a little
     smaller, by under 2 % at this resolution)."""
     R, r = 0.05, 0.02
-    V, F = pl.mesh.primitive_surface("torus", major_radius=R, minor_radius=r, segments=91,
-                                     minor_segments=19)
+    V, F = pl.mesh.primitive_surface("torus", major_radius=R, minor_radius=r, segments=91, minor_segments=19)
     assert len(V) == 1729
     X, T, info = pl.mesh.surface_to_tets(V, F, target_tets=7456)
     q = pl.mesh.tet_quality(X, T)
@@ -120,8 +118,9 @@ def test_open_scans_become_valid_tet_meshes(name):
     from pliant.mesh.tetra import largest_component
     from pliant.mesh.topology import boundary_faces
 
-    faces = np.sort(np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]],
-                                    T[:, [0, 1, 2]]]), axis=1)
+    faces = np.sort(
+        np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]], T[:, [0, 1, 2]]]), axis=1
+    )
     assert np.unique(faces, axis=0, return_counts=True)[1].max() <= 2
     assert len(largest_component(T)) == len(T)
     bf, _ = boundary_faces(T)
@@ -177,8 +176,9 @@ def test_cli_mesh_commands(tmp_path):
     assert r.exit_code == 0 and "ok" in r.output
     r = runner.invoke(app, ["mesh", "simplify", str(spot), str(tmp_path / "s.obj"), "--ratio", "0.5"])
     assert r.exit_code == 0, r.output
-    r = runner.invoke(app, ["mesh", "subdivide", str(tmp_path / "s.obj"), str(tmp_path / "d.obj"),
-                            "--levels", "1"])
+    r = runner.invoke(
+        app, ["mesh", "subdivide", str(tmp_path / "s.obj"), str(tmp_path / "d.obj"), "--levels", "1"]
+    )
     assert r.exit_code == 0, r.output
     out = tmp_path / "spot.vtu"
     r = runner.invoke(app, ["mesh", "tetrahedralize", str(spot), str(out), "--edge-length", "0.15"])
@@ -197,13 +197,13 @@ def test_loop_boundary_and_interior_rules():
     F = np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]])
     V2, F2 = pl.mesh.subdivide_loop(V, F, 1)
     assert len(V2) == 6 + 9 and len(F2) == 16
-    assert np.allclose(V2[1], 0.75 * V[1] + 0.125 * (V[0] + V[2]))      # boundary even
-    assert np.allclose(V2[0], 0.75 * V[0] + 0.125 * (V[1] + V[3]))      # corner: boundary rule
+    assert np.allclose(V2[1], 0.75 * V[1] + 0.125 * (V[0] + V[2]))  # boundary even
+    assert np.allclose(V2[0], 0.75 * V[0] + 0.125 * (V[1] + V[3]))  # corner: boundary rule
     mids = V2[6:]
     assert np.isclose(np.linalg.norm(mids - 0.5 * (V[0] + V[1]), axis=1), 0).any()  # boundary odd
-    interior = 0.375 * (V[1] + V[4]) + 0.125 * (V[0] + V[5])             # edge (1, 4)
+    interior = 0.375 * (V[1] + V[4]) + 0.125 * (V[0] + V[5])  # edge (1, 4)
     assert np.isclose(np.linalg.norm(mids - interior, axis=1), 0).any()
-    assert np.allclose(V2[3], 0.75 * V[3] + 0.125 * (V[0] + V[4]))      # corner (0, 1, 0)
+    assert np.allclose(V2[3], 0.75 * V[3] + 0.125 * (V[0] + V[4]))  # corner (0, 1, 0)
 
 
 def test_graded_grid_is_conforming_and_fills_its_box():
@@ -214,8 +214,8 @@ def test_graded_grid_is_conforming_and_fills_its_box():
     from pliant.mesh.topology import boundary_faces
 
     xs = pl.mesh.graded_coordinates(0.1, 0.3, 1.5, 2.0)
-    np.testing.assert_allclose(np.diff(xs)[:3], 0.1)          # uniform up to fine_to
-    np.testing.assert_allclose(np.diff(xs)[3:] / np.diff(xs)[2:-1], 1.5)   # then geometric
+    np.testing.assert_allclose(np.diff(xs)[:3], 0.1)  # uniform up to fine_to
+    np.testing.assert_allclose(np.diff(xs)[3:] / np.diff(xs)[2:-1], 1.5)  # then geometric
     assert xs[-1] >= 2.0 and xs[-2] < 2.0
     zs = np.array([0.0, 0.5, 0.7])
     X, T = pl.mesh.grid_tets(xs, xs[:4], zs)

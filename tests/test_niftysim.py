@@ -24,8 +24,10 @@ def test_ball_ball_import_and_driven_nodes_follow_ramp():
     """Parsed independently here with ElementTree: node count, element count, NH (μ, K),
     density, damping, Δt; the driven nodes follow RAMP: u = magnitude · t / T exactly."""
     root = ET.parse(BALLS).getroot()
-    cons = [(np.array(c.find("Nodes").text.split(), int), float(c.find("Magnitudes").text))
-            for c in root.findall("Constraint")]
+    cons = [
+        (np.array(c.find("Nodes").text.split(), int), float(c.find("Magnitudes").text))
+        for c in root.findall("Constraint")
+    ]
     sc = load_niftysim(BALLS, ignore=("DoDeformableCollision",))
     assert any("DoDeformableCollision" in w for w in sc.warnings)
     b = sc.builder
@@ -42,8 +44,11 @@ def test_ball_ball_import_and_driven_nodes_follow_ramp():
     assert np.all(np.isfinite(u))
 
 
-def _cube_xml(extra_constraint="", material='<Material Type="NH"><ElasticParams NumParams="2">'
-              '1000 20000</ElasticParams></Material>', elements_type="T4"):
+def _cube_xml(
+    extra_constraint="",
+    material='<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>',
+    elements_type="T4",
+):
     X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (2, 2, 2))
     left = np.nonzero(X[:, 0] < 1e-9)[0]
     right = np.nonzero(X[:, 0] > 0.1 - 1e-9)[0]
@@ -92,19 +97,35 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path, etyp
     assert np.array_equal(sim_a.displacements, sim_b.displacements)
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    (dict(elements_type="H8"), "Elements Type=H8"),
-    (dict(material='<Material Type="HGO"><ElasticParams NumParams="2">1 2</ElasticParams></Material>'),
-     "Material Type=HGO"),
-    (dict(extra_constraint='<Constraint DOF="0" LoadShape="SINE" NumNodes="1" Type="Disp">'
-          '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'), "LoadShape=SINE"),
-    (dict(extra_constraint='<Constraint Type="Traction" NumFaces="all" LoadShape="RAMP"/>'),
-     "Constraint Type=Traction"),
-    (dict(extra_constraint="<ContactSurface><Motion/></ContactSurface>"), "ContactSurface/Motion"),
-    (dict(extra_constraint='<ContactCylinder><Origin>0 0 0</Origin><Axis>0 0 1</Axis><Radius>0.01'
-          '</Radius><Length>0.1</Length><RadChange>0.01</RadChange></ContactCylinder>'),
-     "ContactCylinder/RadChange"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(elements_type="H8"), "Elements Type=H8"),
+        (
+            dict(material='<Material Type="HGO"><ElasticParams NumParams="2">1 2</ElasticParams></Material>'),
+            "Material Type=HGO",
+        ),
+        (
+            dict(
+                extra_constraint='<Constraint DOF="0" LoadShape="SINE" NumNodes="1" Type="Disp">'
+                '<Nodes>0</Nodes><Magnitudes Type="UNIFORM">1</Magnitudes></Constraint>'
+            ),
+            "LoadShape=SINE",
+        ),
+        (
+            dict(extra_constraint='<Constraint Type="Traction" NumFaces="all" LoadShape="RAMP"/>'),
+            "Constraint Type=Traction",
+        ),
+        (dict(extra_constraint="<ContactSurface><Motion/></ContactSurface>"), "ContactSurface/Motion"),
+        (
+            dict(
+                extra_constraint="<ContactCylinder><Origin>0 0 0</Origin><Axis>0 0 1</Axis><Radius>0.01"
+                "</Radius><Length>0.1</Length><RadChange>0.01</RadChange></ContactCylinder>"
+            ),
+            "ContactCylinder/RadChange",
+        ),
+    ],
+)
 def test_unsupported_features_are_refused_by_name(tmp_path, kwargs, name):
     *_, xml = _cube_xml(**kwargs)
     p = tmp_path / "m.xml"
@@ -156,19 +177,21 @@ def test_contact_plate_moves_and_presses_only_its_slave_nodes(tmp_path):
     sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
     sim.run(until=0.5)
     z = sim.positions[:, 2]
-    assert z[slaves].max() <= 0.094 + 1e-9        # the slaves are pressed to the plate
+    assert z[slaves].max() <= 0.094 + 1e-9  # the slaves are pressed to the plate
     assert z[top[X[top, 0] > 0.1 - 1e-9]].min() > 0.094 + 1e-4  # others pass through it
-    assert sim.tool_force(0)[0][2] > 0             # the cube pushes the plate up
+    assert sim.tool_force(0)[0][2] > 0  # the cube pushes the plate up
 
 
 def test_contact_cylinder_and_probe_geometry(tmp_path):
     """ContactCylinder / ContactUSProbe: Origin at one end, unit Axis, Radius, Length; the probe's
     hemispherical tip is centred at Origin + Length·Axis."""
-    *_, xml = _cube_xml(extra_constraint="""
+    *_, xml = _cube_xml(
+        extra_constraint="""
   <ContactCylinder><Origin>0.3 0 0</Origin><Axis>0 0 2</Axis><Radius>0.02</Radius>
     <Length>0.1</Length></ContactCylinder>
   <ContactUSProbe><Origin>0.5 0 0</Origin><Axis>1 0 0</Axis><Radius>0.01</Radius>
-    <Length>0.05</Length><OrigDisp>0 0.1 0</OrigDisp><RadChange>0</RadChange></ContactUSProbe>""")
+    <Length>0.05</Length><OrigDisp>0 0.1 0</OrigDisp><RadChange>0</RadChange></ContactUSProbe>"""
+    )
     p = tmp_path / "tools.xml"
     p.write_text(xml)
     cyl, probe = load_niftysim(p).builder.tools
@@ -192,14 +215,16 @@ def test_h8_cannot_be_ignored_into_garbage(tmp_path):
 
 def test_ramphold_reaches_its_value_at_a_tenth_of_the_total_time(tmp_path):
     """RAMPHOLD (NiftySim's tledConstraint::ComputeAmplitude): u = magnitude · min(1, t / 0.1T)."""
-    *_, xml = _cube_xml(extra_constraint='<Constraint DOF="1" LoadShape="RAMPHOLD" NumNodes="1" '
-                        'Type="Disp"><Nodes>26</Nodes><Magnitudes Type="UNIFORM">0.002</Magnitudes>'
-                        '</Constraint>')
+    *_, xml = _cube_xml(
+        extra_constraint='<Constraint DOF="1" LoadShape="RAMPHOLD" NumNodes="1" '
+        'Type="Disp"><Nodes>26</Nodes><Magnitudes Type="UNIFORM">0.002</Magnitudes>'
+        "</Constraint>"
+    )
     p = tmp_path / "rh.xml"
     p.write_text(xml)
     sc = load_niftysim(p)
     sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
-    for t in (0.0025, 0.005, 0.02):   # T = 0.05 s: ramp until 0.005 s
+    for t in (0.0025, 0.005, 0.02):  # T = 0.05 s: ramp until 0.005 s
         sim.run(until=t)
         assert np.isclose(sim.displacements[26, 1], 0.002 * min(1.0, sim.time / 0.005), rtol=1e-9)
 
@@ -210,8 +235,12 @@ def _pressure_cube_xml(pressure_xml):
     X, T = pl.mesh.box_tets((1.0, 1.0, 1.0), (3, 3, 3), jitter=0.25, seed=1)
     fixes = "".join(
         f'<Constraint DOF="{d}" NumNodes="{len(ids)}" Type="Fix"><Nodes>{fmt(ids)}</Nodes></Constraint>'
-        for d, ids in ((d, np.nonzero(X[:, d] < 1e-9)[0]) for d in range(3)))
-    return X, T, f"""<Model>
+        for d, ids in ((d, np.nonzero(X[:, d] < 1e-9)[0]) for d in range(3))
+    )
+    return (
+        X,
+        T,
+        f"""<Model>
   <Nodes DOF="3" NumNodes="{len(X)}">{fmt(X)}</Nodes>
   <Elements NumEls="{len(T)}" Type="T4">{fmt(T)}</Elements>
   <ElementSet Size="all"><Material Type="NH"><ElasticParams NumParams="2">1000 10000</ElasticParams>
@@ -220,7 +249,8 @@ def _pressure_cube_xml(pressure_xml):
   {pressure_xml}
   <SystemParams><TimeStep>1e-3</TimeStep><TotalTime>1</TotalTime><DampingCoeff>0</DampingCoeff>
     <Density>1000</Density></SystemParams>
-</Model>"""
+</Model>""",
+    )
 
 
 def test_pressure_faces_list_normal_and_all(tmp_path):
@@ -233,10 +263,14 @@ def test_pressure_faces_list_normal_and_all(tmp_path):
     X, T, _ = _pressure_cube_xml("")
     B, _ = boundary_faces(T)
     right = B[np.all(X[B][:, :, 0] > 1 - 1e-9, axis=1)]
-    listed = (f'<Constraint Type="Pressure" NumFaces="{len(right)}" FaceType="Tri" LoadShape="RAMP">'
-              f'<Faces>{fmt(right)}</Faces><Magnitude>300</Magnitude></Constraint>')
-    normal = ('<Constraint Type="Pressure" SpecType="NORMAL" LoadShape="RAMP"><Normal '
-              'ToleranceAngle="5">1 0 0</Normal><Magnitude>300</Magnitude></Constraint>')
+    listed = (
+        f'<Constraint Type="Pressure" NumFaces="{len(right)}" FaceType="Tri" LoadShape="RAMP">'
+        f"<Faces>{fmt(right)}</Faces><Magnitude>300</Magnitude></Constraint>"
+    )
+    normal = (
+        '<Constraint Type="Pressure" SpecType="NORMAL" LoadShape="RAMP"><Normal '
+        'ToleranceAngle="5">1 0 0</Normal><Magnitude>300</Magnitude></Constraint>'
+    )
     b = pl.ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(pl.NeoHookean(mu=1000, K=10000), density=1000)
@@ -253,22 +287,37 @@ def test_pressure_faces_list_normal_and_all(tmp_path):
         assert np.abs(sim.displacements).max() > 1e-4
         assert np.array_equal(sim.displacements, ref.displacements)
     p = tmp_path / "all.xml"
-    p.write_text(_pressure_cube_xml('<Constraint Type="Pressure" NumFaces="all" LoadShape="RAMP">'
-                                    '<Magnitude>500</Magnitude></Constraint>')[2])
+    p.write_text(
+        _pressure_cube_xml(
+            '<Constraint Type="Pressure" NumFaces="all" LoadShape="RAMP">'
+            "<Magnitude>500</Magnitude></Constraint>"
+        )[2]
+    )
     sim = pl.Simulation(load_niftysim(p).builder.finalize("float64"))
     sim.relax(tol=1e-9, increments=4)
     corner = np.argmax(X.sum(axis=1))
     np.testing.assert_allclose(np.prod(1 + sim.displacements[corner]), 1 - 500 / 1e4, rtol=1e-8)
 
 
-@pytest.mark.parametrize("xml, expect", [
-    ('<Material Type="PY"><ElasticParams NumParams="6">300 200 100 50 80 10000</ElasticParams>'
-     '</Material>', pl.Polynomial(300, 200, 100, 50, 80, K=10000)),
-    ('<Material Type="AB"><ElasticParams NumParams="3">1000 2.5 10000</ElasticParams></Material>',
-     pl.ArrudaBoyce(1000, 2.5, 10000)),
-    ('<Material Type="TI"><ElasticParams NumParams="6">1000 10000 500 0 0 2</ElasticParams>'
-     '</Material>', pl.TransverselyIsotropic(1000, 10000, 500, (0, 0, 1))),
-])
+@pytest.mark.parametrize(
+    "xml, expect",
+    [
+        (
+            '<Material Type="PY"><ElasticParams NumParams="6">300 200 100 50 80 10000</ElasticParams>'
+            "</Material>",
+            pl.Polynomial(300, 200, 100, 50, 80, K=10000),
+        ),
+        (
+            '<Material Type="AB"><ElasticParams NumParams="3">1000 2.5 10000</ElasticParams></Material>',
+            pl.ArrudaBoyce(1000, 2.5, 10000),
+        ),
+        (
+            '<Material Type="TI"><ElasticParams NumParams="6">1000 10000 500 0 0 2</ElasticParams>'
+            "</Material>",
+            pl.TransverselyIsotropic(1000, 10000, 500, (0, 0, 1)),
+        ),
+    ],
+)
 def test_other_hyperelastic_materials(tmp_path, xml, expect):
     """PY (C10 C01 C20 C02 C11 κ), AB (μ λm κ) and TI (μ κ η a1 a2 a3, a normalized), in the order
     of NiftySim's user guide, App. A.1."""
@@ -278,9 +327,11 @@ def test_other_hyperelastic_materials(tmp_path, xml, expect):
     (s,) = load_niftysim(p).builder.sets
     assert s.material == expect
     bad = tmp_path / "bad.xml"
-    bad.write_text(text.replace('NumParams="6">1000 10000 500 0 0 2', 'NumParams="5">1000 10000 500 0 0')
-                   .replace('NumParams="3">1000 2.5', 'NumParams="2">1000')
-                   .replace('>300 200 100 50 80 10000<', '>300 200 100 50 80<'))
+    bad.write_text(
+        text.replace('NumParams="6">1000 10000 500 0 0 2', 'NumParams="5">1000 10000 500 0 0')
+        .replace('NumParams="3">1000 2.5', 'NumParams="2">1000')
+        .replace(">300 200 100 50 80 10000<", ">300 200 100 50 80<")
+    )
     with pytest.raises(NiftySimError, match="takes"):
         load_niftysim(bad)
 
@@ -296,18 +347,22 @@ def test_contact_surface_inline_and_vtk(tmp_path):
     V, F = pl.mesh.primitive_surface("sphere", radius=0.05)
     V = V + [0.05, 0.05, -0.05]
     meshio.write(tmp_path / "ball.vtk", meshio.Mesh(V, [("triangle", F)]))
-    inline = (f'<ContactSurface><Nodes>{fmt(V)}</Nodes><Elements Type="T3">{fmt(F)}</Elements>'
-              '</ContactSurface>')
-    for k, xml in enumerate((inline, '<ContactSurface><VTKSurface Type="T3">ball.vtk</VTKSurface>'
-                                     '</ContactSurface>')):
+    inline = (
+        f'<ContactSurface><Nodes>{fmt(V)}</Nodes><Elements Type="T3">{fmt(F)}</Elements></ContactSurface>'
+    )
+    for k, xml in enumerate(
+        (inline, '<ContactSurface><VTKSurface Type="T3">ball.vtk</VTKSurface></ContactSurface>')
+    ):
         *_, text = _cube_xml(extra_constraint=xml)
         p = tmp_path / f"s{k}.xml"
         p.write_text(text)
         (tool,) = load_niftysim(p).builder.tools
         pts = np.array([[0.05, 0.05, -0.05], [0.05, 0.05, 0.0], [0.05, 0.05, 0.03]])
         np.testing.assert_allclose(tool.signed_distance(pts), [-0.05, 0.0, 0.03], atol=1.5e-3)
-    *_, text = _cube_xml(extra_constraint=f'<ContactSurface><Nodes>{fmt(V)}</Nodes><Elements '
-                         f'Type="T3">{fmt(F[:-10])}</Elements></ContactSurface>')
+    *_, text = _cube_xml(
+        extra_constraint=f"<ContactSurface><Nodes>{fmt(V)}</Nodes><Elements "
+        f'Type="T3">{fmt(F[:-10])}</Elements></ContactSurface>'
+    )
     p = tmp_path / "open.xml"
     p.write_text(text)
     with pytest.raises(NiftySimError, match="not closed"):
@@ -317,15 +372,19 @@ def test_contact_surface_inline_and_vtk(tmp_path):
 def test_viscoelastic_nhv_and_tiv(tmp_path):
     """NHV / TIV: the NH / TI elastic parameters and <ViscoParams> (α, τ pairs, isochoric terms
     first; user guide §3.4.4) → pliant.Viscoelastic; a wrong count is a named error."""
-    nhv = ('<Material Type="NHV"><ElasticParams NumParams="2">1000 10000</ElasticParams>'
-           '<ViscoParams NumIsoTerms="2" NumVolTerms="1">0.3 0.1 0.2 1.0 0.1 0.5</ViscoParams>'
-           '</Material>')
-    tiv = ('<Material Type="TIV"><ElasticParams NumParams="6">1000 10000 500 1 0 0</ElasticParams>'
-           '<ViscoParams NumIsoTerms="1" NumVolTerms="0">0.4 0.05</ViscoParams></Material>')
-    expect = [pl.Viscoelastic(pl.NeoHookean(mu=1000, K=10000), iso=[(0.3, 0.1), (0.2, 1.0)],
-                              vol=[(0.1, 0.5)]),
-              pl.Viscoelastic(pl.TransverselyIsotropic(1000, 10000, 500, (1, 0, 0)),
-                              iso=[(0.4, 0.05)])]
+    nhv = (
+        '<Material Type="NHV"><ElasticParams NumParams="2">1000 10000</ElasticParams>'
+        '<ViscoParams NumIsoTerms="2" NumVolTerms="1">0.3 0.1 0.2 1.0 0.1 0.5</ViscoParams>'
+        "</Material>"
+    )
+    tiv = (
+        '<Material Type="TIV"><ElasticParams NumParams="6">1000 10000 500 1 0 0</ElasticParams>'
+        '<ViscoParams NumIsoTerms="1" NumVolTerms="0">0.4 0.05</ViscoParams></Material>'
+    )
+    expect = [
+        pl.Viscoelastic(pl.NeoHookean(mu=1000, K=10000), iso=[(0.3, 0.1), (0.2, 1.0)], vol=[(0.1, 0.5)]),
+        pl.Viscoelastic(pl.TransverselyIsotropic(1000, 10000, 500, (1, 0, 0)), iso=[(0.4, 0.05)]),
+    ]
     for k, (xml, e) in enumerate(zip((nhv, tiv), expect)):
         *_, text = _cube_xml(material=xml)
         p = tmp_path / f"v{k}.xml"

@@ -62,7 +62,7 @@ def test_pressure_follows_the_loaded_face(p):
     dead = brentq(lambda s: uniaxial_reference(W, s)[0] + p, 0.5, 1.8, xtol=1e-12)
     right = X[:, 0] > L - TOL
     got = 1 + sim.displacements[right, 0].mean() / L
-    assert abs(dead - lam) > 0.02 * abs(lam - 1)   # the test can tell the two apart
+    assert abs(dead - lam) > 0.02 * abs(lam - 1)  # the test can tell the two apart
     # 1e-6: numerical differentiation in the reference (h = 1e-6) and the relaxation tolerance.
     assert abs(got - lam) <= 1e-6, (got, lam, dead)
 
@@ -77,9 +77,10 @@ def test_pressure_float32_and_bad_faces():
     s32.relax(tol=1e-5, increments=4)
     # float32 relaxed to a 1e-5 residual: displacement errors of a few 1e-4 of the largest one
     # (measured 3e-4), the residual amplified by the stiffness spread of the jittered cube.
-    np.testing.assert_allclose(s32.displacements, s64.displacements,
-                               atol=1e-3 * np.abs(s64.displacements).max())
-    interior = np.array([[0, 1, 2]])                # not a boundary triangle of the cube
+    np.testing.assert_allclose(
+        s32.displacements, s64.displacements, atol=1e-3 * np.abs(s64.displacements).max()
+    )
+    interior = np.array([[0, 1, 2]])  # not a boundary triangle of the cube
     with pytest.raises(InputError, match="face 0 .* not on the mesh boundary"):
         b.add_pressure(interior, 1.0)
     with pytest.raises(InputError, match="pressure shape"):

@@ -89,15 +89,25 @@ def test_run_cli_static_scene_outputs(tmp_path):
     assert s["max_displacement"] >= 0.03
 
 
-@pytest.mark.parametrize("patch, key, line, text", [
-    (("[solver]\n", "[solver]\nfoo = 1\n"), "solver.foo", 17, "unknown key 'foo'"),
-    (("mu = 1000.0", 'mu = "soft"'), "material[0].mu", 12, "expected number"),
-    (('type = "neo-hookean"', 'type = "rubber"'), "material[0].type", 11, "unknown material"),
-    (("value = 0.03", "value = 0.03\ncurve2 = 1"), "constraint[3].curve2", None, "unknown key"),
-    (("normal = [1, 0, 0] } }\n[[constraint]]\ntype = \"fix\"\ndofs = \"y\"",
-      "normal = [1, 0, 0] }, box = [[5, 5, 5], [6, 6, 6]] }\n[[constraint]]\ntype = \"fix\"\ndofs = \"y\""),
-     "constraint[0].nodes", None, "selects no node"),
-])
+@pytest.mark.parametrize(
+    "patch, key, line, text",
+    [
+        (("[solver]\n", "[solver]\nfoo = 1\n"), "solver.foo", 17, "unknown key 'foo'"),
+        (("mu = 1000.0", 'mu = "soft"'), "material[0].mu", 12, "expected number"),
+        (('type = "neo-hookean"', 'type = "rubber"'), "material[0].type", 11, "unknown material"),
+        (("value = 0.03", "value = 0.03\ncurve2 = 1"), "constraint[3].curve2", None, "unknown key"),
+        (
+            (
+                'normal = [1, 0, 0] } }\n[[constraint]]\ntype = "fix"\ndofs = "y"',
+                "normal = [1, 0, 0] }, box = [[5, 5, 5], [6, 6, 6]] }"
+                '\n[[constraint]]\ntype = "fix"\ndofs = "y"',
+            ),
+            "constraint[0].nodes",
+            None,
+            "selects no node",
+        ),
+    ],
+)
 def test_scene_errors_name_key_and_line(tmp_path, patch, key, line, text):
     bad = TENSION.replace(*patch, 1)
     assert bad != TENSION
@@ -145,8 +155,7 @@ def test_interrupt_keeps_frames_and_summary(tmp_path, monkeypatch):
     from pliant import runner as run_mod
     from pliant.tled import Solver
 
-    text = TENSION.replace("static = true", "static = false").replace("[output]",
-                                                                      "[output]\nframes = 10")
+    text = TENSION.replace("static = true", "static = false").replace("[output]", "[output]\nframes = 10")
     sc = load_scene(_write(tmp_path, text))
     calls = {"n": 0}
     orig = Solver.run
@@ -166,7 +175,9 @@ def test_interrupt_keeps_frames_and_summary(tmp_path, monkeypatch):
 
 def test_scene_tools_and_errors(tmp_path):
     """[[tool]] tables build rigid tools with keyframes; bad ones are named errors."""
-    text = TENSION.replace("[output]", """[[tool]]
+    text = TENSION.replace(
+        "[output]",
+        """[[tool]]
 type = "capsule"
 radius = 0.005
 length = 0.04
@@ -174,7 +185,8 @@ rotation = [90.0, 0.0, 0.0]
 mu_s = 0.3
 keyframes = [{ t = 0.0, position = [0.05, 0.05, 0.2] }, { t = 1.0, position = [0.05, 0.05, 0.11] }]
 
-[output]""")
+[output]""",
+    )
     sc = load_scene(_write(tmp_path, text))
     (tool,) = sc.builder.tools
     R, p = tool.pose(0.5)
@@ -190,14 +202,17 @@ keyframes = [{ t = 0.0, position = [0.05, 0.05, 0.2] }, { t = 1.0, position = [0
 def test_scene_cylinder_tool_restricted_to_a_selection(tmp_path):
     """type = "cylinder" and a `nodes` selection restrict the tool to those nodes (the builder
     receives exactly the nodes the selection names)."""
-    text = TENSION.replace("[output]", """[[tool]]
+    text = TENSION.replace(
+        "[output]",
+        """[[tool]]
 type = "cylinder"
 radius = 0.005
 length = 0.04
 position = [0.05, 0.05, 0.2]
 nodes = { box = [[0.0, 0.0, 0.09], [0.05, 1.0, 1.0]] }
 
-[output]""")
+[output]""",
+    )
     sc = load_scene(_write(tmp_path, text))
     (tool,) = sc.builder.tools
     assert isinstance(tool, pl.contact.Cylinder) and tool.radius == 0.005
@@ -214,34 +229,48 @@ def test_scene_pressure_load_matches_the_api(tmp_path):
     the scene's model equals one built through the API with those faces (same bits)."""
     from pliant.mesh.topology import boundary_faces
 
-    text = TENSION.replace("[output]", """[[load]]
+    text = TENSION.replace(
+        "[output]",
+        """[[load]]
 type = "pressure"
 value = -200.0
 nodes = { plane = { point = [0.1, 0, 0], normal = [1, 0, 0], side = "on", tol = 1e-6 } }
 curve = "ramp"
 
-[output]""")
+[output]""",
+    )
     sc = load_scene(_write(tmp_path, text))
-    (F, p, _), = sc.builder._pressures
+    ((F, p, _),) = sc.builder._pressures
     X, T = sc.builder.nodes, sc.builder.tets
     B, _ = boundary_faces(T)
     expect = B[np.all(np.abs(X[B][:, :, 0] - 0.1) <= 1e-6, axis=1)]
     assert sorted(map(tuple, F.tolist())) == sorted(map(tuple, expect.tolist()))
     assert np.all(p == -200.0)
-    bad = text.replace('nodes = { plane = { point = [0.1, 0, 0], normal = [1, 0, 0], side = "on", '
-                       'tol = 1e-6 } }', "nodes = { ids = [0] }")
+    bad = text.replace(
+        'nodes = { plane = { point = [0.1, 0, 0], normal = [1, 0, 0], side = "on", tol = 1e-6 } }',
+        "nodes = { ids = [0] }",
+    )
     with pytest.raises(SceneError, match=r"load\[\d\]\.nodes.*no whole boundary triangle"):
         load_scene(_write(tmp_path, bad, "b.toml"))
 
 
-@pytest.mark.parametrize("table, expect", [
-    ('type = "transversely-isotropic"\nmu = 1000.0\nK = 10000.0\neta = 500.0\ndirection = [1, 1, 0]',
-     pl.TransverselyIsotropic(1000.0, 10000.0, 500.0, (1, 1, 0))),
-    ('type = "polynomial"\nC10 = 400.0\nC20 = 50.0\nK = 10000.0',
-     pl.Polynomial(400.0, 0.0, 50.0, K=10000.0)),
-    ('type = "arruda-boyce"\nmu = 1000.0\nlambda_m = 3.0\nK = 10000.0',
-     pl.ArrudaBoyce(1000.0, 3.0, 10000.0)),
-])
+@pytest.mark.parametrize(
+    "table, expect",
+    [
+        (
+            'type = "transversely-isotropic"\nmu = 1000.0\nK = 10000.0\neta = 500.0\ndirection = [1, 1, 0]',
+            pl.TransverselyIsotropic(1000.0, 10000.0, 500.0, (1, 1, 0)),
+        ),
+        (
+            'type = "polynomial"\nC10 = 400.0\nC20 = 50.0\nK = 10000.0',
+            pl.Polynomial(400.0, 0.0, 50.0, K=10000.0),
+        ),
+        (
+            'type = "arruda-boyce"\nmu = 1000.0\nlambda_m = 3.0\nK = 10000.0',
+            pl.ArrudaBoyce(1000.0, 3.0, 10000.0),
+        ),
+    ],
+)
 def test_scene_other_materials(tmp_path, table, expect):
     text = TENSION.replace('type = "neo-hookean"\nmu = 1000.0\nK = 10000.0', table)
     (s,) = load_scene(_write(tmp_path, text)).builder.sets
@@ -252,11 +281,14 @@ def test_scene_other_materials(tmp_path, table, expect):
 
 
 def test_scene_viscoelastic_material(tmp_path):
-    text = TENSION.replace('mu = 1000.0\nK = 10000.0', 'mu = 1000.0\nK = 10000.0\n'
-                           'prony_iso = [[0.3, 0.1]]\nprony_vol = [[0.1, 0.5]]')
+    text = TENSION.replace(
+        "mu = 1000.0\nK = 10000.0",
+        "mu = 1000.0\nK = 10000.0\nprony_iso = [[0.3, 0.1]]\nprony_vol = [[0.1, 0.5]]",
+    )
     (s,) = load_scene(_write(tmp_path, text)).builder.sets
-    assert s.material == pl.Viscoelastic(pl.NeoHookean(mu=1000.0, K=10000.0), iso=[(0.3, 0.1)],
-                                         vol=[(0.1, 0.5)])
+    assert s.material == pl.Viscoelastic(
+        pl.NeoHookean(mu=1000.0, K=10000.0), iso=[(0.3, 0.1)], vol=[(0.1, 0.5)]
+    )
     bad = text.replace("[[0.3, 0.1]]", "[[0.9, 0.1], [0.3, 1.0]]")
     with pytest.raises(SceneError, match="sum"):
         load_scene(_write(tmp_path, bad, "b.toml"))

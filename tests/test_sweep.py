@@ -17,8 +17,16 @@ import pytest
 
 from pliant.runner import run_scene
 from pliant.scene import load_scene
-from pliant.sweep import (Design, Parameter, SweepError, design_runs, execute, load_sweep,
-                          run_sweep, sobol_indices)
+from pliant.sweep import (
+    Design,
+    Parameter,
+    SweepError,
+    design_runs,
+    execute,
+    load_sweep,
+    run_sweep,
+    sobol_indices,
+)
 
 ROOT = Path(__file__).parents[1]
 PLIANT = Path(sys.executable).with_name("pliant")  # the installed program
@@ -94,8 +102,9 @@ def test_grid_sweep_equals_runs_one_by_one_and_resumes(bar_sweep, tmp_path):
     assert np.allclose(uz[:, 1] / uz[:, 0], 2.0, rtol=0.1)  # nonlinear and dynamic: within 10 %
     stamps = sorted((p.name, p.stat().st_mtime_ns) for p in (tmp_path / "out" / "runs").iterdir())
     again = run_sweep(spec, tmp_path / "out", workers=2, progress=False)
-    assert sorted((p.name, p.stat().st_mtime_ns)
-                  for p in (tmp_path / "out" / "runs").iterdir()) == stamps  # nothing re-run
+    assert (
+        sorted((p.name, p.stat().st_mtime_ns) for p in (tmp_path / "out" / "runs").iterdir()) == stamps
+    )  # nothing re-run
     pd.testing.assert_frame_equal(again.table, result.table)
     from_file = pd.read_parquet(tmp_path / "out" / "results.parquet")
     pd.testing.assert_frame_equal(from_file, result.table)
@@ -104,9 +113,21 @@ def test_grid_sweep_equals_runs_one_by_one_and_resumes(bar_sweep, tmp_path):
 def test_failed_run_is_recorded_and_the_others_complete(bar_sweep, tmp_path):
     """A negative modulus cannot run: its row says why; the rest are done; the CLI exits 1."""
     bar_sweep.write_text(SWEEP.format(Es=[4.0e5, -1.0, 8.0e5]))
-    r = subprocess.run([str(PLIANT), "sweep", str(bar_sweep), "-o",
-                        str(tmp_path / "out"), "--workers", "2", "--no-progress"],
-                       capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [
+            str(PLIANT),
+            "sweep",
+            str(bar_sweep),
+            "-o",
+            str(tmp_path / "out"),
+            "--workers",
+            "2",
+            "--no-progress",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 1, r.stderr
     table = pd.read_parquet(tmp_path / "out" / "results.parquet").sort_values("run")
     assert list(table["status"]) == ["ok", "ok", "failed", "failed", "ok", "ok"]
@@ -135,7 +156,7 @@ def test_killed_worker_does_not_lose_runs(tmp_path):
 def _ishigami(params: dict, run_dir) -> dict:
     """Ishigami & Homma (1990), a = 7, b = 0.1, on [-π, π]³."""
     x1, x2, x3 = params["x1"], params["x2"], params["x3"]
-    return {"y": math.sin(x1) + 7.0 * math.sin(x2) ** 2 + 0.1 * x3 ** 4 * math.sin(x1)}
+    return {"y": math.sin(x1) + 7.0 * math.sin(x2) ** 2 + 0.1 * x3**4 * math.sin(x1)}
 
 
 def test_sobol_indices_of_ishigami_match_closed_form(tmp_path):
@@ -144,8 +165,8 @@ def test_sobol_indices_of_ishigami_match_closed_form(tmp_path):
     1/50). 512 base samples (2,560 runs through the sweep's Dask machinery); tolerance: three
     times the bootstrap 95 % half-width plus 0.02 (the estimators' own bias at this N)."""
     a, b = 7.0, 0.1
-    V = a * a / 8 + b * math.pi ** 4 / 5 + b * b * math.pi ** 8 / 18 + 0.5
-    V1, V2, V13 = (1 + b * math.pi ** 4 / 5) ** 2 / 2, a * a / 8, b * b * math.pi ** 8 * (1 / 18 - 1 / 50)
+    V = a * a / 8 + b * math.pi**4 / 5 + b * b * math.pi**8 / 18 + 0.5
+    V1, V2, V13 = (1 + b * math.pi**4 / 5) ** 2 / 2, a * a / 8, b * b * math.pi**8 * (1 / 18 - 1 / 50)
     S1 = [V1 / V, V2 / V, 0.0]
     ST = [(V1 + V13) / V, V2 / V, V13 / V]
     params = [Parameter(k, range=(-math.pi, math.pi)) for k in ("x1", "x2", "x3")]
@@ -182,8 +203,7 @@ def test_grid_and_list_designs():
     p = [Parameter("a", values=(1, 2, 3)), Parameter("b", values=("x", "y", "z"))]
     assert len(design_runs(p, Design("grid"))) == 9
     assert design_runs(p, Design("grid"))[:2] == [{"a": 1, "b": "x"}, {"a": 1, "b": "y"}]
-    assert design_runs(p, Design("list")) == [{"a": 1, "b": "x"}, {"a": 2, "b": "y"},
-                                              {"a": 3, "b": "z"}]
+    assert design_runs(p, Design("list")) == [{"a": 1, "b": "x"}, {"a": 2, "b": "y"}, {"a": 3, "b": "z"}]
 
 
 def test_resume_refuses_another_sweep(bar_sweep, tmp_path):
@@ -202,31 +222,53 @@ def _ishigami_free(params, run_dir):
     return {"y": 1.0}
 
 
-@pytest.mark.parametrize("text, culprit", [
-    ('base = "base.toml"\n[[parameter]]\nkey = "material.liver.E"\nvalues = [1.0]\n',
-     "no entry of material is named 'liver'"),
-    ('base = "base.toml"\n[[parameter]]\nkey = "load[3].force"\nvalues = [1.0]\n', "out of range"),
-    ('base = "base.toml"\n[design]\ntype = "lhs"\nsamples = 4\n[[parameter]]\nkey = "solver.damping"'
-     '\nvalues = [1.0]\n', "range = [low, high]"),
-    ('base = "base.toml"\n[design]\ntype = "saltelli"\nsamples = 6\n[[parameter]]\n'
-     'key = "solver.damping"\nrange = [1.0, 2.0]\n', "power of 2"),
-    ('base = "nothere.toml"\n[[parameter]]\nkey = "solver.damping"\nvalues = [1.0]\n', "no such"),
-    ('base = "base.toml"\n[[parameter]]\nkey = "solver..damping"\nvalues = [1.0]\n', "segment"),
-    ('base = "base.toml"\n' + "".join(f'[[parameter]]\nkey = "solver.x{i}"\nvalues = {list(range(60))}\n'
-                                       for i in range(8)), "expected at most 1,000,000"),  # 60^8 runs
-    ('base = "base.toml"\n[design]\ntype = "lhs"\nsamples = 1000000000\n[[parameter]]\n'
-     'key = "solver.damping"\nrange = [1.0, 2.0]\n', "expected at most 1,000,000"),
-    ('base = "base.toml"\nthreads = 1000000\n[[parameter]]\nkey = "solver.damping"\nvalues = [1.0]\n',
-     "threads per run"),
-    ('base = "base.toml"\n[[parameter]]\nkey = "solver.damping"\n', "takes explicit values"),
-    ('base = "base.toml"\nparameter = 3\n', "parameter"),
-])
+@pytest.mark.parametrize(
+    "text, culprit",
+    [
+        (
+            'base = "base.toml"\n[[parameter]]\nkey = "material.liver.E"\nvalues = [1.0]\n',
+            "no entry of material is named 'liver'",
+        ),
+        ('base = "base.toml"\n[[parameter]]\nkey = "load[3].force"\nvalues = [1.0]\n', "out of range"),
+        (
+            'base = "base.toml"\n[design]\ntype = "lhs"\nsamples = 4\n[[parameter]]\nkey = "solver.damping"'
+            "\nvalues = [1.0]\n",
+            "range = [low, high]",
+        ),
+        (
+            'base = "base.toml"\n[design]\ntype = "saltelli"\nsamples = 6\n[[parameter]]\n'
+            'key = "solver.damping"\nrange = [1.0, 2.0]\n',
+            "power of 2",
+        ),
+        ('base = "nothere.toml"\n[[parameter]]\nkey = "solver.damping"\nvalues = [1.0]\n', "no such"),
+        ('base = "base.toml"\n[[parameter]]\nkey = "solver..damping"\nvalues = [1.0]\n', "segment"),
+        (
+            'base = "base.toml"\n'
+            + "".join(f'[[parameter]]\nkey = "solver.x{i}"\nvalues = {list(range(60))}\n' for i in range(8)),
+            "expected at most 1,000,000",
+        ),  # 60^8 runs
+        (
+            'base = "base.toml"\n[design]\ntype = "lhs"\nsamples = 1000000000\n[[parameter]]\n'
+            'key = "solver.damping"\nrange = [1.0, 2.0]\n',
+            "expected at most 1,000,000",
+        ),
+        (
+            'base = "base.toml"\nthreads = 1000000\n[[parameter]]\nkey = "solver.damping"\nvalues = [1.0]\n',
+            "threads per run",
+        ),
+        ('base = "base.toml"\n[[parameter]]\nkey = "solver.damping"\n', "takes explicit values"),
+        ('base = "base.toml"\nparameter = 3\n', "parameter"),
+    ],
+)
 def test_bad_sweep_files_exit_2_naming_the_key(tmp_path, text, culprit):
     (tmp_path / "base.toml").write_text(BASE.format(E=5.0e5, F=-0.5))
     (tmp_path / "s.toml").write_text(text)
-    r = subprocess.run([str(PLIANT), "sweep", str(tmp_path / "s.toml"), "-o",
-                        str(tmp_path / "out"), "--no-progress"], capture_output=True, text=True,
-                       timeout=120)
+    r = subprocess.run(
+        [str(PLIANT), "sweep", str(tmp_path / "s.toml"), "-o", str(tmp_path / "out"), "--no-progress"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 2 and culprit in r.stderr and "s.toml" in r.stderr, r.stderr
     assert "Traceback" not in r.stderr and not (tmp_path / "out").exists()
 
@@ -258,9 +300,13 @@ def test_example_sweeps_run_and_analyze(tmp_path):
     for path in examples:
         saltelli = load_sweep(path).design.type == "saltelli"
         out = tmp_path / path.stem
-        r = subprocess.run([str(PLIANT), "sweep", str(path), "-o", str(out),
-                            "--no-progress"] + (["--analyze"] if saltelli else []),
-                           capture_output=True, text=True, timeout=600)
+        r = subprocess.run(
+            [str(PLIANT), "sweep", str(path), "-o", str(out), "--no-progress"]
+            + (["--analyze"] if saltelli else []),
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         assert r.returncode == 0, r.stderr
         table = pd.read_parquet(out / "results.parquet")
         assert (table["status"] == "ok").all()
@@ -282,12 +328,15 @@ def test_niftysim_base_with_element_paths(tmp_path):
     (tmp_path / "cube.xml").write_text(xml)
     (tmp_path / "s.toml").write_text(
         'base = "cube.xml"\n[[parameter]]\nkey = "ElementSet.Material.ElasticParams[0][0]"\n'
-        'values = [500.0, 2000.0]\n[set]\n"SystemParams.DampingCoeff" = 40.0\n')
-    table = run_sweep(load_sweep(tmp_path / "s.toml"), tmp_path / "out", workers=2,
-                      progress=False).table.sort_values("run")
+        'values = [500.0, 2000.0]\n[set]\n"SystemParams.DampingCoeff" = 40.0\n'
+    )
+    table = run_sweep(
+        load_sweep(tmp_path / "s.toml"), tmp_path / "out", workers=2, progress=False
+    ).table.sort_values("run")
     for mu, (_, row) in zip((500.0, 2000.0), table.iterrows()):
-        edited = xml.replace("1000 20000</ElasticParams>", f"{mu!r} 20000</ElasticParams>") \
-                    .replace("<DampingCoeff>20<", "<DampingCoeff>40.0<")
+        edited = xml.replace("1000 20000</ElasticParams>", f"{mu!r} 20000</ElasticParams>").replace(
+            "<DampingCoeff>20<", "<DampingCoeff>40.0<"
+        )
         assert edited != xml
         (tmp_path / "edited.xml").write_text(edited)
         s = run_scene(load_niftysim(tmp_path / "edited.xml"), None, progress=False)
@@ -305,13 +354,20 @@ def test_batched_sweep_equals_runs_alone(bar_sweep, tmp_path):
     bar_sweep.write_text(grid)
     alone = run_sweep(load_sweep(bar_sweep), tmp_path / "alone", workers=2, progress=False).table
     bar_sweep.write_text("batch = 3\n" + grid)
-    batched = run_sweep(load_sweep(bar_sweep), tmp_path / "batched", workers=2,
-                        progress=False).table
+    batched = run_sweep(load_sweep(bar_sweep), tmp_path / "batched", workers=2, progress=False).table
     assert list(batched["status"]) == ["ok", "ok", "failed", "failed", "failed", "failed", "ok", "ok"]
     assert "material" in batched["error"][2] and "time step" in batched["error"][4].lower()
     assert list(batched["batch"].fillna(1)) == [2, 2, 1, 1, 1, 1, 2, 2]
-    for col in ("max_displacement", "max_von_mises", "strain_energy", "kinetic_energy", "steps",
-                "point.tip.ux", "point.tip.uz", "status"):
+    for col in (
+        "max_displacement",
+        "max_von_mises",
+        "strain_energy",
+        "kinetic_energy",
+        "steps",
+        "point.tip.ux",
+        "point.tip.uz",
+        "status",
+    ):
         pd.testing.assert_series_equal(batched[col], alone[col], check_names=False)
     with pytest.raises(Exception, match="needs each run alone"):
         bar_sweep.write_text("batch = 2\n" + SWEEP.format(Es=ES) + "fields = true\n")
@@ -325,12 +381,23 @@ def test_existing_scheduler_by_address(bar_sweep, tmp_path):
 
     spec = load_sweep(bar_sweep)
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as c:
-        there = run_sweep(spec, tmp_path / "there", scheduler=c.scheduler_address,
-                          progress=False).table
+        there = run_sweep(spec, tmp_path / "there", scheduler=c.scheduler_address, progress=False).table
     here = run_sweep(spec, tmp_path / "here", workers=2, progress=False).table
     for col in ("max_displacement", "strain_energy", "point.tip.uz"):
         pd.testing.assert_series_equal(there[col], here[col])
-    r = subprocess.run([str(PLIANT), "sweep", str(bar_sweep), "-o", str(tmp_path / "bad"),
-                        "--scheduler", "nonsense://nowhere", "--no-progress"],
-                       capture_output=True, text=True, timeout=120)
+    r = subprocess.run(
+        [
+            str(PLIANT),
+            "sweep",
+            str(bar_sweep),
+            "-o",
+            str(tmp_path / "bad"),
+            "--scheduler",
+            "nonsense://nowhere",
+            "--no-progress",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 2 and "nonsense://nowhere" in r.stderr and "Traceback" not in r.stderr, r.stderr

@@ -11,8 +11,8 @@ import pytest
 from pliant.validate.models import hollow_sphere, lame_solve
 from pliant.validate.references import lame_volumetric_strain
 
-A, B = 0.02, 0.04   # inner and outer radius [m]
-E, P = 3e3, 30.0    # Young's modulus and internal pressure [Pa]: strains of 1 %
+A, B = 0.02, 0.04  # inner and outer radius [m]
+E, P = 3e3, 30.0  # Young's modulus and internal pressure [Pa]: strains of 1 %
 
 
 @pytest.fixture(scope="module")

@@ -63,8 +63,10 @@ def test_float32_resolves_a_strain_of_1e_6(name):
     strain −ν ε. Stresses are formed from H = ∇u, not from F − I: F − I in float32 carries an
     absolute error of 6e-8, 6 % of this strain."""
     material = SMALL[name]
-    E, nu = 9 * material.bulk_modulus * material.mu / (3 * material.bulk_modulus + material.mu), \
-        (3 * material.bulk_modulus - 2 * material.mu) / (6 * material.bulk_modulus + 2 * material.mu)
+    E, nu = (
+        9 * material.bulk_modulus * material.mu / (3 * material.bulk_modulus + material.mu),
+        (3 * material.bulk_modulus - 2 * material.mu) / (6 * material.bulk_modulus + 2 * material.mu),
+    )
     eps = 1e-6
     X, model, right = cube_with_symmetry_bcs(material, 1 + eps, dtype="float32")
     sim = pl.Simulation(model)
@@ -90,15 +92,17 @@ def test_transversely_isotropic_fibres_across_the_load():
         return MU / 2 * (I1b - 3) + eta / 2 * (J ** (-2 / 3) * l[1] ** 2 - 1) ** 2 + K / 2 * (J - 1) ** 2
 
     s = 1.2
-    ty, tz = fsolve(lambda t: [nominal(W, (s, t[0], t[1]), 1), nominal(W, (s, t[0], t[1]), 2)],
-                    [0.95, 0.9], xtol=1e-13)
-    X, model, right = cube_with_symmetry_bcs(pl.TransverselyIsotropic(MU, K, eta, (0, 3, 0)), s,
-                                             dtype="float64")
+    ty, tz = fsolve(
+        lambda t: [nominal(W, (s, t[0], t[1]), 1), nominal(W, (s, t[0], t[1]), 2)], [0.95, 0.9], xtol=1e-13
+    )
+    X, model, right = cube_with_symmetry_bcs(
+        pl.TransverselyIsotropic(MU, K, eta, (0, 3, 0)), s, dtype="float64"
+    )
     sim = pl.Simulation(model)
     sim.relax(tol=1e-8, increments=10)
     P = model.internal_forces(sim.state)[right, 0].sum()
-    assert abs(P - nominal(W, (s, ty, tz), 0)) <= 1e-5 * abs(P)   # exact in the FE space
+    assert abs(P - nominal(W, (s, ty, tz), 0)) <= 1e-5 * abs(P)  # exact in the FE space
     u = sim.displacements
     assert np.isclose(1 + u[X[:, 1] > 1 - 1e-9, 1].mean(), ty, rtol=1e-6)
     assert np.isclose(1 + u[X[:, 2] > 1 - 1e-9, 2].mean(), tz, rtol=1e-6)
-    assert ty > tz + 0.01   # the fibres resist the lateral contraction along y
+    assert ty > tz + 0.01  # the fibres resist the lateral contraction along y

@@ -17,9 +17,14 @@ def test_quick_validation_passes_and_reports(tmp_path):
     assert r.exit_code == 0, r.output
     data = json.loads((tmp_path / "results.json").read_text())
     assert data["rows"] and all(row["passed"] for row in data["rows"])
-    assert {row["case"] for row in data["rows"]} >= {"uniaxial stress", "patch test", "simple shear",
-                                                     "cantilever bending", "Lamé sphere (T4ANP)",
-                                                     "damped decay"}
+    assert {row["case"] for row in data["rows"]} >= {
+        "uniaxial stress",
+        "patch test",
+        "simple shear",
+        "cantilever bending",
+        "Lamé sphere (T4ANP)",
+        "damped decay",
+    }
     report = (tmp_path / "report.md").read_text()
     assert f"{len(data['rows'])} of {len(data['rows'])} checks passed" in report
     for png in ("uniaxial.png", "cantilever.png"):

@@ -25,10 +25,14 @@ def chromium():
     exe = shutil.which("chromium") or shutil.which("chromium-browser")
     if exe is None and os.geteuid() == 0 and shutil.which("apt-get"):
         env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
-        subprocess.run(["apt-get", "update", "-qq"], check=False, env=env, timeout=600,
-                       capture_output=True)
-        subprocess.run(["apt-get", "install", "-y", "-qq", "chromium"], check=False, env=env,
-                       timeout=900, capture_output=True)
+        subprocess.run(["apt-get", "update", "-qq"], check=False, env=env, timeout=600, capture_output=True)
+        subprocess.run(
+            ["apt-get", "install", "-y", "-qq", "chromium"],
+            check=False,
+            env=env,
+            timeout=900,
+            capture_output=True,
+        )
         exe = shutil.which("chromium")
     if exe is None:
         pytest.fail("no headless browser: install Debian's chromium (apt-get install chromium)")
@@ -43,9 +47,11 @@ def _free_port():
 
 def _open(p, chromium, port):
     """A headless chromium page on the viewer (software WebGL)."""
-    browser = p.chromium.launch(executable_path=chromium, headless=True,
-                                args=["--no-sandbox", "--use-angle=swiftshader",
-                                      "--enable-unsafe-swiftshader"])
+    browser = p.chromium.launch(
+        executable_path=chromium,
+        headless=True,
+        args=["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"],
+    )
     page = browser.new_page(viewport={"width": 1000, "height": 700})
     page.goto(f"http://127.0.0.1:{port}")
     page.wait_for_selector("canvas", timeout=30000)

@@ -18,7 +18,7 @@ def test_stress_relaxation_after_a_ramp_follows_the_prony_series():
     alpha, tau, t_r, stretch, L = 0.4, 0.05, 0.002, 1.001, 0.01
     material = pl.Viscoelastic(pl.NeoHookean(mu=MU, K=K), iso=[(alpha, tau)], vol=[(alpha, tau)])
     sim = pl.Simulation(_cube(material, stretch, L, t_r), dt=2e-6)
-    P_e = uniaxial_reference(W_nh, stretch)[0] * L * L   # [N] on the face of area L²
+    P_e = uniaxial_reference(W_nh, stretch)[0] * L * L  # [N] on the face of area L²
     for t in (0.03, 0.05, 0.1, 0.2):
         sim.run(until=t)
         F = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
@@ -56,7 +56,7 @@ def test_quasi_static_solution_is_the_fully_relaxed_one_and_state_round_trips(tm
     sim.relax(tol=1e-10)
     P_e = uniaxial_reference(W_nh, stretch)[0] * L * L
     F = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
-    assert abs(F - (1 - alpha) * P_e) <= 1e-6 * P_e     # relaxation tolerance, exact FE space
+    assert abs(F - (1 - alpha) * P_e) <= 1e-6 * P_e  # relaxation tolerance, exact FE space
     sim.run(steps=2000)
     F2 = sim.model.internal_forces(sim.state)[_right(sim), 0].sum()
     assert abs(F2 - F) <= 1e-6 * P_e

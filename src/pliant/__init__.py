@@ -8,14 +8,50 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
 """
 
 from . import _core, contact, io, mesh  # noqa: F401 (sub-packages, re-exported)
-from .errors import (BackendError, ConvergenceError, DegenerateElementError, FileError, InputError,
-                     InstabilityError, InvertedElementError, MaterialError, MeshError, PliantError,
-                     PliantWarning, TimeStepError)
-from .materials import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoHookean,
-                        NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic,
-                        Viscoelastic)
-from .tled import (Constant, ContactReport, Model, ModelBuilder, Ramp, RelaxInfo, RunInfo,
-                   Simulation, SmoothRamp, Hilly, Solver, State, Step, Table, ToolHistory)
+from .errors import (
+    BackendError,
+    ConvergenceError,
+    DegenerateElementError,
+    FileError,
+    InputError,
+    InstabilityError,
+    InvertedElementError,
+    MaterialError,
+    MeshError,
+    PliantError,
+    PliantWarning,
+    TimeStepError,
+)
+from .materials import (
+    ArrudaBoyce,
+    LinearElastic,
+    Material,
+    MooneyRivlin,
+    NeoHookean,
+    NeoHookeanCoupled,
+    Polynomial,
+    StVenantKirchhoff,
+    TransverselyIsotropic,
+    Viscoelastic,
+)
+from .tled import (
+    Constant,
+    ContactReport,
+    Model,
+    ModelBuilder,
+    Ramp,
+    RelaxInfo,
+    RunInfo,
+    Simulation,
+    SmoothRamp,
+    Hilly,
+    Solver,
+    State,
+    Step,
+    Table,
+    ToolHistory,
+)
+
 
 def _version() -> str:
     """The installed distribution's version: one source, pyproject.toml."""
@@ -30,13 +66,41 @@ def _version() -> str:
 __version__ = _version()
 
 __all__ = [
-    "ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
-    "ContactReport", "ToolHistory",
-    "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table",
-    "Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
-    "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "Viscoelastic",
+    "ModelBuilder",
+    "Model",
+    "State",
+    "Solver",
+    "Simulation",
+    "RunInfo",
+    "RelaxInfo",
+    "ContactReport",
+    "ToolHistory",
+    "Constant",
+    "Step",
+    "Ramp",
+    "SmoothRamp",
+    "Hilly",
+    "Table",
+    "Material",
+    "NeoHookean",
+    "MooneyRivlin",
+    "NeoHookeanCoupled",
+    "StVenantKirchhoff",
+    "Polynomial",
+    "ArrudaBoyce",
+    "TransverselyIsotropic",
+    "Viscoelastic",
     "LinearElastic",
-    "PliantError", "InputError", "FileError", "BackendError", "MaterialError", "MeshError",
+    "PliantError",
+    "InputError",
+    "FileError",
+    "BackendError",
+    "MaterialError",
+    "MeshError",
     "InvertedElementError",
-    "DegenerateElementError", "TimeStepError", "InstabilityError", "ConvergenceError", "PliantWarning",
+    "DegenerateElementError",
+    "TimeStepError",
+    "InstabilityError",
+    "ConvergenceError",
+    "PliantWarning",
 ]

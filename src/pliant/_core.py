@@ -9,6 +9,7 @@ PLIANT_NATIVE=ON). The fastest one this CPU runs is imported here and its names 
 import importlib
 import os
 from importlib.util import find_spec
+from typing import Any
 
 _ORDER = ("native", "avx512", "avx2", "generic")
 
@@ -18,9 +19,25 @@ def _in_build() -> tuple:
 
 
 # CPU flags (Linux /proc/cpuinfo names) of the x86-64 micro-architecture levels the modules target.
-_NEEDS = {"avx2": {"avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "movbe", "abm", "xsave"},
-          "avx512": {"avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "movbe", "abm", "xsave",
-                     "avx512f", "avx512bw", "avx512cd", "avx512dq", "avx512vl"}}
+_NEEDS = {
+    "avx2": {"avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "movbe", "abm", "xsave"},
+    "avx512": {
+        "avx",
+        "avx2",
+        "bmi1",
+        "bmi2",
+        "f16c",
+        "fma",
+        "movbe",
+        "abm",
+        "xsave",
+        "avx512f",
+        "avx512bw",
+        "avx512cd",
+        "avx512dq",
+        "avx512vl",
+    },
+}
 
 
 def _cpu_flags() -> set:
@@ -42,15 +59,17 @@ def _choose(isas: tuple) -> str:
     if forced in isas:
         return forced
     if not isas:
-        raise ImportError("pliant's compiled engine is missing (no pliant._core_* module): "
-                          "reinstall pliant")
+        raise ImportError("pliant's compiled engine is missing (no pliant._core_* module): reinstall pliant")
     flags = _cpu_flags()
     best = next((i for i in isas if i in ("native", "generic") or _NEEDS[i] <= flags), isas[-1])
     if forced:  # a bad setting must not stop every command: say so, run on the best path
         import sys
 
-        print(f"warning: PLIANT_ISA={forced!r} is not in this build of pliant "
-              f"({', '.join(isas)}); using {best}", file=sys.stderr)
+        print(
+            f"warning: PLIANT_ISA={forced!r} is not in this build of pliant "
+            f"({', '.join(isas)}); using {best}",
+            file=sys.stderr,
+        )
     return best
 
 
@@ -58,3 +77,10 @@ isas = _in_build()
 isa = _choose(isas)
 _engine = importlib.import_module(f"{__package__}._core_{isa}")
 globals().update({k: v for k, v in vars(_engine).items() if not k.startswith("__")})
+
+
+def __getattr__(name: str) -> Any:
+    """Names the engine module does not have (the engine's own are set above): AttributeError.
+    Declared so that type checkers see the engine's names, which nanobind defines at import, as
+    typed Any rather than missing."""
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

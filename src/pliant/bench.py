@@ -74,8 +74,14 @@ def _bench_solver(model, backend: str) -> Solver:
     return Solver(model, dt=DT, check_every=1000 if backend == "cuda" else 16)
 
 
-def bench_one(n_tets: int, steps: int, threads: int | None = None, dtype: str = "float32",
-              warmup: int = 50, backend: str = "cpu") -> BenchRow:
+def bench_one(
+    n_tets: int,
+    steps: int,
+    threads: int | None = None,
+    dtype: str = "float32",
+    warmup: int = 50,
+    backend: str = "cpu",
+) -> BenchRow:
     X, T = exact_count_mesh(n_tets)
     b = ModelBuilder()
     b.add_mesh(X, T, source=f"bench mesh ({n_tets} tets)")
@@ -87,19 +93,41 @@ def bench_one(n_tets: int, steps: int, threads: int | None = None, dtype: str = 
     wall, info = timed_run(_bench_solver(model, backend), steps, warmup)
     itemsize = np.dtype(dtype).itemsize
     pad = -(-model.n_nodes // 16) * 16
-    mem = model.memory_bytes + itemsize * (2 * 2 * 3 * pad + 3 * pad) + \
-        itemsize * 13 * (-(-n_tets // 16) * 16)
+    mem = (
+        model.memory_bytes + itemsize * (2 * 2 * 3 * pad + 3 * pad) + itemsize * 13 * (-(-n_tets // 16) * 16)
+    )
     per8000 = wall * 8000.0 / steps
     study = STUDY.get(n_tets)
-    return BenchRow(n_tets, model.n_nodes, steps, DT, model.threads, dtype, backend, wall, per8000,
-                    info.element_seconds, info.node_seconds, n_tets * steps / wall, mem,
-                    mem / n_tets, study[0] / per8000 if study else None,
-                    study[1] / per8000 if study else None)
+    return BenchRow(
+        n_tets,
+        model.n_nodes,
+        steps,
+        DT,
+        model.threads,
+        dtype,
+        backend,
+        wall,
+        per8000,
+        info.element_seconds,
+        info.node_seconds,
+        n_tets * steps / wall,
+        mem,
+        mem / n_tets,
+        study[0] / per8000 if study else None,
+        study[1] / per8000 if study else None,
+    )
 
 
-def run_benchmark(sizes=(7456, 12584, 27918, 100_000, 1_000_000), steps: int = 8000,
-                  large_steps: int = 200, threads: int | None = None, dtype: str = "float32",
-                  json_path: str | None = None, echo=print, backend: str = "cpu") -> list[BenchRow]:
+def run_benchmark(
+    sizes=(7456, 12584, 27918, 100_000, 1_000_000),
+    steps: int = 8000,
+    large_steps: int = 200,
+    threads: int | None = None,
+    dtype: str = "float32",
+    json_path: str | None = None,
+    echo=print,
+    backend: str = "cpu",
+) -> list[BenchRow]:
     rows = []
     for n in sizes:
         row = bench_one(n, steps if n in STUDY else large_steps, threads, dtype, backend=backend)
@@ -108,9 +136,14 @@ def run_benchmark(sizes=(7456, 12584, 27918, 100_000, 1_000_000), steps: int = 8
     if json_path:
         from .io.files import atomic_write_text
 
-        atomic_write_text(json_path, json.dumps({"backend": backend, "load_average": os.getloadavg(),
-                                                 "rows": [asdict(r) for r in rows]}, indent=2),
-                          "benchmark JSON")
+        atomic_write_text(
+            json_path,
+            json.dumps(
+                {"backend": backend, "load_average": os.getloadavg(), "rows": [asdict(r) for r in rows]},
+                indent=2,
+            ),
+            "benchmark JSON",
+        )
     return rows
 
 
@@ -128,8 +161,7 @@ def bench_contact(steps: int = 2000, echo=print) -> list[dict]:
     cases.append(("demo: Spot + ground + sphere", demo))
     liver_path = Path.cwd() / "examples" / "liver_indentation.toml"  # run from the repository
     if not liver_path.exists():
-        echo({"case": "liver + capsule", "skipped": f"{liver_path} not found (run from the "
-              "repository root)"})
+        echo({"case": "liver + capsule", "skipped": f"{liver_path} not found (run from the repository root)"})
     else:
         liver = load_scene(liver_path)
         tool = Capsule(0.005, 0.06, rotation=(0.7071068, 0.7071068, 0.0, 0.0), mu_s=0.2, mu_k=0.1)
@@ -140,14 +172,20 @@ def bench_contact(steps: int = 2000, echo=print) -> list[dict]:
     for name, sc in cases:
         model = sc.builder.finalize(sc.dtype)
         wall, info = timed_run(Solver(model), steps)
-        row = {"case": name, "tets": model.n_elements, "contact_nodes": int(len(model.contact_nodes)),
-               "tools": len(model.tools), "steps": steps, "seconds": wall,
-               "contact_share": info.contact_seconds / wall,
-               "element_share": info.element_seconds / wall, "node_share": info.node_seconds / wall}
+        row = {
+            "case": name,
+            "tets": model.n_elements,
+            "contact_nodes": int(len(model.contact_nodes)),
+            "tools": len(model.tools),
+            "steps": steps,
+            "seconds": wall,
+            "contact_share": info.contact_seconds / wall,
+            "element_share": info.element_seconds / wall,
+            "node_share": info.node_seconds / wall,
+        }
         rows.append(row)
         echo(row)
     return rows
-
 
 
 def material_cases():
@@ -166,15 +204,27 @@ def material_cases():
         ("ArrudaBoyce", m.ArrudaBoyce(3.0e3, 2.0, 5.0e4), False),
         ("TransverselyIsotropic", m.TransverselyIsotropic(3.0e3, 5.0e4, 1.0e3, (1.0, 0.0, 0.0)), False),
         ("Viscoelastic(NeoHookean), 1 term", m.Viscoelastic(nh, iso=[(0.5, 0.1)]), False),
-        ("Viscoelastic(NeoHookean), 4+4 terms",
-         m.Viscoelastic(nh, iso=[(0.1, 0.01), (0.1, 0.1), (0.1, 1.0), (0.1, 10.0)],
-                        vol=[(0.1, 0.01), (0.1, 0.1), (0.1, 1.0), (0.1, 10.0)]), False),
+        (
+            "Viscoelastic(NeoHookean), 4+4 terms",
+            m.Viscoelastic(
+                nh,
+                iso=[(0.1, 0.01), (0.1, 0.1), (0.1, 1.0), (0.1, 10.0)],
+                vol=[(0.1, 0.01), (0.1, 0.1), (0.1, 1.0), (0.1, 10.0)],
+            ),
+            False,
+        ),
         ("NeoHookean, T4ANP", nh, True),
     ]
 
 
-def bench_materials(steps: int = 2000, threads: int | None = None, dtype: str = "float32",
-                    cells=(24, 24, 8), echo=print, backend: str = "cpu") -> list[dict]:
+def bench_materials(
+    steps: int = 2000,
+    threads: int | None = None,
+    dtype: str = "float32",
+    cells=(24, 24, 8),
+    echo=print,
+    backend: str = "cpu",
+) -> list[dict]:
     """Per-step time of every material on one box (24 × 24 × 8 cells: 27,648 tets; gravity, fixed
     base, Δt = 0.025 ms), relative to the decoupled Neo-Hookean. Returns one dict per case."""
     X, T = box_tets((0.12, 0.12, 0.04), cells, jitter=0.2, seed=0)
@@ -192,16 +242,28 @@ def bench_materials(steps: int = 2000, threads: int | None = None, dtype: str = 
         wall, info = timed_run(_bench_solver(model, backend), steps)
         per_step = wall / steps
         ref = per_step if ref is None else ref
-        row = {"material": name, "tets": len(T), "steps": steps, "threads": model.threads,
-               "ms_per_step": 1e3 * per_step, "relative": per_step / ref,
-               "element_share": info.element_seconds / wall}
+        row = {
+            "material": name,
+            "tets": len(T),
+            "steps": steps,
+            "threads": model.threads,
+            "ms_per_step": 1e3 * per_step,
+            "relative": per_step / ref,
+            "element_share": info.element_seconds / wall,
+        }
         rows.append(row)
         echo(row)
     return rows
 
 
-def bench_batch(copies: int = 64, n_tets: int = 2000, steps: int = 2000, threads: int | None = None,
-                dtype: str = "float32", backend: str = "cpu") -> dict:
+def bench_batch(
+    copies: int = 64,
+    n_tets: int = 2000,
+    steps: int = 2000,
+    threads: int | None = None,
+    dtype: str = "float32",
+    backend: str = "cpu",
+) -> dict:
     """Many small bodies: ``copies`` Neo-Hookean bodies of ``n_tets`` tets (each its own modulus,
     E = 3–6 kPa), ``steps`` steps of the study's Δt, stepped one model after another versus as one
     :class:`~pliant.tled.batch.Batch`. Model building is not timed. Returns the figures: seconds
@@ -219,8 +281,7 @@ def bench_batch(copies: int = 64, n_tets: int = 2000, steps: int = 2000, threads
         b.set_gravity((0.0, 0.0, -9.81))
         return b
 
-    solvers = [_bench_solver(body(E).finalize(dtype, threads=threads, backend=backend), backend)
-               for E in Es]
+    solvers = [_bench_solver(body(E).finalize(dtype, threads=threads, backend=backend), backend) for E in Es]
     states = [s.model.state() for s in solvers]
     for s, st in zip(solvers, states):
         s.run(st, steps=20)  # warm-up
@@ -230,7 +291,15 @@ def bench_batch(copies: int = 64, n_tets: int = 2000, steps: int = 2000, threads
     alone = time.perf_counter() - t0
     batch = Batch([body(E) for E in Es], dtype, threads=threads, backend=backend)
     together, _ = timed_run(_bench_solver(batch.model, backend), steps, warmup=20)
-    return {"copies": copies, "tets": int(len(T)), "steps": steps, "backend": backend,
-            "threads": solvers[0].model.threads, "dtype": dtype, "one_by_one_s": alone,
-            "batch_s": together, "gain": alone / together,
-            "batch_element_steps_per_second": copies * len(T) * steps / together}
+    return {
+        "copies": copies,
+        "tets": int(len(T)),
+        "steps": steps,
+        "backend": backend,
+        "threads": solvers[0].model.threads,
+        "dtype": dtype,
+        "one_by_one_s": alone,
+        "batch_s": together,
+        "gain": alone / together,
+        "batch_element_steps_per_second": copies * len(T) * steps / together,
+    }

@@ -17,8 +17,7 @@ def finite_number(value, what: str, unit: str = "") -> float:
     except (TypeError, ValueError, OverflowError):
         x = None
     if x is None or not math.isfinite(x):
-        raise InputError(f"{what} = {shown(value)}; expected a finite number"
-                         f"{f' [{unit}]' if unit else ''}")
+        raise InputError(f"{what} = {shown(value)}; expected a finite number{f' [{unit}]' if unit else ''}")
     return x
 
 
@@ -29,8 +28,9 @@ def finite_vector(value, n: int, what: str, unit: str = "") -> np.ndarray:
     except (TypeError, ValueError):
         a = None
     if a is None or a.shape != (n,) or not np.all(np.isfinite(a)):
-        raise InputError(f"{what} = {shown(value)}; expected {n} finite numbers"
-                         f"{f' [{unit}]' if unit else ''}")
+        raise InputError(
+            f"{what} = {shown(value)}; expected {n} finite numbers{f' [{unit}]' if unit else ''}"
+        )
     return a
 
 

@@ -13,7 +13,7 @@ import platform
 import sys
 import time
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
 from rich.console import Console
@@ -24,12 +24,16 @@ from . import __version__, _core
 from .errors import InputError, PliantError
 from .guard import one_line
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
-                  help="pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra.",
-                  epilog="Exit codes: 0 done; 1 the simulation failed (unstable, not converged) "
-                         "or mesh check found problems; 2 bad input (one line names the file, key "
-                         "or element); 3 internal error (a bug: the line names the log with the "
-                         "traceback); 130 interrupted.")
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    help="pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra.",
+    epilog="Exit codes: 0 done; 1 the simulation failed (unstable, not converged) "
+    "or mesh check found problems; 2 bad input (one line names the file, key "
+    "or element); 3 internal error (a bug: the line names the log with the "
+    "traceback); 130 interrupted.",
+)
 console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
 
@@ -41,13 +45,16 @@ def _print_version(value: bool):
 
 
 @app.callback()
-def _main(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
-                                       help="Print the version and exit.")):
+def _main(
+    version: bool = typer.Option(
+        False, "--version", callback=_print_version, is_eager=True, help="Print the version and exit."
+    ),
+):
     """pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra."""
 
 
 def _speed(summary: dict) -> str:
-    """" (Nx real time)" for a run's summary line; empty for a quasi-static solve."""
+    """ " (Nx real time)" for a run's summary line; empty for a quasi-static solve."""
     rtf = summary.get("real_time_factor")
     return f" ({rtf:.2g}x real time)" if rtf is not None else ""
 
@@ -74,70 +81,89 @@ def load_any(path: Path, ignore: list[str] | None = None, overrides: dict | None
 
 
 @app.command()
-def run(scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim model (.xml)."),
-        out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
-        threads: Optional[int] = typer.Option(None, help="CPU threads (default: scene or all)."),
-        ignore: Optional[list[str]] = typer.Option(None, "--ignore",
-                                                   help="Unsupported NiftySim feature to skip."),
-        allow_unstable: bool = typer.Option(False, help="Accept a Δt above the critical step."),
-        progress: bool = typer.Option(True, help="Show a progress bar."),
-        backend: Optional[str] = typer.Option(
-            None, help="cpu, cuda or cuda-emulated (default: the scene's).")):
+def run(
+    scene: Path = typer.Argument(..., help="Scene file (.toml) or NiftySim model (.xml)."),
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
+    threads: Optional[int] = typer.Option(None, help="CPU threads (default: scene or all)."),
+    ignore: Optional[list[str]] = typer.Option(
+        None, "--ignore", help="Unsupported NiftySim feature to skip."
+    ),
+    allow_unstable: bool = typer.Option(False, help="Accept a Δt above the critical step."),
+    progress: bool = typer.Option(True, help="Show a progress bar."),
+    backend: Optional[str] = typer.Option(None, help="cpu, cuda or cuda-emulated (default: the scene's)."),
+):
     """Run a scene or a NiftySim model; write result.pvd, frames, summary.json and result.png."""
     from .runner import run_scene
 
     try:
         sc = load_any(scene, ignore)  # its warnings are printed once the model is built
-        summary = run_scene(sc, out, progress=progress, allow_unstable=allow_unstable,
-                            threads=threads, echo=console.print, backend=backend)
+        summary = run_scene(
+            sc,
+            out,
+            progress=progress,
+            allow_unstable=allow_unstable,
+            threads=threads,
+            echo=console.print,
+            backend=backend,
+        )
     except InputError as e:
         _fail(e, 2)
     except PliantError as e:
         _fail(e, 1)
     if summary["interrupted"]:
-        err_console.print(f"interrupted at t = {summary['simulated_time']:.4g} s; "
-                          f"{summary['frames']} frames kept in {out}")
+        err_console.print(
+            f"interrupted at t = {summary['simulated_time']:.4g} s; {summary['frames']} frames kept in {out}"
+        )
         raise typer.Exit(130)
-    console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.4g} s in "
-                  f"{summary['wall_time']:.2f} s{_speed(summary)}; results in [bold]{escape(str(out))}[/] "
-                  f"(result.pvd for ParaView, "
-                  f"{', '.join(f for f in summary['files'] if f != 'result.pvd')})",
-                  highlight=False)
+    console.print(
+        f"{summary['steps']:,} steps, t = {summary['simulated_time']:.4g} s in "
+        f"{summary['wall_time']:.2f} s{_speed(summary)}; results in [bold]{escape(str(out))}[/] "
+        f"(result.pvd for ParaView, "
+        f"{', '.join(f for f in summary['files'] if f != 'result.pvd')})",
+        highlight=False,
+    )
 
 
 @app.command()
-def demo(out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Output folder."),
-         duration: Optional[float] = typer.Option(None, help="Simulated time [s] (default 1 s)."),
-         threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
-         progress: bool = typer.Option(True, help="Show a progress bar.")):
+def demo(
+    out: Path = typer.Option(Path("pliant-demo"), "-o", "--out", help="Output folder."),
+    duration: Optional[float] = typer.Option(None, help="Simulated time [s] (default 1 s)."),
+    threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
+    progress: bool = typer.Option(True, help="Show a progress bar."),
+):
     """Run the embedded default: Spot the cow on the ground, indented by a tool."""
     from .demo import run_demo
 
     try:
-        summary = run_demo(out, duration=duration, threads=threads, progress=progress,
-                           echo=console.print)
+        summary = run_demo(out, duration=duration, threads=threads, progress=progress, echo=console.print)
     except InputError as e:
         _fail(e, 2)
     except PliantError as e:
         _fail(e, 1)
-    console.print(f"{summary['steps']:,} steps, t = {summary['simulated_time']:.3g} s in "
-                  f"{summary['wall_time']:.1f} s{_speed(summary)}. Results in [bold]{escape(str(out))}[/]: "
-                  "result.pvd (open it "
-                  "in ParaView), result.png, summary.json")
+    console.print(
+        f"{summary['steps']:,} steps, t = {summary['simulated_time']:.3g} s in "
+        f"{summary['wall_time']:.1f} s{_speed(summary)}. Results in [bold]{escape(str(out))}[/]: "
+        "result.pvd (open it "
+        "in ParaView), result.png, summary.json"
+    )
 
 
 @app.command()
-def sweep(spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene, parameters, design."),
-          out: Path = typer.Option(..., "-o", "--out", help="Output folder (resumed if it holds "
-                                   "this sweep)."),
-          scheduler: Optional[str] = typer.Option(None, help="Dask scheduler address (default: a "
-                                                  "local cluster sized to this machine)."),
-          workers: Optional[int] = typer.Option(None, help="Local workers (default: cores // "
-                                                "threads per run)."),
-          analyze: bool = typer.Option(False, "--analyze", help="Sobol indices of every output "
-                                       "(a 'saltelli' design): sensitivity.csv and .png."),
-          retry_failed: bool = typer.Option(False, help="Run the failed runs again on resume."),
-          progress: bool = typer.Option(True, help="Show a progress bar.")):
+def sweep(
+    spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene, parameters, design."),
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder (resumed if it holds this sweep)."),
+    scheduler: Optional[str] = typer.Option(
+        None, help="Dask scheduler address (default: a local cluster sized to this machine)."
+    ),
+    workers: Optional[int] = typer.Option(None, help="Local workers (default: cores // threads per run)."),
+    analyze: bool = typer.Option(
+        False,
+        "--analyze",
+        help="Sobol indices of every output (a 'saltelli' design): sensitivity.csv and .png.",
+    ),
+    retry_failed: bool = typer.Option(False, help="Run the failed runs again on resume."),
+    progress: bool = typer.Option(True, help="Show a progress bar."),
+):
     """Run a parameter sweep on Dask: OUT/results.parquet (a row per run), resumable."""
     from .sweep import load_sweep, run_sweep
 
@@ -148,13 +174,24 @@ def sweep(spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene,
     try:
         sp = load_sweep(spec)
         if workers is not None and workers * sp.threads > limit:
-            raise InputError(f"--workers {workers} × threads {sp.threads} = {workers * sp.threads} "
-                             f"threads; expected at most {limit} on this machine")
+            raise InputError(
+                f"--workers {workers} × threads {sp.threads} = {workers * sp.threads} "
+                f"threads; expected at most {limit} on this machine"
+            )
         if analyze and sp.design.type != "saltelli":
-            raise InputError(f"{spec}: --analyze computes Sobol indices from a 'saltelli' design; "
-                             f"this sweep's design is '{sp.design.type}'")
-        result = run_sweep(sp, out, scheduler=scheduler, workers=workers, analyze=analyze,
-                           retry_failed=retry_failed, progress=progress)
+            raise InputError(
+                f"{spec}: --analyze computes Sobol indices from a 'saltelli' design; "
+                f"this sweep's design is '{sp.design.type}'"
+            )
+        result = run_sweep(
+            sp,
+            out,
+            scheduler=scheduler,
+            workers=workers,
+            analyze=analyze,
+            retry_failed=retry_failed,
+            progress=progress,
+        )
     except InputError as e:
         _fail(e, 2)
     for note in result.notes:
@@ -162,16 +199,21 @@ def sweep(spec: Path = typer.Argument(..., help="Sweep file (.toml): base scene,
     bad = result.failed
     for _, row in bad.head(5).iterrows():
         err_console.print(f"run {row['run']} failed: {escape(str(row['error']))}", highlight=False)
-    console.print(f"{len(result.table)} runs: {len(result.table) - len(bad)} done, {len(bad)} failed, "
-                  f"in {time.perf_counter() - t0:.1f} s; results in [bold]{escape(str(out))}[/] "
-                  f"({', '.join(result.files)})", highlight=False)
+    console.print(
+        f"{len(result.table)} runs: {len(result.table) - len(bad)} done, {len(bad)} failed, "
+        f"in {time.perf_counter() - t0:.1f} s; results in [bold]{escape(str(out))}[/] "
+        f"({', '.join(result.files)})",
+        highlight=False,
+    )
     if len(bad):
         raise typer.Exit(1)
 
 
 @app.command()
-def validate(out: Path = typer.Option(Path("pliant-validation"), "-o", "--out", help="Output folder."),
-             quick: bool = typer.Option(False, "--quick", help="The CI subset (under two minutes).")):
+def validate(
+    out: Path = typer.Option(Path("pliant-validation"), "-o", "--out", help="Output folder."),
+    quick: bool = typer.Option(False, "--quick", help="The CI subset (under two minutes)."),
+):
     """Verify pliant against closed forms: OUT/report.md, results.json and plots; exit 1 if a
     check fails."""
     from .validate import run_validation
@@ -182,26 +224,35 @@ def validate(out: Path = typer.Option(Path("pliant-validation"), "-o", "--out", 
         _fail(e, 2)
     failed = [r for r in rows if not r.passed]
     for r in failed:
-        err_console.print(f"failed: {escape(r.case)}, {escape(r.quantity)}: {r.value:.6g} against "
-                          f"{r.reference:.6g}", highlight=False)
-    console.print(f"{len(rows) - len(failed)} of {len(rows)} checks passed; report in "
-                  f"[bold]{escape(str(out))}[/]/report.md", highlight=False)
+        err_console.print(
+            f"failed: {escape(r.case)}, {escape(r.quantity)}: {r.value:.6g} against {r.reference:.6g}",
+            highlight=False,
+        )
+    console.print(
+        f"{len(rows) - len(failed)} of {len(rows)} checks passed; report in "
+        f"[bold]{escape(str(out))}[/]/report.md",
+        highlight=False,
+    )
     if failed:
         raise typer.Exit(1)
 
 
 @app.command()
-def view(target: Path = typer.Argument(..., help="Scene (.toml), NiftySim model (.xml) or a "
-                                          "results folder to play back."),
-         host: str = typer.Option("127.0.0.1", help="Address to listen on (0.0.0.0 exposes it)."),
-         port: int = typer.Option(8080, help="Port."),
-         threads: Optional[int] = typer.Option(None, help="CPU threads.")):
+def view(
+    target: Path = typer.Argument(
+        ..., help="Scene (.toml), NiftySim model (.xml) or a results folder to play back."
+    ),
+    host: str = typer.Option("127.0.0.1", help="Address to listen on (0.0.0.0 exposes it)."),
+    port: int = typer.Option(8080, help="Port."),
+    threads: Optional[int] = typer.Option(None, help="CPU threads."),
+):
     """Interactive 3-D view in the browser: live simulation with draggable tools, or playback."""
     from .view.viewer import LiveViewer, PlaybackViewer
 
     if not 1 <= port <= 65535:
         _fail(InputError(f"--port {port}: expected 1 to 65535"), 2)
     try:
+        v: PlaybackViewer | LiveViewer
         if target.is_dir():
             v = PlaybackViewer(target, host, port)
         else:
@@ -218,18 +269,22 @@ def view(target: Path = typer.Argument(..., help="Scene (.toml), NiftySim model 
 
 
 @app.command()
-def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write figures as JSON."),
-          sizes: str = typer.Option("7456,12584,27918,100000,1000000", help="Tet counts."),
-          steps: int = typer.Option(8000, help="Steps for the study's sizes."),
-          large_steps: int = typer.Option(200, help="Steps for the other sizes."),
-          threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
-          dtype: str = typer.Option("float32", help="float32 or float64."),
-          contact: bool = typer.Option(False, help="Also time the contact cases (demo, liver)."),
-          materials: bool = typer.Option(False, help="Only the per-material table (27,648-tet box)."),
-          batch: Optional[int] = typer.Option(None, help="Only the batch figure: this many 2,000-tet "
-                                              "bodies one by one, then as one batch."),
-          backend: str = typer.Option(
-              "cpu", help="cpu, cuda (a GPU; e.g. --sizes up to 10000000) or cuda-emulated.")):
+def bench(
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Write figures as JSON."),
+    sizes: str = typer.Option("7456,12584,27918,100000,1000000", help="Tet counts."),
+    steps: int = typer.Option(8000, help="Steps for the study's sizes."),
+    large_steps: int = typer.Option(200, help="Steps for the other sizes."),
+    threads: Optional[int] = typer.Option(None, help="CPU threads (default: all)."),
+    dtype: str = typer.Option("float32", help="float32 or float64."),
+    contact: bool = typer.Option(False, help="Also time the contact cases (demo, liver)."),
+    materials: bool = typer.Option(False, help="Only the per-material table (27,648-tet box)."),
+    batch: Optional[int] = typer.Option(
+        None, help="Only the batch figure: this many 2,000-tet bodies one by one, then as one batch."
+    ),
+    backend: str = typer.Option(
+        "cpu", help="cpu, cuda (a GPU; e.g. --sizes up to 10000000) or cuda-emulated."
+    ),
+):
     """Reproduce the study's timing table (8,000 steps of 0.025 ms, Neo-Hookean) and larger meshes."""
     from .bench import bench_contact, run_benchmark
     from .mesh.primitives import MAX_BOX_TETS
@@ -242,8 +297,12 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
     if steps < 1 or large_steps < 1 or not n or any(v < 1 for v in n):
         _fail(InputError("--steps, --large-steps and --sizes must be positive"), 2)
     if max(steps, large_steps) > MAX_STEPS or max(n) > MAX_BOX_TETS:
-        _fail(InputError(f"--steps and --large-steps at most {MAX_STEPS:.0e}, --sizes at most "
-                         f"{MAX_BOX_TETS:.0e} tets"), 2)
+        _fail(
+            InputError(
+                f"--steps and --large-steps at most {MAX_STEPS:.0e}, --sizes at most {MAX_BOX_TETS:.0e} tets"
+            ),
+            2,
+        )
     if dtype not in ("float32", "float64"):
         _fail(InputError(f"--dtype {dtype!r}: expected float32 or float64"), 2)
     if json_out is not None:
@@ -258,8 +317,10 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
     if backend not in BACKENDS:
         _fail(InputError(f"--backend {backend!r}: expected one of {', '.join(BACKENDS)}"), 2)
     if os.getloadavg()[0] > 0.5:
-        err_console.print(f"[yellow]warning:[/] load average {os.getloadavg()[0]:.1f}: other work is "
-                          "running, timings will suffer")
+        err_console.print(
+            f"[yellow]warning:[/] load average {os.getloadavg()[0]:.1f}: other work is "
+            "running, timings will suffer"
+        )
     if materials:
         _bench_materials(steps if steps != 8000 else 2000, threads, dtype, json_out, backend)
         return
@@ -267,30 +328,55 @@ def bench(json_out: Optional[Path] = typer.Option(None, "--json", help="Write fi
         _bench_batch(batch, steps if steps != 8000 else 2000, threads, dtype, json_out, backend)
         return
     table = Table(title=f"pliant {backend.upper()} backend, {dtype}, Δt = 0.025 ms")
-    for c in ("tets", "nodes", "steps", "threads", "s (8000 steps)", "kernel 1 %", "Melem-steps/s",
-              "bytes/tet", "× study GPU", "× study CPU"):
+    for c in (
+        "tets",
+        "nodes",
+        "steps",
+        "threads",
+        "s (8000 steps)",
+        "kernel 1 %",
+        "Melem-steps/s",
+        "bytes/tet",
+        "× study GPU",
+        "× study CPU",
+    ):
         table.add_column(c, justify="right")
 
     def echo(r):
         f = lambda v: "-" if v is None else f"{v:,.1f}"  # noqa: E731
-        table.add_row(f"{r.tets:,}", f"{r.nodes:,}", f"{r.steps:,}", str(r.threads),
-                      f"{r.seconds_per_8000:.3f}", f"{100 * r.element_seconds / r.seconds:.0f}",
-                      f"{r.element_steps_per_second / 1e6:,.1f}", f"{r.bytes_per_tet:.0f}",
-                      f(r.speedup_vs_study_gpu), f(r.speedup_vs_study_cpu))
+        table.add_row(
+            f"{r.tets:,}",
+            f"{r.nodes:,}",
+            f"{r.steps:,}",
+            str(r.threads),
+            f"{r.seconds_per_8000:.3f}",
+            f"{100 * r.element_seconds / r.seconds:.0f}",
+            f"{r.element_steps_per_second / 1e6:,.1f}",
+            f"{r.bytes_per_tet:.0f}",
+            f(r.speedup_vs_study_gpu),
+            f(r.speedup_vs_study_cpu),
+        )
         console.print(f"  {r.tets:,} tets: {r.seconds:.3f} s for {r.steps} steps")
 
     try:
-        run_benchmark(n, steps, large_steps, threads, dtype, str(json_out) if json_out else None, echo,
-                      backend=backend)
+        run_benchmark(
+            n, steps, large_steps, threads, dtype, str(json_out) if json_out else None, echo, backend=backend
+        )
     except InputError as e:
         _fail(e, 2)
     Console(width=max(console.width, 140)).print(table)
     if contact:
-        rows = bench_contact(echo=lambda r: console.print(f"  {r['case']}: {r['skipped']}") if
-                             "skipped" in r else console.print(
-            f"  {r['case']}: {r['tets']:,} tets, {r['contact_nodes']:,} contact nodes, "
-            f"{r['steps']} steps in {r['seconds']:.2f} s; contact {100 * r['contact_share']:.1f} %, "
-            f"kernel 1 {100 * r['element_share']:.0f} %, kernel 2 {100 * r['node_share']:.0f} %"))
+        rows = bench_contact(
+            echo=lambda r: (
+                console.print(f"  {r['case']}: {r['skipped']}")
+                if "skipped" in r
+                else console.print(
+                    f"  {r['case']}: {r['tets']:,} tets, {r['contact_nodes']:,} contact nodes, "
+                    f"{r['steps']} steps in {r['seconds']:.2f} s; contact {100 * r['contact_share']:.1f} %, "
+                    f"kernel 1 {100 * r['element_share']:.0f} %, kernel 2 {100 * r['node_share']:.0f} %"
+                )
+            )
+        )
         if json_out:
             from .io.files import atomic_write_text
 
@@ -305,10 +391,12 @@ def _bench_batch(copies, steps, threads, dtype, json_out, backend):
     if copies < 1:
         _fail(InputError(f"--batch {copies}: expected at least 1 body"), 2)
     r = bench_batch(copies, steps=steps, threads=threads, dtype=dtype, backend=backend)
-    console.print(f"{r['copies']} bodies of {r['tets']:,} tets, {r['steps']:,} steps, {backend}, "
-                  f"{r['threads']} threads: one by one {r['one_by_one_s']:.3f} s, as one batch "
-                  f"{r['batch_s']:.3f} s ({r['gain']:.2f}x; "
-                  f"{r['batch_element_steps_per_second'] / 1e6:,.1f} M element-steps/s)")
+    console.print(
+        f"{r['copies']} bodies of {r['tets']:,} tets, {r['steps']:,} steps, {backend}, "
+        f"{r['threads']} threads: one by one {r['one_by_one_s']:.3f} s, as one batch "
+        f"{r['batch_s']:.3f} s ({r['gain']:.2f}x; "
+        f"{r['batch_element_steps_per_second'] / 1e6:,.1f} M element-steps/s)"
+    )
     if json_out:
         from .io.files import atomic_write_text
 
@@ -321,17 +409,27 @@ def _bench_materials(steps, threads, dtype, json_out, backend):
     table = Table(title=f"pliant per material, {backend}, {dtype}, 27,648-tet box, Δt = 0.025 ms")
     for c in ("material", "ms / step", "× NeoHookean", "kernel 1 %"):
         table.add_column(c, justify="right")
-    rows = bench_materials(steps, threads, dtype, echo=lambda r: console.print(
-        f"  {r['material']}: {r['ms_per_step']:.3f} ms per step"), backend=backend)
+    rows = bench_materials(
+        steps,
+        threads,
+        dtype,
+        echo=lambda r: console.print(f"  {r['material']}: {r['ms_per_step']:.3f} ms per step"),
+        backend=backend,
+    )
     for r in rows:
-        table.add_row(r["material"], f"{r['ms_per_step']:.3f}", f"{r['relative']:.2f}",
-                      f"{100 * r['element_share']:.0f}")
+        table.add_row(
+            r["material"],
+            f"{r['ms_per_step']:.3f}",
+            f"{r['relative']:.2f}",
+            f"{100 * r['element_share']:.0f}",
+        )
     console.print(table)
     if json_out:
         from .io.files import atomic_write_text
 
-        atomic_write_text(json_out, json.dumps({"backend": backend, "materials": rows}, indent=2),
-                          "benchmark JSON")
+        atomic_write_text(
+            json_out, json.dumps({"backend": backend, "materials": rows}, indent=2), "benchmark JSON"
+        )
 
 
 @app.command()
@@ -341,16 +439,26 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
     cuda = {"compiled": bool(_core.cuda_compiled()), "usable": bool(names), "devices": list(names)}
     if not names:
         cuda["reason"] = why
-    data = {
+    data: dict[str, Any] = {
         "version": __version__,
         "python": sys.version.split()[0],
         "platform": platform.platform(),
-        "backends": {"cpu": {"compiled": True, "usable": True, "threads": _core.max_threads(),
-                             "simd_lanes": int(_core.lanes), "isa": _core.isa,
-                             "isas_built": list(_core.isas)},
-                     "cuda": cuda,
-                     "cuda-emulated": {"compiled": True, "usable": True,
-                                       "note": "the CUDA engine on the host, for tests (slow)"}},
+        "backends": {
+            "cpu": {
+                "compiled": True,
+                "usable": True,
+                "threads": _core.max_threads(),
+                "simd_lanes": int(_core.lanes),
+                "isa": _core.isa,
+                "isas_built": list(_core.isas),
+            },
+            "cuda": cuda,
+            "cuda-emulated": {
+                "compiled": True,
+                "usable": True,
+                "note": "the CUDA engine on the host, for tests (slow)",
+            },
+        },
         "cpu_count": os.cpu_count(),
     }
     if as_json:
@@ -358,9 +466,11 @@ def info(as_json: bool = typer.Option(False, "--json", help="Machine-readable ou
         return
     console.print(f"pliant {data['version']} (Python {data['python']}, {data['platform']})")
     cpu = data["backends"]["cpu"]
-    console.print(f"  cpu : compiled, usable, {cpu['threads']} threads, {cpu['simd_lanes']} lanes per block, "
-                  f"instruction set {cpu['isa']} (built: {', '.join(cpu['isas_built'])}; PLIANT_ISA "
-                  "forces one)")
+    console.print(
+        f"  cpu : compiled, usable, {cpu['threads']} threads, {cpu['simd_lanes']} lanes per block, "
+        f"instruction set {cpu['isa']} (built: {', '.join(cpu['isas_built'])}; PLIANT_ISA "
+        "forces one)"
+    )
     c = data["backends"]["cuda"]
     if not c["compiled"]:
         console.print(f"  cuda: not compiled ({c['reason']})")

@@ -15,8 +15,11 @@ from rich.markup import escape
 from .errors import InputError, PliantError
 from .guard import one_line
 
-mesh_app = typer.Typer(no_args_is_help=True, add_completion=False,
-                       help="Mesh pipeline: simplify, subdivide, repair, check, tetrahedralize, quality.")
+mesh_app = typer.Typer(
+    no_args_is_help=True,
+    add_completion=False,
+    help="Mesh pipeline: simplify, subdivide, repair, check, tetrahedralize, quality.",
+)
 console = Console(soft_wrap=True, markup=False, highlight=False)
 err = Console(stderr=True, soft_wrap=True)
 
@@ -34,14 +37,18 @@ def _guard(fn):
         except PliantError as e:
             err.print(f"[bold red]error:[/] {escape(one_line(str(e)))}", highlight=False)
             raise typer.Exit(1) from None
+
     return wrapper
 
 
 @mesh_app.command("simplify")
 @_guard
-def simplify_cmd(inp: Path, out: Path,
-                 target_faces: Optional[int] = typer.Option(None, "--target-faces", help="Faces to keep."),
-                 ratio: Optional[float] = typer.Option(None, "--ratio", help="Fraction of faces to keep.")):
+def simplify_cmd(
+    inp: Path,
+    out: Path,
+    target_faces: Optional[int] = typer.Option(None, "--target-faces", help="Faces to keep."),
+    ratio: Optional[float] = typer.Option(None, "--ratio", help="Fraction of faces to keep."),
+):
     """QEM simplification (Garland–Heckbert, via fast-simplification)."""
     from .io import check_output_file
     from .mesh import read_surface, simplify, write_surface
@@ -51,8 +58,10 @@ def simplify_cmd(inp: Path, out: Path,
     t = time.perf_counter()
     Vs, Fs = simplify(V, F, target_faces=target_faces, ratio=ratio)
     write_surface(out, Vs, Fs)
-    console.print(f"{len(V):,} vertices / {len(F):,} faces → {len(Vs):,} / {len(Fs):,} in "
-                  f"{time.perf_counter() - t:.2f} s: {out}")
+    console.print(
+        f"{len(V):,} vertices / {len(F):,} faces → {len(Vs):,} / {len(Fs):,} in "
+        f"{time.perf_counter() - t:.2f} s: {out}"
+    )
 
 
 @mesh_app.command("subdivide")
@@ -90,11 +99,14 @@ def check_cmd(inp: Path, as_json: bool = typer.Option(False, "--json")):
 
 @mesh_app.command("repair")
 @_guard
-def repair_cmd(inp: Path, out: Path,
-               keep_largest: bool = typer.Option(False, help="Keep only the largest body."),
-               bodies: str = typer.Option("all", help="Several closed bodies: all (keep each, "
-                                                      "closed and outward), largest, or one "
-                                                      "(refuse).")):
+def repair_cmd(
+    inp: Path,
+    out: Path,
+    keep_largest: bool = typer.Option(False, help="Keep only the largest body."),
+    bodies: str = typer.Option(
+        "all", help="Several closed bodies: all (keep each, closed and outward), largest, or one (refuse)."
+    ),
+):
     """Fill holes, fix winding, drop fragments; refuse with the reason where it cannot."""
     from .io import check_output_file
     from .mesh import check_surface, read_surface, repair_surface, write_surface
@@ -106,23 +118,29 @@ def repair_cmd(inp: Path, out: Path,
     rep = check_surface(Vr, Fr)
     console.print(f"{out}: " + ("; ".join(actions) or "nothing to repair"))
     if rep.self_intersections:
-        console.print(f"  note: {rep.self_intersections} self-intersecting face pairs remain; "
-                      "tetrahedralize handles them (fTetWild's envelope)")
+        console.print(
+            f"  note: {rep.self_intersections} self-intersecting face pairs remain; "
+            "tetrahedralize handles them (fTetWild's envelope)"
+        )
 
 
 @mesh_app.command("tetrahedralize")
 @_guard
-def tetrahedralize_cmd(inp: Path, out: Path,
-                       edge_length: Optional[float] = typer.Option(None, help="Target tet edge [m]."),
-                       max_volume: Optional[float] = typer.Option(None, help="Target tet volume [m³]."),
-                       target_tets: int = typer.Option(20000, help="Tets wanted when no size is given."),
-                       quality: Optional[float] = typer.Option(
-                           None, help="Refuse if the worst radius–edge ratio exceeds this."),
-                       repair: bool = typer.Option(True, help="Repair the surface first."),
-                       bodies: str = typer.Option(
-                           "union", help="Several closed bodies: union (one mesh of their union, "
-                                         "overlaps merged), separate (a mesh per body), largest, "
-                                         "or one (refuse).")):
+def tetrahedralize_cmd(
+    inp: Path,
+    out: Path,
+    edge_length: Optional[float] = typer.Option(None, help="Target tet edge [m]."),
+    max_volume: Optional[float] = typer.Option(None, help="Target tet volume [m³]."),
+    target_tets: int = typer.Option(20000, help="Tets wanted when no size is given."),
+    quality: Optional[float] = typer.Option(None, help="Refuse if the worst radius–edge ratio exceeds this."),
+    repair: bool = typer.Option(True, help="Repair the surface first."),
+    bodies: str = typer.Option(
+        "union",
+        help="Several closed bodies: union (one mesh of their union, "
+        "overlaps merged), separate (a mesh per body), largest, "
+        "or one (refuse).",
+    ),
+):
     """Surface → positively oriented tet mesh (.vtu) with surface nodes and faces marked."""
     import meshio
 
@@ -139,30 +157,41 @@ def tetrahedralize_cmd(inp: Path, out: Path,
     V, F = read_surface(inp)
     if max_volume is not None:
         edge_length = (6 * np.sqrt(2) * max_volume) ** (1 / 3)  # regular tet of that volume
-    X, T, info = surface_to_tets(V, F, edge_length=edge_length, target_tets=target_tets,
-                                 repair=repair, bodies=bodies, log=console.print)
+    X, T, info = surface_to_tets(
+        V,
+        F,
+        edge_length=edge_length,
+        target_tets=target_tets,
+        repair=repair,
+        bodies=bodies,
+        log=console.print,
+    )
     q = tet_quality(X, T)
     if quality is not None and q["radius_edge"].max() > quality:
-        raise PliantError(f"worst radius–edge ratio {q['radius_edge'].max():.2f} exceeds --quality "
-                          f"{quality}")
+        raise PliantError(f"worst radius–edge ratio {q['radius_edge'].max():.2f} exceeds --quality {quality}")
     faces, _ = boundary_faces(T)
     surf = np.zeros(len(X), np.int8)
     surf[np.unique(faces)] = 1
-    mesh = meshio.Mesh(X, [("tetra", T), ("triangle", faces)], point_data={"surface_node": surf},
-                       cell_data={"surface_face": [np.zeros(len(T), np.int8),
-                                                   np.ones(len(faces), np.int8)]})
+    mesh = meshio.Mesh(
+        X,
+        [("tetra", T), ("triangle", faces)],
+        point_data={"surface_node": surf},
+        cell_data={"surface_face": [np.zeros(len(T), np.int8), np.ones(len(faces), np.int8)]},
+    )
     atomic_write(out, lambda tmp: meshio.write(tmp, mesh), "volume mesh")
     console.print(f"{out}: {len(X):,} nodes, {len(T):,} tets, {len(faces):,} surface faces")
 
 
 @mesh_app.command("quality")
 @_guard
-def quality_cmd(inp: Path,
-                png: Optional[Path] = typer.Option(None, help="Histogram picture."),
-                E: float = typer.Option(3000.0, "--E", help="Young's modulus for Δt [Pa]."),
-                nu: float = typer.Option(0.45, "--nu", help="Poisson's ratio for Δt."),
-                density: float = typer.Option(1000.0, help="Density for Δt [kg/m³]."),
-                as_json: bool = typer.Option(False, "--json")):
+def quality_cmd(
+    inp: Path,
+    png: Optional[Path] = typer.Option(None, help="Histogram picture."),
+    E: float = typer.Option(3000.0, "--E", help="Young's modulus for Δt [Pa]."),
+    nu: float = typer.Option(0.45, "--nu", help="Poisson's ratio for Δt."),
+    density: float = typer.Option(1000.0, help="Density for Δt [kg/m³]."),
+    as_json: bool = typer.Option(False, "--json"),
+):
     """Per-tet radius–edge ratio, dihedral angles, volume and critical time step: summary + PNG."""
     from .io import check_output_file
     from .io.mesh import read_volume_mesh
@@ -184,9 +213,11 @@ def quality_cmd(inp: Path,
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return
-    console.print(f"{inp}: {s['tets']:,} tets, {s['inverted']} inverted, {s['degenerate']} "
-                  f"degenerate (zero volume), {s['slivers_min_dihedral_below_5deg']} slivers (min "
-                  "dihedral < 5°)")
+    console.print(
+        f"{inp}: {s['tets']:,} tets, {s['inverted']} inverted, {s['degenerate']} "
+        f"degenerate (zero volume), {s['slivers_min_dihedral_below_5deg']} slivers (min "
+        "dihedral < 5°)"
+    )
     for k in ("radius_edge", "min_dihedral", "max_dihedral", "volume"):
         v = s[k]
         console.print(f"  {k:13s} min {v['min']:.4g}  median {v['median']:.4g}  max {v['max']:.4g}")
@@ -194,8 +225,12 @@ def quality_cmd(inp: Path,
     if d is None:
         console.print("  critical Δt: none: no element has a positive volume")
         return
-    console.print(f"  critical Δt: {d['min']:.3g} s (element {d['element']}), median {d['median']:.3g}"
-                  f" s: the worst element costs {d['cost_factor']:.1f}× the steps")
+    console.print(
+        f"  critical Δt: {d['min']:.3g} s (element {d['element']}), median {d['median']:.3g}"
+        f" s: the worst element costs {d['cost_factor']:.1f}× the steps"
+    )
     if s["inverted"] or s["degenerate"]:
-        console.print(f"  (over the {s['tets'] - s['inverted'] - s['degenerate']:,} valid elements: "
-                      "inverted and degenerate elements have no stable step and must be fixed)")
+        console.print(
+            f"  (over the {s['tets'] - s['inverted'] - s['degenerate']:,} valid elements: "
+            "inverted and degenerate elements have no stable step and must be fixed)"
+        )

@@ -69,8 +69,15 @@ class InstabilityError(PliantError):
     ``quantity`` (``"J"``, ``"displacement"``), ``value``.
     """
 
-    def __init__(self, message: str, time: float, quantity: str, value: float,
-                 element: int | None = None, node: int | None = None):
+    def __init__(
+        self,
+        message: str,
+        time: float,
+        quantity: str,
+        value: float,
+        element: int | None = None,
+        node: int | None = None,
+    ):
         super().__init__(message)
         self.time, self.quantity, self.value = time, quantity, value
         self.element, self.node = element, node

@@ -22,6 +22,7 @@ import sys
 import tempfile
 import traceback
 import warnings
+from typing import Any
 from pathlib import Path
 
 import typer
@@ -34,7 +35,7 @@ EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 
 Abort = typer.Abort
 # Usage errors: click's ClickException (vendored inside typer in recent versions, click's own in
 # older ones); found from a public class so that no private module path is named.
-ClickException = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
+ClickException: Any = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
 
 
 def _debug() -> bool:
@@ -71,8 +72,9 @@ def routed_warnings(console):
     def show(message, category, filename, lineno, file=None, line=None):
         ours = "pliant" in Path(str(filename)).parts or issubclass(category, PliantWarning)
         if ours and issubclass(category, UserWarning):
-            console.print(f"[yellow]warning:[/] {escape(one_line(str(message)))}", highlight=False,
-                          markup=True)
+            console.print(
+                f"[yellow]warning:[/] {escape(one_line(str(message)))}", highlight=False, markup=True
+            )
         elif _debug():
             old(message, category, filename, lineno, file, line)
 
@@ -120,14 +122,18 @@ def run_guarded(app, argv: list[str] | None, console) -> int:
             say(f"input nested too deeply to process ({e})")
             return EXIT_INPUT
         except MemoryError:
-            say("out of memory: the input asks for more memory than this machine has (a mesh, "
-                "a step count or an output too large?)")
+            say(
+                "out of memory: the input asks for more memory than this machine has (a mesh, "
+                "a step count or an output too large?)"
+            )
             return EXIT_INPUT
         except Exception as e:  # a bug: one line, the traceback in a file
             if _debug():
                 traceback.print_exc()
             log = crash_log(e, argv)
             where = f"full traceback in {log}" if log else "no log could be written"
-            say(f"internal error in 'pliant {' '.join(argv[:1])}': {type(e).__name__}: "
-                f"{one_line(str(e), 300)} ({where}; please report it)")
+            say(
+                f"internal error in 'pliant {' '.join(argv[:1])}': {type(e).__name__}: "
+                f"{one_line(str(e), 300)} ({where}; please report it)"
+            )
             return EXIT_INTERNAL

@@ -26,25 +26,33 @@ def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
     return max(1, math.ceil(total_steps / scene.frames))
 
 
-def build(scene: Scene, threads: int | None = None, backend: str | None = None,
-          allow_unstable: bool = False):
+def build(scene: Scene, threads: int | None = None, backend: str | None = None, allow_unstable: bool = False):
     """The scene's model and solver. Input errors name the scene file (the builder knows only the
     mesh's source); a duration of more than MAX_STEPS steps is refused here, before any work."""
     try:
-        model = scene.builder.finalize(scene.dtype,
-                                       threads=scene.threads if threads is None else threads,
-                                       backend=backend or scene.backend)
-        solver = Solver(model, dt=scene.dt, safety=scene.safety, allow_unstable=allow_unstable,
-                        check_every=scene.check_every)
+        model = scene.builder.finalize(
+            scene.dtype,
+            threads=scene.threads if threads is None else threads,
+            backend=backend or scene.backend,
+        )
+        solver = Solver(
+            model,
+            dt=scene.dt,
+            safety=scene.safety,
+            allow_unstable=allow_unstable,
+            check_every=scene.check_every,
+        )
     except InputError as e:
         if scene.source in str(e):
             raise
         raise type(e)(f"{scene.source}: {e}", *_extra_args(e)) from None
     total = scene.duration / solver.dt - 1e-9
     if not total <= MAX_STEPS:
-        raise InputError(f"{scene.source}: duration {scene.duration:g} s takes {total:.3g} steps of "
-                         f"{solver.dt:.3g} s; expected at most {MAX_STEPS:.0e} steps (shorten the "
-                         "duration, or use a quasi-static solve)")
+        raise InputError(
+            f"{scene.source}: duration {scene.duration:g} s takes {total:.3g} steps of "
+            f"{solver.dt:.3g} s; expected at most {MAX_STEPS:.0e} steps (shorten the "
+            "duration, or use a quasi-static solve)"
+        )
     return model, solver
 
 
@@ -58,11 +66,12 @@ def body_measures(model, state, res: dict, nodes=slice(None), elements=slice(Non
     ranges): max displacement [m], max von Mises [Pa], kinetic energy ½ Σ m v² [J] (half-step
     velocity) and strain energy Σ V0 W [J]. ``res``: ``model.element_results(state)``."""
     u, v = state.displacements[nodes], state.velocities[nodes]
-    return {"max_displacement": float(np.linalg.norm(u, axis=1).max()),
-            "max_von_mises": float(res["von_mises"][elements].max()),
-            "kinetic_energy": float(0.5 * np.sum(model.mass[nodes, None] * v * v)),
-            "strain_energy": float(np.dot(model.element_volumes()[elements],
-                                          res["energy_density"][elements]))}
+    return {
+        "max_displacement": float(np.linalg.norm(u, axis=1).max()),
+        "max_von_mises": float(res["von_mises"][elements].max()),
+        "kinetic_energy": float(0.5 * np.sum(model.mass[nodes, None] * v * v)),
+        "strain_energy": float(np.dot(model.element_volumes()[elements], res["energy_density"][elements])),
+    }
 
 
 def _extra_args(e: Exception) -> tuple:
@@ -80,16 +89,22 @@ class _NoFiles:
         self.frames.append((state.time, ""))
 
 
-def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool = False,
-              threads: int | None = None, echo=print, backend: str | None = None,
-              inspect=None) -> dict:
+def run_scene(
+    scene: Scene,
+    out_dir,
+    progress: bool = True,
+    allow_unstable: bool = False,
+    threads: int | None = None,
+    echo=print,
+    backend: str | None = None,
+    inspect=None,
+) -> dict:
     """Run ``scene`` and write OUTDIR/result.pvd, frame_*.vtu, summary.json and result.png
     (``out_dir=None``: no files, the summary alone). ``inspect(model, solver, state) -> dict``, when
     given, adds its entries to the summary once the run has ended (a sweep's outputs).
     Returns the summary. Raises InstabilityError (after writing what it has) when the run fails;
     on KeyboardInterrupt the summary says ``interrupted`` and the frames so far are kept."""
-    from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
-                               TimeRemainingColumn)
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     # checked first, created only once the model is valid
     out = None if out_dir is None else check_output_dir(out_dir)
@@ -97,8 +112,8 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
     with warnings.catch_warnings(record=True) as held:  # a refused build prints its error alone
         warnings.simplefilter("always")
         model, solver = build(scene, threads, backend, allow_unstable)
-    for w in scene.warnings:
-        warnings.warn(PliantWarning(w), stacklevel=2)
+    for text in scene.warnings:
+        warnings.warn(PliantWarning(text), stacklevel=2)
     for w in held:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     total = total_steps(scene.duration, solver.dt)
@@ -109,41 +124,61 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
 
         Ve, Fe = scene.meta["embed_surface"]
         embedding = embed_surface(model.reference_positions, model.tets, Ve, Fe)
-    writer = _NoFiles() if out is None else ResultWriter(out, model, fields=scene.fields,
-                                                         embedding=embedding)
+    writer = _NoFiles() if out is None else ResultWriter(out, model, fields=scene.fields, embedding=embedding)
     writer.write(state)
     build_s = time.perf_counter() - t_build
-    summary = {"pliant": __version__, "scene": scene.source, "title": scene.title,
-               "mode": "static" if scene.static else "dynamic", "steps": 0, "dt": solver.dt,
-               "dt_critical": model.dt_critical, "simulated_time": 0.0, "wall_time": 0.0,
-               "setup_time": build_s, "backend": model.backend, "threads": model.threads,
-               "dtype": scene.dtype, "elements": model.n_elements, "nodes": model.n_nodes,
-               "interrupted": False, "error": None,
-               "warnings": list(scene.warnings) + [str(w.message) for w in held],
-               "files": ["result.pvd", "summary.json"]}
+    summary = {
+        "pliant": __version__,
+        "scene": scene.source,
+        "title": scene.title,
+        "mode": "static" if scene.static else "dynamic",
+        "steps": 0,
+        "dt": solver.dt,
+        "dt_critical": model.dt_critical,
+        "simulated_time": 0.0,
+        "wall_time": 0.0,
+        "setup_time": build_s,
+        "backend": model.backend,
+        "threads": model.threads,
+        "dtype": scene.dtype,
+        "elements": model.n_elements,
+        "nodes": model.n_nodes,
+        "interrupted": False,
+        "error": None,
+        "warnings": list(scene.warnings) + [str(w.message) for w in held],
+        "files": ["result.pvd", "summary.json"],
+    }
     pipeline = scene.meta.get("mesh_pipeline")
     if pipeline:  # a surface went through the mesh pipeline: say what it made
         summary["mesh_pipeline"] = pipeline
         if pipeline.get("bodies", 1) > 1:
-            echo(f"{pipeline['bodies']} bodies in the surface, meshed "
-                 f"{'as their union' if pipeline['bodies_mode'] == 'union' else pipeline['bodies_mode']}"
-                 f": {pipeline['tets']:,} tets")
+            echo(
+                f"{pipeline['bodies']} bodies in the surface, meshed "
+                f"{'as their union' if pipeline['bodies_mode'] == 'union' else pipeline['bodies_mode']}"
+                f": {pipeline['tets']:,} tets"
+            )
     t0 = time.perf_counter()
     try:
         if scene.static:
-            info = solver.relax(state, at_time=scene.duration, tol=scene.tol,
-                                increments=scene.increments, strict=False)
+            info = solver.relax(
+                state, at_time=scene.duration, tol=scene.tol, increments=scene.increments, strict=False
+            )
             summary.update(relax_steps=info.steps, residual=info.residual, converged=info.converged)
             if not info.converged:
-                summary["warnings"].append(f"quasi-static solve stopped at residual "
-                                           f"{info.residual:.3g} (tolerance {scene.tol:g})")
+                summary["warnings"].append(
+                    f"quasi-static solve stopped at residual {info.residual:.3g} (tolerance {scene.tol:g})"
+                )
             writer.write(state)
         else:
             every = _frame_steps(scene, solver.dt, total)
-            cols = (TextColumn("t = {task.fields[t]:.4g} s"), BarColumn(),
-                    TextColumn("{task.completed}/{task.total} steps"),
-                    TextColumn("{task.fields[rate]:,.0f} steps/s"), TimeElapsedColumn(),
-                    TimeRemainingColumn())
+            cols = (
+                TextColumn("t = {task.fields[t]:.4g} s"),
+                BarColumn(),
+                TextColumn("{task.completed}/{task.total} steps"),
+                TextColumn("{task.fields[rate]:,.0f} steps/s"),
+                TimeElapsedColumn(),
+                TimeRemainingColumn(),
+            )
             with Progress(*cols, disable=not progress, transient=False) as bar:
                 task = bar.add_task("run", total=total, t=0.0, rate=0.0)
                 done = 0
@@ -165,8 +200,7 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
         summary["steps"] = state.steps if not scene.static else summary.get("relax_steps", 0)
         summary["simulated_time"] = state.time
         # Simulated seconds per wall second, output included (None for a quasi-static solve).
-        summary["real_time_factor"] = (None if scene.static else
-                                       state.time / max(summary["wall_time"], 1e-12))
+        summary["real_time_factor"] = None if scene.static else state.time / max(summary["wall_time"], 1e-12)
         summary["frames"] = len(writer.frames)
         u = state.displacements
         if np.all(np.isfinite(u)):
@@ -175,8 +209,13 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
             if scene.png and out is not None:
                 from .view import render_png
 
-                render_png(out / "result.png", state.positions, model.tets, res["von_mises"],
-                           title=f"{scene.title[:200]}: t = {state.time:.4g} s")
+                render_png(
+                    out / "result.png",
+                    state.positions,
+                    model.tets,
+                    res["von_mises"],
+                    title=f"{scene.title[:200]}: t = {state.time:.4g} s",
+                )
                 summary["files"].append("result.png")
         if model.tools:
             summary["tools"] = []
@@ -185,11 +224,15 @@ def run_scene(scene: Scene, out_dir, progress: bool = True, allow_unstable: bool
             for k, (tool, H) in enumerate(zip(model.tools, report.tools)):
                 force, torque = report.force(k)  # the equilibrium's after a relaxation
                 peak = float(np.linalg.norm(H.force, axis=1).max()) if len(H.time) else 0.0
-                summary["tools"].append({"name": tool.name, "force": force.tolist(), "max_force": peak,
-                                         "torque": torque.tolist()})
+                summary["tools"].append(
+                    {"name": tool.name, "force": force.tolist(), "max_force": peak, "torque": torque.tolist()}
+                )
                 if len(H.time):
-                    hist[tool.name] = {"time": H.time.tolist(), "force": H.force.tolist(),
-                                       "torque": H.torque.tolist()}
+                    hist[tool.name] = {
+                        "time": H.time.tolist(),
+                        "force": H.force.tolist(),
+                        "torque": H.torque.tolist(),
+                    }
             if out is not None:
                 atomic_write_text(out / "tools.json", json.dumps(hist))
                 summary["files"].append("tools.json")

@@ -7,8 +7,28 @@ its surface after the explicit predictor, with friction (see cpp/include/pliant/
 tool reports the force [N] and torque [N·m] (about its position) it receives, every step.
 """
 
-from .tools import (Box, Capsule, Cylinder, MeshTool, Plane, RigidTool, Sphere, quat_align_z,
-                    quat_from_axis_angle, quat_from_matrix)
+from .tools import (
+    Box,
+    Capsule,
+    Cylinder,
+    MeshTool,
+    Plane,
+    RigidTool,
+    Sphere,
+    quat_align_z,
+    quat_from_axis_angle,
+    quat_from_matrix,
+)
 
-__all__ = ["RigidTool", "Plane", "Sphere", "Capsule", "Cylinder", "Box", "MeshTool",
-           "quat_from_matrix", "quat_from_axis_angle", "quat_align_z"]
+__all__ = [
+    "RigidTool",
+    "Plane",
+    "Sphere",
+    "Capsule",
+    "Cylinder",
+    "Box",
+    "MeshTool",
+    "quat_from_matrix",
+    "quat_from_axis_angle",
+    "quat_align_z",
+]

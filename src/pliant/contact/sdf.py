@@ -37,8 +37,7 @@ def point_triangle_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.n
     return np.linalg.norm(P - Q, axis=1), Q
 
 
-def signed_distance_grid(V: np.ndarray, F: np.ndarray, h: float, margin: float,
-                         candidates: int = 12):
+def signed_distance_grid(V: np.ndarray, F: np.ndarray, h: float, margin: float, candidates: int = 12):
     """Signed distance [m] (negative inside) on a regular grid of spacing h covering the mesh's
     bounding box plus ``margin``. Distance: exact to the nearest of the ``candidates`` faces with the
     nearest centroids; sign: the angle-weighted pseudo-normal test at that closest point (Bærentzen

@@ -11,8 +11,18 @@ from .. import _core
 from ..checks import finite_number, finite_vector, shown
 from ..errors import InputError
 
-__all__ = ["RigidTool", "Plane", "Sphere", "Capsule", "Cylinder", "Box", "MeshTool",
-           "quat_from_matrix", "quat_from_axis_angle", "quat_align_z"]
+__all__ = [
+    "RigidTool",
+    "Plane",
+    "Sphere",
+    "Capsule",
+    "Cylinder",
+    "Box",
+    "MeshTool",
+    "quat_from_matrix",
+    "quat_from_axis_angle",
+    "quat_align_z",
+]
 
 
 def quat_from_axis_angle(axis, angle: float) -> np.ndarray:
@@ -64,13 +74,21 @@ class RigidTool:
 
     kind: _core.ToolKind | None = None
 
-    def __init__(self, mu_s: float = 0.0, mu_k: float | None = None, position=(0.0, 0.0, 0.0),
-                 rotation=(1.0, 0.0, 0.0, 0.0), name: str | None = None):
+    def __init__(
+        self,
+        mu_s: float = 0.0,
+        mu_k: float | None = None,
+        position=(0.0, 0.0, 0.0),
+        rotation=(1.0, 0.0, 0.0, 0.0),
+        name: str | None = None,
+    ):
         self.mu_s = float(mu_s)
         self.mu_k = float(self.mu_s if mu_k is None else mu_k)
         if not (0 <= self.mu_k <= self.mu_s) or not math.isfinite(self.mu_s):
-            raise InputError(f"{type(self).__name__}: friction mu_s = {shown(mu_s)}, mu_k = {shown(mu_k)}; "
-                             "expected 0 <= mu_k <= mu_s")
+            raise InputError(
+                f"{type(self).__name__}: friction mu_s = {shown(mu_s)}, mu_k = {shown(mu_k)}; "
+                "expected 0 <= mu_k <= mu_s"
+            )
         self.name = name or type(self).__name__.lower()
         self.keys: list[np.ndarray] = []
         self.at(0.0, position, rotation)
@@ -97,6 +115,10 @@ class RigidTool:
     def grid(self) -> tuple[list[int], np.ndarray]:
         return [0, 0, 0], np.zeros(0)
 
+    def _sdf_local(self, y: np.ndarray) -> np.ndarray:
+        """φ [m] of points y (n, 3) in the tool's frame; each kind defines it."""
+        raise NotImplementedError
+
     def signed_distance(self, x, t: float = 0.0) -> np.ndarray:
         """φ [m] of world points x (n, 3) at time t (NumPy, for checks and tests)."""
         R, p = self.pose(t)
@@ -113,12 +135,15 @@ class RigidTool:
             i = int(np.searchsorted(K[:, 0], t)) - 1
             w = (t - K[i, 0]) / (K[i + 1, 0] - K[i, 0])
             qb = K[i + 1, 4:] * (1 if K[i, 4:] @ K[i + 1, 4:] >= 0 else -1)
-            k = np.concatenate([[t], (1 - w) * K[i, 1:4] + w * K[i + 1, 1:4],
-                                (1 - w) * K[i, 4:] + w * qb])
+            k = np.concatenate([[t], (1 - w) * K[i, 1:4] + w * K[i + 1, 1:4], (1 - w) * K[i, 4:] + w * qb])
         w, x, y, z = k[4:] / np.linalg.norm(k[4:])
-        R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        R = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+            ]
+        )
         return R, k[1:4]
 
 
@@ -192,8 +217,7 @@ class Cylinder(RigidTool):
         return [self.radius, self.length / 2, 0.0, 0.0]
 
     def _sdf_local(self, y):
-        q = np.stack([np.hypot(y[:, 0], y[:, 1]) - self.radius,
-                      np.abs(y[:, 2]) - self.length / 2], axis=1)
+        q = np.stack([np.hypot(y[:, 0], y[:, 1]) - self.radius, np.abs(y[:, 2]) - self.length / 2], axis=1)
         return np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0)
 
 

@@ -30,8 +30,11 @@ def read_meshio(path, what: str = "mesh"):
             return meshio.read(path)
     except (Exception, SystemExit) as e:
         said = " ".join(sink.getvalue().split())
-        reason = f"{type(e).__name__}: {e}" if str(e) and not isinstance(e, SystemExit) else \
-            (said or type(e).__name__)
+        reason = (
+            f"{type(e).__name__}: {e}"
+            if str(e) and not isinstance(e, SystemExit)
+            else (said or type(e).__name__)
+        )
         raise MeshError(f"{path}: cannot read as a {what} ({reason[:300]})") from None
 
 
@@ -47,8 +50,10 @@ def check_output_file(path, what: str = "output file", mesh_format: bool = False
         import meshio
 
         if path.suffix.lower() not in meshio.extension_to_filetypes:
-            raise InputError(f"{path}: unknown {what} format {path.suffix!r}; expected an extension "
-                             "meshio writes (.obj, .stl, .ply, .off, .vtk, .vtu, .msh...)")
+            raise InputError(
+                f"{path}: unknown {what} format {path.suffix!r}; expected an extension "
+                "meshio writes (.obj, .stl, .ply, .off, .vtk, .vtu, .msh...)"
+            )
     if not parent.exists():
         raise InputError(f"{path}: cannot write the {what}: folder {parent} does not exist")
     if not parent.is_dir():
@@ -66,8 +71,9 @@ def _probe_folder(folder: Path, path: Path, what: str) -> None:
         with tempfile.TemporaryFile(dir=folder, prefix=".pliant-probe-"):
             pass
     except OSError as e:
-        raise InputError(f"{path}: cannot write the {what}: folder {folder} is not writable "
-                         f"({e.strerror or e})") from None
+        raise InputError(
+            f"{path}: cannot write the {what}: folder {folder} is not writable ({e.strerror or e})"
+        ) from None
 
 
 def check_output_dir(path, what: str = "output folder") -> Path:
@@ -123,8 +129,9 @@ def atomic_write(path, write, what: str = "file") -> Path:
     path = Path(path)
     suffix = "".join(path.suffixes[-1:])
     try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
-                                   prefix=f".{path.stem}.", suffix=f".tmp{suffix}")
+        fd, tmp = tempfile.mkstemp(
+            dir=path.parent if str(path.parent) else ".", prefix=f".{path.stem}.", suffix=f".tmp{suffix}"
+        )
         os.close(fd)
     except OSError as e:
         raise InputError(f"{path}: cannot write the {what}: {e.strerror or e}") from None

@@ -22,16 +22,19 @@ def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray
     mesh = read_meshio(path, "volume mesh")
     other = sorted({c.type for c in mesh.cells} - {"tetra"} - SURFACE_CELLS)
     if other:
-        counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}"
-                           for t in other)
-        raise MeshError(f"{path}: has {counts} cells; pliant simulates linear tetrahedra only "
-                        "(convert the mesh, e.g. re-mesh its surface with pliant mesh "
-                        "tetrahedralize)")
+        counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}" for t in other)
+        raise MeshError(
+            f"{path}: has {counts} cells; pliant simulates linear tetrahedra only "
+            "(convert the mesh, e.g. re-mesh its surface with pliant mesh "
+            "tetrahedralize)"
+        )
     blocks = [(i, c) for i, c in enumerate(mesh.cells) if c.type == "tetra"]
     if not blocks:
         kinds = sorted({c.type for c in mesh.cells}) or ["none"]
-        raise MeshError(f"{path}: no linear tetrahedra (cell types: {', '.join(kinds)}); expected "
-                        "'tetra' cells (surface meshes go through the mesh pipeline)")
+        raise MeshError(
+            f"{path}: no linear tetrahedra (cell types: {', '.join(kinds)}); expected "
+            "'tetra' cells (surface meshes go through the mesh pipeline)"
+        )
     tets = np.concatenate([c.data for _, c in blocks]).astype(np.int64)
     X = np.asarray(mesh.points, dtype=float)
     if X.ndim != 2 or X.shape[1] < 3:

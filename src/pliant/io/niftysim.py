@@ -18,28 +18,43 @@ import contextlib
 import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import FileError, InputError
-from ..materials import (ArrudaBoyce, NeoHookean, Polynomial, StVenantKirchhoff,
-                         TransverselyIsotropic)
+from ..materials import ArrudaBoyce, NeoHookean, Polynomial, StVenantKirchhoff, TransverselyIsotropic
 from ..job import Scene
 from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
 
-_KNOWN_TOP = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams", "SubMesh", "Output",
-              "ContactPlate", "ContactCylinder", "ContactUSProbe", "ContactSurface"}
+_KNOWN_TOP = {
+    "Nodes",
+    "Elements",
+    "ElementSet",
+    "Constraint",
+    "SystemParams",
+    "SubMesh",
+    "Output",
+    "ContactPlate",
+    "ContactCylinder",
+    "ContactUSProbe",
+    "ContactSurface",
+}
 _SYSTEM = {"TimeStep", "TotalTime", "DampingCoeff", "Density", "HGKappa", "DoDeformableCollision"}
 
 
 # NiftySim user guide v2.4, App. A.1: material code → (pliant class, parameters in file order).
-_MATERIALS = {
+_MATERIALS: dict[str, tuple[Any, tuple[str, ...]]] = {
     "NH": (lambda mu, k: NeoHookean(mu=mu, K=k), ("mu", "kappa")),
-    "PY": (lambda c10, c01, c20, c02, c11, k: Polynomial(c10, c01, c20, c02, c11, K=k),
-           ("C10", "C01", "C20", "C02", "C11", "kappa")),
+    "PY": (
+        lambda c10, c01, c20, c02, c11, k: Polynomial(c10, c01, c20, c02, c11, K=k),
+        ("C10", "C01", "C20", "C02", "C11", "kappa"),
+    ),
     "AB": (lambda mu, lm, k: ArrudaBoyce(mu, lm, k), ("mu", "lambda_m", "kappa")),
-    "TI": (lambda mu, k, eta, a1, a2, a3: TransverselyIsotropic(mu, k, eta, (a1, a2, a3)),
-           ("mu", "kappa", "eta", "a1", "a2", "a3")),
+    "TI": (
+        lambda mu, k, eta, a1, a2, a3: TransverselyIsotropic(mu, k, eta, (a1, a2, a3)),
+        ("mu", "kappa", "eta", "a1", "a2", "a3"),
+    ),
 }
 
 
@@ -56,9 +71,8 @@ def _numbers(el, path, what, dtype=float):
         a = np.array(words, dtype=np.float64 if dtype is float else dtype)
     except (ValueError, OverflowError):
         bad = next((w for w in words if not _parses(w, dtype)), "?")
-        kind = 'an integer' if dtype is not float else 'a number'
-        raise NiftySimError(f"<{what}>: {bad[:40]!r} is not {kind}",
-                            str(path), what) from None
+        kind = "an integer" if dtype is not float else "a number"
+        raise NiftySimError(f"<{what}>: {bad[:40]!r} is not {kind}", str(path), what) from None
     if dtype is float and not np.all(np.isfinite(a)):
         i = int(np.argmax(~np.isfinite(a)))
         raise NiftySimError(f"<{what}>: value {i} is {a[i]}; expected finite numbers", str(path), what)
@@ -79,8 +93,9 @@ def _scalar(text, f: str, key: str, kind=float, low: float | None = None, strict
     try:
         v = kind(str(text).strip())
     except (TypeError, ValueError, OverflowError):
-        raise NiftySimError(f"<{key}> = {str(text)[:40]!r}: expected "
-                            f"{'an integer' if kind is int else 'a number'}", f, key) from None
+        raise NiftySimError(
+            f"<{key}> = {str(text)[:40]!r}: expected {'an integer' if kind is int else 'a number'}", f, key
+        ) from None
     if not math.isfinite(v) or (low is not None and (v <= low if strict else v < low)):
         bound = "" if low is None else f" {'>' if strict else '>='} {low:g}"
         raise NiftySimError(f"<{key}> = {v}: expected a finite value{bound}", f, key)
@@ -111,23 +126,26 @@ def set_xml_key(root, key: str, value, f: str = "") -> None:
     for n, seg in enumerate(segments):
         m = re.fullmatch(r"([A-Za-z_][\w-]*)((?:\[\d+\])*)", seg)
         if not m:
-            raise NiftySimError(f"segment {seg!r}: expected an element name with optional [index]es",
-                                f, key)
+            raise NiftySimError(f"segment {seg!r}: expected an element name with optional [index]es", f, key)
         idx = [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
         found = el.findall(m.group(1))
         at = idx[0] if idx else 0
         if at >= len(found):
-            raise NiftySimError(f"<{el.tag}> has {len(found)} <{m.group(1)}> element(s); "
-                                f"expected at least {at + 1}", f, key)
+            raise NiftySimError(
+                f"<{el.tag}> has {len(found)} <{m.group(1)}> element(s); expected at least {at + 1}", f, key
+            )
         el = found[at]
         if len(idx) > 2 or (len(idx) == 2 and n < len(segments) - 1):
-            raise NiftySimError(f"segment {seg!r}: a second [index] (a number in the text) "
-                                "is allowed on the last element only", f, key)
+            raise NiftySimError(
+                f"segment {seg!r}: a second [index] (a number in the text) "
+                "is allowed on the last element only",
+                f,
+                key,
+            )
     words = (el.text or "").split()
     if len(idx) == 2:
         if idx[1] >= len(words):
-            raise NiftySimError(f"<{el.tag}> holds {len(words)} value(s); [{idx[1]}] is out of "
-                                "range", f, key)
+            raise NiftySimError(f"<{el.tag}> holds {len(words)} value(s); [{idx[1]}] is out of range", f, key)
         words[idx[1]] = _word(value)
         el.text = " ".join(words)
     else:
@@ -161,8 +179,9 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         if name in ignore:
             warnings.append(f"{f}: ignored unsupported NiftySim feature {name} ({why})")
             return
-        raise NiftySimError(f"unsupported NiftySim feature {name}: {why}; pass "
-                            f"--ignore {name} to skip it knowingly", f, name)
+        raise NiftySimError(
+            f"unsupported NiftySim feature {name}: {why}; pass --ignore {name} to skip it knowingly", f, name
+        )
 
     for child in root:
         if child.tag not in _KNOWN_TOP:
@@ -177,9 +196,13 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
     b.nodal_pressure_stabilization = 0.0  # NiftySim's T4ANP: the plain average
     _element_sets(root, b, len(T), default_rho, f, unsupported)
-    shapes = {"RAMP": lambda: Ramp(total), "STEP": lambda: Step(0.0),
-              "POLY345": lambda: SmoothRamp(total), "HILLY": lambda: Hilly(total),
-              "RAMPHOLD": lambda: Ramp(0.1 * total)}  # NiftySim: ramp over 10 % of T, then hold
+    shapes = {
+        "RAMP": lambda: Ramp(total),
+        "STEP": lambda: Step(0.0),
+        "POLY345": lambda: SmoothRamp(total),
+        "HILLY": lambda: Hilly(total),
+        "RAMPHOLD": lambda: Ramp(0.1 * total),
+    }  # NiftySim: ramp over 10 % of T, then hold
     for k, c in enumerate(root.findall("Constraint")):
         key = f"Constraint[{k}]"
         with _named(f, key):
@@ -193,8 +216,17 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     out_every = None
     for o in root.findall("Output"):
         out_every = _scalar(o.get("Freq"), f, "Output Freq", int, 1, False)
-    scene = Scene(f, b, duration=total, dt=dt, dtype="float32", output_every=out_every,
-                  frames=20, title=path.stem, warnings=warnings)
+    scene = Scene(
+        f,
+        b,
+        duration=total,
+        dt=dt,
+        dtype="float32",
+        output_every=out_every,
+        frames=20,
+        title=path.stem,
+        warnings=warnings,
+    )
     scene.meta["mesh_source"] = f
     return scene
 
@@ -211,23 +243,28 @@ def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
     if X.size % 3:
         raise NiftySimError(f"<Nodes>: {X.size} coordinates, not a multiple of 3", f, "Nodes")
     X = X.reshape(-1, 3)
-    if "NumNodes" in nodes_el.attrib and \
-            _scalar(nodes_el.get("NumNodes"), f, "Nodes NumNodes", int, 0) != len(X):
-        raise NiftySimError(f"<Nodes NumNodes={nodes_el.get('NumNodes')}> but {len(X)} nodes "
-                            "listed", f, "Nodes")
+    if "NumNodes" in nodes_el.attrib and _scalar(
+        nodes_el.get("NumNodes"), f, "Nodes NumNodes", int, 0
+    ) != len(X):
+        raise NiftySimError(
+            f"<Nodes NumNodes={nodes_el.get('NumNodes')}> but {len(X)} nodes listed", f, "Nodes"
+        )
     etype = elems_el.get("Type")
     if etype not in ("T4", "T4ANP"):  # other connectivities cannot be read as tetrahedra: not ignorable
-        raise NiftySimError(f"unsupported NiftySim feature Elements Type={etype}: pliant has "
-                            "linear tetrahedra (T4) only", f, "Elements")
+        raise NiftySimError(
+            f"unsupported NiftySim feature Elements Type={etype}: pliant has linear tetrahedra (T4) only",
+            f,
+            "Elements",
+        )
     T = _numbers(elems_el, f, "Elements", np.int64)
     if T.size % 4:
         raise NiftySimError(f"<Elements>: {T.size} indices, not a multiple of 4", f, "Elements")
     T = T.reshape(-1, 4)
     M = len(T)
-    if "NumEls" in elems_el.attrib and _scalar(elems_el.get("NumEls"), f, "Elements NumEls", int,
-                                               0) != M:
-        raise NiftySimError(f"<Elements NumEls={elems_el.get('NumEls')}> but {M} elements listed",
-                            f, "Elements")
+    if "NumEls" in elems_el.attrib and _scalar(elems_el.get("NumEls"), f, "Elements NumEls", int, 0) != M:
+        raise NiftySimError(
+            f"<Elements NumEls={elems_el.get('NumEls')}> but {M} elements listed", f, "Elements"
+        )
 
     return X, T, etype
 
@@ -249,8 +286,9 @@ def _system_params(root, f: str, unsupported, warnings: list[str]):
     dt = _scalar(params["TimeStep"], f, "SystemParams/TimeStep", float, 0.0)
     total = _scalar(params["TotalTime"], f, "SystemParams/TotalTime", float, 0.0)
     damping = _scalar(params["DampingCoeff"], f, "SystemParams/DampingCoeff", float, 0.0, False)
-    default_rho = _scalar(params["Density"], f, "SystemParams/Density", float, 0.0) \
-        if "Density" in params else None
+    default_rho = (
+        _scalar(params["Density"], f, "SystemParams/Density", float, 0.0) if "Density" in params else None
+    )
     if params.get("DoDeformableCollision", "0").strip() not in ("0", ""):
         unsupported("DoDeformableCollision", "contact between deformable bodies is not yet in pliant")
     if "HGKappa" in params:
@@ -271,11 +309,13 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
             try:
                 n = int(size)
             except ValueError:
-                raise NiftySimError(f"<ElementSet Size={size[:40]!r}>: expected a count or 'all'", f,
-                                    key) from None
+                raise NiftySimError(
+                    f"<ElementSet Size={size[:40]!r}>: expected a count or 'all'", f, key
+                ) from None
             if not 0 <= n <= M:
-                raise NiftySimError(f"<ElementSet Size={n}>: expected 0 to {M} (the element count) "
-                                    "or 'all'", f, key)
+                raise NiftySimError(
+                    f"<ElementSet Size={n}>: expected 0 to {M} (the element count) or 'all'", f, key
+                )
             if listed.size == n:
                 elems = listed
             elif listed.size <= 1:  # shorthand: N consecutive elements from the first listed (or 0)
@@ -292,8 +332,11 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
         ep = m.find("ElasticParams")
         vals = _numbers(ep, f, f"{key}/ElasticParams") if ep is not None else np.zeros(0)
         rho_el = m.find("Density")
-        rho = _scalar(rho_el.text, f, f"{key}/Material/Density", float, 0.0) \
-            if rho_el is not None else default_rho
+        rho = (
+            _scalar(rho_el.text, f, f"{key}/Material/Density", float, 0.0)
+            if rho_el is not None
+            else default_rho
+        )
         if rho is None:
             raise NiftySimError("no density: give <Density> in the material or SystemParams", f, key)
         with _named(f, key):
@@ -304,8 +347,9 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
             elif mtype in _MATERIALS or mtype in ("NHV", "TIV"):
                 cls, names = _MATERIALS[mtype[:-1] if mtype in ("NHV", "TIV") else mtype]
                 if vals.size != len(names):
-                    raise NiftySimError(f"{mtype} takes {len(names)} parameters ({', '.join(names)}); "
-                                        f"got {vals.size}", f, key)
+                    raise NiftySimError(
+                        f"{mtype} takes {len(names)} parameters ({', '.join(names)}); got {vals.size}", f, key
+                    )
                 material = cls(*vals)
                 if mtype in ("NHV", "TIV"):
                     material = _visco(m, material, f, key)
@@ -325,8 +369,7 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
         unsupported(f"Constraint SpecType={c.get('SpecType')}", "only node lists")
         return
     if ctype not in ("Fix", "Disp", "Force", "Gravity"):
-        unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity and "
-                    "Pressure")
+        unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity and Pressure")
         return
     dof = c.get("DOF", "all")
     dofs = "xyz" if dof == "all" else {"0": "x", "1": "y", "2": "z"}.get(dof)
@@ -336,20 +379,19 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
     if ctype != "Fix":
         shape = c.get("LoadShape")
         if shape not in shapes:
-            unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and "
-                        "RAMPHOLD")
+            unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and RAMPHOLD")
             return
         curve = shapes[shape]()
     if ctype == "Gravity":
         mag_el, dir_el = c.find("AccelerationMagnitude"), c.find("AccelerationDirection")
         if mag_el is None or dir_el is None:
-            raise NiftySimError("Gravity needs <AccelerationMagnitude> and "
-                                "<AccelerationDirection>", f, key)
+            raise NiftySimError("Gravity needs <AccelerationMagnitude> and <AccelerationDirection>", f, key)
         g = _scalar(mag_el.text, f, f"{key}/AccelerationMagnitude")
         d = _numbers(dir_el, f, f"{key}/AccelerationDirection")
         if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.linalg.norm(d) > 0:
-            raise NiftySimError(f"<AccelerationDirection> {d.tolist()}: expected 3 finite numbers, "
-                                "not all zero", f, key)
+            raise NiftySimError(
+                f"<AccelerationDirection> {d.tolist()}: expected 3 finite numbers, not all zero", f, key
+            )
         b.set_gravity(g * d / np.linalg.norm(d), curve)
         return
     nodes_el = c.find("Nodes")
@@ -383,7 +425,6 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
         b.add_force(ids, force, curve)
 
 
-
 def _vector(el, tag, f, key, n=3):
     c = el.find(tag)
     if c is None:
@@ -405,7 +446,7 @@ def _rigid_contacts(root, b: ModelBuilder, total: float, f: str, unsupported, wa
     Radius, Length) → a flat-ended Cylinder; NiftySim ignores nodes beyond the ends, pliant pushes
     them out through the end faces. ContactUSProbe (a cylinder with a hemispherical tip at
     Origin + Length·Axis) → a Capsule, which is rounded at the back end too."""
-    from ..contact import Box, Capsule, Cylinder, quat_align_z, quat_from_matrix
+    from ..contact import Box, Capsule, Cylinder, RigidTool, quat_align_z, quat_from_matrix
 
     s_of = lambda tr: tr**3 * (10 - 15 * tr + 6 * tr**2)  # noqa: E731
     times = np.linspace(0.0, total, 101)
@@ -417,13 +458,16 @@ def _rigid_contacts(root, b: ModelBuilder, total: float, f: str, unsupported, wa
                 ab, ac = bb - a, c - a
                 L1, L2 = np.linalg.norm(ab), np.linalg.norm(ac)
                 if not (L1 > 0 and L2 > 0) or abs(ab @ ac) > 1e-6 * L1 * L2:
-                    raise NiftySimError("ContactPlate: corners a, b, c must span a rectangle "
-                                        "(b − a ⟂ c − a, both non-zero)", f, key)
+                    raise NiftySimError(
+                        "ContactPlate: corners a, b, c must span a rectangle (b − a ⟂ c − a, both non-zero)",
+                        f,
+                        key,
+                    )
                 n = np.cross(ab, ac) / (L1 * L2)
                 depth = max(L1, L2)
                 R = np.column_stack([ab / L1, ac / L2, n])
                 start = a + (ab + ac) / 2 - n * depth / 2
-                tool = Box((L1 / 2, L2 / 2, depth / 2), name=f"niftysim {key}")
+                tool: RigidTool = Box((L1 / 2, L2 / 2, depth / 2), name=f"niftysim {key}")
                 rot = quat_from_matrix(R)
                 disp = _vector(el, "Disp", f, key) if el.find("Disp") is not None else np.zeros(3)
             else:
@@ -442,8 +486,7 @@ def _rigid_contacts(root, b: ModelBuilder, total: float, f: str, unsupported, wa
                     raise NiftySimError(str(e), f, key) from None
                 start = origin + axis * length / 2
                 rot = quat_align_z(axis)
-                disp = (_vector(el, "OrigDisp", f, key) if el.find("OrigDisp") is not None
-                        else np.zeros(3))
+                disp = _vector(el, "OrigDisp", f, key) if el.find("OrigDisp") is not None else np.zeros(3)
             if np.any(disp != 0):
                 for t in times:
                     tool.at(float(t), start + s_of(t / total) * disp, rot)
@@ -454,8 +497,9 @@ def _rigid_contacts(root, b: ModelBuilder, total: float, f: str, unsupported, wa
             if slaves is not None:
                 nodes = _numbers(slaves, f, f"{key}/SlvNodes", np.int64)
                 if nodes.size and (nodes.min() < 0 or nodes.max() >= b.n_nodes):
-                    raise NiftySimError(f"SlvNodes: node index out of range 0..{b.n_nodes - 1}",
-                                        f, f"{key}/SlvNodes")
+                    raise NiftySimError(
+                        f"SlvNodes: node index out of range 0..{b.n_nodes - 1}", f, f"{key}/SlvNodes"
+                    )
             try:
                 b.add_tool(tool, nodes=nodes)
             except InputError as e:
@@ -504,14 +548,12 @@ def _pressure(c, b: ModelBuilder, T: np.ndarray, shapes: dict, f: str, key: str,
             raise NiftySimError(f"FaceType={c.get('FaceType')!r}: T4 meshes have Tri faces", f, key)
         fe = c.find("Faces")
         if fe is None:
-            raise NiftySimError("Pressure needs <Faces>, NumFaces=\"all\" or SpecType=\"NORMAL\"",
-                                f, key)
+            raise NiftySimError('Pressure needs <Faces>, NumFaces="all" or SpecType="NORMAL"', f, key)
         faces = _numbers(fe, f, f"{key}/Faces", np.int64)
         if faces.size % 3:
             raise NiftySimError(f"<Faces>: {faces.size} indices, not a multiple of 3", f, key)
         faces = faces.reshape(-1, 3)
-        if "NumFaces" in c.attrib and c.get("NumFaces").isdigit() and \
-                int(c.get("NumFaces")) != len(faces):
+        if "NumFaces" in c.attrib and c.get("NumFaces").isdigit() and int(c.get("NumFaces")) != len(faces):
             raise NiftySimError(f"NumFaces={c.get('NumFaces')} but {len(faces)} faces listed", f, key)
         orient = False
     if len(faces) == 0:
@@ -543,15 +585,18 @@ def _rigid_surfaces(root, b: ModelBuilder, path: Path, f: str, unsupported) -> N
             else:
                 ne, ee = el.find("Nodes"), el.find("Elements")
                 if ne is None or ee is None:
-                    raise NiftySimError("ContactSurface needs <VTKSurface> or <Nodes> and <Elements>",
-                                        f, key)
+                    raise NiftySimError("ContactSurface needs <VTKSurface> or <Nodes> and <Elements>", f, key)
                 V = _numbers(ne, f, f"{key}/Nodes").reshape(-1, 3)
                 F = _numbers(ee, f, f"{key}/Elements", np.int64).reshape(-1, 3)
         except (InputError, ValueError) as e:
             raise NiftySimError(f"ContactSurface: {e}", f, key) from None
         if not check_surface(V, F).watertight:
-            raise NiftySimError("ContactSurface: the surface is not closed; pliant's mesh tools "
-                                "keep nodes out of a closed volume", f, key)
+            raise NiftySimError(
+                "ContactSurface: the surface is not closed; pliant's mesh tools "
+                "keep nodes out of a closed volume",
+                f,
+                key,
+            )
         b.add_tool(MeshTool(V, F, name=f"niftysim {key}"))
 
 
@@ -569,7 +614,8 @@ def _visco(m, material, f: str, key: str):
         raise NiftySimError("<ViscoParams NumIsoTerms/NumVolTerms>: expected integers", f, key) from None
     v = _numbers(vp, f, f"{key}/ViscoParams")
     if v.size != 2 * (ni + nv):
-        raise NiftySimError(f"<ViscoParams>: {v.size} values for {ni} + {nv} terms (expected "
-                            f"{2 * (ni + nv)})", f, key)
+        raise NiftySimError(
+            f"<ViscoParams>: {v.size} values for {ni} + {nv} terms (expected {2 * (ni + nv)})", f, key
+        )
     pairs = v.reshape(-1, 2).tolist()
     return Viscoelastic(material, iso=pairs[:ni], vol=pairs[ni:])

@@ -8,8 +8,7 @@ from pathlib import Path
 from .files import atomic_write, atomic_write_text, deferred_interrupt, make_output_dir
 
 
-FIELDS = ("displacement", "velocity", "von_mises", "J", "strain_energy_density", "cauchy",
-          "green_strain")
+FIELDS = ("displacement", "velocity", "von_mises", "J", "strain_energy_density", "cauchy", "green_strain")
 
 
 class ResultWriter:
@@ -34,9 +33,11 @@ class ResultWriter:
 
     def _pvd(self, name: str, files: list[tuple[float, str]]):
         entries = "\n".join(f'    <DataSet timestep="{t:.9g}" part="0" file="{f}"/>' for t, f in files)
-        atomic_write_text(self.dir / name,
-                          '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                          f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
+        atomic_write_text(
+            self.dir / name,
+            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+            f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n",
+        )
 
     def write(self, state) -> Path:
         import meshio
@@ -44,27 +45,38 @@ class ResultWriter:
         res = self.model.element_results(state)
         name = f"frame_{len(self.frames):05d}.vtu"
         f = self.fields
-        point = {k: v for k, v in (("displacement", state.displacements),
-                                   ("velocity", state.velocities)) if k in f}
-        cell_src = {"von_mises": res["von_mises"], "J": res["J"],
-                    "strain_energy_density": res["energy_density"], "cauchy": res["cauchy"],
-                    "green_strain": res["green_strain"]}
-        mesh = meshio.Mesh(self.model.reference_positions, [("tetra", self.model.tets)],
-                           point_data=point,
-                           cell_data={k: [v] for k, v in cell_src.items() if k in f})
+        point = {
+            k: v for k, v in (("displacement", state.displacements), ("velocity", state.velocities)) if k in f
+        }
+        cell_src = {
+            "von_mises": res["von_mises"],
+            "J": res["J"],
+            "strain_energy_density": res["energy_density"],
+            "cauchy": res["cauchy"],
+            "green_strain": res["green_strain"],
+        }
+        mesh = meshio.Mesh(
+            self.model.reference_positions,
+            [("tetra", self.model.tets)],
+            point_data=point,
+            cell_data={k: [v] for k, v in cell_src.items() if k in f},
+        )
         # Ctrl-C is held from the first file of the frame to the last index, so that result.pvd
         # always lists exactly the frames on disk.
         with deferred_interrupt():
             if self.embedding is not None:
                 emb = self.embedding
                 Vs = emb.positions(self.model.tets, state.positions)
-                atomic_write(self.dir / name.replace("frame_", "surface_"), lambda tmp: meshio.write(
-                    tmp, meshio.Mesh(Vs, [("triangle", emb.faces)]), binary=True), "surface frame")
-            final = atomic_write(self.dir / name, lambda tmp: meshio.write(tmp, mesh, binary=True),
-                                 "result frame")
+                atomic_write(
+                    self.dir / name.replace("frame_", "surface_"),
+                    lambda tmp: meshio.write(tmp, meshio.Mesh(Vs, [("triangle", emb.faces)]), binary=True),
+                    "surface frame",
+                )
+            final = atomic_write(
+                self.dir / name, lambda tmp: meshio.write(tmp, mesh, binary=True), "result frame"
+            )
             self.frames.append((state.time, name))
             self._pvd("result.pvd", self.frames)
             if self.embedding is not None:
-                self._pvd("surface.pvd", [(t, n.replace("frame_", "surface_"))
-                                          for t, n in self.frames])
+                self._pvd("surface.pvd", [(t, n.replace("frame_", "surface_")) for t, n in self.frames])
         return final

@@ -18,11 +18,30 @@ TransverselyIsotropic      μ/2 (Ī1 − 3) + η/2 (Ī4 − 1)² + K/2 (J − 1)
 =========================  ==========================================================  ==============
 """
 
-from .hyperelastic import (ArrudaBoyce, LinearElastic, Material, MooneyRivlin, NeoHookean,
-                           NeoHookeanCoupled, Polynomial, StVenantKirchhoff, TransverselyIsotropic,
-                           lame_from_young)
+from .hyperelastic import (
+    ArrudaBoyce,
+    LinearElastic,
+    Material,
+    MooneyRivlin,
+    NeoHookean,
+    NeoHookeanCoupled,
+    Polynomial,
+    StVenantKirchhoff,
+    TransverselyIsotropic,
+    lame_from_young,
+)
 from .viscoelastic import Viscoelastic
 
-__all__ = ["Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
-           "LinearElastic", "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "Viscoelastic",
-           "lame_from_young"]
+__all__ = [
+    "Material",
+    "NeoHookean",
+    "MooneyRivlin",
+    "NeoHookeanCoupled",
+    "StVenantKirchhoff",
+    "LinearElastic",
+    "Polynomial",
+    "ArrudaBoyce",
+    "TransverselyIsotropic",
+    "Viscoelastic",
+    "lame_from_young",
+]

@@ -9,8 +9,18 @@ from .. import _core
 from ..checks import shown
 from ..errors import MaterialError
 
-__all__ = ["Material", "NeoHookean", "MooneyRivlin", "NeoHookeanCoupled", "StVenantKirchhoff",
-           "LinearElastic", "Polynomial", "ArrudaBoyce", "TransverselyIsotropic", "lame_from_young"]
+__all__ = [
+    "Material",
+    "NeoHookean",
+    "MooneyRivlin",
+    "NeoHookeanCoupled",
+    "StVenantKirchhoff",
+    "LinearElastic",
+    "Polynomial",
+    "ArrudaBoyce",
+    "TransverselyIsotropic",
+    "lame_from_young",
+]
 
 
 def _positive(name: str, value: float, cls: str) -> float:
@@ -25,8 +35,10 @@ def lame_from_young(E: float, nu: float, cls: str = "material") -> tuple[float, 
     E = _positive("E", E, cls)
     nu = float(nu)
     if not math.isfinite(nu) or nu >= 0.5 or nu <= -1.0:
-        raise MaterialError(f"{cls}: nu = {shown(nu)}; expected -1 < nu < 0.5 (0.5 is incompressible, "
-                            "which explicit dynamics cannot represent: use e.g. 0.49)")
+        raise MaterialError(
+            f"{cls}: nu = {shown(nu)}; expected -1 < nu < 0.5 (0.5 is incompressible, "
+            "which explicit dynamics cannot represent: use e.g. 0.49)"
+        )
     return E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
 
 
@@ -81,7 +93,7 @@ class Material:
 def _mu_k(cls: str, mu, K, E, nu, k_name: str = "K") -> tuple[float, float]:
     if E is not None or nu is not None:
         if E is None or nu is None or mu is not None or K is not None:
-            native = 'mu' if cls != 'MooneyRivlin' else 'C10, C01'
+            native = "mu" if cls != "MooneyRivlin" else "C10, C01"
             raise MaterialError(f"{cls}: give either (E, nu) or ({native}, {k_name})")
         m, lam = lame_from_young(E, nu, cls)
         return m, lam + 2.0 * m / 3.0
@@ -148,8 +160,9 @@ class _MuLambda(Material):
             self.mu = _positive("mu", mu, cls)
             self.lam = float(lam)
             if not math.isfinite(self.lam) or self.lam + 2.0 * self.mu / 3.0 <= 0.0:
-                raise MaterialError(f"{cls}: lam = {shown(lam)}; expected lam + 2 mu / 3 > 0 "
-                                    "(positive bulk modulus)")
+                raise MaterialError(
+                    f"{cls}: lam = {shown(lam)}; expected lam + 2 mu / 3 > 0 (positive bulk modulus)"
+                )
 
     @property
     def params(self):
@@ -178,8 +191,10 @@ class LinearElastic(_MuLambda):
 def _finite(name: str, value, cls: str, minimum: float | None = None) -> float:
     v = float(value)
     if not math.isfinite(v) or (minimum is not None and v < minimum):
-        raise MaterialError(f"{cls}: {name} = {shown(value)}; expected a finite value"
-                            + (f" >= {minimum:g}" if minimum is not None else ""))
+        raise MaterialError(
+            f"{cls}: {name} = {shown(value)}; expected a finite value"
+            + (f" >= {minimum:g}" if minimum is not None else "")
+        )
     return v
 
 
@@ -193,8 +208,9 @@ class Polynomial(Material):
     def __init__(self, C10, C01=0.0, C20=0.0, C02=0.0, C11=0.0, *, K):
         c = "Polynomial"
         self.C10, self.C01 = _finite("C10", C10, c), _finite("C01", C01, c)
-        self.C20, self.C02, self.C11 = (_finite(n, v, c) for n, v in
-                                        (("C20", C20), ("C02", C02), ("C11", C11)))
+        self.C20, self.C02, self.C11 = (
+            _finite(n, v, c) for n, v in (("C20", C20), ("C02", C02), ("C11", C11))
+        )
         self.K = _positive("K", K, c)
         self.mu = 2.0 * (self.C10 + self.C01)
         if not self.mu > 0:
@@ -206,8 +222,10 @@ class Polynomial(Material):
         return (self.C10, self.C01, self.C20, self.C02, self.C11, self.K)
 
     def __repr__(self):
-        return (f"Polynomial(C10={self.C10:g}, C01={self.C01:g}, C20={self.C20:g}, "
-                f"C02={self.C02:g}, C11={self.C11:g}, K={self.K:g})")
+        return (
+            f"Polynomial(C10={self.C10:g}, C01={self.C01:g}, C20={self.C20:g}, "
+            f"C02={self.C02:g}, C11={self.C11:g}, K={self.K:g})"
+        )
 
 
 class ArrudaBoyce(Material):
@@ -259,5 +277,7 @@ class TransverselyIsotropic(Material):
         return (self.mu, self.K, self.eta, *self.direction)
 
     def __repr__(self):
-        return (f"TransverselyIsotropic(mu={self.mu:g}, K={self.K:g}, eta={self.eta:g}, "
-                f"direction={self.direction})")
+        return (
+            f"TransverselyIsotropic(mu={self.mu:g}, K={self.K:g}, eta={self.eta:g}, "
+            f"direction={self.direction})"
+        )

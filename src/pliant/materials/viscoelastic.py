@@ -12,13 +12,19 @@ from .hyperelastic import Material
 
 __all__ = ["Viscoelastic"]
 
+
 def decoupled_materials() -> list[str]:
     """Names of the decoupled material classes (the engine decides which kinds are)."""
     from . import hyperelastic as h
 
-    return [c.__name__ for c in vars(h).values() if isinstance(c, type) and issubclass(c, Material)
-            and isinstance(getattr(c, "kind", None), _core.MaterialKind)
-            and _core.is_decoupled(c.kind)]
+    return [
+        c.__name__
+        for c in vars(h).values()
+        if isinstance(c, type)
+        and issubclass(c, Material)
+        and isinstance(getattr(c, "kind", None), _core.MaterialKind)
+        and _core.is_decoupled(c.kind)
+    ]
 
 
 class Viscoelastic(Material):
@@ -31,8 +37,9 @@ class Viscoelastic(Material):
     def __init__(self, base: Material, iso=(), vol=()):
         c = "Viscoelastic"
         if not isinstance(base, Material) or isinstance(base, Viscoelastic) or not base.decoupled:
-            raise MaterialError(f"{c}: base {shown(base)}; expected a decoupled material "
-                                f"({', '.join(decoupled_materials())})")
+            raise MaterialError(
+                f"{c}: base {shown(base)}; expected a decoupled material ({', '.join(decoupled_materials())})"
+            )
         terms = []
         for name, series in (("iso", iso), ("vol", vol)):
             most = _core.prony_max // 2
@@ -41,15 +48,20 @@ class Viscoelastic(Material):
             except (TypeError, ValueError):
                 pairs = None
             if pairs is None or len(pairs) > most or any(len(p) != 2 for p in pairs):
-                raise MaterialError(f"{c}: {name} = {shown(series)}; expected up to {most} pairs "
-                                    "(alpha, tau [s])")
+                raise MaterialError(
+                    f"{c}: {name} = {shown(series)}; expected up to {most} pairs (alpha, tau [s])"
+                )
             for a, tau in pairs:
                 if not (math.isfinite(a) and a >= 0 and math.isfinite(tau) and tau > 0):
-                    raise MaterialError(f"{c}: {name} term (alpha={shown(a)}, tau={shown(tau)}); expected "
-                                        "alpha >= 0 and tau > 0 [s]")
+                    raise MaterialError(
+                        f"{c}: {name} term (alpha={shown(a)}, tau={shown(tau)}); expected "
+                        "alpha >= 0 and tau > 0 [s]"
+                    )
             if sum(a for a, _ in pairs) >= 1.0:
-                raise MaterialError(f"{c}: {name} alphas sum to {sum(a for a, _ in pairs):g}; "
-                                    "expected < 1 (a positive long-term modulus)")
+                raise MaterialError(
+                    f"{c}: {name} alphas sum to {sum(a for a, _ in pairs):g}; "
+                    "expected < 1 (a positive long-term modulus)"
+                )
             terms.append(tuple(pairs))
         self.base, self.prony = base, tuple(terms)
         self.kind, self.mu, self.lam = base.kind, base.mu, base.lam

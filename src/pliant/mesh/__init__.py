@@ -9,8 +9,24 @@ from .repair import check_surface, repair_surface, simplify, subdivide_loop
 from .surface import primitive_surface, read_surface, write_surface
 from .tetra import tetrahedralize
 
-__all__ = ["box_tets", "grid_tets", "graded_coordinates", "orient_positive", "read_surface",
-           "write_surface", "primitive_surface", "tetrahedralize", "check_surface",
-           "repair_surface", "simplify", "subdivide_loop",
-           "surface_to_tets", "default_edge_length", "tet_quality", "quality_summary",
-           "critical_time_steps", "embed_surface", "Embedding"]
+__all__ = [
+    "box_tets",
+    "grid_tets",
+    "graded_coordinates",
+    "orient_positive",
+    "read_surface",
+    "write_surface",
+    "primitive_surface",
+    "tetrahedralize",
+    "check_surface",
+    "repair_surface",
+    "simplify",
+    "subdivide_loop",
+    "surface_to_tets",
+    "default_edge_length",
+    "tet_quality",
+    "quality_summary",
+    "critical_time_steps",
+    "embed_surface",
+    "Embedding",
+]

@@ -31,8 +31,9 @@ def _barycentric(P: np.ndarray, X: np.ndarray) -> np.ndarray:
     return np.concatenate([1 - lam.sum(axis=1, keepdims=True), lam], axis=1)
 
 
-def embed_surface(nodes: np.ndarray, tets: np.ndarray, V: np.ndarray, F: np.ndarray,
-                  candidates: int = 16) -> Embedding:
+def embed_surface(
+    nodes: np.ndarray, tets: np.ndarray, V: np.ndarray, F: np.ndarray, candidates: int = 16
+) -> Embedding:
     """Embed surface vertices V [m] (n, 3) in the tet mesh (nodes, tets). Each vertex is tested
     against the ``candidates`` tets with the nearest centroids (KD-tree); a vertex outside all of
     them (a fine surface slightly outside a coarse mesh) takes the candidate whose barycentric
@@ -53,7 +54,10 @@ def embed_surface(nodes: np.ndarray, tets: np.ndarray, V: np.ndarray, F: np.ndar
         score = w.min(axis=1)
         better = score > best_score
         best_score[better], best_t[better], best_w[better] = score[better], t[better], w[better]
-    inside_pt = np.einsum("vk,vkd->vd", np.clip(best_w, 0, None) /
-                          np.clip(best_w, 0, None).sum(1, keepdims=True), nodes[tets[best_t]])
+    inside_pt = np.einsum(
+        "vk,vkd->vd",
+        np.clip(best_w, 0, None) / np.clip(best_w, 0, None).sum(1, keepdims=True),
+        nodes[tets[best_t]],
+    )
     dist = np.where(best_score >= -1e-9, 0.0, np.linalg.norm(V - inside_pt, axis=1))
     return Embedding(best_t, best_w, np.asarray(F, np.int64), dist)

@@ -29,10 +29,18 @@ def default_edge_length(V: np.ndarray, F: np.ndarray, target_tets: int = 20000) 
     return (6.0 * math.sqrt(2.0) * vol / target_tets) ** (1.0 / 3.0)
 
 
-def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = None,
-                    target_tets: int = 10000, target_faces: int | None = None,
-                    epsilon: float | None = None, repair: bool = True, keep_largest: bool = False,
-                    bodies: str = "union", log=None) -> tuple[np.ndarray, np.ndarray, dict]:
+def surface_to_tets(
+    V: np.ndarray,
+    F: np.ndarray,
+    edge_length: float | None = None,
+    target_tets: int = 10000,
+    target_faces: int | None = None,
+    epsilon: float | None = None,
+    repair: bool = True,
+    keep_largest: bool = False,
+    bodies: str = "union",
+    log=None,
+) -> tuple[np.ndarray, np.ndarray, dict]:
     """Tet mesh [m] of a triangle surface. Steps (each timed in the returned info): repair (holes,
     winding, fragments), QEM simplification to ``target_faces`` (default: what the tet size can
     resolve, area / (√3/4 · edge²), i.e. surface triangles of the tet edge), fTetWild with envelope
@@ -53,13 +61,16 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
         bodies = "largest"
     if not 1 <= int(target_tets) <= MAX_TETS:
         raise MeshError(f"target_tets = {target_tets}; expected 1 to {MAX_TETS:.0e}")
-    info: dict = {"input_vertices": int(len(V)), "input_faces": int(len(F)), "seconds": {},
-                  "bodies_mode": bodies}
+    info: dict = {
+        "input_vertices": int(len(V)),
+        "input_faces": int(len(F)),
+        "seconds": {},
+        "bodies_mode": bodies,
+    }
     t = time.perf_counter()
     require_volume(V, F, closed=False)
     if repair:
-        V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(
-            bodies, bodies))
+        V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(bodies, bodies))
         info["repair"] = actions
     info["seconds"]["repair"] = time.perf_counter() - t
     require_volume(V, F)
@@ -92,16 +103,19 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
     for attempt in range(2):
         X, T = tetrahedralize(V, F, edge_length=el, epsilon=eps, keep_all=len(parts) > 1)
         e = X[T]
-        vol = float(np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]),
-                              e[:, 3] - e[:, 0]).sum() / 6)
+        vol = float(
+            np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]).sum() / 6
+        )
         ratio = vol / ref_vol if ref_vol else 1.0
         info["volume_ratio"] = ratio
-        if ref_vol is None or 0.9 * low <= vol <= 1.1 * ref_vol:
+        if ref_vol is None or low is None or 0.9 * low <= vol <= 1.1 * ref_vol:
             break
         if attempt == 1:
-            raise MeshError(f"tetrahedralize: the tets fill {100 * ratio:.0f} % of the surface's "
-                            f"volume (envelope {eps:g}); repair the surface or give a smaller "
-                            "edge length")
+            raise MeshError(
+                f"tetrahedralize: the tets fill {100 * ratio:.0f} % of the surface's "
+                f"volume (envelope {eps:g}); repair the surface or give a smaller "
+                "edge length"
+            )
         eps /= 2
     if len(parts) > 1:
         info["union_volume"] = vol
@@ -110,12 +124,16 @@ def surface_to_tets(V: np.ndarray, F: np.ndarray, edge_length: float | None = No
     info["seconds"]["tetrahedralize"] = time.perf_counter() - t
     info["nodes"], info["tets"] = int(len(X)), int(len(T))
     if log:
-        if len(parts) > 1:
-            log(f"{len(parts)} bodies meshed as their union: {vol:.4g} m^3 of tets for "
-                f"{ref_vol:.4g} m^3 of bodies ({ref_vol - vol:.3g} m^3 of overlap merged)")
-        log(f"repair {info['seconds']['repair']:.1f} s, simplify to {len(F):,} faces "
+        if len(parts) > 1 and ref_vol is not None:
+            log(
+                f"{len(parts)} bodies meshed as their union: {vol:.4g} m^3 of tets for "
+                f"{ref_vol:.4g} m^3 of bodies ({ref_vol - vol:.3g} m^3 of overlap merged)"
+            )
+        log(
+            f"repair {info['seconds']['repair']:.1f} s, simplify to {len(F):,} faces "
             f"{info['seconds']['simplify']:.1f} s, tetrahedralize {info['seconds']['tetrahedralize']:.1f} s:"
-            f" {len(X):,} nodes, {len(T):,} tets")
+            f" {len(X):,} nodes, {len(T):,} tets"
+        )
     return X, T, info
 
 
@@ -134,8 +152,14 @@ def _separate(parts, edge_length, target_tets, epsilon, info, log):
     el = float(edge_length) if edge_length else default_edge_length(V, F, target_tets)
     Xs, Ts, n = [], [], 0
     for p in parts:
-        X, T, _ = surface_to_tets(np.asarray(p.vertices), np.asarray(p.faces), edge_length=el,
-                                  epsilon=epsilon, repair=False, bodies="one")
+        X, T, _ = surface_to_tets(
+            np.asarray(p.vertices),
+            np.asarray(p.faces),
+            edge_length=el,
+            epsilon=epsilon,
+            repair=False,
+            bodies="one",
+        )
         Xs.append(X)
         Ts.append(T + n)
         n += len(X)

@@ -13,8 +13,9 @@ def orient_positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """Return tets (M, 4) with corners 2 and 3 swapped where det[X1−X0, X2−X0, X3−X0] < 0."""
     X = np.asarray(nodes, float)
     T = np.array(tets, dtype=np.int64)
-    d = np.einsum("ij,ij->i", np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]),
-                  X[T[:, 3]] - X[T[:, 0]])
+    d = np.einsum(
+        "ij,ij->i", np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]), X[T[:, 3]] - X[T[:, 0]]
+    )
     neg = d < 0
     T[neg, 2], T[neg, 3] = T[neg, 3].copy(), T[neg, 2].copy()
     return T
@@ -29,14 +30,14 @@ def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
     for name, c in zip("xyz", (xs, ys, zs)):
         c = np.asarray(c, float)
         if c.ndim != 1 or c.size < 2 or not np.all(np.isfinite(c)) or np.any(np.diff(c) <= 0):
-            raise InputError(f"{name}s = {c!r}; expected at least 2 finite, strictly increasing "
-                             "coordinates [m]")
+            raise InputError(
+                f"{name}s = {c!r}; expected at least 2 finite, strictly increasing coordinates [m]"
+            )
         g.append(c)
     nx, ny, nz = (c.size - 1 for c in g)
     X = np.stack(np.meshgrid(*g, indexing="ij"), axis=-1).reshape(-1, 3)
     idx = np.arange(X.shape[0]).reshape(nx + 1, ny + 1, nz + 1)
-    i, j, k = (a.ravel() for a in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz),
-                                             indexing="ij"))
+    i, j, k = (a.ravel() for a in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij"))
     tets = []
     for perm in itertools.permutations(range(3)):
         corner = np.zeros((3, i.size), dtype=np.int64)
@@ -53,10 +54,13 @@ def graded_coordinates(h: float, fine_to: float, ratio: float, length: float) ->
     then each cell ``ratio`` times the previous one until ``length`` is reached or passed (the last
     cell is kept whole). E.g. fine under a contact, coarse far from it."""
     h, fine_to, ratio, length = (float(v) for v in (h, fine_to, ratio, length))
-    if not (h > 0 and fine_to >= 0 and ratio >= 1 and length > 0 and
-            all(np.isfinite([h, fine_to, ratio, length]))):
-        raise InputError(f"graded_coordinates(h={h}, fine_to={fine_to}, ratio={ratio}, "
-                         f"length={length}); expected h > 0, fine_to >= 0, ratio >= 1, length > 0")
+    if not (
+        h > 0 and fine_to >= 0 and ratio >= 1 and length > 0 and all(np.isfinite([h, fine_to, ratio, length]))
+    ):
+        raise InputError(
+            f"graded_coordinates(h={h}, fine_to={fine_to}, ratio={ratio}, "
+            f"length={length}); expected h > 0, fine_to >= 0, ratio >= 1, length > 0"
+        )
     xs = list(np.arange(0.0, fine_to + 1e-9 * h, h)) or [0.0]
     if len(xs) == 1:
         xs.append(h)
@@ -68,8 +72,9 @@ def graded_coordinates(h: float, fine_to: float, ratio: float, length: float) ->
 MAX_BOX_TETS = 2e8  # ~50 GB of engine arrays: beyond any workstation
 
 
-def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitter: float = 0.0,
-             seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def box_tets(
+    size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitter: float = 0.0, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
     """Box [origin, origin + size] [m] split into nx·ny·nz hexahedra of 6 tetrahedra each (Kuhn
     triangulation, conforming). ``jitter`` moves interior nodes randomly by up to that fraction of
     a cell, making the mesh unstructured. Returns nodes (N, 3) [m] and tets (M, 4)."""
@@ -80,19 +85,22 @@ def box_tets(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), origin=(0.0, 0.0, 0.0), jitt
     if min(nx, ny, nz) < 1:
         raise InputError(f"cells = {list(cells)}; expected three integers >= 1")
     if 6 * nx * ny * nz > MAX_BOX_TETS:
-        raise InputError(f"cells = {[nx, ny, nz]} make {6 * nx * ny * nz:.3g} tets; expected at most "
-                         f"{MAX_BOX_TETS:.0e}")
+        raise InputError(
+            f"cells = {[nx, ny, nz]} make {6 * nx * ny * nz:.3g} tets; expected at most {MAX_BOX_TETS:.0e}"
+        )
     size = np.asarray(size, float)
     if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
         raise InputError(f"size = {np.asarray(size).tolist()}; expected three finite lengths > 0 [m]")
     if not (0 <= jitter < 0.5):
-        raise InputError(f"jitter = {float(jitter)}; expected 0 <= jitter < 0.5 (a fraction of a "
-                         "cell: half a cell or more can turn elements inside out)")
+        raise InputError(
+            f"jitter = {float(jitter)}; expected 0 <= jitter < 0.5 (a fraction of a "
+            "cell: half a cell or more can turn elements inside out)"
+        )
     X, T = grid_tets(*(np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))))
     if jitter > 0:
         h = size / np.array([nx, ny, nz])
         rng = np.random.default_rng(seed)
         interior = np.all((X > 1e-12 * size) & (X < size * (1 - 1e-12)), axis=1)
-        X[interior] += (rng.uniform(-1, 1, (interior.sum(), 3)) * jitter * h)
+        X[interior] += rng.uniform(-1, 1, (interior.sum(), 3)) * jitter * h
         T = orient_positive(X, T)
     return X + np.asarray(origin, float), T

@@ -3,6 +3,8 @@ element implies for a material (the worst element sets the explicit solver's cos
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .. import _core
@@ -19,9 +21,11 @@ def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
     a, b, c = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0], P[:, 3] - P[:, 0]
     # Circumcentre offset from P0: (|a|²(b×c) + |b|²(c×a) + |c|²(a×b)) / (2 a·(b×c)).
     det = 2.0 * np.einsum("ij,ij->i", a, np.cross(b, c))
-    num = (np.einsum("ij,ij->i", a, a)[:, None] * np.cross(b, c) +
-           np.einsum("ij,ij->i", b, b)[:, None] * np.cross(c, a) +
-           np.einsum("ij,ij->i", c, c)[:, None] * np.cross(a, b))
+    num = (
+        np.einsum("ij,ij->i", a, a)[:, None] * np.cross(b, c)
+        + np.einsum("ij,ij->i", b, b)[:, None] * np.cross(c, a)
+        + np.einsum("ij,ij->i", c, c)[:, None] * np.cross(a, b)
+    )
     with np.errstate(divide="ignore", invalid="ignore"):
         R = np.linalg.norm(num, axis=1) / np.abs(det)
     pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
@@ -30,16 +34,21 @@ def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
     faces = [(1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)]  # face k is opposite corner k
     n = np.stack([np.cross(P[:, f[1]] - P[:, f[0]], P[:, f[2]] - P[:, f[0]]) for f in faces], 1)
     n /= np.maximum(np.linalg.norm(n, axis=2, keepdims=True), 1e-300)
-    dih = []
+    dih_list = []
     for i, j in pairs:  # edge (i, j) is shared by the faces opposite the two other corners
         k, l = [c for c in range(4) if c not in (i, j)]
         cosang = -np.einsum("ij,ij->i", n[:, k], n[:, l])
-        dih.append(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))))
-    dih = np.stack(dih, 1)
+        dih_list.append(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))))
+    dih = np.stack(dih_list, 1)
     with np.errstate(divide="ignore", invalid="ignore"):
         re = R / edges.min(axis=1)
-    return {"volume": np.asarray(vol), "radius_edge": re, "min_dihedral": dih.min(axis=1),
-            "max_dihedral": dih.max(axis=1), "min_altitude": np.asarray(alt)}
+    return {
+        "volume": np.asarray(vol),
+        "radius_edge": re,
+        "min_dihedral": dih.min(axis=1),
+        "max_dihedral": dih.max(axis=1),
+        "min_altitude": np.asarray(alt),
+    }
 
 
 def critical_time_steps(nodes, tets, material, density: float) -> np.ndarray:
@@ -64,22 +73,29 @@ def quality_summary(q: dict[str, np.ndarray], dt: np.ndarray | None = None) -> d
     worst step). Every number is finite (JSON-safe); ``dt_critical`` is None without a valid
     element."""
     ok = valid_elements(q)
-    out = {"tets": int(len(q["volume"])), "inverted": int((q["volume"] < 0).sum())}
+    out: dict[str, Any] = {"tets": int(len(q["volume"])), "inverted": int((q["volume"] < 0).sum())}
     out["degenerate"] = int((~ok).sum()) - out["inverted"]
     for k in ("volume", "radius_edge", "min_dihedral", "max_dihedral", "min_altitude"):
         v = q[k][ok] if ok.any() else np.zeros(1)
-        out[k] = {"min": float(np.min(v)), "p5": float(np.percentile(v, 5)),
-                  "median": float(np.median(v)), "p95": float(np.percentile(v, 95)),
-                  "max": float(np.max(v))}
+        out[k] = {
+            "min": float(np.min(v)),
+            "p5": float(np.percentile(v, 5)),
+            "median": float(np.median(v)),
+            "p95": float(np.percentile(v, 95)),
+            "max": float(np.max(v)),
+        }
     out["slivers_min_dihedral_below_5deg"] = int((q["min_dihedral"][ok] < 5).sum())
     if dt is not None:
         out["dt_critical"] = None
         if ok.any():
             idx = np.nonzero(ok)[0]
             worst = int(idx[np.argmin(dt[idx])])
-            out["dt_critical"] = {"min": float(dt[worst]), "element": worst,
-                                  "median": float(np.median(dt[idx])),
-                                  "cost_factor": float(np.median(dt[idx]) / dt[worst])}
+            out["dt_critical"] = {
+                "min": float(dt[worst]),
+                "element": worst,
+                "median": float(np.median(dt[idx])),
+                "cost_factor": float(np.median(dt[idx]) / dt[worst]),
+            }
     return out
 
 

@@ -9,6 +9,7 @@ is ours: each boundary loop is closed by a fan around a new vertex at the loop's
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -93,8 +94,20 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
     winding = bool(m.is_winding_consistent)
     watertight = boundary == 0 and nonman == 0
     volume = float(m.volume) if watertight else float("nan")
-    rep = SurfaceReport(len(V), len(F), bodies, boundary, holes, nonman, degenerate, dup, winding,
-                        bool(watertight and volume > 0), watertight, volume)
+    rep = SurfaceReport(
+        len(V),
+        len(F),
+        bodies,
+        boundary,
+        holes,
+        nonman,
+        degenerate,
+        dup,
+        winding,
+        bool(watertight and volume > 0),
+        watertight,
+        volume,
+    )
     if self_intersections and nonman == 0:
         rep.self_intersections = count_self_intersections(V, F)
     if boundary:
@@ -125,14 +138,14 @@ def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_00
     origin = lo.min(axis=0)
     cl = np.floor((lo - origin) / h).astype(np.int64)
     ch = np.floor((hi - origin) / h).astype(np.int64)
-    cells, owners = [], []
+    cell_list, owner_list = [], []
     for i in range(len(F)):
         r = [np.arange(cl[i, d], ch[i, d] + 1) for d in range(3)]
         g = np.stack(np.meshgrid(*r, indexing="ij"), -1).reshape(-1, 3)
-        cells.append(g)
-        owners.append(np.full(len(g), i))
-    cells = np.concatenate(cells)
-    owners = np.concatenate(owners)
+        cell_list.append(g)
+        owner_list.append(np.full(len(g), i))
+    cells = np.concatenate(cell_list)
+    owners = np.concatenate(owner_list)
     key = (cells[:, 0] * 73856093) ^ (cells[:, 1] * 19349663) ^ (cells[:, 2] * 83492791)
     order = np.argsort(key, kind="stable")
     key, owners = key[order], owners[order]
@@ -157,6 +170,7 @@ def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_00
 
 def _tri_tri_intersect(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Vectorized triangle–triangle intersection test for non-coplanar pairs (Möller 1997)."""
+
     def plane(T):
         n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
         return n, -np.einsum("ij,ij->i", n, T[:, 0])
@@ -168,7 +182,7 @@ def _tri_tri_intersect(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     eps = 1e-12 * (np.abs(sA).max(axis=1) + np.abs(sB).max(axis=1) + 1e-300)
     sB = np.where(np.abs(sB) < eps[:, None], 0, sB)
     sA = np.where(np.abs(sA) < eps[:, None], 0, sA)
-    sep = (np.all(sB > 0, 1) | np.all(sB < 0, 1) | np.all(sA > 0, 1) | np.all(sA < 0, 1))
+    sep = np.all(sB > 0, 1) | np.all(sB < 0, 1) | np.all(sA > 0, 1) | np.all(sA < 0, 1)
     coplanar = np.all(sB == 0, 1)
     D = np.cross(nA, nB)
 
@@ -232,9 +246,9 @@ BODIES = ("one", "all", "largest")
 MAX_FACES = 2e7  # surfaces beyond this exhaust a workstation's memory in the mesh pipeline
 
 
-def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
-                   keep_largest: bool = False, bodies: str = "one"
-                   ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def repair_surface(
+    V: np.ndarray, F: np.ndarray, fill_holes: bool = True, keep_largest: bool = False, bodies: str = "one"
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Merge duplicate vertices, drop degenerate and duplicate faces and fragments (bodies with
     under 1 % of the faces), fill holes (minimum-area triangulation), make winding consistent and
     each body's faces point outward. Returns (V, F, actions).
@@ -258,20 +272,24 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
         actions.append(f"removed {len(F) - len(m.faces)} degenerate/duplicate faces")
     if len(m.faces) == 0:
         raise MeshError("repair: no valid faces left (every face is degenerate or a duplicate)")
-    groups = trimesh.graph.connected_components(m.face_adjacency, nodes=np.arange(len(m.faces)),
-                                                min_len=1)
+    groups = trimesh.graph.connected_components(m.face_adjacency, nodes=np.arange(len(m.faces)), min_len=1)
     big = [g for g in groups if len(g) >= 0.01 * len(m.faces)]
     if len(big) < len(groups):
-        actions.append(f"dropped {len(groups) - len(big)} fragment(s) of "
-                       f"{len(m.faces) - sum(len(g) for g in big)} faces")
+        actions.append(
+            f"dropped {len(groups) - len(big)} fragment(s) of {len(m.faces) - sum(len(g) for g in big)} faces"
+        )
     _, count = _edges(np.asarray(m.faces)[np.concatenate(big)])
     if (count > 2).any():
-        raise MeshError(f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than "
-                        "two faces); cannot repair automatically")
-    parts = [m.submesh([g], append=True) for g in big]
+        raise MeshError(
+            f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than "
+            "two faces); cannot repair automatically"
+        )
+    parts: list = [m.submesh([g], append=True) for g in big]
     if len(parts) > 1 and bodies == "one":
-        raise MeshError(f"repair: {len(parts)} separate bodies; keep them all (bodies='all', "
-                        "--bodies all: their union is meshed), or the largest (--bodies largest)")
+        raise MeshError(
+            f"repair: {len(parts)} separate bodies; keep them all (bodies='all', "
+            "--bodies all: their union is meshed), or the largest (--bodies largest)"
+        )
     if len(parts) > 1 and bodies == "largest":
         n = len(parts)
         parts = [max(parts, key=lambda p: len(p.faces))]
@@ -279,12 +297,14 @@ def repair_surface(V: np.ndarray, F: np.ndarray, fill_holes: bool = True,
     closed = [_close_body(p, fill_holes, actions) for p in parts]
     if len(closed) > 1:
         actions.append(f"kept {len(closed)} bodies")
-    m = trimesh.util.concatenate(closed) if len(closed) > 1 else closed[0]
-    rep = check_surface(m.vertices, m.faces, self_intersections=False)
+    out: Any = trimesh.util.concatenate(closed) if len(closed) > 1 else closed[0]
+    rep = check_surface(out.vertices, out.faces, self_intersections=False)
     if not rep.watertight or not rep.winding_consistent:
-        raise MeshError(f"repair: still not a closed, consistently oriented surface after "
-                        f"repair ({'; '.join(rep.problems)})")
-    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64), actions
+        raise MeshError(
+            f"repair: still not a closed, consistently oriented surface after "
+            f"repair ({'; '.join(rep.problems)})"
+        )
+    return np.asarray(out.vertices, float), np.asarray(out.faces, np.int64), actions
 
 
 def _close_body(m, fill_holes: bool, actions: list[str]):
@@ -298,8 +318,10 @@ def _close_body(m, fill_holes: bool, actions: list[str]):
             uniq, _ = _edges(Fr)
             existing = set(map(tuple, uniq.tolist()))
             Fr = np.concatenate([Fr] + [fill_loop(Vr, loop, existing) for loop in loops])
-            actions.append(f"filled {len(loops)} hole(s) ({sum(len(l) for l in loops)} boundary "
-                           "edges) by minimum-area triangulation")
+            actions.append(
+                f"filled {len(loops)} hole(s) ({sum(len(l) for l in loops)} boundary "
+                "edges) by minimum-area triangulation"
+            )
     m = trimesh.Trimesh(Vr, Fr, process=False)
     if not m.is_winding_consistent:
         trimesh.repair.fix_winding(m)
@@ -323,8 +345,10 @@ def require_volume(V: np.ndarray, F: np.ndarray, closed: bool = True, who: str =
     or loop on such input. Raises MeshError ("``who``: the surface encloses no volume: why")."""
     why = _no_volume(np.asarray(V, float), F, closed)
     if why:
-        raise MeshError(f"{who}{': ' if who else ''}the surface encloses no volume: {why}; expected "
-                        "a closed surface around a solid")
+        raise MeshError(
+            f"{who}{': ' if who else ''}the surface encloses no volume: {why}; expected "
+            "a closed surface around a solid"
+        )
 
 
 def _no_volume(V: np.ndarray, F: np.ndarray, closed: bool) -> str | None:
@@ -344,8 +368,13 @@ def _no_volume(V: np.ndarray, F: np.ndarray, closed: bool) -> str | None:
     return None
 
 
-def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,
-             ratio: float | None = None, preserve_boundary: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def simplify(
+    V: np.ndarray,
+    F: np.ndarray,
+    target_faces: int | None = None,
+    ratio: float | None = None,
+    preserve_boundary: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
     """QEM simplification (Garland & Heckbert 1997) to ``target_faces`` faces or a ``ratio`` of
     them, through fast-simplification. Open boundaries are kept (their vertices are not collapsed)
     unless ``preserve_boundary=False``; the result is checked for manifoldness, and a collapse
@@ -359,6 +388,7 @@ def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,
         if not 0 < ratio <= 1:
             raise MeshError(f"simplify: ratio = {ratio!r}; expected 0 < ratio <= 1")
         target_faces = int(round(ratio * len(F)))
+    assert target_faces is not None  # one of the two was given
     if target_faces < 4:
         raise MeshError(f"simplify: target of {target_faces} faces; expected >= 4")
     if target_faces >= len(F):
@@ -367,16 +397,22 @@ def simplify(V: np.ndarray, F: np.ndarray, target_faces: int | None = None,
     open_mesh = bool((count == 1).any())
     for agg in (7.0, 3.0, 1.0):
         Vs, Fs = fast_simplification.simplify(
-            np.asarray(V, np.float32), np.asarray(F, np.int32), target_count=int(target_faces),
-            agg=agg, preserve_border=bool(preserve_boundary and open_mesh))
+            np.asarray(V, np.float32),
+            np.asarray(F, np.int32),
+            target_count=int(target_faces),
+            agg=agg,
+            preserve_border=bool(preserve_boundary and open_mesh),
+        )
         Fs = np.asarray(Fs, np.int64)
         if not (_edges(Fs)[1] > 2).any():
             used = np.unique(Fs)  # drop vertices no face uses any more
             remap = np.full(len(Vs), -1, dtype=np.int64)
             remap[used] = np.arange(used.size)
             return np.asarray(Vs, float)[used], remap[Fs]
-    raise MeshError("simplify: every collapse order tried made an edge non-manifold; repair the "
-                    "surface first (pliant mesh repair) or simplify less")
+    raise MeshError(
+        "simplify: every collapse order tried made an edge non-manifold; repair the "
+        "surface first (pliant mesh repair) or simplify less"
+    )
 
 
 def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -391,9 +427,11 @@ def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.nd
     V, F = np.asarray(V, float), np.asarray(F, np.int64)
     faces = len(F) * 4.0 ** min(int(levels), 500)  # 4^500 ≈ 1e301: no float overflow
     if faces > MAX_FACES:
-        raise MeshError(f"subdivide: {levels} levels turn {len(F):,} faces into "
-                        f"{faces:.3g}{' or more' if levels > 500 else ''}; expected at most "
-                        f"{MAX_FACES:.0e} (fewer levels, or simplify first)")
+        raise MeshError(
+            f"subdivide: {levels} levels turn {len(F):,} faces into "
+            f"{faces:.3g}{' or more' if levels > 500 else ''}; expected at most "
+            f"{MAX_FACES:.0e} (fewer levels, or simplify first)"
+        )
     for _ in range(int(levels)):
         V, F = _loop_once(V, F)
     return V, F
@@ -401,8 +439,8 @@ def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.nd
 
 def _loop_once(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     nv = len(V)
-    half = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])   # (3F, 2), face k*F + f
-    opp = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])                   # vertex opposite each
+    half = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])  # (3F, 2), face k*F + f
+    opp = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])  # vertex opposite each
     key = np.sort(half, axis=1)
     edges, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
     inv = inv.ravel()
@@ -413,20 +451,23 @@ def _loop_once(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     opp_sum = np.zeros((ne, 3))
     np.add.at(opp_sum, inv, V[opp])
     boundary = count == 1
-    odd = np.where(boundary[:, None], 0.5 * (V[edges[:, 0]] + V[edges[:, 1]]),
-                   0.375 * (V[edges[:, 0]] + V[edges[:, 1]]) + 0.125 * opp_sum)
+    odd = np.where(
+        boundary[:, None],
+        0.5 * (V[edges[:, 0]] + V[edges[:, 1]]),
+        0.375 * (V[edges[:, 0]] + V[edges[:, 1]]) + 0.125 * opp_sum,
+    )
     # Even vertices: interior rule from all neighbours, boundary rule from boundary neighbours.
     nb_sum = np.zeros((nv, 3))
     n = np.zeros(nv)
-    for a, b in ((0, 1), (1, 0)):
-        np.add.at(nb_sum, edges[:, a], V[edges[:, b]])
-        np.add.at(n, edges[:, a], 1)
+    for i, j in ((0, 1), (1, 0)):
+        np.add.at(nb_sum, edges[:, i], V[edges[:, j]])
+        np.add.at(n, edges[:, i], 1)
     bnd_sum = np.zeros((nv, 3))
     bnd_n = np.zeros(nv)
     be = edges[boundary]
-    for a, b in ((0, 1), (1, 0)):
-        np.add.at(bnd_sum, be[:, a], V[be[:, b]])
-        np.add.at(bnd_n, be[:, a], 1)
+    for i, j in ((0, 1), (1, 0)):
+        np.add.at(bnd_sum, be[:, i], V[be[:, j]])
+        np.add.at(bnd_n, be[:, i], 1)
     with np.errstate(divide="ignore", invalid="ignore"):
         beta = (0.625 - (0.375 + 0.25 * np.cos(2 * np.pi / n)) ** 2) / n
     even = np.where((n > 0)[:, None], (1 - n * beta)[:, None] * V + beta[:, None] * nb_sum, V)
@@ -436,6 +477,12 @@ def _loop_once(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     m = nv + inv.reshape(3, -1)  # odd vertex of edges (0,1), (1,2), (2,0) of each face
     e01, e12, e20 = m[0], m[1], m[2]
     a, b, c = F[:, 0], F[:, 1], F[:, 2]
-    F2 = np.concatenate([np.stack([a, e01, e20], 1), np.stack([e01, b, e12], 1),
-                         np.stack([e20, e12, c], 1), np.stack([e01, e12, e20], 1)])
+    F2 = np.concatenate(
+        [
+            np.stack([a, e01, e20], 1),
+            np.stack([e01, b, e12], 1),
+            np.stack([e20, e12, c], 1),
+            np.stack([e01, e12, e20], 1),
+        ]
+    )
     return np.concatenate([even, odd]), F2

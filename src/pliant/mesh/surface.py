@@ -31,8 +31,7 @@ def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
                 if len(idx) < 3:
                     raise MeshError(f"{path}:{lineno}: face with {len(idx)} vertices")
                 if not all(0 <= i < 2**62 for i in idx):
-                    raise MeshError(f"{path}:{lineno}: face index out of range in "
-                                    f"{line.strip()[:80]!r}")
+                    raise MeshError(f"{path}:{lineno}: face index out of range in {line.strip()[:80]!r}")
                 for k in range(1, len(idx) - 1):  # fan-triangulate polygons
                     F.append([idx[0], idx[k], idx[k + 1]])
     return np.asarray(V, dtype=float).reshape(-1, 3), np.asarray(F, dtype=np.int64).reshape(-1, 3)
@@ -54,8 +53,9 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
         quads = [c.data for c in m.cells if c.type == "quad"]
         parts = tris + [q[:, [0, 1, 2]] for q in quads] + [q[:, [0, 2, 3]] for q in quads]
         if not parts:
-            raise MeshError(f"{path}: no triangles (cell types: "
-                            f"{', '.join(sorted({c.type for c in m.cells})) or 'none'})")
+            raise MeshError(
+                f"{path}: no triangles (cell types: {', '.join(sorted({c.type for c in m.cells})) or 'none'})"
+            )
         V, F = np.asarray(m.points, float)[:, :3], np.concatenate(parts).astype(np.int64)
     if len(V) == 0 or len(F) == 0:
         raise MeshError(f"{path}: empty mesh ({len(V)} vertices, {len(F)} faces)")
@@ -74,8 +74,11 @@ def write_surface(path, V: np.ndarray, F: np.ndarray) -> None:
     from ..io.files import atomic_write, check_output_file
 
     path = check_output_file(path, "surface mesh", mesh_format=True)
-    atomic_write(path, lambda tmp: meshio.write(
-        tmp, meshio.Mesh(np.asarray(V, float), [("triangle", np.asarray(F))])), "surface mesh")
+    atomic_write(
+        path,
+        lambda tmp: meshio.write(tmp, meshio.Mesh(np.asarray(V, float), [("triangle", np.asarray(F))])),
+        "surface mesh",
+    )
 
 
 def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:
@@ -83,26 +86,30 @@ def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:
     z, centred), torus(major_radius, minor_radius; axis z). Resolution follows ``segments``."""
     import trimesh
 
-    for key, low, high in (("segments", 3, 4096), ("minor_segments", 3, 4096),
-                           ("subdivisions", 0, 7)):
+    for key, low, high in (("segments", 3, 4096), ("minor_segments", 3, 4096), ("subdivisions", 0, 7)):
         if key in p and not (isinstance(p[key], (int, np.integer)) and low <= p[key] <= high):
             raise MeshError(f"{kind}: {key} = {p[key]!r}; expected an integer from {low} to {high}")
     for key in ("radius", "height", "major_radius", "minor_radius"):
         if key in p and not (np.isfinite(p[key]) and p[key] > 0):
             raise MeshError(f"{kind}: {key} = {p[key]!r}; expected a finite length > 0 [m]")
     if kind == "torus" and not p["minor_radius"] < p["major_radius"]:
-        raise MeshError(f"torus: minor_radius {p['minor_radius']} must be smaller than major_radius "
-                        f"{p['major_radius']} [m]")
+        raise MeshError(
+            f"torus: minor_radius {p['minor_radius']} must be smaller than major_radius "
+            f"{p['major_radius']} [m]"
+        )
     if kind == "sphere":
-        m = trimesh.creation.icosphere(subdivisions=int(p.get("subdivisions", 3)),
-                                       radius=p["radius"])
+        m = trimesh.creation.icosphere(subdivisions=int(p.get("subdivisions", 3)), radius=p["radius"])
     elif kind == "cylinder":
-        m = trimesh.creation.cylinder(radius=p["radius"], height=p["height"],
-                                      sections=int(p.get("segments", 48)))
+        m = trimesh.creation.cylinder(
+            radius=p["radius"], height=p["height"], sections=int(p.get("segments", 48))
+        )
     elif kind == "torus":
-        m = trimesh.creation.torus(major_radius=p["major_radius"], minor_radius=p["minor_radius"],
-                                   major_sections=int(p.get("segments", 48)),
-                                   minor_sections=int(p.get("minor_segments", 24)))
+        m = trimesh.creation.torus(
+            major_radius=p["major_radius"],
+            minor_radius=p["minor_radius"],
+            major_sections=int(p.get("segments", 48)),
+            minor_sections=int(p.get("minor_segments", 24)),
+        )
     else:
         raise MeshError(f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus")
     return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)

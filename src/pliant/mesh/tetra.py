@@ -57,16 +57,17 @@ def largest_component(tets: np.ndarray, keep_all: bool = False, island: float = 
     from scipy.sparse.csgraph import connected_components
 
     M = len(tets)
-    faces = np.sort(np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]],
-                                    tets[:, [0, 1, 2]]]), axis=1)
+    faces = np.sort(
+        np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]], tets[:, [0, 1, 2]]]),
+        axis=1,
+    )
     owner = np.tile(np.arange(M), 4)
     _, inv = np.unique(faces, axis=0, return_inverse=True)
     inv = inv.ravel()
     order = np.argsort(inv, kind="stable")
     same = inv[order][1:] == inv[order][:-1]
     a, b = owner[order][:-1][same], owner[order][1:][same]
-    n, label = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(M, M)),
-                                    directed=False)
+    n, label = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(M, M)), directed=False)
     if n == 1:
         return tets
     sizes = np.bincount(label)
@@ -81,10 +82,17 @@ def cache_dir() -> Path:
     return d
 
 
-def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = None,
-                   edge_length_fac: float = 0.05, epsilon: float = 1e-3, optimize: bool = True,
-                   threads: int = 0, cache: bool = True, keep_all: bool = False
-                   ) -> tuple[np.ndarray, np.ndarray]:
+def tetrahedralize(
+    V: np.ndarray,
+    F: np.ndarray,
+    edge_length: float | None = None,
+    edge_length_fac: float = 0.05,
+    epsilon: float = 1e-3,
+    optimize: bool = True,
+    threads: int = 0,
+    cache: bool = True,
+    keep_all: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
     """Tet mesh of the volume bounded by a triangle surface V [m] (n, 3), F (f, 3).
 
     edge_length: target tet edge [m] (default: ``edge_length_fac`` × bounding-box diagonal).
@@ -99,8 +107,9 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.uint32)
     if V.ndim != 2 or V.shape[1] != 3 or len(V) < 4 or F.ndim != 2 or F.shape[1] != 3 or len(F) < 4:
-        raise MeshError(f"tetrahedralize: need a closed triangle surface, got {V.shape} vertices, "
-                        f"{F.shape} faces")
+        raise MeshError(
+            f"tetrahedralize: need a closed triangle surface, got {V.shape} vertices, {F.shape} faces"
+        )
     require_volume(V, F, who="tetrahedralize")
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     el = float(edge_length) if edge_length else edge_length_fac * diag
@@ -109,11 +118,14 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
     volume = abs(surface_volume(V, F))
     expected = volume / (el**3 / (6 * math.sqrt(2)))  # regular tets of edge el
     if expected > MAX_TETS:
-        raise MeshError(f"tetrahedralize: edge length {el:.3g} m would make about {expected:.3g} "
-                        f"tets in the surface's {volume:.3g} m^3; expected at most {MAX_TETS:.0e} "
-                        "(give a larger edge length)")
-    key = hashlib.sha256(V.tobytes() + F.tobytes() +
-                         repr((el, epsilon, optimize, keep_all, 3)).encode()).hexdigest()[:24]
+        raise MeshError(
+            f"tetrahedralize: edge length {el:.3g} m would make about {expected:.3g} "
+            f"tets in the surface's {volume:.3g} m^3; expected at most {MAX_TETS:.0e} "
+            "(give a larger edge length)"
+        )
+    key = hashlib.sha256(
+        V.tobytes() + F.tobytes() + repr((el, epsilon, optimize, keep_all, 3)).encode()
+    ).hexdigest()[:24]
     path = cache_dir() / f"tet-{key}.npz"
     if cache and path.exists():
         with np.load(path) as d:
@@ -126,16 +138,33 @@ def tetrahedralize(V: np.ndarray, F: np.ndarray, edge_length: float | None = Non
         os.chdir(scratch)
         try:
             nodes, tets = W.tetrahedralize_mesh(
-                V, F, bool(optimize), False, el / diag, 0.0, float(epsilon), 10.0, False,
-                int(threads), 80, 6, True, False, False, np.zeros((0, 3)),
-                np.zeros((0, 4), np.int32), np.zeros(0))
+                V,
+                F,
+                bool(optimize),
+                False,
+                el / diag,
+                0.0,
+                float(epsilon),
+                10.0,
+                False,
+                int(threads),
+                80,
+                6,
+                True,
+                False,
+                False,
+                np.zeros((0, 3)),
+                np.zeros((0, 4), np.int32),
+                np.zeros(0),
+            )
         finally:
             os.chdir(here)
     nodes = np.asarray(nodes, float)
     tets = np.asarray(tets, np.int64)
     if len(tets) == 0:
-        raise MeshError("tetrahedralize: fTetWild produced no tetrahedra (is the surface closed "
-                        "and of non-zero volume?)")
+        raise MeshError(
+            "tetrahedralize: fTetWild produced no tetrahedra (is the surface closed and of non-zero volume?)"
+        )
     tets = orient_positive(nodes, tets)
     # Drop unused nodes and (near-)zero-volume slivers.
     e = nodes[tets]

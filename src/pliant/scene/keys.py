@@ -13,6 +13,7 @@ from .schema import SceneError
 
 __all__ = ["set_key", "get_key", "apply_overrides"]
 
+
 class _KeyProblem(Exception):
     """What is wrong with a key path; the public functions add the file and the key."""
 
@@ -29,8 +30,10 @@ def _parse_key(key: str) -> list[str | int]:
     for seg in key.split("."):
         m = _SEGMENT.fullmatch(seg)
         if not m:
-            raise _KeyProblem(f"segment {seg!r} is not a name with optional [index]es; "
-                             "expected a path such as 'tool.probe.keyframes[1].position[2]'")
+            raise _KeyProblem(
+                f"segment {seg!r} is not a name with optional [index]es; "
+                "expected a path such as 'tool.probe.keyframes[1].position[2]'"
+            )
         parts.append(m.group(1))
         parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
     return parts
@@ -48,15 +51,16 @@ def _child(node: Any, part: str | int, key: str, done: str) -> Any:
         return node[part]
     if isinstance(node, dict):
         if part not in node:
-            raise _KeyProblem(f"{where} has no key {part!r} (it has "
-                             f"{', '.join(map(repr, node)) or 'none'})")
+            raise _KeyProblem(f"{where} has no key {part!r} (it has {', '.join(map(repr, node)) or 'none'})")
         return node[part]
     if isinstance(node, list):
         named = [i for i, e in enumerate(node) if isinstance(e, dict) and e.get("name") == part]
         if len(named) != 1:
             names = [e.get("name") for e in node if isinstance(e, dict) and "name" in e]
-            raise _KeyProblem(f"{'no' if not named else 'more than one'} entry of {where} "
-                             f"is named {part!r} (names: {', '.join(map(repr, names)) or 'none'})")
+            raise _KeyProblem(
+                f"{'no' if not named else 'more than one'} entry of {where} "
+                f"is named {part!r} (names: {', '.join(map(repr, names)) or 'none'})"
+            )
         return node[named[0]]
     raise _KeyProblem(f"{where} is a value, not a table; {part!r} does not apply")
 

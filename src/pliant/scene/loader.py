@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -31,14 +32,16 @@ else:  # pragma: no cover
 __all__ = ["load_scene", "make_curve"]
 
 
-_MATERIALS = {
+_MATERIALS: dict[str, tuple[Any, tuple[str, ...]]] = {
     "neo-hookean": (mat.NeoHookean, ("mu", "K")),
     "mooney-rivlin": (mat.MooneyRivlin, ("C10", "C01", "K")),
     "neo-hookean-coupled": (mat.NeoHookeanCoupled, ("mu", "lam")),
     "st-venant-kirchhoff": (mat.StVenantKirchhoff, ("mu", "lam")),
     "linear-elastic": (mat.LinearElastic, ("mu", "lam")),
-    "polynomial": (lambda C10, C01, C20, C02, C11, K: mat.Polynomial(C10, C01, C20, C02, C11, K=K),
-                   ("C10", "C01", "C20", "C02", "C11", "K")),
+    "polynomial": (
+        lambda C10, C01, C20, C02, C11, K: mat.Polynomial(C10, C01, C20, C02, C11, K=K),
+        ("C10", "C01", "C20", "C02", "C11", "K"),
+    ),
     "arruda-boyce": (mat.ArrudaBoyce, ("mu", "lambda_m", "K")),
     "transversely-isotropic": (mat.TransverselyIsotropic, ("mu", "K", "eta", "direction")),
 }
@@ -52,8 +55,13 @@ def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
         return Constant()
     if isinstance(spec, str):
         spec = {"type": spec}
-    check_keys(ctx, spec, path, {"type": "str", "t0": "number", "t1": "number", "times": "list",
-                                 "values": "list"}, ("type",))
+    check_keys(
+        ctx,
+        spec,
+        path,
+        {"type": "str", "t0": "number", "t1": "number", "times": "list", "values": "list"},
+        ("type",),
+    )
     kind = spec["type"]
     with ctx.under(path):
         if kind == "constant":
@@ -67,8 +75,9 @@ def make_curve(ctx: Ctx, spec, path: str, duration: float) -> LoadCurve:
             if "times" not in spec or "values" not in spec:
                 raise ctx.error(path, "a table curve needs 'times' and 'values'")
             return Table(spec["times"], spec["values"])
-    raise ctx.error(f"{path}.type", f"unknown curve {kind!r}; expected constant, step, ramp, "
-                    "smooth-ramp or table")
+    raise ctx.error(
+        f"{path}.type", f"unknown curve {kind!r}; expected constant, step, ramp, smooth-ramp or table"
+    )
 
 
 def load_scene(path, overrides: dict | None = None) -> Scene:
@@ -80,9 +89,22 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     text, data = _read_toml(path)
     data = apply_overrides(data, overrides, str(path))
     ctx = Ctx(str(path), text)
-    check_keys(ctx, data, "", {"title": "str", "mesh": "table", "material": "list",
-                               "solver": "table", "constraint": "list", "load": "list",
-                               "tool": "list", "output": "table"}, ("mesh", "material"))
+    check_keys(
+        ctx,
+        data,
+        "",
+        {
+            "title": "str",
+            "mesh": "table",
+            "material": "list",
+            "solver": "table",
+            "constraint": "list",
+            "load": "list",
+            "tool": "list",
+            "output": "table",
+        },
+        ("mesh", "material"),
+    )
     b = ModelBuilder()
     scene = Scene(str(path), b, title=data.get("title", path.stem))
     _solver_settings(ctx, data.get("solver", {}), scene)
@@ -118,12 +140,27 @@ def _read_toml(path: Path) -> tuple[str, dict]:
 
 def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
     """The [solver] table: time, step, precision, backend, threads, quasi-static options, damping."""
-    check_keys(ctx, solver, "solver", {
-        "dt": "number|str", "safety": "number", "damping": "number", "duration": "number",
-        "stiffness_damping": "number",
-        "nodal_pressure": "bool", "nodal_pressure_stabilization": "number",
-        "dtype": "str", "threads": "int", "static": "bool", "tol": "number", "increments": "int",
-        "check_every": "int", "backend": "str"})
+    check_keys(
+        ctx,
+        solver,
+        "solver",
+        {
+            "dt": "number|str",
+            "safety": "number",
+            "damping": "number",
+            "duration": "number",
+            "stiffness_damping": "number",
+            "nodal_pressure": "bool",
+            "nodal_pressure_stabilization": "number",
+            "dtype": "str",
+            "threads": "int",
+            "static": "bool",
+            "tol": "number",
+            "increments": "int",
+            "check_every": "int",
+            "backend": "str",
+        },
+    )
     scene.duration = float(solver.get("duration", 1.0))
     if not scene.duration > 0:
         raise ctx.error("solver.duration", "expected a duration > 0 [s]")
@@ -143,22 +180,26 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
         raise ctx.error("solver.dtype", f"dtype = {scene.dtype!r}: expected 'float32' or 'float64'")
     scene.backend = solver.get("backend", "cpu")
     if scene.backend not in BACKENDS:
-        raise ctx.error("solver.backend", f"backend = {scene.backend!r}: expected one of "
-                        f"{', '.join(BACKENDS)}")
+        raise ctx.error(
+            "solver.backend", f"backend = {scene.backend!r}: expected one of {', '.join(BACKENDS)}"
+        )
     scene.threads = solver.get("threads")
     if scene.threads is not None and not 1 <= scene.threads <= _core.thread_limit():
-        raise ctx.error("solver.threads", f"threads = {scene.threads}; expected 1 to "
-                        f"{_core.thread_limit()} on this machine (leave it out for automatic)")
+        raise ctx.error(
+            "solver.threads",
+            f"threads = {scene.threads}; expected 1 to "
+            f"{_core.thread_limit()} on this machine (leave it out for automatic)",
+        )
     scene.static = bool(solver.get("static", False))
     scene.tol = float(solver.get("tol", 1e-5))
     scene.increments = int(solver.get("increments", 1))
     scene.check_every = int(solver.get("check_every", 16))
     if not 1 <= scene.increments <= MAX_INCREMENTS:
-        raise ctx.error("solver.increments", f"increments = {scene.increments}; expected 1 to "
-                        f"{MAX_INCREMENTS}")
+        raise ctx.error(
+            "solver.increments", f"increments = {scene.increments}; expected 1 to {MAX_INCREMENTS}"
+        )
     if not 1 <= scene.check_every <= 10**6:
-        raise ctx.error("solver.check_every", f"check_every = {scene.check_every}; expected 1 to "
-                        "1000000")
+        raise ctx.error("solver.check_every", f"check_every = {scene.check_every}; expected 1 to 1000000")
     damping = float(solver.get("damping", 0.0))
     if damping < 0:
         raise ctx.error("solver.damping", "expected damping >= 0 [1/s]")
@@ -170,8 +211,10 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
     scene.builder.nodal_pressure = bool(solver.get("nodal_pressure", False))
     gamma = float(solver.get("nodal_pressure_stabilization", scene.builder.nodal_pressure_stabilization))
     if not 0.0 <= gamma <= 1.0:
-        raise ctx.error("solver.nodal_pressure_stabilization", f"{gamma:g}: expected a fraction from 0 "
-                        "(plain T4ANP) to 1 (plain T4)")
+        raise ctx.error(
+            "solver.nodal_pressure_stabilization",
+            f"{gamma:g}: expected a fraction from 0 (plain T4ANP) to 1 (plain T4)",
+        )
     scene.builder.nodal_pressure_stabilization = gamma
 
 
@@ -180,20 +223,41 @@ def _materials(ctx: Ctx, tables: list, b: ModelBuilder, X, T, sets) -> None:
     on a region or on every element not yet assigned."""
     for i, m in enumerate(tables):
         p = f"material[{i}]"
-        check_keys(ctx, m, p, {"type": "str", "region": "table", "density": "number", "E": "number",
-                               "nu": "number", "mu": "number", "K": "number", "lam": "number",
-                               "lambda": "number",
-                               "C10": "number", "C01": "number", "C20": "number", "C02": "number",
-                               "C11": "number", "lambda_m": "number", "eta": "number",
-                               "direction": "list", "prony_iso": "list", "prony_vol": "list",
-                               "name": "str"}, ("type", "density"))
+        check_keys(
+            ctx,
+            m,
+            p,
+            {
+                "type": "str",
+                "region": "table",
+                "density": "number",
+                "E": "number",
+                "nu": "number",
+                "mu": "number",
+                "K": "number",
+                "lam": "number",
+                "lambda": "number",
+                "C10": "number",
+                "C01": "number",
+                "C20": "number",
+                "C02": "number",
+                "C11": "number",
+                "lambda_m": "number",
+                "eta": "number",
+                "direction": "list",
+                "prony_iso": "list",
+                "prony_vol": "list",
+                "name": "str",
+            },
+            ("type", "density"),
+        )
         if m["type"] not in _MATERIALS:
-            raise ctx.error(f"{p}.type", f"unknown material {m['type']!r}; expected one of "
-                            f"{', '.join(_MATERIALS)}")
+            raise ctx.error(
+                f"{p}.type", f"unknown material {m['type']!r}; expected one of {', '.join(_MATERIALS)}"
+            )
         with ctx.under(p):
             material = _material(ctx, m, p)
-            elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) \
-                if "region" in m else None
+            elems = select_elements(ctx, m["region"], f"{p}.region", X, T, sets) if "region" in m else None
             b.set_material(material, m["density"], elements=elems, name=m.get("name", p))
 
 
@@ -202,11 +266,11 @@ def _material(ctx: Ctx, m: dict, p: str):
     if "lambda" in m:  # the key's old name: one name per parameter across Python and scenes
         import warnings
 
-        warnings.warn(f"{ctx.file}: {p}.lambda is deprecated; name it 'lam' (as in Python)",
-                      PliantWarning, stacklevel=2)
+        warnings.warn(
+            f"{ctx.file}: {p}.lambda is deprecated; name it 'lam' (as in Python)", PliantWarning, stacklevel=2
+        )
         m = {("lam" if k == "lambda" else k): v for k, v in m.items()}
-    given = {k for k in m if k not in ("type", "region", "density", "name", "prony_iso",
-                                       "prony_vol")}
+    given = {k for k in m if k not in ("type", "region", "density", "name", "prony_iso", "prony_vol")}
     if m["type"] == "polynomial":  # higher-order constants default to 0
         given |= {"C01", "C20", "C02", "C11"}
         m = {"C01": 0.0, "C20": 0.0, "C02": 0.0, "C11": 0.0, **m}
@@ -216,8 +280,9 @@ def _material(ctx: Ctx, m: dict, p: str):
         material = cls(*[m[k] for k in native])
     else:
         alt = " or (E, nu)" if m["type"] not in _NO_E_NU else ""
-        raise ctx.error(p, f"{m['type']} takes ({', '.join(native)}){alt}; got "
-                        f"({', '.join(sorted(given)) or 'nothing'})")
+        raise ctx.error(
+            p, f"{m['type']} takes ({', '.join(native)}){alt}; got ({', '.join(sorted(given)) or 'nothing'})"
+        )
     if "prony_iso" in m or "prony_vol" in m:  # visco-hyperelastic: (alpha, tau [s]) pairs
         material = mat.Viscoelastic(material, m.get("prony_iso", []), m.get("prony_vol", []))
     return material
@@ -227,8 +292,20 @@ def _constraints(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) ->
     """The [[constraint]] tables: 'fix' or 'displacement' (value [m], optional curve)."""
     for i, c in enumerate(tables):
         p = f"constraint[{i}]"
-        check_keys(ctx, c, p, {"type": "str", "nodes": "table", "dofs": "str", "value": "number|list",
-                               "curve": "str|table", "name": "str"}, ("type", "nodes"))
+        check_keys(
+            ctx,
+            c,
+            p,
+            {
+                "type": "str",
+                "nodes": "table",
+                "dofs": "str",
+                "value": "number|list",
+                "curve": "str|table",
+                "name": "str",
+            },
+            ("type", "nodes"),
+        )
         ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T)
         dofs = c.get("dofs", "xyz")
         with ctx.under(p):
@@ -239,20 +316,35 @@ def _constraints(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) ->
             elif c["type"] == "displacement":
                 if "value" not in c:
                     raise ctx.error(p, "a 'displacement' constraint needs 'value' [m]")
-                b.prescribe(ids, c["value"], dofs,
-                            make_curve(ctx, c.get("curve"), f"{p}.curve", scene.duration))
+                b.prescribe(
+                    ids, c["value"], dofs, make_curve(ctx, c.get("curve"), f"{p}.curve", scene.duration)
+                )
             else:
-                raise ctx.error(f"{p}.type", f"unknown constraint {c['type']!r}; expected 'fix' or "
-                                "'displacement'")
+                raise ctx.error(
+                    f"{p}.type", f"unknown constraint {c['type']!r}; expected 'fix' or 'displacement'"
+                )
 
 
 def _loads(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) -> None:
     """The [[load]] tables."""
     for i, ld in enumerate(tables):
         p = f"load[{i}]"
-        check_keys(ctx, ld, p, {"type": "str", "nodes": "table", "force": "list",
-                                "total_force": "list", "g": "list", "value": "number",
-                                "curve": "str|table", "name": "str"}, ("type",))
+        check_keys(
+            ctx,
+            ld,
+            p,
+            {
+                "type": "str",
+                "nodes": "table",
+                "force": "list",
+                "total_force": "list",
+                "g": "list",
+                "value": "number",
+                "curve": "str|table",
+                "name": "str",
+            },
+            ("type",),
+        )
         with ctx.under(p):
             _add_load(ctx, b, ld, p, X, T, scene)
 
@@ -275,8 +367,11 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
         b.set_gravity(vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g"), curve)
     elif ld["type"] == "force":
         if "nodes" not in ld or (("force" in ld) == ("total_force" in ld)):
-            raise ctx.error(p, "a 'force' load needs 'nodes' and one of 'force' (per node [N]) "
-                            "or 'total_force' (shared equally [N])")
+            raise ctx.error(
+                p,
+                "a 'force' load needs 'nodes' and one of 'force' (per node [N]) "
+                "or 'total_force' (shared equally [N])",
+            )
         ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
         if "force" in ld:
             f = np.array(vector(ctx, ld["force"], f"{p}.force"))
@@ -285,25 +380,34 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
         b.add_force(ids, f, curve)
     elif ld["type"] == "pressure":
         if "nodes" not in ld or "value" not in ld:
-            raise ctx.error(p, "a 'pressure' load needs 'value' [Pa] and 'nodes' (the boundary "
-                            "triangles whose three nodes are all selected)")
+            raise ctx.error(
+                p,
+                "a 'pressure' load needs 'value' [Pa] and 'nodes' (the boundary "
+                "triangles whose three nodes are all selected)",
+            )
         ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
         B, _ = boundary_faces(T)
         faces = B[np.all(np.isin(B, ids), axis=1)]
         if len(faces) == 0:
-            raise ctx.error(f"{p}.nodes", f"the {ids.size} selected nodes hold no whole boundary "
-                            "triangle: select a surface patch")
+            raise ctx.error(
+                f"{p}.nodes",
+                f"the {ids.size} selected nodes hold no whole boundary triangle: select a surface patch",
+            )
         b.add_pressure(faces, float(ld["value"]), curve)
     else:
-        raise ctx.error(f"{p}.type", f"unknown load {ld['type']!r}; expected 'force', "
-                        "'pressure' or 'gravity'")
+        raise ctx.error(
+            f"{p}.type", f"unknown load {ld['type']!r}; expected 'force', 'pressure' or 'gravity'"
+        )
 
 
 def _output(ctx: Ctx, data: dict, scene: Scene) -> None:
     """The [output] table."""
-    out = check_keys(ctx, data.get("output", {}), "output",
-                     {"every": "int", "interval": "number", "frames": "int", "png": "bool",
-                      "fields": "list"})
+    out = check_keys(
+        ctx,
+        data.get("output", {}),
+        "output",
+        {"every": "int", "interval": "number", "frames": "int", "png": "bool", "fields": "list"},
+    )
     from ..io.results import FIELDS
 
     fields = out.get("fields", list(FIELDS[:5]))
@@ -313,8 +417,14 @@ def _output(ctx: Ctx, data: dict, scene: Scene) -> None:
     scene.fields = tuple(fields)
     if sum(k in out for k in ("every", "interval", "frames")) > 1:
         raise ctx.error("output", "give at most one of 'every' (steps), 'interval' [s], 'frames'")
-    if "every" in out and out["every"] < 1 or "frames" in out and out["frames"] < 1 \
-            or "interval" in out and not out["interval"] > 0:
+    if (
+        "every" in out
+        and out["every"] < 1
+        or "frames" in out
+        and out["frames"] < 1
+        or "interval" in out
+        and not out["interval"] > 0
+    ):
         raise ctx.error("output", "every, frames and interval must be positive")
     scene.output_every = out.get("every")
     scene.output_interval = out.get("interval")

@@ -33,12 +33,33 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
     from .. import mesh as pm
     from ..io.mesh import read_volume_mesh
 
-    check_keys(ctx, spec, "mesh", {
-        "file": "str", "primitive": "str", "size": "list|number", "cells": "list", "radius": "number",
-        "height": "number", "major_radius": "number", "minor_radius": "number",
-        "edge_length": "number", "scale": "number", "rotate": "list", "translate": "list",
-        "jitter": "number", "segments": "int", "minor_segments": "int", "target_tets": "int",
-        "embed": "bool", "embed_subdivide": "int", "bodies": "str", "envelope": "number"})
+    check_keys(
+        ctx,
+        spec,
+        "mesh",
+        {
+            "file": "str",
+            "primitive": "str",
+            "size": "list|number",
+            "cells": "list",
+            "radius": "number",
+            "height": "number",
+            "major_radius": "number",
+            "minor_radius": "number",
+            "edge_length": "number",
+            "scale": "number",
+            "rotate": "list",
+            "translate": "list",
+            "jitter": "number",
+            "segments": "int",
+            "minor_segments": "int",
+            "target_tets": "int",
+            "embed": "bool",
+            "embed_subdivide": "int",
+            "bodies": "str",
+            "envelope": "number",
+        },
+    )
     if ("file" in spec) == ("primitive" in spec):
         raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
     sets: dict[str, np.ndarray] = {}
@@ -69,15 +90,24 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
                 from ..mesh.pipeline import BODIES
 
                 if spec.get("bodies", "union") not in BODIES:
-                    raise ctx.error("mesh.bodies", f"bodies = {spec['bodies']!r}; expected one of "
-                                    f"{', '.join(BODIES)}")
+                    raise ctx.error(
+                        "mesh.bodies", f"bodies = {spec['bodies']!r}; expected one of {', '.join(BODIES)}"
+                    )
                 env = spec.get("envelope")
                 if env is not None and not 0 < env < 0.1:
-                    raise ctx.error("mesh.envelope", f"envelope = {env}; expected 0 < envelope < "
-                                    "0.1 (a fraction of the bounding-box diagonal)")
-                X, T, info = pm.surface_to_tets(V * scale, F, edge_length=el,
-                                                target_tets=spec.get("target_tets", 10000),
-                                                epsilon=env, bodies=spec.get("bodies", "union"))
+                    raise ctx.error(
+                        "mesh.envelope",
+                        f"envelope = {env}; expected 0 < envelope < "
+                        "0.1 (a fraction of the bounding-box diagonal)",
+                    )
+                X, T, info = pm.surface_to_tets(
+                    V * scale,
+                    F,
+                    edge_length=el,
+                    target_tets=spec.get("target_tets", 10000),
+                    epsilon=env,
+                    bodies=spec.get("bodies", "union"),
+                )
                 scene.meta["mesh_pipeline"] = info
                 if spec.get("embed") or spec.get("embed_subdivide"):
                     Ve, Fe = pm.subdivide_loop(V * scale, F, int(spec.get("embed_subdivide", 0)))
@@ -99,25 +129,30 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
             cells = spec.get("cells") or [max(1, round(s / h)) for s in size]
             if not (len(cells) == 3 and all(isinstance(c, int) and c >= 1 for c in cells)):
                 raise ctx.error("mesh.cells", "expected three integers >= 1")
-            X, T = pm.box_tets(size, cells, origin=[-s / 2 for s in size],
-                               jitter=float(spec.get("jitter", 0.0)))
+            X, T = pm.box_tets(
+                size, cells, origin=[-s / 2 for s in size], jitter=float(spec.get("jitter", 0.0))
+            )
         elif kind in ("sphere", "cylinder", "torus"):
             if kind == "sphere":
                 V, F = pm.primitive_surface("sphere", radius=pos("radius"))
             elif kind == "cylinder":
-                V, F = pm.primitive_surface("cylinder", radius=pos("radius"), height=pos("height"),
-                                            segments=spec.get("segments", 48))
+                V, F = pm.primitive_surface(
+                    "cylinder", radius=pos("radius"), height=pos("height"), segments=spec.get("segments", 48)
+                )
             else:
-                V, F = pm.primitive_surface("torus", major_radius=pos("major_radius"),
-                                            minor_radius=pos("minor_radius"),
-                                            segments=spec.get("segments", 48),
-                                            minor_segments=spec.get("minor_segments", 24))
-            X, T, info = pm.surface_to_tets(V, F, edge_length=el,
-                                            target_tets=spec.get("target_tets", 10000))
+                V, F = pm.primitive_surface(
+                    "torus",
+                    major_radius=pos("major_radius"),
+                    minor_radius=pos("minor_radius"),
+                    segments=spec.get("segments", 48),
+                    minor_segments=spec.get("minor_segments", 24),
+                )
+            X, T, info = pm.surface_to_tets(V, F, edge_length=el, target_tets=spec.get("target_tets", 10000))
             scene.meta["mesh_pipeline"] = info
         else:
-            raise ctx.error("mesh.primitive", f"unknown primitive {kind!r}; expected box, sphere, "
-                            "cylinder or torus")
+            raise ctx.error(
+                "mesh.primitive", f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus"
+            )
         scene.meta["mesh_source"] = f"primitive {kind}"
     X = np.asarray(X, float) * scale
     emb = scene.meta.get("embed_surface")
@@ -132,6 +167,8 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
             emb[0] = emb[0] + np.array(spec["translate"], float)
     extent = float(np.ptp(X, axis=0).max())
     if extent > 10.0:
-        scene.warnings.append(f"{ctx.file}: the mesh is {extent:g} m across; pliant expects SI "
-                              "metres: if the file is in millimetres, set mesh.scale = 0.001")
+        scene.warnings.append(
+            f"{ctx.file}: the mesh is {extent:g} m across; pliant expects SI "
+            "metres: if the file is in millimetres, set mesh.scale = 0.001"
+        )
     return X, np.asarray(T, np.int64), sets

@@ -43,8 +43,12 @@ class Ctx:
                         return i + 1
                     continue
             if start is not None and i > start:
-                if s.startswith("[") and not s.startswith("[["+header) and re.match(r"^\[", s) \
-                        and not re.match(rf"^\[{re.escape(header)}\.", s):
+                if (
+                    s.startswith("[")
+                    and not s.startswith("[[" + header)
+                    and re.match(r"^\[", s)
+                    and not re.match(rf"^\[{re.escape(header)}\.", s)
+                ):
                     break
                 if leaf and re.match(rf"^{re.escape(leaf)}\s*=", s):
                     return i + 1
@@ -72,8 +76,14 @@ class Ctx:
             raise self.error(key, str(e)) from None
 
 
-_TYPES = {"number": (int, float), "int": (int,), "str": (str,), "bool": (bool,), "table": (dict,),
-          "list": (list,)}
+_TYPES = {
+    "number": (int, float),
+    "int": (int,),
+    "str": (str,),
+    "bool": (bool,),
+    "table": (dict,),
+    "list": (list,),
+}
 
 
 def key_path(path: str, key: str) -> str:
@@ -82,8 +92,9 @@ def key_path(path: str, key: str) -> str:
     return f"{path}.{k}" if path else k
 
 
-def check_keys(ctx: Ctx, table: Any, path: str, allowed: dict[str, str],
-               required: tuple[str, ...] = ()) -> dict:
+def check_keys(
+    ctx: Ctx, table: Any, path: str, allowed: dict[str, str], required: tuple[str, ...] = ()
+) -> dict:
     """Check that ``table`` is a table whose keys are among ``allowed`` (key → type name; '|' for
     alternatives) and that ``required`` keys are present. Returns the table."""
     if not isinstance(table, dict):
@@ -91,8 +102,7 @@ def check_keys(ctx: Ctx, table: Any, path: str, allowed: dict[str, str],
     for k, v in table.items():
         kp = key_path(path, k)
         if k not in allowed:
-            raise ctx.error(kp, f"unknown key {_short(k, 40)}; expected one of: "
-                            f"{', '.join(sorted(allowed))}")
+            raise ctx.error(kp, f"unknown key {_short(k, 40)}; expected one of: {', '.join(sorted(allowed))}")
         kinds = allowed[k].split("|")
         ok = False
         for kind in kinds:
@@ -116,8 +126,10 @@ def _short(v, limit: int = 80) -> str:
 
 
 def vector(ctx: Ctx, value, path: str, n: int = 3) -> list[float]:
-    if not (isinstance(value, list) and len(value) == n and
-            all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-                for x in value)):
+    if not (
+        isinstance(value, list)
+        and len(value) == n
+        and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value)
+    ):
         raise ctx.error(path, f"{_short(value)}: expected a list of {n} finite numbers")
     return [float(x) for x in value]

@@ -14,8 +14,15 @@ import numpy as np
 from ..mesh.topology import boundary_nodes
 from .schema import Ctx, check_keys, vector
 
-_KEYS = {"all": "bool", "ids": "list", "box": "list", "sphere": "table", "plane": "table",
-         "surface": "bool", "set": "str"}
+_KEYS = {
+    "all": "bool",
+    "ids": "list",
+    "box": "list",
+    "sphere": "table",
+    "plane": "table",
+    "surface": "bool",
+    "set": "str",
+}
 
 
 def _mask(ctx: Ctx, spec: dict, path: str, P: np.ndarray, extent: float) -> np.ndarray:
@@ -37,14 +44,25 @@ def _mask(ctx: Ctx, spec: dict, path: str, P: np.ndarray, extent: float) -> np.n
         lo, hi = np.array(vector(ctx, b[0], f"{path}.box")), np.array(vector(ctx, b[1], f"{path}.box"))
         m &= np.all((P >= np.minimum(lo, hi)) & (P <= np.maximum(lo, hi)), axis=1)
     if "sphere" in spec:
-        s = check_keys(ctx, spec["sphere"], f"{path}.sphere", {"center": "list", "radius": "number"},
-                       ("center", "radius"))
-        m &= np.linalg.norm(P - np.array(vector(ctx, s["center"], f"{path}.sphere.center")),
-                            axis=1) <= s["radius"]
+        s = check_keys(
+            ctx,
+            spec["sphere"],
+            f"{path}.sphere",
+            {"center": "list", "radius": "number"},
+            ("center", "radius"),
+        )
+        m &= (
+            np.linalg.norm(P - np.array(vector(ctx, s["center"], f"{path}.sphere.center")), axis=1)
+            <= s["radius"]
+        )
     if "plane" in spec:
-        p = check_keys(ctx, spec["plane"], f"{path}.plane",
-                       {"point": "list", "normal": "list", "side": "str", "tol": "number"},
-                       ("point", "normal"))
+        p = check_keys(
+            ctx,
+            spec["plane"],
+            f"{path}.plane",
+            {"point": "list", "normal": "list", "side": "str", "tol": "number"},
+            ("point", "normal"),
+        )
         n = np.array(vector(ctx, p["normal"], f"{path}.plane.normal"))
         if not np.linalg.norm(n) > 0:
             raise ctx.error(f"{path}.plane.normal", "expected a non-zero normal")
@@ -66,8 +84,9 @@ def select_nodes(ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray)
     """Node indices selected by ``spec``; an empty selection is an error naming the key."""
     check_keys(ctx, spec, path, _KEYS)
     if "set" in spec:
-        raise ctx.error(f"{path}.set", "node sets by name are not supported; use ids, box, sphere, "
-                        "plane or surface")
+        raise ctx.error(
+            f"{path}.set", "node sets by name are not supported; use ids, box, sphere, plane or surface"
+        )
     if not spec:
         raise ctx.error(path, "empty selection; give all, ids, box, sphere, plane and/or surface")
     extent = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
@@ -78,19 +97,21 @@ def select_nodes(ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray)
         m &= s
     ids = np.nonzero(m)[0]
     if ids.size == 0:
-        raise ctx.error(path, "selects no node; check the coordinates (metres, after scale and "
-                        "transform)")
+        raise ctx.error(path, "selects no node; check the coordinates (metres, after scale and transform)")
     return ids
 
 
-def select_elements(ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray,
-                    sets: dict[str, np.ndarray]) -> np.ndarray:
+def select_elements(
+    ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray, sets: dict[str, np.ndarray]
+) -> np.ndarray:
     """Element indices whose centroid is selected by ``spec`` (or the named element set)."""
     check_keys(ctx, spec, path, _KEYS)
     if "set" in spec:
         if spec["set"] not in sets:
-            raise ctx.error(f"{path}.set", f"unknown element set {spec['set']!r}; the mesh has: "
-                            f"{', '.join(sets) or 'none'}")
+            raise ctx.error(
+                f"{path}.set",
+                f"unknown element set {spec['set']!r}; the mesh has: {', '.join(sets) or 'none'}",
+            )
         return sets[spec["set"]]
     if spec.get("surface"):
         raise ctx.error(f"{path}.surface", "surface selects nodes, not elements")

@@ -14,11 +14,30 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
     tool classes' InputErrors then name this file and key."""
     from .. import contact as ct
 
-    check_keys(ctx, t, p, {"type": "str", "name": "str", "mu_s": "number", "mu_k": "number",
-                           "radius": "number", "length": "number", "half_extents": "list",
-                           "point": "list", "normal": "list", "file": "str", "scale": "number",
-                           "spacing": "number", "position": "list", "rotation": "list",
-                           "keyframes": "list", "nodes": "table"}, ("type",))
+    check_keys(
+        ctx,
+        t,
+        p,
+        {
+            "type": "str",
+            "name": "str",
+            "mu_s": "number",
+            "mu_k": "number",
+            "radius": "number",
+            "length": "number",
+            "half_extents": "list",
+            "point": "list",
+            "normal": "list",
+            "file": "str",
+            "scale": "number",
+            "spacing": "number",
+            "position": "list",
+            "rotation": "list",
+            "keyframes": "list",
+            "nodes": "table",
+        },
+        ("type",),
+    )
     kw = {"mu_s": t.get("mu_s", 0.0), "mu_k": t.get("mu_k"), "name": t.get("name")}
 
     def rot(v, key):
@@ -34,9 +53,13 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
         pose["position"] = vector(ctx, t["position"], f"{p}.position")
     if "rotation" in t:
         pose["rotation"] = rot(t["rotation"], f"{p}.rotation")
+    tool: ct.RigidTool
     if kind == "plane":
-        tool = ct.Plane(vector(ctx, t.get("point", [0, 0, 0]), f"{p}.point"),
-                        vector(ctx, t.get("normal", [0, 0, 1]), f"{p}.normal"), **kw)
+        tool = ct.Plane(
+            vector(ctx, t.get("point", [0, 0, 0]), f"{p}.point"),
+            vector(ctx, t.get("normal", [0, 0, 1]), f"{p}.normal"),
+            **kw,
+        )
     elif kind == "sphere":
         tool = ct.Sphere(t.get("radius", 0.0), **pose, **kw)
     elif kind == "capsule":
@@ -44,8 +67,7 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
     elif kind == "cylinder":
         tool = ct.Cylinder(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
     elif kind == "box":
-        tool = ct.Box(vector(ctx, t.get("half_extents", [0, 0, 0]), f"{p}.half_extents"),
-                      **pose, **kw)
+        tool = ct.Box(vector(ctx, t.get("half_extents", [0, 0, 0]), f"{p}.half_extents"), **pose, **kw)
     elif kind == "mesh":
         from ..mesh import read_surface
 
@@ -54,14 +76,19 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
         V, F = read_surface(f)
         tool = ct.MeshTool(V * float(t.get("scale", 1.0)), F, t.get("spacing"), **pose, **kw)
     else:
-        raise ctx.error(f"{p}.type", f"unknown tool {kind!r}; expected plane, sphere, capsule, "
-                        "cylinder, box or mesh")
+        raise ctx.error(
+            f"{p}.type", f"unknown tool {kind!r}; expected plane, sphere, capsule, cylinder, box or mesh"
+        )
     for j, k in enumerate(t.get("keyframes", [])):
         kp = f"{p}.keyframes[{j}]"
-        check_keys(ctx, k, kp, {"t": "number", "position": "list", "rotation": "list"},
-                   ("t", "position"))
-        tool.at(k["t"], vector(ctx, k["position"], f"{kp}.position"),
-                rot(k["rotation"], f"{kp}.rotation") if "rotation" in k else
-                tool.keys[-1][4:] if tool.keys else (1.0, 0, 0, 0))
+        check_keys(ctx, k, kp, {"t": "number", "position": "list", "rotation": "list"}, ("t", "position"))
+        tool.at(
+            k["t"],
+            vector(ctx, k["position"], f"{kp}.position"),
+            rot(k["rotation"], f"{kp}.rotation")
+            if "rotation" in k
+            else tool.keys[-1][4:]
+            if tool.keys
+            else (1.0, 0, 0, 0),
+        )
     return tool
-

@@ -10,6 +10,21 @@ from .execute import SweepError, execute, records_table, run_one
 from .run import SweepResult, run_sweep
 from .spec import Design, Outputs, Parameter, SweepSpec, load_sweep
 
-__all__ = ["Design", "Outputs", "Parameter", "SceneCase", "SweepError", "SweepResult", "SweepSpec",
-           "design_runs", "execute", "load_sweep", "records_table", "run_one", "run_sweep",
-           "salib_problem", "sobol_indices", "write_sensitivity"]
+__all__ = [
+    "Design",
+    "Outputs",
+    "Parameter",
+    "SceneCase",
+    "SweepError",
+    "SweepResult",
+    "SweepSpec",
+    "design_runs",
+    "execute",
+    "load_sweep",
+    "records_table",
+    "run_one",
+    "run_sweep",
+    "salib_problem",
+    "sobol_indices",
+    "write_sensitivity",
+]

@@ -26,12 +26,19 @@ _BOOKKEEPING = {"run", "status", "error", "wall_time", "steps", "dt", "simulated
 def analyzable_outputs(table, parameters: list[Parameter]) -> list[str]:
     """Numeric scalar output columns of the results table (not parameters, not bookkeeping)."""
     keys = {p.key for p in parameters}
-    return [c for c in table.columns if c not in keys and c not in _BOOKKEEPING
-            and not c.endswith(".node") and np.issubdtype(table[c].dtype, np.number)]
+    return [
+        c
+        for c in table.columns
+        if c not in keys
+        and c not in _BOOKKEEPING
+        and not c.endswith(".node")
+        and np.issubdtype(table[c].dtype, np.number)
+    ]
 
 
-def sobol_indices(table, parameters: list[Parameter], design: Design,
-                  outputs: list[str] | None = None) -> tuple[Any, list[str]]:
+def sobol_indices(
+    table, parameters: list[Parameter], design: Design, outputs: list[str] | None = None
+) -> tuple[Any, list[str]]:
     """Sobol indices of each output: a DataFrame (output, parameter, S1, S1_conf, ST, ST_conf)
     and notes on the outputs left out (failed runs, no variance). InputError for a design that
     is not Saltelli's."""
@@ -39,24 +46,36 @@ def sobol_indices(table, parameters: list[Parameter], design: Design,
     from SALib.analyze import sobol as salib_sobol
 
     if design.type != "saltelli":
-        raise InputError(f"Sobol indices need a 'saltelli' design (this sweep's is "
-                         f"'{design.type}'); expected [design] type = \"saltelli\"")
+        raise InputError(
+            f"Sobol indices need a 'saltelli' design (this sweep's is "
+            f"'{design.type}'); expected [design] type = \"saltelli\""
+        )
     problem = salib_problem(parameters)
     rows, notes = [], []
     for name in outputs or analyzable_outputs(table, parameters):
         Y = table.sort_values("run")[name].to_numpy(dtype=np.float64)
         bad = np.flatnonzero(~np.isfinite(Y))
         if len(bad):
-            notes.append(f"{name}: left out, runs {bad[:5].tolist()}{'...' if len(bad) > 5 else ''} "
-                         "have no value (failed)")
+            notes.append(
+                f"{name}: left out, runs {bad[:5].tolist()}{'...' if len(bad) > 5 else ''} "
+                "have no value (failed)"
+            )
             continue
         if np.ptp(Y) == 0:
             notes.append(f"{name}: left out, the same in every run")
             continue
         S = salib_sobol.analyze(problem, Y, calc_second_order=False, seed=design.seed)
         for j, p in enumerate(parameters):
-            rows.append({"output": name, "parameter": p.key, "S1": S["S1"][j],
-                         "S1_conf": S["S1_conf"][j], "ST": S["ST"][j], "ST_conf": S["ST_conf"][j]})
+            rows.append(
+                {
+                    "output": name,
+                    "parameter": p.key,
+                    "S1": S["S1"][j],
+                    "S1_conf": S["S1_conf"][j],
+                    "ST": S["ST"][j],
+                    "ST_conf": S["ST_conf"][j],
+                }
+            )
     return pd.DataFrame(rows, columns=["output", "parameter", "S1", "S1_conf", "ST", "ST_conf"]), notes
 
 
@@ -68,8 +87,7 @@ def write_sensitivity(indices, out) -> list[str]:
     import matplotlib.pyplot as plt
 
     out = Path(out)
-    atomic_write(out / "sensitivity.csv", lambda tmp: indices.to_csv(tmp, index=False),
-                 "sensitivity table")
+    atomic_write(out / "sensitivity.csv", lambda tmp: indices.to_csv(tmp, index=False), "sensitivity table")
     names = list(dict.fromkeys(indices["output"]))
     if not names:
         return ["sensitivity.csv"]
@@ -84,7 +102,8 @@ def write_sensitivity(indices, out) -> list[str]:
         ax.set_ylim(min(0.0, float(sub["S1"].min()) - 0.05), 1.05)
     axes[0, 0].legend(fontsize=8)
     fig.tight_layout()
-    atomic_write(out / "sensitivity.png", lambda tmp: fig.savefig(tmp, dpi=110, format="png"),
-                 "sensitivity chart")
+    atomic_write(
+        out / "sensitivity.png", lambda tmp: fig.savefig(tmp, dpi=110, format="png"), "sensitivity chart"
+    )
     plt.close(fig)
     return ["sensitivity.csv", "sensitivity.png"]

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from ..errors import InputError, PliantError
 from ..guard import one_line
 from .case import SceneCase
@@ -38,21 +40,24 @@ def _run_together(case: SceneCase, scenes: list) -> list[dict[str, Any]]:
                 raise InputError(f"batch: solver setting {key} differs between runs")
     if first.static:
         raise InputError("batch: quasi-static solves run one by one")
-    batch = Batch([sc.builder for sc in scenes], first.dtype, threads=case.threads,
-                  backend=first.backend)
+    batch = Batch([sc.builder for sc in scenes], first.dtype, threads=case.threads, backend=first.backend)
     model = batch.model
     solver = Solver(model, dt=first.dt, safety=first.safety, check_every=first.check_every)
     state = model.state()
     solver.run(state, steps=total_steps(first.duration, solver.dt))
     res = model.element_results(state)
-    forces = batch.tool_forces(solver.contact_report()) if model.tools else None
+    forces = batch.tool_forces(solver.contact_report()) if model.tools else np.zeros((batch.bodies, 0, 3))
     X, u = model.reference_positions, state.displacements
     out = []
     for k in range(batch.bodies):
         nodes = slice(batch.node_offsets[k], batch.node_offsets[k + 1])
         elems = slice(batch.element_offsets[k], batch.element_offsets[k + 1])
-        rec = {**body_measures(model, state, res, nodes, elems), "steps": state.steps,
-               "simulated_time": state.time, "dt": solver.dt}
+        rec = {
+            **body_measures(model, state, res, nodes, elems),
+            "steps": state.steps,
+            "simulated_time": state.time,
+            "dt": solver.dt,
+        }
         for j, tool in enumerate(model.tools):
             rec.update({f"tool.{tool.name}.f{c}": float(forces[k, j, i]) for i, c in enumerate("xyz")})
         rec.update(case.point_outputs(X[nodes], u[nodes]))
@@ -88,7 +93,12 @@ def run_batch(case: SceneCase, indices: list[int], params: list[dict]) -> list[d
     else:
         share = (time.perf_counter() - t0) / max(1, len(scenes))
         for (i, _), o in zip(scenes, outputs):
-            records[i] = {"run": i, "status": "ok", "error": "", **o, "wall_time": share,
-                          "batch": len(scenes)}
+            records[i] = {
+                "run": i,
+                "status": "ok",
+                "error": "",
+                **o,
+                "wall_time": share,
+                "batch": len(scenes),
+            }
     return [records[i] for i in indices]
-

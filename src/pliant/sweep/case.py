@@ -17,8 +17,15 @@ __all__ = ["SceneCase", "SUMMARY_OUTPUTS"]
 
 # Scalars of a run's summary that every sweep collects: max displacement [m], max von Mises [Pa],
 # kinetic and strain energy [J] at the end, steps, simulated time [s], time step [s].
-SUMMARY_OUTPUTS = ("max_displacement", "max_von_mises", "kinetic_energy", "strain_energy", "steps",
-                   "simulated_time", "dt")
+SUMMARY_OUTPUTS = (
+    "max_displacement",
+    "max_von_mises",
+    "kinetic_energy",
+    "strain_energy",
+    "steps",
+    "simulated_time",
+    "dt",
+)
 
 
 @dataclass(frozen=True)
@@ -43,9 +50,14 @@ class SceneCase:
         from ..runner import run_scene
 
         scene = load_job(self.base, self.ignore, {**self.fixed, **params})
-        summary = run_scene(scene, run_dir if self.outputs.fields else None, progress=False,
-                            threads=self.threads, echo=lambda *a, **k: None,
-                            inspect=lambda m, s, st: self._inspect(m, s, st, run_dir))
+        summary = run_scene(
+            scene,
+            run_dir if self.outputs.fields else None,
+            progress=False,
+            threads=self.threads,
+            echo=lambda *a, **k: None,
+            inspect=lambda m, s, st: self._inspect(m, s, st, run_dir),
+        )
         return _flatten(summary)
 
     def point_outputs(self, X: np.ndarray, u: np.ndarray) -> dict[str, Any]:
@@ -69,8 +81,14 @@ class SceneCase:
                 out[f"tool.{tool.name}.force_history"] = H.force.tolist()
         if self.outputs.fields and run_dir is not None:
             res = model.element_results(state)
-            np.savez(Path(run_dir) / "fields.npz", points=X, tets=model.tets, displacement=u,
-                     von_mises=res["von_mises"], J=res["J"])
+            np.savez(
+                Path(run_dir) / "fields.npz",
+                points=X,
+                tets=model.tets,
+                displacement=u,
+                von_mises=res["von_mises"],
+                J=res["J"],
+            )
         return out
 
 

@@ -46,14 +46,18 @@ def write_dataset(out, records: list[dict], keys: list[str]) -> Path:
                     continue
                 with np.load(f) as d:
                     if d["points"].shape != X.shape or not np.array_equal(d["tets"], T):
-                        raise InputError(f"{f}: run {records[k]['run']} has another mesh than run "
-                                         f"{records[0]['run']}; a dataset holds one mesh (fields "
-                                         "stay in the per-run folders)")
+                        raise InputError(
+                            f"{f}: run {records[k]['run']} has another mesh than run "
+                            f"{records[0]['run']}; a dataset holds one mesh (fields "
+                            "stay in the per-run folders)"
+                        )
                     u[k], vm[k], J[k] = d["displacement"], d["von_mises"], d["J"]
                     ok[k] = True
             h["ok"] = ok
-            P = h.create_dataset("parameters", data=np.array(
-                [[_number(r.get(key)) for key in keys] for r in records], dtype="f8"))
+            P = h.create_dataset(
+                "parameters",
+                data=np.array([[_number(r.get(key)) for key in keys] for r in records], dtype="f8"),
+            )
             P.attrs["names"] = keys
 
     return atomic_write(out / "dataset.h5", write, "dataset")

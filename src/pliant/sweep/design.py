@@ -35,7 +35,7 @@ def _builtin(v: Any) -> Any:
 
 
 def _unit_to_range(u: np.ndarray, p: Parameter) -> np.ndarray:
-    low, high = p.range
+    low, high = p.bounds
     if p.scale == "log":
         return np.exp(math.log(low) + u * (math.log(high) - math.log(low)))
     return low + u * (high - low)
@@ -58,16 +58,22 @@ def _qmc(kind: str, d: int, n: int, seed: int) -> np.ndarray:
 def salib_problem(parameters: list[Parameter]) -> dict:
     """SALib's problem description: the parameters and their bounds in the sampled space
     (the logarithm's for a log scale)."""
-    return {"num_vars": len(parameters), "names": [p.key for p in parameters],
-            "bounds": [[math.log(p.range[0]), math.log(p.range[1])] if p.scale == "log"
-                       else list(p.range) for p in parameters]}
+    return {
+        "num_vars": len(parameters),
+        "names": [p.key for p in parameters],
+        "bounds": [
+            [math.log(p.bounds[0]), math.log(p.bounds[1])] if p.scale == "log" else list(p.bounds)
+            for p in parameters
+        ],
+    }
 
 
 def _saltelli(parameters: list[Parameter], design: Design) -> np.ndarray:
     from SALib.sample import sobol as salib_sobol
 
-    X = salib_sobol.sample(salib_problem(parameters), design.samples, calc_second_order=False,
-                           seed=design.seed)
+    X = salib_sobol.sample(
+        salib_problem(parameters), design.samples, calc_second_order=False, seed=design.seed
+    )
     for j, p in enumerate(parameters):
         if p.scale == "log":
             X[:, j] = np.exp(X[:, j])
@@ -77,10 +83,11 @@ def _saltelli(parameters: list[Parameter], design: Design) -> np.ndarray:
 def design_runs(params: list[Parameter], d: Design) -> list[dict[str, Any]]:
     """The runs of a sweep of ``params`` by design ``d``, in order: a dict key path → value each."""
     keys = [p.key for p in params]
+    rows: Any
     if d.type == "grid":
-        rows = itertools.product(*(p.values for p in params))
+        rows = itertools.product(*(p.choices for p in params))
     elif d.type == "list":
-        rows = zip(*(p.values for p in params))
+        rows = zip(*(p.choices for p in params))
     elif d.type == "saltelli":
         rows = _saltelli(params, d)
     else:

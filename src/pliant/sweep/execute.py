@@ -70,13 +70,17 @@ def _check_manifest(out: Path, fingerprint: str, runs: list[dict]) -> None:
         except (OSError, ValueError):
             theirs = {}
         if theirs.get("fingerprint") != fingerprint or theirs.get("runs") != runs:
-            raise SweepError(f"{out}: the folder holds another sweep (its sweep.json differs: the "
-                             "spec or the base file changed); expected the same sweep to resume, "
-                             "or a new output folder")
+            raise SweepError(
+                f"{out}: the folder holds another sweep (its sweep.json differs: the "
+                "spec or the base file changed); expected the same sweep to resume, "
+                "or a new output folder"
+            )
         return
     if any(out.iterdir()):
-        raise SweepError(f"{out}: the folder is not empty and holds no sweep.json; expected an "
-                         "empty or new output folder, or one of an earlier run of this sweep")
+        raise SweepError(
+            f"{out}: the folder is not empty and holds no sweep.json; expected an "
+            "empty or new output folder, or one of an earlier run of this sweep"
+        )
     atomic_write_text(manifest, json.dumps(mine, indent=1))
 
 
@@ -105,35 +109,81 @@ def _client(scheduler: str | None, workers: int | None, threads: int):
         try:
             client = Client(scheduler, timeout="20s")
         except (OSError, TimeoutError, ValueError) as e:
-            raise SweepError(f"cannot reach the Dask scheduler {scheduler!r}: {one_line(str(e))}; "
-                             "expected an address such as tcp://host:8786") from None
+            raise SweepError(
+                f"cannot reach the Dask scheduler {scheduler!r}: {one_line(str(e))}; "
+                "expected an address such as tcp://host:8786"
+            ) from None
         with client:
             yield client
         return
     n = workers or max(1, machine_cores() // threads)
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with (
+        LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        ) as cluster,
+        Client(cluster) as client,
+    ):
         yield client
 
 
-def _submit(client, case: Callable, runs: list[dict], todo: list[int], out: Path, fingerprint: str,
-            fields: bool, batch: int) -> dict:
+def _submit(
+    client,
+    case: Callable,
+    runs: list[dict],
+    todo: list[int],
+    out: Path,
+    fingerprint: str,
+    fields: bool,
+    batch: int,
+) -> dict:
     """One task per run, or per ``batch`` runs (run together by pliant.sweep.batched)."""
     if batch > 1:
         from .batched import run_batch
 
-        chunks = [todo[i:i + batch] for i in range(0, len(todo), batch)]
-        return {client.submit(run_batch, case, ids, [runs[i] for i in ids],
-                              key=f"pliant-{fingerprint}-batch-{ids[0]}", pure=False): ids
-                for ids in chunks}
-    return {client.submit(run_one, case, i, runs[i], str(out / "runs" / f"{i:05d}") if fields else None,
-                          key=f"pliant-{fingerprint}-run-{i}", pure=False): [i] for i in todo}
+        chunks = [todo[i : i + batch] for i in range(0, len(todo), batch)]
+        return {
+            client.submit(
+                run_batch,
+                case,
+                ids,
+                [runs[i] for i in ids],
+                key=f"pliant-{fingerprint}-batch-{ids[0]}",
+                pure=False,
+            ): ids
+            for ids in chunks
+        }
+    return {
+        client.submit(
+            run_one,
+            case,
+            i,
+            runs[i],
+            str(out / "runs" / f"{i:05d}") if fields else None,
+            key=f"pliant-{fingerprint}-run-{i}",
+            pure=False,
+        ): [i]
+        for i in todo
+    }
 
 
-def execute(runs: list[dict[str, Any]], case: Callable, out, *, fingerprint: str = "",
-            threads: int = 1, fields: bool = False, scheduler: str | None = None,
-            workers: int | None = None, retry_failed: bool = False, batch: int = 1,
-            on_record: Callable[[dict, int, int], None] | None = None) -> list[dict]:
+def execute(
+    runs: list[dict[str, Any]],
+    case: Callable,
+    out,
+    *,
+    fingerprint: str = "",
+    threads: int = 1,
+    fields: bool = False,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    retry_failed: bool = False,
+    batch: int = 1,
+    on_record: Callable[[dict, int, int], None] | None = None,
+) -> list[dict]:
     """Run ``case`` for each of ``runs`` (parameter dicts) on Dask, skipping those recorded in
     ``out`` by an earlier call with the same ``fingerprint``; ``batch`` > 1 runs that many together
     (a SceneCase: one model, pliant.sweep.batched). ``on_record(record, done, total)`` follows
@@ -155,8 +205,15 @@ def execute(runs: list[dict[str, Any]], case: Callable, out, *, fingerprint: str
                     got = fut.result()
                     got = got if isinstance(got, list) else [got]
                 except Exception as e:  # noqa: BLE001 (a task Dask gave up on: KilledWorker...)
-                    got = [{"run": i, "status": "failed", "wall_time": None,
-                            "error": one_line(f"{type(e).__name__}: {e}")} for i in futures[fut]]
+                    got = [
+                        {
+                            "run": i,
+                            "status": "failed",
+                            "wall_time": None,
+                            "error": one_line(f"{type(e).__name__}: {e}"),
+                        }
+                        for i in futures[fut]
+                    ]
                 for rec in got:
                     i = rec["run"]
                     rec = {"run": i, **runs[i], **rec}
@@ -175,6 +232,7 @@ def records_table(records: list[dict], out) -> Any:
     table = pd.DataFrame.from_records(records)
     first = ["run"] + [c for c in ("status", "error", "wall_time") if c in table.columns]
     table = table[first + [c for c in table.columns if c not in first]]
-    atomic_write(Path(out) / "results.parquet", lambda tmp: table.to_parquet(tmp, index=False),
-                 "results table")
+    atomic_write(
+        Path(out) / "results.parquet", lambda tmp: table.to_parquet(tmp, index=False), "results table"
+    )
     return table

@@ -31,17 +31,38 @@ class SweepResult:
 
 
 def _progress_bar(enabled: bool):
-    from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn,
-                               TimeElapsedColumn, TimeRemainingColumn)
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
 
-    return Progress(TextColumn("runs"), BarColumn(), MofNCompleteColumn(),
-                    TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
-                    TextColumn("ETA"), TimeRemainingColumn(), disable=not enabled, transient=False)
+    return Progress(
+        TextColumn("runs"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[failed]} failed"),
+        TimeElapsedColumn(),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+        disable=not enabled,
+        transient=False,
+    )
 
 
-def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: int | None = None,
-              retry_failed: bool = False, analyze: bool = False,
-              progress: bool = True) -> SweepResult:
+def run_sweep(
+    spec: SweepSpec,
+    out,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    retry_failed: bool = False,
+    analyze: bool = False,
+    progress: bool = True,
+) -> SweepResult:
     """Run (or resume) the sweep ``spec`` into ``out``: OUT/results.parquet, OUT/runs/, with
     fields OUT/dataset.h5, with ``analyze`` OUT/sensitivity.csv and .png."""
     runs = design_runs(spec.parameters, spec.design)
@@ -54,10 +75,19 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
             failed += rec.get("status", "ok") != "ok"
             bar.update(task, completed=done, failed=failed)
 
-        records = execute(runs, SceneCase.from_spec(spec), out, fingerprint=spec.fingerprint(),
-                          threads=spec.threads, fields=spec.outputs.fields, scheduler=scheduler,
-                          workers=workers, retry_failed=retry_failed, batch=spec.batch,
-                          on_record=follow)
+        records = execute(
+            runs,
+            SceneCase.from_spec(spec),
+            out,
+            fingerprint=spec.fingerprint(),
+            threads=spec.threads,
+            fields=spec.outputs.fields,
+            scheduler=scheduler,
+            workers=workers,
+            retry_failed=retry_failed,
+            batch=spec.batch,
+            on_record=follow,
+        )
     result = SweepResult(records_table(records, out), ["results.parquet", "runs/", "sweep.json"])
     if spec.outputs.fields:
         from .dataset import write_dataset

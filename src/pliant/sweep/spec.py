@@ -59,6 +59,18 @@ class Parameter:
     range: tuple[float, float] | None = None
     scale: str = "linear"
 
+    @property
+    def choices(self) -> tuple:
+        """The explicit values (empty for a sampled parameter)."""
+        return self.values or ()
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """[low, high] of a sampled parameter; ValueError for one with explicit values."""
+        if self.range is None:
+            raise ValueError(f"parameter {self.key!r} has explicit values, no range")
+        return self.range
+
 
 @dataclass(frozen=True)
 class Design:
@@ -103,11 +115,18 @@ class SweepSpec:
         """A hash of everything that decides the runs' results (the spec and the base file's
         bytes), so that a resumed sweep can tell whether its finished runs still hold."""
         base = self.base.read_bytes() if self.base.is_file() else b""
-        spec = json.dumps({"parameters": [p.__dict__ for p in self.parameters],
-                           "design": self.design.__dict__, "fixed": self.fixed,
-                           "outputs": self.outputs.__dict__, "ignore": self.ignore,
-                           "batch": self.batch},
-                          sort_keys=True, default=str)
+        spec = json.dumps(
+            {
+                "parameters": [p.__dict__ for p in self.parameters],
+                "design": self.design.__dict__,
+                "fixed": self.fixed,
+                "outputs": self.outputs.__dict__,
+                "ignore": self.ignore,
+                "batch": self.batch,
+            },
+            sort_keys=True,
+            default=str,
+        )
         return hashlib.sha256(spec.encode() + b"\0" + base).hexdigest()[:16]
 
 
@@ -122,9 +141,22 @@ def load_sweep(path) -> SweepSpec:
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"not valid TOML: {e}", str(path)) from None
     ctx = Ctx(str(path), text)
-    check_keys(ctx, data, "", {"base": "str", "threads": "int", "ignore": "list", "design": "table",
-                               "parameter": "list", "set": "table", "output": "table",
-                               "batch": "int"}, ("base", "parameter"))
+    check_keys(
+        ctx,
+        data,
+        "",
+        {
+            "base": "str",
+            "threads": "int",
+            "ignore": "list",
+            "design": "table",
+            "parameter": "list",
+            "set": "table",
+            "output": "table",
+            "batch": "int",
+        },
+        ("base", "parameter"),
+    )
     base = (path.parent / data["base"]).resolve()
     if not base.is_file():
         raise ctx.error("base", f"no such scene or NiftySim model: {base}")
@@ -140,18 +172,29 @@ def load_sweep(path) -> SweepSpec:
     dup = next((k for k in keys if keys.count(k) > 1), None)
     if dup:
         raise ctx.error("parameter", f"key {dup!r} is varied twice; expected each key once")
-    if design.type == "list" and len({len(p.values) for p in params}) > 1:
-        raise ctx.error("parameter", "a 'list' design pairs the i-th values of every parameter; "
-                        f"expected lists of one length (got {[len(p.values) for p in params]})")
+    if design.type == "list" and len({len(p.choices) for p in params}) > 1:
+        raise ctx.error(
+            "parameter",
+            "a 'list' design pairs the i-th values of every parameter; "
+            f"expected lists of one length (got {[len(p.choices) for p in params]})",
+        )
     n = _run_count(design, params)
     if n > MAX_RUNS:
         raise ctx.error("design", f"the design makes {n:.3g} runs; expected at most {MAX_RUNS:,}")
     ignore = data.get("ignore", [])
     if not all(isinstance(x, str) for x in ignore):
         raise ctx.error("ignore", "expected a list of NiftySim feature names")
-    spec = SweepSpec(base, params, design, dict(data.get("set", {})),
-                     _outputs(ctx, data.get("output", {})), threads, tuple(ignore), str(path),
-                     _batch(ctx, data))
+    spec = SweepSpec(
+        base,
+        params,
+        design,
+        dict(data.get("set", {})),
+        _outputs(ctx, data.get("output", {})),
+        threads,
+        tuple(ignore),
+        str(path),
+        _batch(ctx, data),
+    )
     _check_key_paths(ctx, spec)
     return spec
 
@@ -183,23 +226,32 @@ def _check_key_paths(ctx: Ctx, spec: SweepSpec) -> None:
 
         def put(key, value):
             set_key(data, key, value, str(spec.base))
-    where = {**{k: f"set.{k}" for k in spec.fixed},
-             **{p.key: f"parameter[{i}].key" for i, p in enumerate(spec.parameters)}}
-    for key, value in {**spec.fixed, **{p.key: p.values[0] if p.values else p.range[0]
-                                         for p in spec.parameters}}.items():
+
+    where = {
+        **{k: f"set.{k}" for k in spec.fixed},
+        **{p.key: f"parameter[{i}].key" for i, p in enumerate(spec.parameters)},
+    }
+    for key, value in {
+        **spec.fixed,
+        **{p.key: p.choices[0] if p.choices else p.bounds[0] for p in spec.parameters},
+    }.items():
         try:
             put(key, value)
         except InputError as e:
-            raise SceneError(f"{key!r} does not fit the base file: {e}", ctx.file, where[key],
-                             ctx.line_of(where[key].split(".")[0])) from None
+            raise SceneError(
+                f"{key!r} does not fit the base file: {e}",
+                ctx.file,
+                where[key],
+                ctx.line_of(where[key].split(".")[0]),
+            ) from None
 
 
 def _run_count(design: Design, params: list[Parameter]) -> int:
     """Runs the design makes (counted, not listed)."""
     if design.type == "grid":
-        return math.prod(len(p.values) for p in params)
+        return math.prod(len(p.choices) for p in params)
     if design.type == "list":
-        return len(params[0].values)
+        return len(params[0].choices)
     return design.samples * (len(params) + 2) if design.type == "saltelli" else design.samples
 
 
@@ -212,8 +264,11 @@ def _batch(ctx: Ctx, data: dict) -> int:
     out = data.get("output", {})
     for key in ("fields", "tool_history"):
         if batch > 1 and out.get(key):
-            raise ctx.error(f"output.{key}", f"{key} = true needs each run alone; expected batch "
-                            "= 1 (a batch reports each run's closing figures)")
+            raise ctx.error(
+                f"output.{key}",
+                f"{key} = true needs each run alone; expected batch "
+                "= 1 (a batch reports each run's closing figures)",
+            )
     return batch
 
 
@@ -226,29 +281,33 @@ def _design(ctx: Ctx, d: dict) -> Design:
     if kind in _SAMPLED and samples < 1:
         raise ctx.error("design.samples", f"a '{kind}' design needs samples >= 1")
     if kind == "saltelli" and samples & (samples - 1):
-        raise ctx.error("design.samples", f"samples = {samples}: Saltelli's scheme on a Sobol' "
-                        "sequence needs a power of 2")
+        raise ctx.error(
+            "design.samples",
+            f"samples = {samples}: Saltelli's scheme on a Sobol' sequence needs a power of 2",
+        )
     return Design(kind, samples, d.get("seed", 0))
 
 
 def _parameter(ctx: Ctx, p: dict, where: str, design: Design) -> Parameter:
-    check_keys(ctx, p, where, {"key": "str", "values": "list", "range": "list", "scale": "str"},
-               ("key",))
+    check_keys(ctx, p, where, {"key": "str", "values": "list", "range": "list", "scale": "str"}, ("key",))
     if design.type in _SAMPLED:
         if "range" not in p:
-            raise ctx.error(where, f"a '{design.type}' design samples a range; expected "
-                            "range = [low, high]")
+            raise ctx.error(where, f"a '{design.type}' design samples a range; expected range = [low, high]")
         low, high = vector(ctx, p["range"], f"{where}.range", 2)
         scale = p.get("scale", "linear")
         if scale not in ("linear", "log"):
             raise ctx.error(f"{where}.scale", f"scale = {scale!r}: expected 'linear' or 'log'")
         if not low < high or (scale == "log" and not low > 0):
-            raise ctx.error(f"{where}.range", f"range = [{low:g}, {high:g}]: expected low < high"
-                            + (" and low > 0 for a log scale" if scale == "log" else ""))
+            raise ctx.error(
+                f"{where}.range",
+                f"range = [{low:g}, {high:g}]: expected low < high"
+                + (" and low > 0 for a log scale" if scale == "log" else ""),
+            )
         return Parameter(p["key"], range=(low, high), scale=scale)
     if "values" not in p or not p["values"]:
-        raise ctx.error(where, f"a '{design.type}' design takes explicit values; expected "
-                        "values = [...] (non-empty)")
+        raise ctx.error(
+            where, f"a '{design.type}' design takes explicit values; expected values = [...] (non-empty)"
+        )
     for v in p["values"]:
         if isinstance(v, float) and not math.isfinite(v):
             raise ctx.error(f"{where}.values", f"{v!r}: expected finite numbers")
@@ -257,6 +316,7 @@ def _parameter(ctx: Ctx, p: dict, where: str, design: Design) -> Parameter:
 
 def _outputs(ctx: Ctx, o: dict) -> Outputs:
     check_keys(ctx, o, "output", {"points": "table", "tool_history": "bool", "fields": "bool"})
-    points = {name: tuple(vector(ctx, v, f"output.points.{name}"))
-              for name, v in o.get("points", {}).items()}
+    points: dict[str, Any] = {
+        name: tuple(vector(ctx, v, f"output.points.{name}")) for name, v in o.get("points", {}).items()
+    }
     return Outputs(points, o.get("tool_history", False), o.get("fields", False))

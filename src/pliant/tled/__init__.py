@@ -6,6 +6,21 @@ from .model import Model, State
 from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory
 from .solver import Simulation, Solver
 
-__all__ = ["ModelBuilder", "Model", "State", "Solver", "Simulation", "RunInfo", "RelaxInfo",
-           "ContactReport", "ToolHistory",
-           "LoadCurve", "Constant", "Step", "Ramp", "SmoothRamp", "Hilly", "Table"]
+__all__ = [
+    "ModelBuilder",
+    "Model",
+    "State",
+    "Solver",
+    "Simulation",
+    "RunInfo",
+    "RelaxInfo",
+    "ContactReport",
+    "ToolHistory",
+    "LoadCurve",
+    "Constant",
+    "Step",
+    "Ramp",
+    "SmoothRamp",
+    "Hilly",
+    "Table",
+]

@@ -40,27 +40,36 @@ def _same(a, b) -> bool:
 
 
 def _tool_signature(tool) -> tuple:
-    return (type(tool).__name__, tool.name, tool.mu_s, tool.mu_k, tuple(tool.params()),
-            tool.key_array().tobytes())
+    return (
+        type(tool).__name__,
+        tool.name,
+        tool.mu_s,
+        tool.mu_k,
+        tuple(tool.params()),
+        tool.key_array().tobytes(),
+    )
 
 
 def _check_shared(builders: list[ModelBuilder]) -> None:
     """The settings a model holds once are the same in every body; InputError names the first
     body that differs and the setting."""
     first = builders[0]
-    shared = {"damping": lambda b: float(b.damping),
-              "stiffness_damping": lambda b: float(b.stiffness_damping),
-              "nodal_pressure (T4ANP)": lambda b: (bool(b.nodal_pressure),
-                                                   float(b.nodal_pressure_stabilization)),
-              "gravity": lambda b: b._gravity,
-              "tools": lambda b: [_tool_signature(t) for t in b.tools],
-              "tool node restrictions": lambda b: [s is None for s in b.tool_nodes]}
+    shared = {
+        "damping": lambda b: float(b.damping),
+        "stiffness_damping": lambda b: float(b.stiffness_damping),
+        "nodal_pressure (T4ANP)": lambda b: (bool(b.nodal_pressure), float(b.nodal_pressure_stabilization)),
+        "gravity": lambda b: b._gravity,
+        "tools": lambda b: [_tool_signature(t) for t in b.tools],
+        "tool node restrictions": lambda b: [s is None for s in b.tool_nodes],
+    }
     for k, b in enumerate(builders[1:], start=1):
         for what, get in shared.items():
             if not _same(get(b), get(first)):
-                raise InputError(f"batch: body {k} ({b.source}) has another {what} than body 0 "
-                                 f"({first.source}); a batch shares its {what}: expected the same "
-                                 "in every body")
+                raise InputError(
+                    f"batch: body {k} ({b.source}) has another {what} than body 0 "
+                    f"({first.source}); a batch shares its {what}: expected the same "
+                    "in every body"
+                )
 
 
 def merge_builders(builders: list[ModelBuilder]) -> tuple[ModelBuilder, np.ndarray, np.ndarray]:
@@ -88,9 +97,10 @@ def merge_builders(builders: list[ModelBuilder]) -> tuple[ModelBuilder, np.ndarr
         out._cons.update({(n + int(n0), d): v for (n, d), v in b._cons.items()})
         out._forces += [(ids + n0, f, c) for ids, f, c in b._forces]
         out._pressures += [(F + n0, p, c) for F, p, c in b._pressures]
-    out.tool_nodes = [None if s is None else np.concatenate([b.tool_nodes[t] + n0 for b, n0 in
-                                                            zip(builders, node_off)])
-                      for t, s in enumerate(first.tool_nodes)]
+    out.tool_nodes = [
+        None if s is None else np.concatenate([b.tool_nodes[t] + n0 for b, n0 in zip(builders, node_off)])
+        for t, s in enumerate(first.tool_nodes)
+    ]
     out.source = f"batch of {len(builders)} ({first.source})"
     return out, node_off, elem_off
 
@@ -106,8 +116,9 @@ class Batch:
         self.model = merged.finalize(dtype, **finalize_options)
 
     @classmethod
-    def replicate(cls, builder: ModelBuilder, materials: list, dtype="float32",
-                  **finalize_options) -> "Batch":
+    def replicate(
+        cls, builder: ModelBuilder, materials: list, dtype="float32", **finalize_options
+    ) -> "Batch":
         """len(materials) copies of ``builder``, copy k with ``materials[k]``: a Material (every
         element set) or a dict set name → Material (the sets it names)."""
         builders = []
@@ -115,28 +126,34 @@ class Batch:
             b = copy.copy(builder)
             names = {s.name for s in builder.sets}
             if isinstance(m, dict) and set(m) - names:
-                raise InputError(f"batch: materials[{k}] names element set(s) "
-                                 f"{sorted(set(m) - names)}; the sets are {sorted(names)}")
-            b.sets = [dataclasses.replace(s, material=(m.get(s.name, s.material) if isinstance(m, dict)
-                                                       else m)) for s in builder.sets]
+                raise InputError(
+                    f"batch: materials[{k}] names element set(s) "
+                    f"{sorted(set(m) - names)}; the sets are {sorted(names)}"
+                )
+            b.sets = [
+                dataclasses.replace(s, material=(m.get(s.name, s.material) if isinstance(m, dict) else m))
+                for s in builder.sets
+            ]
             builders.append(b)
         return cls(builders, dtype, **finalize_options)
 
     def nodes(self, a: np.ndarray, k: int) -> np.ndarray:
         """Body k's rows of a per-node array (N_total, ...) such as displacements [m]."""
-        return a[self.node_offsets[k]:self.node_offsets[k + 1]]
+        return a[self.node_offsets[k] : self.node_offsets[k + 1]]
 
     def elements(self, a: np.ndarray, k: int) -> np.ndarray:
         """Body k's rows of a per-element array (M_total, ...) such as von Mises stress [Pa]."""
-        return a[self.element_offsets[k]:self.element_offsets[k + 1]]
+        return a[self.element_offsets[k] : self.element_offsets[k + 1]]
 
     def stack(self, a: np.ndarray) -> np.ndarray:
         """A per-node array with the batch as its leading dimension, shape (B, N, ...), when
         every body has N nodes (copies of one body); InputError otherwise."""
         n = np.diff(self.node_offsets)
         if np.any(n != n[0]):
-            raise InputError("batch: the bodies have different node counts "
-                             f"({sorted(set(n.tolist()))}); take them one by one with nodes(a, k)")
+            raise InputError(
+                "batch: the bodies have different node counts "
+                f"({sorted(set(n.tolist()))}); take them one by one with nodes(a, k)"
+            )
         return a.reshape(self.bodies, int(n[0]), *a.shape[1:])
 
     def tool_forces(self, report) -> np.ndarray:

@@ -92,13 +92,14 @@ class ModelBuilder:
             X = np.asarray(nodes, dtype=float)
             T = np.asarray(tets)
         except (TypeError, ValueError) as e:
-            raise MeshError(f"{src}: nodes (N, 3) and tetrahedra (M, 4) must be numeric arrays: "
-                            f"{e}") from None
+            raise MeshError(
+                f"{src}: nodes (N, 3) and tetrahedra (M, 4) must be numeric arrays: {e}"
+            ) from None
         if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] == 0:
             raise MeshError(f"{src}: nodes have shape {X.shape}; expected (N, 3) with N >= 1")
         if not np.all(np.isfinite(X)):
-            bad = int(np.argwhere(~np.isfinite(X))[0, 0])
-            raise MeshError(f"{src}: node {bad} has a non-finite coordinate {X[bad].tolist()}")
+            node = int(np.argwhere(~np.isfinite(X))[0, 0])
+            raise MeshError(f"{src}: node {node} has a non-finite coordinate {X[node].tolist()}")
         if T.ndim != 2 or T.shape[1] != 4 or T.shape[0] == 0:
             raise MeshError(f"{src}: tetrahedra have shape {T.shape}; expected (M, 4) with M >= 1")
         if not (np.issubdtype(T.dtype, np.integer) or np.issubdtype(T.dtype, np.floating)):
@@ -109,14 +110,16 @@ class ModelBuilder:
             T = T.astype(np.int64)
         bad = np.argwhere((T < 0) | (T >= X.shape[0]))
         if bad.size:
-            e = int(bad[0, 0])
-            raise MeshError(f"{src}: element {e} has node index {int(T[e, bad[0, 1]])}; "
-                            f"expected 0 <= index < {X.shape[0]}")
+            k = int(bad[0, 0])
+            raise MeshError(
+                f"{src}: element {k} has node index {int(T[k, bad[0, 1]])}; "
+                f"expected 0 <= index < {X.shape[0]}"
+            )
         rep = np.sort(T, axis=1)
         dup = np.nonzero(np.any(rep[:, 1:] == rep[:, :-1], axis=1))[0]
         if dup.size:
-            e = int(dup[0])
-            raise DegenerateElementError(f"{src}: element {e} repeats a node: {T[e].tolist()}", e)
+            k = int(dup[0])
+            raise DegenerateElementError(f"{src}: element {k} repeats a node: {T[k].tolist()}", k)
         base = self.nodes.shape[0]
         first = self.tets.shape[0]
         self.nodes = np.vstack([self.nodes, X])
@@ -155,8 +158,7 @@ class ModelBuilder:
         """Node ids as int64: integers, or floats with integral values; anything else (1.5,
         strings, booleans) raises InputError naming ``what``."""
         a = np.asarray(nodes)
-        if a.dtype == bool or not (np.issubdtype(a.dtype, np.integer) or
-                                   np.issubdtype(a.dtype, np.floating)):
+        if a.dtype == bool or not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating)):
             raise InputError(f"{what}: node ids of type {a.dtype}; expected integers")
         if np.issubdtype(a.dtype, np.floating):
             if not np.all(np.isfinite(a)) or np.any(a != np.round(a)):
@@ -189,9 +191,11 @@ class ModelBuilder:
         except (TypeError, ValueError):
             val = None
         if val is None or val.shape != (ids.size, len(ds)):
-            raise InputError(f"prescribe: displacement of {given} for {len(ds)} DOF(s) ({dofs}) of "
-                             f"{ids.size} node(s); expected a scalar, ({len(ds)},) or "
-                             f"({ids.size}, {len(ds)}) [m]")
+            raise InputError(
+                f"prescribe: displacement of {given} for {len(ds)} DOF(s) ({dofs}) of "
+                f"{ids.size} node(s); expected a scalar, ({len(ds)},) or "
+                f"({ids.size}, {len(ds)}) [m]"
+            )
         if not np.all(np.isfinite(val)):
             raise InputError("prescribe: displacement values must be finite")
         curve = curve or Constant()
@@ -201,9 +205,11 @@ class ModelBuilder:
                 new = (float(val[i, j]), curve)
                 old = self._cons.get(key)
                 if old is not None and old != new:
-                    raise InputError(f"node {int(n)} DOF {'xyz'[d]} is constrained twice: "
-                                     f"{old[0]:g} m with {shown(old[1])} and {new[0]:g} m with "
-                                     f"{shown(new[1])}")
+                    raise InputError(
+                        f"node {int(n)} DOF {'xyz'[d]} is constrained twice: "
+                        f"{old[0]:g} m with {shown(old[1])} and {new[0]:g} m with "
+                        f"{shown(new[1])}"
+                    )
                 self._cons[key] = new
 
     def add_force(self, nodes, force, curve: LoadCurve | None = None):
@@ -215,8 +221,10 @@ class ModelBuilder:
         except (TypeError, ValueError):
             f = np.zeros((0, 0))
         if f.shape != (ids.size, 3) or not np.all(np.isfinite(f)):
-            raise InputError(f"add_force: force of shape {f.shape} or not finite; expected finite (3,) or "
-                             f"({ids.size}, 3) [N]")
+            raise InputError(
+                f"add_force: force of shape {f.shape} or not finite; expected finite (3,) or "
+                f"({ids.size}, 3) [N]"
+            )
         self._forces.append((ids, np.array(f), curve or Constant()))
 
     def add_pressure(self, faces, pressure, curve: LoadCurve | None = None, orient: bool = True):
@@ -231,11 +239,16 @@ class ModelBuilder:
         if F.ndim != 2 or F.shape[1] != 3 or F.shape[0] == 0 or not np.issubdtype(F.dtype, np.integer):
             raise InputError(f"add_pressure: faces shape {F.shape}; expected (F, 3) node ids")
         F = self._node_ids(F.ravel(), "add_pressure faces").reshape(-1, 3)
-        p = np.broadcast_to(np.asarray(pressure, float), (F.shape[0],)).copy() \
-            if np.ndim(pressure) == 0 else np.asarray(pressure, float)
+        p = (
+            np.broadcast_to(np.asarray(pressure, float), (F.shape[0],)).copy()
+            if np.ndim(pressure) == 0
+            else np.asarray(pressure, float)
+        )
         if p.shape != (F.shape[0],) or not np.all(np.isfinite(p)):
-            raise InputError(f"add_pressure: pressure shape {np.shape(pressure)}; expected a finite "
-                             f"value or ({F.shape[0]},) [Pa]")
+            raise InputError(
+                f"add_pressure: pressure shape {np.shape(pressure)}; expected a finite "
+                f"value or ({F.shape[0]},) [Pa]"
+            )
         if orient:
             from ..mesh.topology import boundary_faces
 
@@ -245,8 +258,10 @@ class ModelBuilder:
             for i, f in enumerate(F.tolist()):
                 b = index.get(tuple(sorted(f)))
                 if b is None:
-                    raise InputError(f"add_pressure: face {i} (nodes {f}) is not on the mesh "
-                                     "boundary; pass orient=False to load it as given")
+                    raise InputError(
+                        f"add_pressure: face {i} (nodes {f}) is not on the mesh "
+                        "boundary; pass orient=False to load it as given"
+                    )
                 out.append(b)
             F = np.array(out, np.int64)
         self._pressures.append((F, p, curve or Constant()))
@@ -271,17 +286,18 @@ class ModelBuilder:
             raise InputError(f"add_tool: {shown(tool)} is not a pliant.contact tool")
         if nodes is not None:
             if len(self.tools) >= _core.masked_tools:
-                raise InputError(f"add_tool {shown(tool.name)}: only the first "
-                                 f"{_core.masked_tools} tools can be "
-                                 f"restricted to nodes; this is tool {len(self.tools)}")
+                raise InputError(
+                    f"add_tool {shown(tool.name)}: only the first "
+                    f"{_core.masked_tools} tools can be "
+                    f"restricted to nodes; this is tool {len(self.tools)}"
+                )
             nodes = np.unique(self._node_ids(nodes, f"add_tool {shown(tool.name)} nodes"))
         self.tools.append(tool)
         self.tool_nodes.append(nodes)
         return tool
 
     # --- finalize ---------------------------------------------------------------------------
-    def finalize(self, dtype="float32", threads: int | None = None, backend: str = "cpu",
-                 device: int = 0):
+    def finalize(self, dtype="float32", threads: int | None = None, backend: str = "cpu", device: int = 0):
         """Validate everything and build the static Model (engine arrays in a cache-friendly order).
 
         backend: "cpu" (OpenMP + SIMD), "cuda" (the same engine on an NVIDIA GPU, device-resident)
@@ -299,42 +315,55 @@ class ModelBuilder:
             raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")
         gamma = float(self.nodal_pressure_stabilization)
         if not 0.0 <= gamma <= 1.0:
-            raise InputError(f"nodal_pressure_stabilization = {shown(self.nodal_pressure_stabilization)}; "
-                             "expected a fraction from 0 (plain T4ANP) to 1 (plain T4)")
+            raise InputError(
+                f"nodal_pressure_stabilization = {shown(self.nodal_pressure_stabilization)}; "
+                "expected a fraction from 0 (plain T4ANP) to 1 (plain T4)"
+            )
         beta = float(self.stiffness_damping)
         if not math.isfinite(beta) or beta < 0:
-            raise InputError(f"stiffness_damping = {shown(self.stiffness_damping)}; expected a finite "
-                             "value >= 0 [s]")
+            raise InputError(
+                f"stiffness_damping = {shown(self.stiffness_damping)}; expected a finite value >= 0 [s]"
+            )
         owner = np.full(self.n_elements, -1, dtype=np.int64)
         for k, s in enumerate(self.sets):
             clash = s.elements[owner[s.elements] >= 0]
             if clash.size:
-                raise InputError(f"element {int(clash[0])} is in two element sets "
-                                 f"({self.sets[owner[clash[0]]].name!r} and {shown(s.name)})")
+                raise InputError(
+                    f"element {int(clash[0])} is in two element sets "
+                    f"({self.sets[owner[clash[0]]].name!r} and {shown(s.name)})"
+                )
             owner[s.elements] = k
         if np.any(owner < 0):
-            raise MaterialError(f"{self.source}: element {int(np.argmax(owner < 0))} has no material; "
-                                "call set_material() for every element")
+            raise MaterialError(
+                f"{self.source}: element {int(np.argmax(owner < 0))} has no material; "
+                "call set_material() for every element"
+            )
         if self.nodal_pressure:
             for s in self.sets:
                 if getattr(s.material, "prony", None):
-                    raise MaterialError(f"element set {shown(s.name)}: viscoelastic materials and "
-                                        "average nodal pressure (T4ANP) cannot be combined yet")
+                    raise MaterialError(
+                        f"element set {shown(s.name)}: viscoelastic materials and "
+                        "average nodal pressure (T4ANP) cannot be combined yet"
+                    )
                 if not s.material.decoupled:
                     from ..materials.viscoelastic import decoupled_materials
 
-                    raise MaterialError(f"element set {shown(s.name)}: {type(s.material).__name__} has no "
-                                        "separate volumetric term; average nodal pressure (T4ANP) "
-                                        f"needs a decoupled material ({', '.join(decoupled_materials())})")
+                    raise MaterialError(
+                        f"element set {shown(s.name)}: {type(s.material).__name__} has no "
+                        "separate volumetric term; average nodal pressure (T4ANP) "
+                        f"needs a decoupled material ({', '.join(decoupled_materials())})"
+                    )
         X = np.ascontiguousarray(self.nodes)
         T32 = np.ascontiguousarray(self.tets.astype(np.int32))
         vol, alt = _core.tet_geometry(X, T32)
         bad = np.nonzero(~(np.isfinite(vol) & np.isfinite(alt)))[0]
         if bad.size:
             e = int(bad[0])
-            raise MeshError(f"{self.source}: element {e} has a non-finite volume or altitude: "
-                            f"coordinates up to {float(np.abs(X).max()):.3g} m overflow (SI metres "
-                            "expected; scale the mesh)")
+            raise MeshError(
+                f"{self.source}: element {e} has a non-finite volume or altitude: "
+                f"coordinates up to {float(np.abs(X).max()):.3g} m overflow (SI metres "
+                "expected; scale the mesh)"
+            )
         edges = X[T32[:, [1, 2, 3, 2, 3, 3]]] - X[T32[:, [0, 0, 0, 1, 1, 2]]]
         lmax = np.sqrt((edges**2).sum(-1)).max(axis=1)
         rel = vol / np.maximum(lmax, np.finfo(float).tiny) ** 3
@@ -343,14 +372,18 @@ class ModelBuilder:
             e = int(degenerate[0])
             raise DegenerateElementError(
                 f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is degenerate: volume "
-                f"{vol[e]:.3e} m^3 for longest edge {lmax[e]:.3e} m; expected a non-flat tetrahedron", e)
+                f"{vol[e]:.3e} m^3 for longest edge {lmax[e]:.3e} m; expected a non-flat tetrahedron",
+                e,
+            )
         inverted = np.nonzero(vol < 0)[0]
         if inverted.size:
             e = int(inverted[0])
             raise InvertedElementError(
                 f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is inverted: volume "
                 f"{vol[e]:.3e} m^3; expected positive orientation (swap two nodes), "
-                f"{inverted.size} inverted element(s) in all", e)
+                f"{inverted.size} inverted element(s) in all",
+                e,
+            )
         check_backend(backend)
         model = Model(self, owner, dtype, threads, geometry=(vol, alt))
         model._set_default_backend(backend, device)

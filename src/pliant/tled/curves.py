@@ -132,8 +132,9 @@ class Table(LoadCurve):
             raise InputError("Table: times and values must be finite")
         if np.any(np.diff(t) <= 0):
             k = int(np.argmax(np.diff(t) <= 0))
-            raise InputError(f"Table: times must increase strictly; times[{k + 1}] = {t[k + 1]:g} "
-                             f"<= times[{k}] = {t[k]:g}")
+            raise InputError(
+                f"Table: times must increase strictly; times[{k + 1}] = {t[k + 1]:g} <= times[{k}] = {t[k]:g}"
+            )
         self.times, self.values = tuple(t), tuple(v)
 
     @property

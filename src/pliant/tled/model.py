@@ -39,10 +39,11 @@ def _check_threads(threads) -> None:
     if threads is None:
         return
     limit = int(_core.thread_limit())
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) \
-            or not 1 <= threads <= limit:
-        raise InputError(f"threads = {shown(threads)}; expected an integer from 1 to {limit} on this "
-                         "machine, or None for automatic")
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not 1 <= threads <= limit:
+        raise InputError(
+            f"threads = {shown(threads)}; expected an integer from 1 to {limit} on this "
+            "machine, or None for automatic"
+        )
 
 
 def _fingerprint(X, T, sets, dtype, constraints) -> str:
@@ -71,11 +72,15 @@ def _warn_slow_element(source: str, dt: np.ndarray, altitude: np.ndarray) -> Non
         return
     factor = float(np.median(dt) / dt[worst])
     if factor >= SLOW_ELEMENT_FACTOR:
-        warnings.warn(PliantWarning(
-            f"{source}: element {worst} limits the stable time step to {dt[worst]:.3g} s, "
-            f"{factor:.0f}x below the median element's {np.median(dt):.3g} s: every run takes "
-            f"{factor:.0f}x the steps a uniform mesh would (smallest altitude {altitude[worst]:.3g} "
-            "m); check the mesh (pliant mesh quality)"), stacklevel=4)
+        warnings.warn(
+            PliantWarning(
+                f"{source}: element {worst} limits the stable time step to {dt[worst]:.3g} s, "
+                f"{factor:.0f}x below the median element's {np.median(dt):.3g} s: every run takes "
+                f"{factor:.0f}x the steps a uniform mesh would (smallest altitude {altitude[worst]:.3g} "
+                "m); check the mesh (pliant mesh quality)"
+            ),
+            stacklevel=4,
+        )
 
 
 def _prony_row(prony) -> list[float]:
@@ -125,8 +130,14 @@ class Model:
     ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,).
     """
 
-    def __init__(self, builder, owner: np.ndarray, dtype: np.dtype, threads: int | None,
-                 geometry: tuple[np.ndarray, np.ndarray]):
+    def __init__(
+        self,
+        builder,
+        owner: np.ndarray,
+        dtype: np.dtype,
+        threads: int | None,
+        geometry: tuple[np.ndarray, np.ndarray],
+    ):
         X, T = builder.nodes, builder.tets
         _check_threads(threads)
         self.reference_positions = X.copy()
@@ -151,10 +162,13 @@ class Model:
         used = flat[np.sort(first)]
         orphans = np.setdiff1d(np.arange(N), used)
         if orphans.size:
-            warnings.warn(PliantWarning(
-                f"{builder.source}: {orphans.size} node(s) belong to no element (first: "
-                f"{int(orphans[0])}); they carry no mass and never move unless prescribed"),
-                stacklevel=3)
+            warnings.warn(
+                PliantWarning(
+                    f"{builder.source}: {orphans.size} node(s) belong to no element (first: "
+                    f"{int(orphans[0])}); they carry no mass and never move unless prescribed"
+                ),
+                stacklevel=3,
+            )
         node_order = np.concatenate([used, orphans])  # engine node i is user node node_order[i]
         node_rank = np.empty(N, dtype=np.int64)
         node_rank[node_order] = np.arange(N)
@@ -174,20 +188,23 @@ class Model:
             R = pattern_of.setdefault(k, np.zeros((N, 3)))
             np.add.at(R, node_rank[ids], f)
         pattern_curve = sorted(pattern_of)
-        press_F = np.concatenate([F for F, _, _ in builder._pressures]) if builder._pressures \
+        press_F = (
+            np.concatenate([F for F, _, _ in builder._pressures])
+            if builder._pressures
             else np.zeros((0, 3), np.int64)
-        press_p = np.concatenate([p for _, p, _ in builder._pressures]) if builder._pressures \
-            else np.zeros(0)
+        )
+        press_p = np.concatenate([p for _, p, _ in builder._pressures]) if builder._pressures else np.zeros(0)
         press_c = [cid(c) for F, _, c in builder._pressures for _ in range(len(F))]
-        patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve \
-            else np.zeros((0, N, 3))
+        patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve else np.zeros((0, N, 3))
         cons = sorted(builder._cons.items())
         self._cons_user = [(n, d) for (n, d), _ in cons]
-        g, gcurve = (builder._gravity[0], cid(builder._gravity[1])) if builder._gravity \
-            else (np.zeros(3), -1)
+        g, gcurve = (builder._gravity[0], cid(builder._gravity[1])) if builder._gravity else (np.zeros(3), -1)
         cons_curve = [cid(c) for _, (v, c) in cons]  # register every curve before the tables
         self.curves = curves
-        tb, tc, tt, tv = [], [], [], []
+        tb: list[int] = []
+        tc: list[int] = []
+        tt: list[float] = []
+        tv: list[float] = []
         for c in curves:
             tb.append(len(tt))
             tc.append(len(c.times))
@@ -201,8 +218,7 @@ class Model:
         if self.tools:
             from ..mesh.topology import boundary_nodes
 
-            n_cons = np.bincount(np.array([n for n, _ in self._cons_user], np.int64),
-                                 minlength=X.shape[0])
+            n_cons = np.bincount(np.array([n for n, _ in self._cons_user], np.int64), minlength=X.shape[0])
             surface = boundary_nodes(T)
             restricted = [s for s in builder.tool_nodes if s is not None]
             cand = np.unique(np.concatenate([surface, *restricted])).astype(np.int64)
@@ -211,8 +227,8 @@ class Model:
             # without a node set, the node set otherwise).
             on_surface = np.isin(cn, surface)
             masks = np.zeros(cn.size, np.int64)
-            for k, s in enumerate(builder.tool_nodes[:_core.masked_tools]):
-                masks |= (on_surface if s is None else np.isin(cn, s)).astype(np.int64) << k
+            for bit, s in enumerate(builder.tool_nodes[: _core.masked_tools]):
+                masks |= (on_surface if s is None else np.isin(cn, s)).astype(np.int64) << bit
         else:
             cn, masks = np.zeros(0, np.int64), np.zeros(0, np.int64)
         self.contact_nodes = cn
@@ -220,11 +236,12 @@ class Model:
         tool_grids = [t.grid() for t in self.tools]
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
-            for k in np.nonzero(keep)[0]:
-                visco.extend(_prony_row(getattr(self.sets[k].material, "prony", None)))
+            for g in np.nonzero(keep)[0]:
+                visco.extend(_prony_row(getattr(self.sets[g].material, "prony", None)))
         n_par = _core.material_params
-        params = [p for k in np.nonzero(keep)[0]
-                  for p in (*self.sets[k].material.params, *([0.0] * n_par))[:n_par]]
+        params = [
+            p for k in np.nonzero(keep)[0] for p in (*self.sets[k].material.params, *([0.0] * n_par))[:n_par]
+        ]
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
         try:
             self._engine = Engine(
@@ -236,11 +253,19 @@ class Model:
                 group_params=params,
                 patterns=np.ascontiguousarray(patterns, dtype=float),
                 pattern_curve=pattern_curve,
-                cons_node=[int(node_rank[n]) for (n, d), _ in cons], cons_dim=[d for (n, d), _ in cons],
-                cons_value=[v for _, (v, c) in cons], cons_curve=cons_curve,
-                curve_kind=[int(c.kind) for c in curves], curve_t0=[c.t0 for c in curves],
-                curve_t1=[c.t1 for c in curves], curve_table_begin=tb, curve_table_count=tc,
-                table_t=tt, table_v=tv, gravity=[float(x) for x in g], gravity_curve=gcurve,
+                cons_node=[int(node_rank[n]) for (n, d), _ in cons],
+                cons_dim=[d for (n, d), _ in cons],
+                cons_value=[v for _, (v, c) in cons],
+                cons_curve=cons_curve,
+                curve_kind=[int(c.kind) for c in curves],
+                curve_t0=[c.t0 for c in curves],
+                curve_t1=[c.t1 for c in curves],
+                curve_table_begin=tb,
+                curve_table_count=tc,
+                table_t=tt,
+                table_v=tv,
+                gravity=[float(x) for x in g],
+                gravity_curve=gcurve,
                 # engine order: sequential access
                 contact_nodes=[int(node_rank[n]) for n in cn[cn_order]],
                 contact_masks=[int(m) for m in masks[cn_order]],
@@ -251,8 +276,10 @@ class Model:
                 tool_grid_dims=[d for dims, _ in tool_grids for d in dims],
                 tool_grids=[v.tolist() for _, v in tool_grids],
                 press_nodes=[int(v) for v in node_rank[press_F].ravel()],
-                press_value=press_p.tolist(), press_curve=press_c,
-                anp=bool(builder.nodal_pressure), group_visco=visco,
+                press_value=press_p.tolist(),
+                press_curve=press_c,
+                anp=bool(builder.nodal_pressure),
+                group_visco=visco,
                 stiffness_damping=self.stiffness_damping,
                 anp_stabilization=float(builder.nodal_pressure_stabilization),
                 threads=int(threads if threads else _auto_threads(M)),
@@ -263,15 +290,16 @@ class Model:
         self.fingerprint = _fingerprint(X, T, self.sets, dtype, self._cons_user)
         self._results_backend = None  # made on first use (element_results, internal_forces)
         self._backend, self._device = "cpu", 0  # the default backend of its solvers
-        self._solver = None                     # weak reference: the last solver that ran
-        self.dt_critical = _damped_critical_step(float(self._engine.dt_critical),
-                                                 self.stiffness_damping)
+        self._solver = None  # weak reference: the last solver that ran
+        self.dt_critical = _damped_critical_step(float(self._engine.dt_critical), self.stiffness_damping)
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
-        _warn_slow_element(builder.source,
-                           self.to_user_elements(np.asarray(self._engine.critical_steps())),
-                           np.asarray(geometry[1], float))
+        _warn_slow_element(
+            builder.source,
+            self.to_user_elements(np.asarray(self._engine.critical_steps())),
+            np.asarray(geometry[1], float),
+        )
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)
         self.constrained = np.zeros((N, 3), dtype=bool)
@@ -335,8 +363,11 @@ class Model:
     def use_backend(self, backend: str, device: int = 0):
         """Deprecated: the Solver owns its backend (``Solver(model, backend=...)``, or
         ``finalize(backend=...)`` for every solver of the model). Sets the default."""
-        warnings.warn("Model.use_backend() is deprecated; pass backend= to Solver or finalize()",
-                      DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            "Model.use_backend() is deprecated; pass backend= to Solver or finalize()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         self._set_default_backend(backend, device)
 
     def _set_default_backend(self, backend: str, device: int = 0):
@@ -346,8 +377,11 @@ class Model:
 
     def use_cuda(self, device: int = 0):
         """Deprecated: ``Solver(model, backend="cuda", device=d)``."""
-        warnings.warn("Model.use_cuda(d) is deprecated; use Solver(model, backend='cuda', device=d)",
-                      DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            "Model.use_cuda(d) is deprecated; use Solver(model, backend='cuda', device=d)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         self._set_default_backend("cuda", device)
 
     def _results(self):
@@ -358,8 +392,12 @@ class Model:
         return self._results_backend
 
     def _last_solver(self, what: str):
-        warnings.warn(f"Model.{what} is deprecated; use Solver.contact_report() (one report of tool "
-                      "forces and contact)", DeprecationWarning, stacklevel=3)
+        warnings.warn(
+            f"Model.{what} is deprecated; use Solver.contact_report() (one report of tool "
+            "forces and contact)",
+            DeprecationWarning,
+            stacklevel=3,
+        )
         solver = self._solver() if self._solver else None
         if solver is None:
             raise InputError(f"Model.{what}: no solver has run this model")
@@ -389,12 +427,15 @@ class Model:
         """Per element (user order): ``J``; ``energy_density`` W [Pa]; ``pk2`` S, ``cauchy`` σ [Pa] and
         ``green_strain`` E, each (M, 6) as xx, yy, zz, xy, yz, xz; ``von_mises`` [Pa] (M,)."""
         J, W, S, sig, E = self._results().measures(state._s)
-        out = {k: self.to_user_elements(np.asarray(v, dtype=float)) for k, v in
-               dict(J=J, energy_density=W, pk2=S, cauchy=sig, green_strain=E).items()}
+        out = {
+            k: self.to_user_elements(np.asarray(v, dtype=float))
+            for k, v in dict(J=J, energy_density=W, pk2=S, cauchy=sig, green_strain=E).items()
+        }
         s = out["cauchy"]
-        out["von_mises"] = np.sqrt(0.5 * ((s[:, 0] - s[:, 1]) ** 2 + (s[:, 1] - s[:, 2]) ** 2 +
-                                          (s[:, 2] - s[:, 0]) ** 2) +
-                                   3.0 * (s[:, 3] ** 2 + s[:, 4] ** 2 + s[:, 5] ** 2))
+        out["von_mises"] = np.sqrt(
+            0.5 * ((s[:, 0] - s[:, 1]) ** 2 + (s[:, 1] - s[:, 2]) ** 2 + (s[:, 2] - s[:, 0]) ** 2)
+            + 3.0 * (s[:, 3] ** 2 + s[:, 4] ** 2 + s[:, 5] ** 2)
+        )
         return out
 
     def element_volumes(self) -> np.ndarray:
@@ -463,15 +504,16 @@ class State:
         try:
             a = np.asarray(a, dtype=float)
         except (TypeError, ValueError) as e:
-            raise InputError(f"{name}: expected numbers of shape ({self.model.n_nodes}, 3); {e}") \
-                from None
+            raise InputError(f"{name}: expected numbers of shape ({self.model.n_nodes}, 3); {e}") from None
         if a.shape != (self.model.n_nodes, 3):
             raise InputError(f"{name}: expected shape ({self.model.n_nodes}, 3), got {a.shape}")
         bad = np.argwhere(~np.isfinite(a))
         if bad.size:
             i = int(bad[0, 0])
-            raise InputError(f"{name}: {len(bad)} non-finite value(s), first at node {i}: "
-                             f"{a[i].tolist()}; expected finite values")
+            raise InputError(
+                f"{name}: {len(bad)} non-finite value(s), first at node {i}: "
+                f"{a[i].tolist()}; expected finite values"
+            )
         return a
 
     def set_displacements(self, u, velocities=None, dt: float | None = None):
@@ -504,10 +546,17 @@ class State:
             path = path.with_name(path.name + ".npz")
         check_output_file(path, "state file")
         u_prev = self.model.to_user_nodes(np.asarray(self._s.get_u_prev(), dtype=float))
-        data = dict(u=self.displacements, u_prev=u_prev, t=self.time, dt=self.dt, step=self.steps,
-                    n_nodes=self.model.n_nodes, n_elements=self.model.n_elements,
-                    fingerprint=self.model.fingerprint,
-                    visco=np.asarray(self._s.get_q(), dtype=float))  # engine layout, same model
+        data = dict(
+            u=self.displacements,
+            u_prev=u_prev,
+            t=self.time,
+            dt=self.dt,
+            step=self.steps,
+            n_nodes=self.model.n_nodes,
+            n_elements=self.model.n_elements,
+            fingerprint=self.model.fingerprint,
+            visco=np.asarray(self._s.get_q(), dtype=float),
+        )  # engine layout, same model
         atomic_write(path, lambda tmp: np.savez(tmp, **data), "state file")
 
     def load(self, path):
@@ -520,10 +569,10 @@ class State:
             with np.load(path, allow_pickle=False) as d:
                 data = {k: d[k] for k in d.files}
         except Exception as e:  # zip, zlib, format and OS errors alike
-            raise InputError(f"{path}: not a readable pliant state file ({type(e).__name__}: "
-                             f"{str(e)[:200]})") from None
-        missing = [k for k in ("u", "u_prev", "t", "dt", "step", "n_nodes", "n_elements")
-                   if k not in data]
+            raise InputError(
+                f"{path}: not a readable pliant state file ({type(e).__name__}: {str(e)[:200]})"
+            ) from None
+        missing = [k for k in ("u", "u_prev", "t", "dt", "step", "n_nodes", "n_elements") if k not in data]
         if missing:
             raise InputError(f"{path}: not a pliant state file (no {', '.join(missing)})")
         try:
@@ -532,16 +581,22 @@ class State:
         except (TypeError, ValueError) as e:
             raise InputError(f"{path}: not a pliant state file ({e})") from None
         if nn != self.model.n_nodes or ne != self.model.n_elements:
-            raise InputError(f"{path}: state of a model with {nn} nodes / {ne} elements; this model "
-                             f"has {self.model.n_nodes} / {self.model.n_elements}")
+            raise InputError(
+                f"{path}: state of a model with {nn} nodes / {ne} elements; this model "
+                f"has {self.model.n_nodes} / {self.model.n_elements}"
+            )
         fp = str(data["fingerprint"]) if "fingerprint" in data else None
         if fp is not None and fp != self.model.fingerprint:
-            raise InputError(f"{path}: state saved from a different model (same sizes, different "
-                             f"mesh, materials or constraints: fingerprint {fp}, this model "
-                             f"{self.model.fingerprint})")
+            raise InputError(
+                f"{path}: state saved from a different model (same sizes, different "
+                f"mesh, materials or constraints: fingerprint {fp}, this model "
+                f"{self.model.fingerprint})"
+            )
         if not (np.isfinite(t) and np.isfinite(dt) and dt >= 0 and step >= 0):
-            raise InputError(f"{path}: bad time data t = {t}, dt = {dt}, step = {step}; expected "
-                             "finite t, dt >= 0 and step >= 0")
+            raise InputError(
+                f"{path}: bad time data t = {t}, dt = {dt}, step = {step}; expected "
+                "finite t, dt >= 0 and step >= 0"
+            )
         u = self.model.to_engine_nodes(self._check(data["u"], f"{path}: u"))
         u_prev = self.model.to_engine_nodes(self._check(data["u_prev"], f"{path}: u_prev"))
         if "visco" in data:

@@ -29,8 +29,11 @@ MAX_INCREMENTS = 10_000  # load steps of one quasi-static solve
 
 def _step_count(steps, what: str = "steps") -> int:
     """A step count: an integer (not a bool, not a float with a fraction) from 0 to MAX_STEPS."""
-    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer, float)) \
-            or (isinstance(steps, float) and not steps.is_integer()):
+    if (
+        isinstance(steps, (bool, np.bool_))
+        or not isinstance(steps, (int, np.integer, float))
+        or (isinstance(steps, float) and not steps.is_integer())
+    ):
         raise InputError(f"{what} = {shown(steps)}; expected a whole number of steps")
     if not 0 <= steps <= MAX_STEPS:
         raise InputError(f"{what} = {int(steps)}; expected 0 to {MAX_STEPS:.0e} steps in one call")
@@ -53,9 +56,17 @@ class Solver:
     ``finalize``); the solver owns its backend and its own copy of the tools' trajectories.
     """
 
-    def __init__(self, model: Model, dt: float | None = None, safety: float = 0.8,
-                 damping: float | None = None, allow_unstable: bool = False, check_every: int = 16,
-                 backend: str | None = None, device: int | None = None):
+    def __init__(
+        self,
+        model: Model,
+        dt: float | None = None,
+        safety: float = 0.8,
+        damping: float | None = None,
+        allow_unstable: bool = False,
+        check_every: int = 16,
+        backend: str | None = None,
+        device: int | None = None,
+    ):
         _check_model(model, "Solver(model)")
         self.model = model
         if not (0 < safety <= 1):
@@ -69,7 +80,8 @@ class Solver:
             raise TimeStepError(
                 f"dt = {dt:.4g} s exceeds the critical time step {model.dt_critical:.4g} s "
                 f"(element {model.dt_critical_element}: smallest altitude / dilatational wave speed); "
-                f"use dt <= {model.dt_critical:.4g} s, or allow_unstable=True to force it")
+                f"use dt <= {model.dt_critical:.4g} s, or allow_unstable=True to force it"
+            )
         self.dt = dt
         self.damping = model.damping if damping is None else float(damping)
         if not math.isfinite(self.damping) or self.damping < 0:
@@ -113,16 +125,20 @@ class Solver:
         nodes, tool, f = self._backend.contact_state()
         tool, f = np.asarray(tool), np.array(f)
         f[tool < 0] = 0.0
-        return ContactReport(self._histories, self.model._node_order[np.asarray(nodes)], tool, f,
-                             self._relaxed)
+        return ContactReport(
+            self._histories, self.model._node_order[np.asarray(nodes)], tool, f, self._relaxed
+        )
 
     @property
     def tool_histories(self) -> dict[int, ToolHistory]:
         """Deprecated: ``contact_report().tools``."""
         import warnings
 
-        warnings.warn("Solver.tool_histories is deprecated; use Solver.contact_report().tools",
-                      DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            "Solver.tool_histories is deprecated; use Solver.contact_report().tools",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         return dict(enumerate(self._histories))
 
     @property
@@ -130,8 +146,11 @@ class Solver:
         """Deprecated: ``contact_report().relaxed``."""
         import warnings
 
-        warnings.warn("Solver.relaxed_tool_forces is deprecated; use Solver.contact_report().relaxed",
-                      DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            "Solver.relaxed_tool_forces is deprecated; use Solver.contact_report().relaxed",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         return self._relaxed
 
     def _raise(self, rep: dict):
@@ -140,19 +159,40 @@ class Solver:
             e = m.user_element(rep["where"])
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: non-finite deformation in element {e} (J = {v}); "
-                f"reduce dt (now {self.dt:.3g} s) or the loads", t, "J", v, element=e)
+                f"reduce dt (now {self.dt:.3g} s) or the loads",
+                t,
+                "J",
+                v,
+                element=e,
+            )
         if status == RunStatus.Inverted:
             e = m.user_element(rep["where"])
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: element {e} inverted (J = {v:.3g} <= 0); reduce dt "
-                f"(now {self.dt:.3g} s), the loads, or refine/soften around it", t, "J", v, element=e)
+                f"(now {self.dt:.3g} s), the loads, or refine/soften around it",
+                t,
+                "J",
+                v,
+                element=e,
+            )
         node = m.user_node(rep["where"])
         if status == RunStatus.NonFinite:
-            raise InstabilityError(f"unstable at t = {t:.6g} s: non-finite displacement at node {node}"
-                                   f" (value {v}); dt = {self.dt:.3g} s", t, "displacement", v, node=node)
-        raise InstabilityError(f"unstable at t = {t:.6g} s: displacement {v:.3g} m at node {node} "
-                               f"exceeds 100 x the body size (energy blow-up); dt = {self.dt:.3g} s",
-                               t, "displacement", v, node=node)
+            raise InstabilityError(
+                f"unstable at t = {t:.6g} s: non-finite displacement at node {node}"
+                f" (value {v}); dt = {self.dt:.3g} s",
+                t,
+                "displacement",
+                v,
+                node=node,
+            )
+        raise InstabilityError(
+            f"unstable at t = {t:.6g} s: displacement {v:.3g} m at node {node} "
+            f"exceeds 100 x the body size (energy blow-up); dt = {self.dt:.3g} s",
+            t,
+            "displacement",
+            v,
+            node=node,
+        )
 
     def _same_model(self, *states: State):
         for s in states:
@@ -168,8 +208,9 @@ class Solver:
         if not (math.isfinite(dt) and dt > 0):
             raise TimeStepError(f"dt = {shown(dt)}; expected a finite time step > 0 [s]")
         if dt > self.model.dt_critical and self.dt <= self.model.dt_critical:
-            raise TimeStepError(f"dt = {dt:.4g} s exceeds the critical time step "
-                                f"{self.model.dt_critical:.4g} s")
+            raise TimeStepError(
+                f"dt = {dt:.4g} s exceeds the critical time step {self.model.dt_critical:.4g} s"
+            )
         rep = self._backend.step(state_in._s, state_out._s, dt, self.damping)
         self._ran()
         self._relaxed = None
@@ -185,22 +226,28 @@ class Solver:
             until = finite_number(until, "until", "s")
             n = (until - state.time) / self.dt - 1e-9
             if not n <= MAX_STEPS:
-                raise InputError(f"until = {until:g} s is {n:.3g} steps of {self.dt:.3g} s away; "
-                                 f"expected at most {MAX_STEPS:.0e} steps in one call")
+                raise InputError(
+                    f"until = {until:g} s is {n:.3g} steps of {self.dt:.3g} s away; "
+                    f"expected at most {MAX_STEPS:.0e} steps in one call"
+                )
             steps = max(0, math.ceil(n))
         steps = _step_count(steps)
         if steps == 0:
             return RunInfo(0, state.time)
         t0 = state.time
-        rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every,
-                                self.blowup)
+        rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every, self.blowup)
         self._ran()
         self._relaxed = None
         self._record_tools(t0, int(rep["steps"]))
         if rep["status"]:
             self._raise(rep)
-        return RunInfo(int(rep["steps"]), float(rep["t"]), float(rep["elem_seconds"]),
-                       float(rep["node_seconds"]), float(rep["contact_seconds"]))
+        return RunInfo(
+            int(rep["steps"]),
+            float(rep["t"]),
+            float(rep["elem_seconds"]),
+            float(rep["node_seconds"]),
+            float(rep["contact_seconds"]),
+        )
 
     def _record_tools(self, t0: float, steps: int):
         if not self.model.tools:
@@ -215,8 +262,11 @@ class Solver:
     def _tool_index(self, k) -> int:
         n = len(self.model.tools)
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < n:
-            raise InputError(f"tool index {shown(k)}; expected an integer from 0 to {n - 1}" if n else
-                             f"tool index {shown(k)}: this model has no tools")
+            raise InputError(
+                f"tool index {shown(k)}; expected an integer from 0 to {n - 1}"
+                if n
+                else f"tool index {shown(k)}: this model has no tools"
+            )
         return int(k)
 
     def tool_force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -225,9 +275,16 @@ class Solver:
         per-node contact forces (the viewer asks every frame)."""
         return tool_force(self._histories, self._relaxed, self._tool_index(k))
 
-    def relax(self, state: State, at_time: float | None = None, tol: float = 1e-5,
-              max_steps: int = 200_000, increments: int = 1, check_every: int = 10,
-              strict: bool = True) -> RelaxInfo:
+    def relax(
+        self,
+        state: State,
+        at_time: float | None = None,
+        tol: float = 1e-5,
+        max_steps: int = 200_000,
+        increments: int = 1,
+        check_every: int = 10,
+        strict: bool = True,
+    ) -> RelaxInfo:
         """Quasi-static equilibrium under the loads and prescribed displacements of time ``at_time``
         [s] (default: when every load curve has reached its final value), by dynamic relaxation with
         adaptive damping (Joldes, Wittek & Miller 2009, CMAME 198:3313) over fictitious masses
@@ -242,20 +299,22 @@ class Solver:
         self._same_model(state)
         t_end = self.model.last_load_time if at_time is None else float(at_time)
         if not 1 <= int(increments) <= MAX_INCREMENTS:
-            raise InputError(f"increments = {shown(increments)}; expected 1 to {MAX_INCREMENTS} "
-                             "(each is a whole relaxation)")
+            raise InputError(
+                f"increments = {shown(increments)}; expected 1 to {MAX_INCREMENTS} "
+                "(each is a whole relaxation)"
+            )
         if not 1 <= int(max_steps) <= MAX_STEPS:
             raise InputError(f"max_steps = {shown(max_steps)}; expected 1 to {MAX_STEPS:.0e}")
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
-            rep = self._backend.relax(state._s, float(t), self.dt, float(tol), int(max_steps),
-                                      int(check_every), self.blowup)
+            rep = self._backend.relax(
+                state._s, float(t), self.dt, float(tol), int(max_steps), int(check_every), self.blowup
+            )
             self._ran()
             steps += int(rep["steps"])
             if rep["status"]:
                 self._raise(rep)
-        info = RelaxInfo(steps, float(rep["residual"]), rep["residual"] < tol,
-                         float(rep["damping"]))
+        info = RelaxInfo(steps, float(rep["residual"]), rep["residual"] < tol, float(rep["damping"]))
         if self.model.tools:  # the equilibrium contact forces
             h = np.asarray(self._backend.tool_history())[0]
             self._relaxed = [(h[k, :3].copy(), h[k, 3:].copy()) for k in range(len(self.model.tools))]
@@ -263,13 +322,16 @@ class Solver:
             if self.model.dtype == np.float32 and info.residual < 1e-3:
                 hint = "the float32 round-off floor: use float64 for tighter tolerances"
             else:
-                hint = ("if the residual stays large, the material may stiffen beyond the "
-                        "small-strain modulus that sets the time step (lower the solver's dt or "
-                        "safety) or the load may need more increments")
+                hint = (
+                    "if the residual stays large, the material may stiffen beyond the "
+                    "small-strain modulus that sets the time step (lower the solver's dt or "
+                    "safety) or the load may need more increments"
+                )
             raise ConvergenceError(
                 f"dynamic relaxation reached residual {info.residual:.3g} after {info.steps} steps; "
                 f"tolerance {tol:g}. It stops early when the residual no longer falls ({hint}); "
-                "else raise max_steps or tol")
+                "else raise max_steps or tol"
+            )
         return info
 
 
@@ -293,12 +355,14 @@ class Simulation:
 
     def step(self, n: int | None = None) -> RunInfo:
         """One step of Δt (``step(n)``, n > 1, is deprecated: use ``run(steps=n)``)."""
-        if n is not None and not (isinstance(n, (int, np.integer)) and not isinstance(n, bool)
-                                  and n == 1):
+        if n is not None and not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n == 1):
             import warnings
 
-            warnings.warn("Simulation.step(n) is deprecated; use Simulation.run(steps=n)",
-                          DeprecationWarning, stacklevel=2)
+            warnings.warn(
+                "Simulation.step(n) is deprecated; use Simulation.run(steps=n)",
+                DeprecationWarning,
+                stacklevel=2,
+            )
             return self.solver.run(self.state, steps=_step_count(n, "n"))
         return self.solver.run(self.state, steps=1)
 
@@ -314,16 +378,22 @@ class Simulation:
         """Deprecated: ``run(until=t)``."""
         import warnings
 
-        warnings.warn("Simulation.run_to(t) is deprecated; use Simulation.run(until=t)",
-                      DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            "Simulation.run_to(t) is deprecated; use Simulation.run(until=t)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         return self.run(until=t)
 
     def solve_static(self, **options) -> RelaxInfo:
         """Deprecated: ``relax(...)``."""
         import warnings
 
-        warnings.warn("Simulation.solve_static() is deprecated; use Simulation.relax()",
-                      DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            "Simulation.solve_static() is deprecated; use Simulation.relax()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         return self.relax(**options)
 
     @property

@@ -12,8 +12,13 @@ import numpy as np
 from ..materials import LinearElastic, NeoHookean
 from ..tled import Simulation
 from . import models
-from .references import (UNIAXIAL, hertz_force, lame_volumetric_strain, timoshenko_tip_deflection,
-                         uniaxial_reference)
+from .references import (
+    UNIAXIAL,
+    hertz_force,
+    lame_volumetric_strain,
+    timoshenko_tip_deflection,
+    uniaxial_reference,
+)
 
 __all__ = ["Check", "CASES"]
 
@@ -42,8 +47,9 @@ class Check:
         if self.kind == "match":
             self.passed = bool(self.error <= self.tolerance)
         else:
-            self.passed = bool(self.value <= self.reference if self.kind == "at most"
-                               else self.value >= self.reference)
+            self.passed = bool(
+                self.value <= self.reference if self.kind == "at most" else self.value >= self.reference
+            )
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -52,17 +58,27 @@ class Check:
 def uniaxial(quick: bool) -> tuple[list[Check], dict]:
     """Uniaxial stress of every material on a jittered 3 × 3 × 3 cube, quasi-static: nominal stress
     (reaction / area) against ∂W/∂λ of the strain energy in principal stretches (Ogden 1984)."""
-    rows, curves = [], {}
+    rows: list[Check] = []
+    curves: dict[str, list] = {}
     for name, (material, W, stretches) in UNIAXIAL.items():
-        for s in ((1.2,) if quick else stretches):
+        for s in (1.2,) if quick else stretches:
             X, model, right = models.cube_with_symmetry_bcs(material, s, dtype="float64")
             sim = Simulation(model)
             sim.relax(tol=1e-8, increments=10)
             P_ref, _ = uniaxial_reference(W, s)
             P = float(model.internal_forces(sim.state)[right, 0].sum())
-            rows.append(Check("uniaxial stress", f"{name} P_x at λ = {s}", P, P_ref, "Pa",
-                              "relaxation residual 1e-8 and the reference's finite difference: "
-                              "0.5 % bounds both by far", 5e-3))
+            rows.append(
+                Check(
+                    "uniaxial stress",
+                    f"{name} P_x at λ = {s}",
+                    P,
+                    P_ref,
+                    "Pa",
+                    "relaxation residual 1e-8 and the reference's finite difference: "
+                    "0.5 % bounds both by far",
+                    5e-3,
+                )
+            )
             curves.setdefault(name, []).append((s, P, P_ref))
     return rows, {"uniaxial": curves}
 
@@ -74,18 +90,31 @@ def cantilever(quick: bool) -> tuple[list[Check], dict]:
     L, H, E, P = 1.0, 0.1, 1.0e6, 1.0e-2
     ref = timoshenko_tip_deflection(P, L, H, E, 0.0)
     levels = (1, 2, 4) if quick else (1, 2, 4, 8)
-    errors = [abs(models.cantilever_tip_deflection(n, LinearElastic(E=E, nu=0.0)) - ref) / ref
-              for n in levels]
+    errors = [
+        abs(models.cantilever_tip_deflection(n, LinearElastic(E=E, nu=0.0)) - ref) / ref for n in levels
+    ]
     rate = math.log2(errors[-2] / errors[-1])
     finest = levels[-1]
-    rows = [Check("cantilever bending", f"tip deflection error, {finest} elements through the depth",
-                  errors[-1], 0.25 if quick else 0.07, "1",
-                  "linear tets are stiff in bending: measured 17.6 % at 4 and 5.1 % at 8",
-                  kind="at most"),
-            Check("cantilever bending", f"observed rate, {levels[-2]} → {finest} elements", rate,
-                  1.3 if quick else 1.5, "1",
-                  "theory 2; shear locking keeps coarse levels pre-asymptotic (0.7, 1.4, 1.8 measured)",
-                  kind="at least")]
+    rows = [
+        Check(
+            "cantilever bending",
+            f"tip deflection error, {finest} elements through the depth",
+            errors[-1],
+            0.25 if quick else 0.07,
+            "1",
+            "linear tets are stiff in bending: measured 17.6 % at 4 and 5.1 % at 8",
+            kind="at most",
+        ),
+        Check(
+            "cantilever bending",
+            f"observed rate, {levels[-2]} → {finest} elements",
+            rate,
+            1.3 if quick else 1.5,
+            "1",
+            "theory 2; shear locking keeps coarse levels pre-asymptotic (0.7, 1.4, 1.8 measured)",
+            kind="at least",
+        ),
+    ]
     return rows, {"cantilever": {"levels": list(levels), "errors": errors}}
 
 
@@ -94,15 +123,31 @@ def lame_sphere(quick: bool) -> tuple[list[Check], dict]:
     Lamé: T4ANP's radial displacement, and its median element volumetric strain."""
     shell = models.hollow_sphere()
     rows = []
-    for nu in ((0.49,) if quick else (0.49, 0.499)):
+    for nu in (0.49,) if quick else (0.49, 0.499):
         err, dJ = models.lame_solve(shell, nu, anp=True)
-        rows.append(Check("Lamé sphere (T4ANP)", f"RMS u_r error, ν = {nu}", err, 0.04, "1",
-                          "a 6 mm mesh across a 2 cm wall: 1.9 % and 2.3 % measured", kind="at most"))
+        rows.append(
+            Check(
+                "Lamé sphere (T4ANP)",
+                f"RMS u_r error, ν = {nu}",
+                err,
+                0.04,
+                "1",
+                "a 6 mm mesh across a 2 cm wall: 1.9 % and 2.3 % measured",
+                kind="at most",
+            )
+        )
         if nu == 0.49:
-            rows.append(Check("Lamé sphere (T4ANP)", "median element J − 1, ν = 0.49",
-                              float(np.median(dJ)), lame_volumetric_strain(0.02, 0.04, 30.0, 3e3, nu),
-                              "1", "element J scatters about the uniform exact value (volume modes); "
-                              "its median is 6 % off", 0.15))
+            rows.append(
+                Check(
+                    "Lamé sphere (T4ANP)",
+                    "median element J − 1, ν = 0.49",
+                    float(np.median(dJ)),
+                    lame_volumetric_strain(0.02, 0.04, 30.0, 3e3, nu),
+                    "1",
+                    "element J scatters about the uniform exact value (volume modes); its median is 6 % off",
+                    0.15,
+                )
+            )
     return rows, {}
 
 
@@ -116,15 +161,30 @@ def damping(quick: bool) -> tuple[list[Check], dict]:
     sim = Simulation(model)
     sim.state.set_displacements(models.bend(X))
     t, E = models.energy_history(sim, 100, 5)  # 0.5 s: the energy falls by e^-10
-    rows.append(Check("damped decay", f"energy decay rate with α = {alpha:g} /s (α)",
-                      -np.polyfit(t, np.log(E), 1)[0], alpha, "1/s",
-                      "every mode's energy decays as exp(−αt); the envelope ripples at α/ω ≈ 0.02",
-                      0.02))
+    rows.append(
+        Check(
+            "damped decay",
+            f"energy decay rate with α = {alpha:g} /s (α)",
+            -np.polyfit(t, np.log(E), 1)[0],
+            alpha,
+            "1/s",
+            "every mode's energy decays as exp(−αt); the envelope ripples at α/ω ≈ 0.02",
+            0.02,
+        )
+    )
     beta = 4e-4
     omega, sigma = models.decay_of_first_mode(*models.ringing_cantilever(beta=beta))
-    rows.append(Check("damped decay", f"decay rate with β = {beta} s (β ω²/2, ω = {omega:.1f} rad/s)",
-                      sigma, beta * omega**2 / 2, "1/s",
-                      "the same fit; the half-step velocity's lag errs below 0.1 %", 0.02))
+    rows.append(
+        Check(
+            "damped decay",
+            f"decay rate with β = {beta} s (β ω²/2, ω = {omega:.1f} rad/s)",
+            sigma,
+            beta * omega**2 / 2,
+            "1/s",
+            "the same fit; the half-step velocity's lag errs below 0.1 %",
+            0.02,
+        )
+    )
     return rows, {}
 
 
@@ -149,10 +209,26 @@ def patch_and_shear(quick: bool) -> tuple[list[Check], dict]:
     inside = np.setdiff1d(np.arange(len(X)), boundary)
     err = float(np.abs(sim.displacements[inside] - u_exact[inside]).max())
     sig = model.element_results(sim.state)["cauchy"]
-    return [Check("patch test", "interior displacement error / γ", err / gamma, 1e-7, "1",
-                  "relaxation residual 1e-10 times the size of u", kind="at most"),
-            Check("simple shear", "mean σ_xy (μγ for Neo-Hookean)", float(sig[:, 3].mean()), mu * gamma,
-                  "Pa", "homogeneous and isochoric: exact up to the solve's residual", 1e-6)], {}
+    return [
+        Check(
+            "patch test",
+            "interior displacement error / γ",
+            err / gamma,
+            1e-7,
+            "1",
+            "relaxation residual 1e-10 times the size of u",
+            kind="at most",
+        ),
+        Check(
+            "simple shear",
+            "mean σ_xy (μγ for Neo-Hookean)",
+            float(sig[:, 3].mean()),
+            mu * gamma,
+            "Pa",
+            "homogeneous and isochoric: exact up to the solve's residual",
+            1e-6,
+        ),
+    ], {}
 
 
 def hertz(quick: bool) -> tuple[list[Check], dict]:
@@ -164,16 +240,49 @@ def hertz(quick: bool) -> tuple[list[Check], dict]:
     R, E, nu = 0.01, 1e4, 0.3
     depths = np.array([0.0025, 0.005, 0.01]) * R
     F, reaction = models.hertz_indentation(depths, R, E, nu)
-    rows = [Check("Hertz indentation", f"force at δ/R = {d / R:.2%}", f, hertz_force(d, R, E, nu), "N",
-                  "finite block (+0.5 to 1 %), load on the deformed surface (+0.4 to 1.5 %), linear "
-                  "tets (+2 %): 3.2–4.2 % measured", 0.05) for d, f in zip(depths, F)]
-    rows.append(Check("Hertz indentation", "exponent of F(δ)", np.polyfit(np.log(depths), np.log(F), 1)[0],
-                      1.5, "1", "the depth-dependent errors above tilt the fit by about 0.015", 0.02))
-    rows.append(Check("Hertz indentation", "support reaction / tool force at the deepest step",
-                      reaction[-1] / F[-1], 1.0, "1", "the relaxation's 1e-5 out-of-balance force "
-                      "(2e-4 measured)", 2e-3))
+    rows = [
+        Check(
+            "Hertz indentation",
+            f"force at δ/R = {d / R:.2%}",
+            f,
+            hertz_force(d, R, E, nu),
+            "N",
+            "finite block (+0.5 to 1 %), load on the deformed surface (+0.4 to 1.5 %), linear "
+            "tets (+2 %): 3.2–4.2 % measured",
+            0.05,
+        )
+        for d, f in zip(depths, F)
+    ]
+    rows.append(
+        Check(
+            "Hertz indentation",
+            "exponent of F(δ)",
+            np.polyfit(np.log(depths), np.log(F), 1)[0],
+            1.5,
+            "1",
+            "the depth-dependent errors above tilt the fit by about 0.015",
+            0.02,
+        )
+    )
+    rows.append(
+        Check(
+            "Hertz indentation",
+            "support reaction / tool force at the deepest step",
+            reaction[-1] / F[-1],
+            1.0,
+            "1",
+            "the relaxation's 1e-5 out-of-balance force (2e-4 measured)",
+            2e-3,
+        )
+    )
     return rows, {}
 
 
-CASES = {"uniaxial": uniaxial, "patch": patch_and_shear, "cantilever": cantilever,
-         "lame": lame_sphere, "damping": damping, "hertz": hertz}
+CASES = {
+    "uniaxial": uniaxial,
+    "patch": patch_and_shear,
+    "cantilever": cantilever,
+    "lame": lame_sphere,
+    "damping": damping,
+    "hertz": hertz,
+}

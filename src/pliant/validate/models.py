@@ -12,9 +12,18 @@ from .. import mesh
 from ..tled import ModelBuilder, Ramp, Simulation, Table
 from .references import lame_radial_displacement
 
-__all__ = ["cube_with_symmetry_bcs", "cantilever_tip_deflection", "hollow_sphere", "lame_solve",
-           "ringing_cantilever", "decay_of_first_mode", "free_block", "bend", "energy_history",
-           "hertz_indentation"]
+__all__ = [
+    "cube_with_symmetry_bcs",
+    "cantilever_tip_deflection",
+    "hollow_sphere",
+    "lame_solve",
+    "ringing_cantilever",
+    "decay_of_first_mode",
+    "free_block",
+    "bend",
+    "energy_history",
+    "hertz_indentation",
+]
 
 
 def cube_with_symmetry_bcs(material, stretch, cells=3, jitter=0.25, dtype="float32", L=1.0):
@@ -187,18 +196,18 @@ def hertz_indentation(depths, R=0.01, E=1e4, nu=0.3):
     b.fix(np.nonzero(X[:, 0] == 0.0)[0], "x")
     b.fix(np.nonzero(X[:, 1] == 0.0)[0], "y")
     bottom = np.nonzero(X[:, 2] == X[:, 2].min())[0]
-    b.fix(bottom, "z")                             # roller: closer to a half-space than clamped
+    b.fix(bottom, "z")  # roller: closer to a half-space than clamped
     tool = Sphere(R)
-    tool.at(0.0, (0.0, 0.0, R))                    # touching the top face z = 0 at the origin
+    tool.at(0.0, (0.0, 0.0, R))  # touching the top face z = 0 at the origin
     for k, d in enumerate(depths):
-        tool.at(k + 1.0, (0.0, 0.0, R - d))        # keyframe k + 1: depth δ_k
+        tool.at(k + 1.0, (0.0, 0.0, R - d))  # keyframe k + 1: depth δ_k
     b.add_tool(tool)
     sim = Simulation(b.finalize("float64"))
     forces, reactions = [], []
     for k in range(len(depths)):
         # tol: relative out-of-balance force; 1e-4 and 1e-6 gave the same force to 5 digits.
         sim.solver.relax(sim.state, at_time=k + 1.0, tol=1e-5)
-        forces.append(4 * sim.contact_report().relaxed[0][0][2])   # quarter model → whole
+        forces.append(4 * sim.contact_report().relaxed[0][0][2])  # quarter model → whole
         reactions.append(4 * sim.model.internal_forces(sim.state)[bottom, 2].sum())
         u = sim.displacements
         if not (np.all(u[X[:, 0] == 0.0, 0] == 0.0) and np.all(u[X[:, 1] == 0.0, 1] == 0.0)):

@@ -11,8 +11,18 @@ from scipy.optimize import brentq
 
 from .. import materials as mat
 
-__all__ = ["MU", "K", "LAM", "UNIAXIAL", "nominal", "uniaxial_reference", "timoshenko_tip_deflection",
-           "lame_radial_displacement", "lame_volumetric_strain", "hertz_force"]
+__all__ = [
+    "MU",
+    "K",
+    "LAM",
+    "UNIAXIAL",
+    "nominal",
+    "uniaxial_reference",
+    "timoshenko_tip_deflection",
+    "lame_radial_displacement",
+    "lame_volumetric_strain",
+    "hertz_force",
+]
 
 MU, K = 1.0e3, 10.0e3  # Pa; K/μ = 10 (ν ≈ 0.45), soft tissue-like
 LAM = K - 2 * MU / 3
@@ -33,8 +43,11 @@ def W_nh(l, mu=MU, k=K):
 
 def W_mr(l, c10=0.3 * MU, c01=0.2 * MU, k=K):
     J = _J(l)
-    return c10 * (J ** (-2 / 3) * sum(x * x for x in l) - 3) + c01 * (J ** (-4 / 3) * _I2(l) - 3) + \
-        k / 2 * (J - 1) ** 2
+    return (
+        c10 * (J ** (-2 / 3) * sum(x * x for x in l) - 3)
+        + c01 * (J ** (-4 / 3) * _I2(l) - 3)
+        + k / 2 * (J - 1) ** 2
+    )
 
 
 def W_nhc(l, mu=MU, lam=LAM):
@@ -77,11 +90,17 @@ UNIAXIAL = {
     "MooneyRivlin": (mat.MooneyRivlin(C10=0.3 * MU, C01=0.2 * MU, K=K), W_mr, (0.7, 1.2, 1.5)),
     "NeoHookeanCoupled": (mat.NeoHookeanCoupled(mu=MU, lam=LAM), W_nhc, (0.7, 1.2, 1.5)),
     "StVenantKirchhoff": (mat.StVenantKirchhoff(mu=MU, lam=LAM), W_svk, (0.7, 1.2, 1.5)),
-    "Polynomial": (mat.Polynomial(0.3 * MU, 0.2 * MU, 0.1 * MU, 0.05 * MU, 0.08 * MU, K=K), W_py,
-                   (0.7, 1.2, 1.4)),
+    "Polynomial": (
+        mat.Polynomial(0.3 * MU, 0.2 * MU, 0.1 * MU, 0.05 * MU, 0.08 * MU, K=K),
+        W_py,
+        (0.7, 1.2, 1.4),
+    ),
     "ArrudaBoyce": (mat.ArrudaBoyce(mu=MU, lambda_m=2.0, K=K), W_ab, (0.7, 1.2, 1.5)),
-    "TransverselyIsotropic": (mat.TransverselyIsotropic(MU, K, 2 * MU, (2.0, 0.0, 0.0)), W_ti,
-                              (0.9, 1.2, 1.5)),
+    "TransverselyIsotropic": (
+        mat.TransverselyIsotropic(MU, K, 2 * MU, (2.0, 0.0, 0.0)),
+        W_ti,
+        (0.9, 1.2, 1.5),
+    ),
 }
 
 

@@ -35,9 +35,20 @@ def run_validation(out, quick: bool = False, echo: Callable[[str], None] = print
         bad = sum(not r.passed for r in got)
         echo(f"{name}: {len(got) - bad}/{len(got)} passed in {timings[name]:.1f} s")
     files = _plots(out, figures)
-    atomic_write_text(out / "results.json", json.dumps({
-        "pliant": __version__, "quick": quick, "isa": _core.isa, "seconds": timings,
-        "rows": [r.as_dict() for r in rows]}, indent=2), "validation results")
+    atomic_write_text(
+        out / "results.json",
+        json.dumps(
+            {
+                "pliant": __version__,
+                "quick": quick,
+                "isa": _core.isa,
+                "seconds": timings,
+                "rows": [r.as_dict() for r in rows],
+            },
+            indent=2,
+        ),
+        "validation results",
+    )
     atomic_write_text(out / "report.md", _markdown(rows, files, timings, quick), "validation report")
     return rows
 
@@ -53,7 +64,7 @@ def _plots(out: Path, figures: dict) -> list[str]:
         fig, ax = plt.subplots(figsize=(6.5, 4.2))
         for name, pts in figures["uniaxial"].items():
             pts = sorted(pts)
-            line, = ax.plot([p[0] for p in pts], [p[2] for p in pts], "-", lw=1)
+            (line,) = ax.plot([p[0] for p in pts], [p[2] for p in pts], "-", lw=1)
             ax.plot([p[0] for p in pts], [p[1] for p in pts], "o", color=line.get_color(), label=name)
         ax.set_xlabel("stretch λ")
         ax.set_ylabel("nominal stress P_x [Pa]")
@@ -65,8 +76,7 @@ def _plots(out: Path, figures: dict) -> list[str]:
         fig, ax = plt.subplots(figsize=(5, 4))
         ax.loglog(c["levels"], c["errors"], "o-", label="pliant, linear tets")
         e0 = c["errors"][-1]
-        ax.loglog(c["levels"], [e0 * (c["levels"][-1] / n) ** 2 for n in c["levels"]], "--",
-                  label="O(h²)")
+        ax.loglog(c["levels"], [e0 * (c["levels"][-1] / n) ** 2 for n in c["levels"]], "--", label="O(h²)")
         ax.set_xticks(c["levels"], [str(n) for n in c["levels"]])
         ax.minorticks_off()
         ax.set_xlabel("elements through the depth")
@@ -87,23 +97,34 @@ def _markdown(rows: list[Check], files: list[str], timings: dict, quick: bool) -
     import importlib.util
 
     failed = [r for r in rows if not r.passed]
-    lines = [f"# pliant {__version__} validation{' (quick)' if quick else ''}", "",
-             f"{len(rows) - len(failed)} of {len(rows)} checks passed; {platform.machine()}, "
-             f"engine path {_core.isa}, {sum(timings.values()):.0f} s.", "",
-             "| case | quantity | pliant | reference | error | tolerance | result |",
-             "|---|---|---|---|---|---|---|"]
+    lines = [
+        f"# pliant {__version__} validation{' (quick)' if quick else ''}",
+        "",
+        f"{len(rows) - len(failed)} of {len(rows)} checks passed; {platform.machine()}, "
+        f"engine path {_core.isa}, {sum(timings.values()):.0f} s.",
+        "",
+        "| case | quantity | pliant | reference | error | tolerance | result |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
-        tol = {"match": f"{r.tolerance:.2g}", "at most": f"≤ {r.reference:.3g}",
-               "at least": f"≥ {r.reference:.3g}"}[r.kind]
+        tol = {
+            "match": f"{r.tolerance:.2g}",
+            "at most": f"≤ {r.reference:.3g}",
+            "at least": f"≥ {r.reference:.3g}",
+        }[r.kind]
         ref = f"{r.reference:.6g} {r.unit}" if r.kind == "match" else "(bound)"
         err = f"{r.error:.2e}" if r.kind == "match" else ""
-        lines.append(f"| {r.case} | {r.quantity} | {r.value:.6g} {r.unit if r.kind == 'match' else ''} | "
-                     f"{ref} | {err} | {tol} | {'pass' if r.passed else '**FAIL**'} |")
+        lines.append(
+            f"| {r.case} | {r.quantity} | {r.value:.6g} {r.unit if r.kind == 'match' else ''} | "
+            f"{ref} | {err} | {tol} | {'pass' if r.passed else '**FAIL**'} |"
+        )
     lines += ["", "Tolerances and bounds, and why:", ""]
     lines += [f"- {r.case}, {r.quantity}: {r.why}." for r in rows]
     lines += ["", *[f"![{f}]({f})" for f in files], "", "## Peers", ""]
     for peer in _PEERS:
         there = importlib.util.find_spec(peer) is not None
-        lines.append(f"- {peer}: {'installed, ' if there else 'not installed; '}not run: pliant validate "
-                     "does not drive other simulators yet (docs/validation.md).")
+        lines.append(
+            f"- {peer}: {'installed, ' if there else 'not installed; '}not run: pliant validate "
+            "does not drive other simulators yet (docs/validation.md)."
+        )
     return "\n".join(lines) + "\n"

@@ -10,8 +10,15 @@ import numpy as np
 from ..mesh.topology import boundary_faces
 
 
-def render_png(path, positions: np.ndarray, tets: np.ndarray, element_field: np.ndarray,
-               label: str = "von Mises stress [Pa]", title: str = "", max_faces: int = 60000) -> Path:
+def render_png(
+    path,
+    positions: np.ndarray,
+    tets: np.ndarray,
+    element_field: np.ndarray,
+    label: str = "von Mises stress [Pa]",
+    title: str = "",
+    max_faces: int = 60000,
+) -> Path:
     """Write a PNG [path] of the surface of the mesh at ``positions`` [m] (N, 3), coloured by
     ``element_field`` (M,). Written atomically."""
     import matplotlib

@@ -91,16 +91,16 @@ class LiveViewer:
     # --- GUI ------------------------------------------------------------------------------
     def _build_gui(self):
         g = self.server.gui
-        g.add_markdown(f"**pliant** — {self.scene.title}: {self.model.n_elements:,} tets, "
-                       f"Δt = {self.sim.solver.dt:.3g} s")
+        g.add_markdown(
+            f"**pliant** — {self.scene.title}: {self.model.n_elements:,} tets, "
+            f"Δt = {self.sim.solver.dt:.3g} s"
+        )
         self.play_button = g.add_button("Pause")
         self.step_button = g.add_button("Single step")
         self.reset_button = g.add_button("Reset")
-        self.field_dropdown = g.add_dropdown("Colour by", ["von Mises stress [Pa]",
-                                                           "displacement [m]"])
+        self.field_dropdown = g.add_dropdown("Colour by", ["von Mises stress [Pa]", "displacement [m]"])
         self.stiffness = g.add_slider("Stiffness × (live)", 0.25, 4.0, 0.05, 1.0)
-        self.damping = g.add_slider("Damping α [1/s] (live)", 0.0, 100.0, 0.5,
-                                    float(self.sim.solver.damping))
+        self.damping = g.add_slider("Damping α [1/s] (live)", 0.0, 100.0, 0.5, float(self.sim.solver.damping))
         self.status = g.add_markdown("")
         self.colourbar = g.add_markdown("")
         self.force_text = g.add_markdown("")
@@ -159,8 +159,7 @@ class LiveViewer:
             if isinstance(tool, Sphere):
                 sc.add_icosphere(f"{name}/shape", radius=tool.radius, color=(200, 80, 80))
             elif isinstance(tool, Capsule):
-                sc.add_cylinder(f"{name}/shape", radius=tool.radius, height=tool.length,
-                                color=(200, 80, 80))
+                sc.add_cylinder(f"{name}/shape", radius=tool.radius, height=tool.length, color=(200, 80, 80))
             elif isinstance(tool, Box):
                 sc.add_box(f"{name}/shape", dimensions=tuple(2 * tool.half), color=(200, 80, 80))
             ctrl.on_update(lambda _, k=k, c=ctrl: self._dragged(k, c))
@@ -208,8 +207,11 @@ class LiveViewer:
 
         with self.lock:
             P = self.sim.positions
-            vm = self.model.element_results(self.sim.state)["von_mises"] \
-                if self.field.startswith("von") else None
+            vm = (
+                self.model.element_results(self.sim.state)["von_mises"]
+                if self.field.startswith("von")
+                else None
+            )
             u = self.sim.displacements
             t = self.sim.time
             forces = [self.sim.tool_force(k) for k in range(len(self.model.tools))]
@@ -217,18 +219,24 @@ class LiveViewer:
         if self.embedding is not None:  # the fine surface follows the tets
             emb = self.embedding
             V, F = emb.positions(self.model.tets, P), emb.faces
-            vals = vm[emb.tet] if vm is not None else \
-                np.linalg.norm(emb.positions(self.model.tets, u), axis=1)
+            vals = (
+                vm[emb.tet] if vm is not None else np.linalg.norm(emb.positions(self.model.tets, u), axis=1)
+            )
         else:
             V, F = P[self.surface.nodes], self.surface.faces
-            vals = self.surface.node_values(vm) if vm is not None else \
-                np.linalg.norm(u[self.surface.nodes], axis=1)
+            vals = (
+                self.surface.node_values(vm)
+                if vm is not None
+                else np.linalg.norm(u[self.surface.nodes], axis=1)
+            )
         lo, hi = float(vals.min()), float(vals.max())
         mesh = trimesh.Trimesh(V, F, process=False, vertex_colors=_colours(vals, lo, hi))
         self.server.scene.add_mesh_trimesh("/body", mesh)
-        self.status.content = (f"t = {t:.3f} s · {self.steps_per_second:,.0f} steps/s · "
-                               f"real-time factor {self.realtime_factor:.2f}" +
-                               (f"  \n**stopped:** {self.error}" if self.error else ""))
+        self.status.content = (
+            f"t = {t:.3f} s · {self.steps_per_second:,.0f} steps/s · "
+            f"real-time factor {self.realtime_factor:.2f}"
+            + (f"  \n**stopped:** {self.error}" if self.error else "")
+        )
         self.colourbar.content = f"{self.field}: {lo:.3g} (dark blue) … {hi:.3g} (yellow)"
         lines = []
         ext = float(np.ptp(self.model.reference_positions, axis=0).max())
@@ -241,8 +249,9 @@ class LiveViewer:
             lines.append(f"tool {k} ({self.model.tools[k].name}): |F| = {np.linalg.norm(f):.3g} N")
             fmax = max(np.linalg.norm(f), 1e-12)
             seg = np.array([[p, p + 0.3 * ext * f / fmax]])
-            self.server.scene.add_line_segments(f"/forces/{k}", seg, (255, 60, 60), thickness=3,
-                                                thickness_units="screen")
+            self.server.scene.add_line_segments(
+                f"/forces/{k}", seg, (255, 60, 60), thickness=3, thickness_units="screen"
+            )
         self.force_text.content = "  \n".join(lines)
 
     def serve(self, duration: float | None = None):
@@ -275,8 +284,9 @@ class PlaybackViewer:
         pvd = out / "result.pvd"
         if not pvd.exists():
             raise InputError(f"{out}: no result.pvd (not a pliant results folder)")
-        entries = re.findall(r'timestep="([^"]+)"[^>]*file="([^"/\\]+)"',
-                             pvd.read_text(encoding="utf-8", errors="replace"))
+        entries = re.findall(
+            r'timestep="([^"]+)"[^>]*file="([^"/\\]+)"', pvd.read_text(encoding="utf-8", errors="replace")
+        )
         if not entries:
             raise InputError(f"{pvd}: no frames")
         try:
@@ -305,14 +315,20 @@ class PlaybackViewer:
         m = read_meshio(self.files[i], "result frame")
         u = m.point_data.get("displacement", np.zeros_like(self.X))
         vm = m.cell_data_dict.get("von_mises", {}).get("tetra")
-        vals = self.surface.node_values(vm) if vm is not None else \
-            np.linalg.norm(u[self.surface.nodes], axis=1)
+        vals = (
+            self.surface.node_values(vm) if vm is not None else np.linalg.norm(u[self.surface.nodes], axis=1)
+        )
         lo, hi = float(vals.min()), float(vals.max())
-        mesh = trimesh.Trimesh((self.X + u)[self.surface.nodes], self.surface.faces, process=False,
-                               vertex_colors=_colours(vals, lo, hi))
+        mesh = trimesh.Trimesh(
+            (self.X + u)[self.surface.nodes],
+            self.surface.faces,
+            process=False,
+            vertex_colors=_colours(vals, lo, hi),
+        )
         self.server.scene.add_mesh_trimesh("/body", mesh)
-        self.label.content = (f"t = {self.times[i]:.4g} s (frame {i + 1}/{len(self.files)}); "
-                              f"von Mises {lo:.3g} … {hi:.3g} Pa")
+        self.label.content = (
+            f"t = {self.times[i]:.4g} s (frame {i + 1}/{len(self.files)}); von Mises {lo:.3g} … {hi:.3g} Pa"
+        )
 
     def serve(self, duration: float | None = None):
         end = None if duration is None else time.perf_counter() + duration
