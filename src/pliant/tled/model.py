@@ -236,8 +236,8 @@ class Model:
         tool_grids = [t.grid() for t in self.tools]
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
-            for g in np.nonzero(keep)[0]:
-                visco.extend(_prony_row(getattr(self.sets[g].material, "prony", None)))
+            for grp in np.nonzero(keep)[0]:
+                visco.extend(_prony_row(getattr(self.sets[grp].material, "prony", None)))
         n_par = _core.material_params
         params = [
             p for k in np.nonzero(keep)[0] for p in (*self.sets[k].material.params, *([0.0] * n_par))[:n_par]
