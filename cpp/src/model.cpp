@@ -34,7 +34,7 @@ void Model<T>::build_groups(const ModelInput& in) {
     for (std::size_t g = 0; g < in.group_end.size(); ++g) {
         const index_t end = in.group_end[g];
         const index_t nb = (end - begin + kLanes - 1) / kLanes;
-        Group<T> grp{blocks, blocks + nb, {static_cast<MaterialKind>(in.group_kind[g]), {}}};
+        Group<T> grp{blocks, blocks + nb, {static_cast<MaterialKind>(in.group_kind[g]), {}}, Prony<T>{}};
         for (int k = 0; k < kMaterialParams; ++k)
             grp.material.p[k] = T(in.group_params[kMaterialParams * g + k]);
         if (!in.group_visco.empty()) {
