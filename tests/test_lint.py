@@ -41,3 +41,26 @@ def test_mypy_finds_nothing(tmp_path):
     )
     errors = [ln for ln in r.stdout.splitlines() if ": error:" in ln]
     assert r.returncode == 0 and not errors, "\n".join(errors) or r.stdout + r.stderr
+
+
+def test_clang_format_changes_nothing():
+    """The C++ and CUDA sources follow .clang-format (clang-format from the test environment)."""
+    files = subprocess.run(
+        ["git", "ls-files", "cpp/*.hpp", "cpp/*.cpp", "cpp/*.cu", "cpp/*.cuh"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    ).stdout.split()
+    if not files:  # not a git checkout (an unpacked sdist): every source file under cpp/
+        files = [
+            str(p.relative_to(ROOT))
+            for p in (ROOT / "cpp").rglob("*")
+            if p.suffix in (".hpp", ".cpp", ".cu", ".cuh")
+        ]
+    assert files
+    exe = Path(sys.executable).with_name("clang-format")
+    r = subprocess.run(
+        [str(exe), "--dry-run", "--Werror", *files], cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
+    assert r.returncode == 0, "run `clang-format -i` on cpp/:\n" + r.stderr[-3000:]

@@ -99,115 +99,144 @@ void scatter_nodes(const In<double>& a, std::vector<T>& soa, index_t n, index_t 
 }
 
 template <class T>
-void bind_engine(nb::module_& m, const char* engine_name, const char* backend_name,
-                 const char* state_name) {
+void bind_engine(nb::module_& m, const char* engine_name, const char* backend_name, const char* state_name) {
     using E = Engine<T>;
     using B = PyBackend<T>;
     using S = PyState<T>;
     nb::class_<S>(m, state_name)
         .def_prop_ro("n_nodes", [](const S& s) { return s.n_nodes; })
-        .def_prop_rw("t", [](const S& s) { return s.s.t; }, [](S& s, double t) { s.s.t = t; s.s.touch(); })
-        .def_prop_rw("dt", [](const S& s) { return s.s.dt; }, [](S& s, double v) { s.s.dt = v; s.s.touch(); })
-        .def_prop_rw("step", [](const S& s) { return s.s.step; }, [](S& s, long v) { s.s.step = v; })
-        .def("get_u", [](const S& s) {
-            const index_t P = static_cast<index_t>(s.s.u.size() / 3);
-            return to_numpy(gather_nodes(s.s.u, s.n_nodes, P), {size_t(s.n_nodes), 3});
-        })
-        .def("get_u_prev", [](const S& s) {
-            const index_t P = static_cast<index_t>(s.s.u.size() / 3);
-            return to_numpy(gather_nodes(s.s.u_prev, s.n_nodes, P), {size_t(s.n_nodes), 3});
-        })
-        .def("set_u", [](S& s, In<double> a) {
-            scatter_nodes(a, s.s.u, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+        .def_prop_rw(
+            "t", [](const S& s) { return s.s.t; },
+            [](S& s, double t) {
+                s.s.t = t;
+                s.s.touch();
+            })
+        .def_prop_rw(
+            "dt", [](const S& s) { return s.s.dt; },
+            [](S& s, double v) {
+                s.s.dt = v;
+                s.s.touch();
+            })
+        .def_prop_rw(
+            "step", [](const S& s) { return s.s.step; }, [](S& s, long v) { s.s.step = v; })
+        .def("get_u",
+             [](const S& s) {
+                 const index_t P = static_cast<index_t>(s.s.u.size() / 3);
+                 return to_numpy(gather_nodes(s.s.u, s.n_nodes, P), {size_t(s.n_nodes), 3});
+             })
+        .def("get_u_prev",
+             [](const S& s) {
+                 const index_t P = static_cast<index_t>(s.s.u.size() / 3);
+                 return to_numpy(gather_nodes(s.s.u_prev, s.n_nodes, P), {size_t(s.n_nodes), 3});
+             })
+        .def("set_u",
+             [](S& s, In<double> a) {
+                 scatter_nodes(a, s.s.u, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+                 s.s.touch();
+             })
+        .def("set_u_prev",
+             [](S& s, In<double> a) {
+                 scatter_nodes(a, s.s.u_prev, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+                 s.s.touch();
+             })
+        .def("get_q",
+             [](const S& s) {  // viscoelastic state, raw engine layout (save/restore)
+                 std::vector<double> q(s.s.q.begin(), s.s.q.end());
+                 return q;
+             })
+        .def("set_q",
+             [](S& s, std::vector<double> q) {
+                 if (q.size() != s.s.q.size())
+                     throw nb::value_error(("viscoelastic state: " + std::to_string(q.size()) +
+                                            " values, expected " + std::to_string(s.s.q.size()))
+                                               .c_str());
+                 for (std::size_t i = 0; i < q.size(); ++i) s.s.q[i] = T(q[i]);
+                 s.s.touch();
+             })
+        .def("copy",
+             [](const S& s) {
+                 S c(s);
+                 c.s.touch();
+                 return c;
+             })
+        .def("assign", [](S& s, const S& o) {
+            s = o;
             s.s.touch();
-        })
-        .def("set_u_prev", [](S& s, In<double> a) {
-            scatter_nodes(a, s.s.u_prev, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
-            s.s.touch();
-        })
-        .def("get_q", [](const S& s) {  // viscoelastic state, raw engine layout (save/restore)
-            std::vector<double> q(s.s.q.begin(), s.s.q.end());
-            return q;
-        })
-        .def("set_q", [](S& s, std::vector<double> q) {
-            if (q.size() != s.s.q.size())
-                throw nb::value_error(("viscoelastic state: " + std::to_string(q.size()) +
-                                       " values, expected " + std::to_string(s.s.q.size())).c_str());
-            for (std::size_t i = 0; i < q.size(); ++i) s.s.q[i] = T(q[i]);
-            s.s.touch();
-        })
-        .def("copy", [](const S& s) { S c(s); c.s.touch(); return c; })
-        .def("assign", [](S& s, const S& o) { s = o; s.s.touch(); });
+        });
 
     nb::class_<E>(m, engine_name, "A model (static, built once) and the backend that steps it.")
-        .def("__init__",
-             [](E* self, In<double> X, In<index_t> tets, In<double> density,
-                std::vector<index_t> group_end, std::vector<int> group_kind,
-                std::vector<double> group_params, In<double> patterns,
-                std::vector<index_t> pattern_curve, std::vector<index_t> cons_node,
-                std::vector<int> cons_dim, std::vector<double> cons_value,
-                std::vector<index_t> cons_curve, std::vector<int> curve_kind,
-                std::vector<double> curve_t0, std::vector<double> curve_t1,
-                std::vector<index_t> curve_table_begin, std::vector<index_t> curve_table_count,
-                std::vector<double> table_t, std::vector<double> table_v, std::vector<double> gravity,
-                index_t gravity_curve, std::vector<index_t> contact_nodes,
-                std::vector<index_t> contact_masks,
-                std::vector<int> tool_kind, std::vector<double> tool_params,
-                std::vector<double> tool_mu, std::vector<std::vector<double>> tool_keys,
-                std::vector<index_t> tool_grid_dims, std::vector<std::vector<double>> tool_grids,
-                std::vector<index_t> press_nodes, std::vector<double> press_value,
-                std::vector<index_t> press_curve, bool anp, std::vector<double> group_visco,
-                double stiffness_damping, double anp_stabilization, int threads) {
-                 ModelInput in;
-                 in.X = X.data();
-                 in.n_nodes = static_cast<index_t>(X.shape(0));
-                 in.tets = tets.data();
-                 in.n_elems = static_cast<index_t>(tets.shape(0));
-                 in.density = density.data();
-                 in.group_end = std::move(group_end);
-                 in.group_kind = std::move(group_kind);
-                 in.group_params = std::move(group_params);
-                 in.patterns = patterns.data();
-                 in.n_patterns = static_cast<int>(pattern_curve.size());
-                 in.pattern_curve = std::move(pattern_curve);
-                 in.cons_node = std::move(cons_node);
-                 in.cons_dim = std::move(cons_dim);
-                 in.cons_value = std::move(cons_value);
-                 in.cons_curve = std::move(cons_curve);
-                 for (std::size_t c = 0; c < curve_kind.size(); ++c)
-                     in.curves.push_back({static_cast<CurveKind>(curve_kind[c]), curve_t0[c],
-                                          curve_t1[c], curve_table_begin[c], curve_table_count[c]});
-                 in.table_t = std::move(table_t);
-                 in.table_v = std::move(table_v);
-                 for (int d = 0; d < 3; ++d) in.gravity[d] = gravity[d];
-                 in.gravity_curve = gravity_curve;
-                 in.contact_nodes = std::move(contact_nodes);
-                 in.contact_masks = std::move(contact_masks);
-                 in.press_nodes = std::move(press_nodes);
-                 in.press_value = std::move(press_value);
-                 in.press_curve = std::move(press_curve);
-                 in.anp = anp;
-                 in.stiffness_damping = stiffness_damping;
-                 in.anp_stabilization = anp_stabilization;
-                 in.group_visco = std::move(group_visco);
-                 for (std::size_t k = 0; k < tool_kind.size(); ++k) {
-                     RigidTool t{};
-                     t.kind = static_cast<ToolKind>(tool_kind[k]);
-                     for (int c = 0; c < 4; ++c) t.p[c] = tool_params[4 * k + c];
-                     t.mu_s = tool_mu[2 * k];
-                     t.mu_k = tool_mu[2 * k + 1];
-                     t.key_begin = static_cast<index_t>(in.tool_keys.size() / 8);
-                     t.key_count = static_cast<index_t>(tool_keys[k].size() / 8);
-                     in.tool_keys.insert(in.tool_keys.end(), tool_keys[k].begin(), tool_keys[k].end());
-                     t.grid_begin = static_cast<index_t>(in.tool_grid.size());
-                     for (int c = 0; c < 3; ++c) t.grid_dims[c] = tool_grid_dims[3 * k + c];
-                     in.tool_grid.insert(in.tool_grid.end(), tool_grids[k].begin(), tool_grids[k].end());
-                     in.tools.push_back(t);
-                 }
-                 new (self) E(in, threads);
-             },
-             // The model crosses as named fields (keyword-only): units and layouts as ModelInput.
-             nb::kw_only(), "X"_a, "tets"_a, "density"_a, "group_end"_a, "group_kind"_a, "group_params"_a, "patterns"_a, "pattern_curve"_a, "cons_node"_a, "cons_dim"_a, "cons_value"_a, "cons_curve"_a, "curve_kind"_a, "curve_t0"_a, "curve_t1"_a, "curve_table_begin"_a, "curve_table_count"_a, "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a, "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a, "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a, "stiffness_damping"_a, "anp_stabilization"_a, "threads"_a)
+        .def(
+            "__init__",
+            [](E* self, In<double> X, In<index_t> tets, In<double> density, std::vector<index_t> group_end,
+               std::vector<int> group_kind, std::vector<double> group_params, In<double> patterns,
+               std::vector<index_t> pattern_curve, std::vector<index_t> cons_node, std::vector<int> cons_dim,
+               std::vector<double> cons_value, std::vector<index_t> cons_curve, std::vector<int> curve_kind,
+               std::vector<double> curve_t0, std::vector<double> curve_t1,
+               std::vector<index_t> curve_table_begin, std::vector<index_t> curve_table_count,
+               std::vector<double> table_t, std::vector<double> table_v, std::vector<double> gravity,
+               index_t gravity_curve, std::vector<index_t> contact_nodes, std::vector<index_t> contact_masks,
+               std::vector<int> tool_kind, std::vector<double> tool_params, std::vector<double> tool_mu,
+               std::vector<std::vector<double>> tool_keys, std::vector<index_t> tool_grid_dims,
+               std::vector<std::vector<double>> tool_grids, std::vector<index_t> press_nodes,
+               std::vector<double> press_value, std::vector<index_t> press_curve, bool anp,
+               std::vector<double> group_visco, double stiffness_damping, double anp_stabilization,
+               int threads) {
+                ModelInput in;
+                in.X = X.data();
+                in.n_nodes = static_cast<index_t>(X.shape(0));
+                in.tets = tets.data();
+                in.n_elems = static_cast<index_t>(tets.shape(0));
+                in.density = density.data();
+                in.group_end = std::move(group_end);
+                in.group_kind = std::move(group_kind);
+                in.group_params = std::move(group_params);
+                in.patterns = patterns.data();
+                in.n_patterns = static_cast<int>(pattern_curve.size());
+                in.pattern_curve = std::move(pattern_curve);
+                in.cons_node = std::move(cons_node);
+                in.cons_dim = std::move(cons_dim);
+                in.cons_value = std::move(cons_value);
+                in.cons_curve = std::move(cons_curve);
+                for (std::size_t c = 0; c < curve_kind.size(); ++c)
+                    in.curves.push_back({static_cast<CurveKind>(curve_kind[c]), curve_t0[c], curve_t1[c],
+                                         curve_table_begin[c], curve_table_count[c]});
+                in.table_t = std::move(table_t);
+                in.table_v = std::move(table_v);
+                for (int d = 0; d < 3; ++d) in.gravity[d] = gravity[d];
+                in.gravity_curve = gravity_curve;
+                in.contact_nodes = std::move(contact_nodes);
+                in.contact_masks = std::move(contact_masks);
+                in.press_nodes = std::move(press_nodes);
+                in.press_value = std::move(press_value);
+                in.press_curve = std::move(press_curve);
+                in.anp = anp;
+                in.stiffness_damping = stiffness_damping;
+                in.anp_stabilization = anp_stabilization;
+                in.group_visco = std::move(group_visco);
+                for (std::size_t k = 0; k < tool_kind.size(); ++k) {
+                    RigidTool t{};
+                    t.kind = static_cast<ToolKind>(tool_kind[k]);
+                    for (int c = 0; c < 4; ++c) t.p[c] = tool_params[4 * k + c];
+                    t.mu_s = tool_mu[2 * k];
+                    t.mu_k = tool_mu[2 * k + 1];
+                    t.key_begin = static_cast<index_t>(in.tool_keys.size() / 8);
+                    t.key_count = static_cast<index_t>(tool_keys[k].size() / 8);
+                    in.tool_keys.insert(in.tool_keys.end(), tool_keys[k].begin(), tool_keys[k].end());
+                    t.grid_begin = static_cast<index_t>(in.tool_grid.size());
+                    for (int c = 0; c < 3; ++c) t.grid_dims[c] = tool_grid_dims[3 * k + c];
+                    in.tool_grid.insert(in.tool_grid.end(), tool_grids[k].begin(), tool_grids[k].end());
+                    in.tools.push_back(t);
+                }
+                new (self) E(in, threads);
+            },
+            // The model crosses as named fields (keyword-only): units and layouts as ModelInput.
+            nb::kw_only(), "X"_a, "tets"_a, "density"_a, "group_end"_a, "group_kind"_a, "group_params"_a,
+            "patterns"_a, "pattern_curve"_a, "cons_node"_a, "cons_dim"_a, "cons_value"_a, "cons_curve"_a,
+            "curve_kind"_a, "curve_t0"_a, "curve_t1"_a, "curve_table_begin"_a, "curve_table_count"_a,
+            "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a,
+            "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a,
+            "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a,
+            "stiffness_damping"_a, "anp_stabilization"_a, "threads"_a)
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
@@ -215,40 +244,50 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
         .def_prop_ro("dt_critical_element", [](const E& e) { return e.model.dt_critical_elem; })
         .def_prop_ro("bytes", [](const E& e) { return e.model.bytes(); })
         .def_prop_ro("threads", [](const E& e) { return e.threads; })
-        .def("new_state", [](const E& e) {
-            const std::size_t q = static_cast<std::size_t>(e.model.n_blocks) * kLanes * 6 *
-                                  static_cast<std::size_t>(e.model.visco_terms);
-            return S{State<T>(e.model.n_pad, q), e.model.n_nodes};
-        })
-        .def("critical_steps", [](const E& e) {
-            // Stable step of each element [s] (h_min / c_d), in the order elements were given.
-            const std::size_t n = e.model.elem_dt.size();
-            std::vector<double> dt = e.model.elem_dt;
-            return to_numpy(std::move(dt), {n});
-        })
-        .def("mass", [](const E& e) {
-            std::vector<T> m(e.model.mass.begin(), e.model.mass.begin() + e.model.n_nodes);
-            return to_numpy(std::move(m), {size_t(e.model.n_nodes)});
-        })
-        .def("make_backend", [](const E& e, const std::string& name, int device, int threads) {
-            // A new backend for this model (the returned object keeps the model alive).
-            try {
-                return PyBackend<T>{&e, make_backend(e, name, device, threads)};
-            } catch (const std::invalid_argument& x) {
-                throw nb::value_error(x.what());
-            }
-        }, "name"_a, "device"_a = 0, "threads"_a = 0, nb::keep_alive<0, 1>());
+        .def("new_state",
+             [](const E& e) {
+                 const std::size_t q = static_cast<std::size_t>(e.model.n_blocks) * kLanes * 6 *
+                                       static_cast<std::size_t>(e.model.visco_terms);
+                 return S{State<T>(e.model.n_pad, q), e.model.n_nodes};
+             })
+        .def("critical_steps",
+             [](const E& e) {
+                 // Stable step of each element [s] (h_min / c_d), in the order elements were given.
+                 const std::size_t n = e.model.elem_dt.size();
+                 std::vector<double> dt = e.model.elem_dt;
+                 return to_numpy(std::move(dt), {n});
+             })
+        .def("mass",
+             [](const E& e) {
+                 std::vector<T> m(e.model.mass.begin(), e.model.mass.begin() + e.model.n_nodes);
+                 return to_numpy(std::move(m), {size_t(e.model.n_nodes)});
+             })
+        .def(
+            "make_backend",
+            [](const E& e, const std::string& name, int device, int threads) {
+                // A new backend for this model (the returned object keeps the model alive).
+                try {
+                    return PyBackend<T>{&e, make_backend(e, name, device, threads)};
+                } catch (const std::invalid_argument& x) {
+                    throw nb::value_error(x.what());
+                }
+            },
+            "name"_a, "device"_a = 0, "threads"_a = 0, nb::keep_alive<0, 1>());
 
     nb::class_<B>(m, backend_name, "A backend stepping one model: run, step, relax, results, tools.")
-        .def("step", [](B& e, const S& in, S& out, double dt, double alpha) {
-                 RunReport r;
-                 {
-                     nb::gil_scoped_release g;
-                     r = e->step(in.s, out.s, dt, alpha);
-                 }
-                 return report(r);
-             }, "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
-        .def("run", [](B& e, S& s, long n, double dt, double alpha, int check_every, double blowup) {
+        .def(
+            "step",
+            [](B& e, const S& in, S& out, double dt, double alpha) {
+                RunReport r;
+                {
+                    nb::gil_scoped_release g;
+                    r = e->step(in.s, out.s, dt, alpha);
+                }
+                return report(r);
+            },
+            "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
+        .def("run",
+             [](B& e, S& s, long n, double dt, double alpha, int check_every, double blowup) {
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
@@ -256,8 +295,9 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  }
                  return report(r);
              })
-        .def("relax", [](B& e, S& s, double t_eval, double dt, double tol, long max_steps,
-                         int check_every, double blowup) {
+        .def("relax",
+             [](B& e, S& s, double t_eval, double dt, double tol, long max_steps, int check_every,
+                double blowup) {
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
@@ -265,45 +305,50 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  }
                  return report(r);
              })
-        .def("measures", [](B& e, const S& s) {
-            const size_t M = size_t(e.engine->model.n_elems);
-            ElementResults<T> r;
-            {
-                nb::gil_scoped_release g;
-                r = e->measures(s.s);
-            }
-            return nb::make_tuple(to_numpy(std::move(r.J), {M}), to_numpy(std::move(r.W), {M}),
-                                  to_numpy(std::move(r.S), {M, 6}), to_numpy(std::move(r.sigma), {M, 6}),
-                                  to_numpy(std::move(r.E), {M, 6}));
-        })
-        .def("set_tool_keys", [](B& e, std::vector<std::vector<double>> keys) {
-            try {
-                e->set_tool_keys(keys);
-            } catch (const std::invalid_argument& x) {
-                throw nb::value_error(x.what());
-            }
-        })
-        .def("scale_materials", [](B& e, double factor) {
-            // Multiply every material's moduli by `factor` relative to the values at build time
-            // (the viewer's stiffness slider). The critical time step scales by 1/sqrt(factor).
-            if (!(factor > 0.0)) throw nb::value_error("factor must be > 0");
-            e->scale_materials(factor);
-        })
+        .def("measures",
+             [](B& e, const S& s) {
+                 const size_t M = size_t(e.engine->model.n_elems);
+                 ElementResults<T> r;
+                 {
+                     nb::gil_scoped_release g;
+                     r = e->measures(s.s);
+                 }
+                 return nb::make_tuple(to_numpy(std::move(r.J), {M}), to_numpy(std::move(r.W), {M}),
+                                       to_numpy(std::move(r.S), {M, 6}), to_numpy(std::move(r.sigma), {M, 6}),
+                                       to_numpy(std::move(r.E), {M, 6}));
+             })
+        .def("set_tool_keys",
+             [](B& e, std::vector<std::vector<double>> keys) {
+                 try {
+                     e->set_tool_keys(keys);
+                 } catch (const std::invalid_argument& x) {
+                     throw nb::value_error(x.what());
+                 }
+             })
+        .def("scale_materials",
+             [](B& e, double factor) {
+                 // Multiply every material's moduli by `factor` relative to the values at build time
+                 // (the viewer's stiffness slider). The critical time step scales by 1/sqrt(factor).
+                 if (!(factor > 0.0)) throw nb::value_error("factor must be > 0");
+                 e->scale_materials(factor);
+             })
         .def_prop_ro("name", [](const B& e) { return e->name(); })
         .def_prop_ro("threads", [](const B& e) { return e->threads(); })
-        .def("tool_history", [](const B& e) {
-            std::vector<double> h = e->tool_history();
-            const size_t nt = e.engine->model.tools.size();
-            const size_t steps = nt ? h.size() / (6 * nt) : 0;
-            return to_numpy(std::move(h), {steps, nt, 6});
-        })
-        .def("contact_state", [](const B& e) {
-            std::vector<index_t> nodes = e.engine->model.contact_nodes;
-            ContactReport c = e->contact_report();
-            const size_t n = nodes.size();
-            return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(c.tool), {n}),
-                                  to_numpy(std::move(c.force), {n, 3}));
-        })
+        .def("tool_history",
+             [](const B& e) {
+                 std::vector<double> h = e->tool_history();
+                 const size_t nt = e.engine->model.tools.size();
+                 const size_t steps = nt ? h.size() / (6 * nt) : 0;
+                 return to_numpy(std::move(h), {steps, nt, 6});
+             })
+        .def("contact_state",
+             [](const B& e) {
+                 std::vector<index_t> nodes = e.engine->model.contact_nodes;
+                 ContactReport c = e->contact_report();
+                 const size_t n = nodes.size();
+                 return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(c.tool), {n}),
+                                       to_numpy(std::move(c.force), {n, 3}));
+             })
         .def("internal_forces", [](B& e, const S& s) {
             std::vector<T> f = e->internal_forces(s.s);
             return to_numpy(gather_nodes(f, e.engine->model.n_nodes, e.engine->model.n_pad),
@@ -368,20 +413,26 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
         .value("Box", ToolKind::Box)
         .value("Grid", ToolKind::Grid)
         .value("Cylinder", ToolKind::Cylinder);
-    m.def("is_decoupled", [](MaterialKind kind) {
-        // Whether a material kind splits W into isochoric and volumetric parts (T4ANP and
-        // viscoelasticity need it): the engine's own M::decoupled, so Python restates no list.
-        const MaterialParams<double> p{kind, {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0}};
-        return with_material(p, [](const auto& mat) { return std::decay_t<decltype(mat)>::decoupled; });
-    }, "kind"_a);
-    m.def("log_J", [](In<double> x, bool single) {
-        // The engine's ln J from J − 1 (materials.hpp, log_J), in float32 or float64, for tests.
-        const size_t n = x.size();
-        std::vector<double> out(n);
-        for (size_t i = 0; i < n; ++i)
-            out[i] = single ? double(log_J(float(x.data()[i]))) : log_J(x.data()[i]);
-        return to_numpy(std::move(out), {n});
-    }, "jm1"_a, "single"_a);
+    m.def(
+        "is_decoupled",
+        [](MaterialKind kind) {
+            // Whether a material kind splits W into isochoric and volumetric parts (T4ANP and
+            // viscoelasticity need it): the engine's own M::decoupled, so Python restates no list.
+            const MaterialParams<double> p{kind, {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0}};
+            return with_material(p, [](const auto& mat) { return std::decay_t<decltype(mat)>::decoupled; });
+        },
+        "kind"_a);
+    m.def(
+        "log_J",
+        [](In<double> x, bool single) {
+            // The engine's ln J from J − 1 (materials.hpp, log_J), in float32 or float64, for tests.
+            const size_t n = x.size();
+            std::vector<double> out(n);
+            for (size_t i = 0; i < n; ++i)
+                out[i] = single ? double(log_J(float(x.data()[i]))) : log_J(x.data()[i]);
+            return to_numpy(std::move(out), {n});
+        },
+        "jm1"_a, "single"_a);
     m.def("max_threads", []() { return omp_get_max_threads(); });
     m.def("thread_limit", &pliant::thread_limit_value, "Most CPU threads a solver accepts.");
     m.def("cuda_compiled", &pliant::cuda_compiled);

@@ -67,8 +67,8 @@ typename Model<T>::NodeSums Model<T>::build_elements(const ModelInput& in) {
     elem_id.assign(S, -1);
     elem_dt.assign(static_cast<std::size_t>(n_elems), 0.0);
     mass.assign(P, T(0));
-    NodeSums sums{std::vector<double>(P, 0.0), std::vector<double>(P, 0.0),
-                  std::vector<double>(P, 0.0), std::vector<index_t>(n_nodes + 1, 0)};
+    NodeSums sums{std::vector<double>(P, 0.0), std::vector<double>(P, 0.0), std::vector<double>(P, 0.0),
+                  std::vector<index_t>(n_nodes + 1, 0)};
     std::vector<double>&mass_d = sums.mass, &stiff_d = sums.stiff, &vol_d = sums.vol;
     std::vector<index_t>& count = sums.count;
 
@@ -93,7 +93,8 @@ typename Model<T>::NodeSums Model<T>::build_elements(const ModelInput& in) {
                 throw std::invalid_argument("element " + std::to_string(e) +
                                             " has non-positive reference volume");
             for (int a = 0; a < 3; ++a)
-                for (int d = 0; d < 3; ++d) elem_grad[aosoa(s / kLanes, s % kLanes, 3 * a + d, 9)] = T(grad[a][d]);
+                for (int d = 0; d < 3; ++d)
+                    elem_grad[aosoa(s / kLanes, s % kLanes, 3 * a + d, 9)] = T(grad[a][d]);
             elem_vol[s] = T(vol);
             elem_id[s] = e;
             const double rho = in.density[e];
@@ -127,13 +128,15 @@ void Model<T>::build_masses(const ModelInput& in, const NodeSums& sums) {
         throw std::invalid_argument("the T4ANP stabilization must be between 0 and 1");
     anp_stabilization = in.anp_stabilization;
     if (anp && visco_terms > 0)
-        throw std::invalid_argument("average nodal pressure (T4ANP) and viscoelastic materials "
-                                    "cannot be combined yet");
+        throw std::invalid_argument(
+            "average nodal pressure (T4ANP) and viscoelastic materials "
+            "cannot be combined yet");
     if (anp) {
         for (const Group<T>& g : groups)
             if (!with_material(g.material, [](const auto& m) { return m.decoupled; }))
-                throw std::invalid_argument("average nodal pressure (T4ANP) needs decoupled "
-                                            "materials (a separate volumetric term)");
+                throw std::invalid_argument(
+                    "average nodal pressure (T4ANP) needs decoupled "
+                    "materials (a separate volumetric term)");
         node_volume.assign(P, T(0));
         for (std::size_t n = 0; n < P; ++n) node_volume[n] = T(vol_d[n] > 0.0 ? vol_d[n] : 1.0);
     }
@@ -147,7 +150,6 @@ void Model<T>::build_masses(const ModelInput& in, const NodeSums& sums) {
         relax_mass[n] = T(mr);
         relax_inv_mass[n] = mr > 0.0 ? T(1.0 / mr) : T(0);
     }
-
 }
 
 /// Node → (element slot, corner) incidence, ordered by slot: a fixed summation order.
@@ -165,7 +167,6 @@ void Model<T>::build_incidence(std::vector<index_t> count) {
             inc_index[fill[n]++] = aosoa(static_cast<index_t>(s / kLanes), s % kLanes, 3 * a, 12);
         }
     }
-
 }
 
 /// Load patterns (K, N, 3) → (K, 3, P), and gravity as one more pattern (m_a g).
@@ -189,7 +190,6 @@ void Model<T>::build_loads(const ModelInput& in, const std::vector<double>& mass
                 load_patterns[(k * 3 + d) * P + n] = T(mass_d[n] * in.gravity[d]);
     }
     n_load_patterns = static_cast<int>(pattern_curve.size());
-
 }
 
 /// Follower pressure: one pattern-factor slot per distinct curve, reference edges, node → face
@@ -223,7 +223,6 @@ void Model<T>::build_pressure(const ModelInput& in) {
         for (index_t f = 0; f < nf; ++f)
             for (int a = 0; a < 3; ++a) pface_index[fill[press_nodes[3 * f + a]]++] = f;
     }
-
 }
 
 /// Prescribed DOFs sorted by node (values, curves, per-node offsets) and the free-DOF mask.
@@ -233,9 +232,8 @@ void Model<T>::build_constraints(const ModelInput& in) {
     free_mask.assign(3 * P, T(1));
     std::vector<std::size_t> order(in.cons_node.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return in.cons_node[a] < in.cons_node[b];
-    });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return in.cons_node[a] < in.cons_node[b]; });
     cons_offsets.assign(static_cast<std::size_t>(n_nodes) + 1, 0);
     for (std::size_t i : order) {
         const index_t dof = in.cons_dim[i] * n_pad + in.cons_node[i];
@@ -277,11 +275,11 @@ void Model<T>::build_contact_and_tables(const ModelInput& in) {
 template <class T>
 std::size_t Model<T>::bytes() const {
     auto b = [](const auto& v) { return v.size() * sizeof(v[0]); };
-    return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) +
-           b(inc_offsets) + b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) +
-           b(relax_inv_mass) + b(node_volume) + b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) +
-           b(press_slot) + b(press_edges) + b(press_value) +
-           b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) + b(cons_offsets);
+    return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) + b(inc_offsets) +
+           b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) + b(relax_inv_mass) + b(node_volume) +
+           b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) + b(press_slot) +
+           b(press_edges) + b(press_value) + b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) +
+           b(cons_offsets);
 }
 
 template struct Model<float>;

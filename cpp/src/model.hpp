@@ -24,45 +24,45 @@ struct Group {
 /// Raw description of a model handed over by the builder (all in SI units, user-facing node and
 /// element numbering already replaced by the builder's locality-friendly order).
 struct ModelInput {
-    const double* X;          // reference positions [m], (N, 3)
+    const double* X;  // reference positions [m], (N, 3)
     index_t n_nodes;
-    const index_t* tets;      // (M, 4), positively oriented
-    const double* density;    // [kg/m³], (M,)
+    const index_t* tets;    // (M, 4), positively oriented
+    const double* density;  // [kg/m³], (M,)
     index_t n_elems;
-    std::vector<index_t> group_end;        // element index one past each group, ascending
-    std::vector<int> group_kind;           // MaterialKind per group
-    std::vector<double> group_params;      // kMaterialParams per group
-    std::vector<double> group_visco;       // per group: n_iso, n_vol, then (α, τ) × kPronyMax; or
-                                           // empty (no viscoelasticity)
-    const double* patterns;   // load patterns [N], (K, N, 3)
+    std::vector<index_t> group_end;    // element index one past each group, ascending
+    std::vector<int> group_kind;       // MaterialKind per group
+    std::vector<double> group_params;  // kMaterialParams per group
+    std::vector<double> group_visco;   // per group: n_iso, n_vol, then (α, τ) × kPronyMax; or
+                                       // empty (no viscoelasticity)
+    const double* patterns;            // load patterns [N], (K, N, 3)
     int n_patterns;
-    std::vector<index_t> pattern_curve;    // curve per pattern
-    double gravity[3] = {0.0, 0.0, 0.0};   // [m/s²], applied as the pattern m_a·g
-    index_t gravity_curve = -1;            // −1: no gravity
-    std::vector<index_t> cons_node;        // constrained DOFs: node, dim, value [m], curve
+    std::vector<index_t> pattern_curve;   // curve per pattern
+    double gravity[3] = {0.0, 0.0, 0.0};  // [m/s²], applied as the pattern m_a·g
+    index_t gravity_curve = -1;           // −1: no gravity
+    std::vector<index_t> cons_node;       // constrained DOFs: node, dim, value [m], curve
     std::vector<int> cons_dim;
     std::vector<double> cons_value;
     std::vector<index_t> cons_curve;
     std::vector<LoadCurve> curves;
     std::vector<double> table_t, table_v;
-    std::vector<index_t> contact_nodes;    // surface nodes that take part in contact
-    std::vector<index_t> contact_masks;    // per contact node: bit k set if tool k (< kMaskedTools)
-                                           // may touch it
+    std::vector<index_t> contact_nodes;  // surface nodes that take part in contact
+    std::vector<index_t> contact_masks;  // per contact node: bit k set if tool k (< kMaskedTools)
+                                         // may touch it
     std::vector<RigidTool> tools;
-    std::vector<double> tool_keys;         // 8 per keyframe: t, position (3), quaternion (4)
-    std::vector<double> tool_grid;         // signed-distance grids [m]
-    std::vector<index_t> press_nodes;      // follower-pressure triangles, 3 nodes each
-    std::vector<double> press_value;       // [Pa] per triangle (positive: against its normal)
-    std::vector<index_t> press_curve;      // curve per triangle
-    bool anp = false;                      // average nodal pressure (T4ANP)
-    double stiffness_damping = 0.0;        // Rayleigh β [s] (tled.hpp: add_damping_forces)
-    double anp_stabilization = 0.0;        // T4ANP: fraction γ of the element's own pressure
+    std::vector<double> tool_keys;     // 8 per keyframe: t, position (3), quaternion (4)
+    std::vector<double> tool_grid;     // signed-distance grids [m]
+    std::vector<index_t> press_nodes;  // follower-pressure triangles, 3 nodes each
+    std::vector<double> press_value;   // [Pa] per triangle (positive: against its normal)
+    std::vector<index_t> press_curve;  // curve per triangle
+    bool anp = false;                  // average nodal pressure (T4ANP)
+    double stiffness_damping = 0.0;    // Rayleigh β [s] (tled.hpp: add_damping_forces)
+    double anp_stabilization = 0.0;    // T4ANP: fraction γ of the element's own pressure
 };
 
 template <class T>
 struct Model {
     index_t n_nodes = 0, n_pad = 0, n_elems = 0, n_blocks = 0;
-    std::vector<index_t> elem_nodes;   // AoSoA K=4 over padded elements
+    std::vector<index_t> elem_nodes;  // AoSoA K=4 over padded elements
     std::vector<T> elem_grad, elem_vol;
     std::vector<index_t> elem_id;      // padded slot → builder element index (−1 for padding)
     std::vector<index_t> block_group;  // block → group
@@ -73,27 +73,27 @@ struct Model {
     // element's critical step equals dt_critical (Underwood 1983, "Dynamic relaxation", §4: the
     // static solution does not depend on the mass; large elements no longer wait on small ones).
     std::vector<T> relax_mass, relax_inv_mass;
-    std::vector<T> load_patterns;              // (K, 3, P)
-    int n_load_patterns = 0;                   // K; pattern_curve also holds the pressure slots
+    std::vector<T> load_patterns;  // (K, 3, P)
+    int n_load_patterns = 0;       // K; pattern_curve also holds the pressure slots
     std::vector<index_t> pattern_curve;
     std::vector<index_t> pface_offsets, pface_index, press_nodes, press_slot;
     std::vector<T> press_edges, press_value;
-    bool anp = false;                  // average nodal pressure tetrahedra (T4ANP)
-    double stiffness_damping = 0.0;    // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
-    double anp_stabilization = 0.0;    // T4ANP: p = p̄ + γ (p(J_e) − p̄) (AveragedPressure)
-    int visco_terms = 0;               // max Prony terms of any group: the State's q holds 6 each
-    std::vector<T> node_volume;        // Σ V0 of the elements of each node [m³], (P,), T4ANP only
+    bool anp = false;                           // average nodal pressure tetrahedra (T4ANP)
+    double stiffness_damping = 0.0;             // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
+    double anp_stabilization = 0.0;             // T4ANP: p = p̄ + γ (p(J_e) − p̄) (AveragedPressure)
+    int visco_terms = 0;                        // max Prony terms of any group: the State's q holds 6 each
+    std::vector<T> node_volume;                 // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node
     std::vector<T> cons_value;
-    std::vector<index_t> cons_offsets;          // node n's constraints: [cons_offsets[n], [n+1])
+    std::vector<index_t> cons_offsets;  // node n's constraints: [cons_offsets[n], [n+1])
     std::vector<LoadCurve> curves;
     std::vector<double> table_t, table_v;
-    std::vector<double> X;                     // reference positions [m], AoS (N, 3)
+    std::vector<double> X;  // reference positions [m], AoS (N, 3)
     std::vector<index_t> contact_nodes;
     std::vector<index_t> contact_bits;  // per contact node: bits 0–2 free DOFs, bit 3 + k tool k
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys, tool_grid;
-    double dt_critical = 0.0;   // min over elements of h_min / c_d [s]
+    double dt_critical = 0.0;  // min over elements of h_min / c_d [s]
     index_t dt_critical_elem = -1;
     std::vector<double> elem_dt;  // per builder element: h_min / c_d [s] (host only, for reports)
 
@@ -102,9 +102,10 @@ struct Model {
     ElementData<T> elements() const { return {elem_nodes.data(), elem_grad.data(), elem_vol.data()}; }
     /// Node data with the physical masses, or with the dynamic-relaxation masses if `relax`.
     NodeData<T> nodes(bool relax = false) const {
-        return {inc_offsets.data(), inc_index.data(), relax ? relax_inv_mass.data() : inv_mass.data(),
-                load_patterns.data(), n_load_patterns, pface_offsets.data(), pface_index.data(),
-                press_nodes.data(), press_edges.data(), press_value.data(), press_slot.data()};
+        return {inc_offsets.data(),   inc_index.data(),   relax ? relax_inv_mass.data() : inv_mass.data(),
+                load_patterns.data(), n_load_patterns,    pface_offsets.data(),
+                pface_index.data(),   press_nodes.data(), press_edges.data(),
+                press_value.data(),   press_slot.data()};
     }
     /// Curve factors at time t [s], one per curve.
     void curve_factors(double t, T* out) const {

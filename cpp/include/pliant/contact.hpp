@@ -31,7 +31,7 @@ struct RigidTool {
     ToolKind kind;
     double p[4];
     double mu_s, mu_k;
-    index_t key_begin, key_count;   // keyframes: time [s], position [m] (3), quaternion (w,x,y,z)
+    index_t key_begin, key_count;  // keyframes: time [s], position [m] (3), quaternion (w,x,y,z)
     index_t grid_begin, grid_dims[3];
 };
 
@@ -65,9 +65,15 @@ PLIANT_HD Pose tool_pose(const RigidTool& tool, double t, const double* keys) {
     n = 1.0 / std::sqrt(n);
     const double qw = q[0] * n, qx = q[1] * n, qy = q[2] * n, qz = q[3] * n;
     Pose P;
-    P.R[0] = 1 - 2 * (qy * qy + qz * qz); P.R[1] = 2 * (qx * qy - qz * qw); P.R[2] = 2 * (qx * qz + qy * qw);
-    P.R[3] = 2 * (qx * qy + qz * qw); P.R[4] = 1 - 2 * (qx * qx + qz * qz); P.R[5] = 2 * (qy * qz - qx * qw);
-    P.R[6] = 2 * (qx * qz - qy * qw); P.R[7] = 2 * (qy * qz + qx * qw); P.R[8] = 1 - 2 * (qx * qx + qy * qy);
+    P.R[0] = 1 - 2 * (qy * qy + qz * qz);
+    P.R[1] = 2 * (qx * qy - qz * qw);
+    P.R[2] = 2 * (qx * qz + qy * qw);
+    P.R[3] = 2 * (qx * qy + qz * qw);
+    P.R[4] = 1 - 2 * (qx * qx + qz * qz);
+    P.R[5] = 2 * (qy * qz - qx * qw);
+    P.R[6] = 2 * (qx * qz - qy * qw);
+    P.R[7] = 2 * (qy * qz + qx * qw);
+    P.R[8] = 1 - 2 * (qx * qx + qy * qy);
     for (int c = 0; c < 3; ++c) P.t[c] = (1.0 - w) * a[1 + c] + w * b[1 + c];
     return P;
 }
@@ -90,16 +96,26 @@ PLIANT_HD void rotate(const Pose& P, const double y[3], double out[3]) {
 PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* grid, double n[3]) {
     switch (tl.kind) {
         case ToolKind::Plane:
-            n[0] = 0.0; n[1] = 0.0; n[2] = 1.0;
+            n[0] = 0.0;
+            n[1] = 0.0;
+            n[2] = 1.0;
             return y[2];
         case ToolKind::Sphere:
         case ToolKind::Capsule: {
             double c[3] = {0.0, 0.0, 0.0};
-            if (tl.kind == ToolKind::Capsule) c[2] = y[2] < -tl.p[1] ? -tl.p[1] : (y[2] > tl.p[1] ? tl.p[1] : y[2]);
+            if (tl.kind == ToolKind::Capsule)
+                c[2] = y[2] < -tl.p[1] ? -tl.p[1] : (y[2] > tl.p[1] ? tl.p[1] : y[2]);
             const double d[3] = {y[0] - c[0], y[1] - c[1], y[2] - c[2]};
             const double r = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            if (r > 0.0) { n[0] = d[0] / r; n[1] = d[1] / r; n[2] = d[2] / r; }
-            else { n[0] = 0.0; n[1] = 0.0; n[2] = 1.0; }
+            if (r > 0.0) {
+                n[0] = d[0] / r;
+                n[1] = d[1] / r;
+                n[2] = d[2] / r;
+            } else {
+                n[0] = 0.0;
+                n[1] = 0.0;
+                n[2] = 1.0;
+            }
             return r - tl.p[0];
         }
         case ToolKind::Box: {
@@ -108,7 +124,10 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
             for (int c = 0; c < 3; ++c) {
                 q[c] = std::fabs(y[c]) - tl.p[c];
                 if (q[c] > 0.0) out2 += q[c] * q[c];
-                if (q[c] > inside) { inside = q[c]; arg = c; }
+                if (q[c] > inside) {
+                    inside = q[c];
+                    arg = c;
+                }
             }
             if (out2 > 0.0) {
                 const double r = std::sqrt(out2);
@@ -126,11 +145,20 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
             const double ez = y[2] < 0.0 ? -1.0 : 1.0;
             if (dr > 0.0 && dz > 0.0) {  // beyond the rim: nearest point on the edge circle
                 const double d = std::sqrt(dr * dr + dz * dz);
-                n[0] = dr * er[0] / d; n[1] = dr * er[1] / d; n[2] = dz * ez / d;
+                n[0] = dr * er[0] / d;
+                n[1] = dr * er[1] / d;
+                n[2] = dz * ez / d;
                 return d;
             }
-            if (dr > dz) { n[0] = er[0]; n[1] = er[1]; n[2] = 0.0; return dr; }
-            n[0] = 0.0; n[1] = 0.0; n[2] = ez;
+            if (dr > dz) {
+                n[0] = er[0];
+                n[1] = er[1];
+                n[2] = 0.0;
+                return dr;
+            }
+            n[0] = 0.0;
+            n[1] = 0.0;
+            n[2] = ez;
             return dz;
         }
         default: {  // Grid
@@ -154,8 +182,9 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
                     for (int c = 0; c < 2; ++c) v[a][b][c] = at(i0[0] + a, i0[1] + b, i0[2] + c);
             const double x = g[0], yy = g[1], z = g[2];
             auto lerp = [](double p, double q, double s) { return p + s * (q - p); };
-            const double phi = lerp(lerp(lerp(v[0][0][0], v[0][0][1], z), lerp(v[0][1][0], v[0][1][1], z), yy),
-                                    lerp(lerp(v[1][0][0], v[1][0][1], z), lerp(v[1][1][0], v[1][1][1], z), yy), x);
+            const double phi =
+                lerp(lerp(lerp(v[0][0][0], v[0][0][1], z), lerp(v[0][1][0], v[0][1][1], z), yy),
+                     lerp(lerp(v[1][0][0], v[1][0][1], z), lerp(v[1][1][0], v[1][1][1], z), yy), x);
             n[0] = lerp(lerp(v[1][0][0] - v[0][0][0], v[1][0][1] - v[0][0][1], z),
                         lerp(v[1][1][0] - v[0][1][0], v[1][1][1] - v[0][1][1], z), yy);
             n[1] = lerp(lerp(v[0][1][0] - v[0][0][0], v[0][1][1] - v[0][0][1], z),
@@ -163,7 +192,13 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
             n[2] = lerp(lerp(v[0][0][1] - v[0][0][0], v[0][1][1] - v[0][1][0], yy),
                         lerp(v[1][0][1] - v[1][0][0], v[1][1][1] - v[1][1][0], yy), x);
             const double r = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-            if (r > 0.0) { n[0] /= r; n[1] /= r; n[2] /= r; } else { n[2] = 1.0; }
+            if (r > 0.0) {
+                n[0] /= r;
+                n[1] /= r;
+                n[2] /= r;
+            } else {
+                n[2] = 1.0;
+            }
             return phi;
         }
     }
@@ -181,11 +216,10 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
 /// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt.
 /// Outputs: u⁺ corrected, force_out, tool_out.
 template <class T>
-PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits,
-                            const double* X, const T* mass,
-                            const T* u, index_t P, const RigidTool* tools, int n_tools,
-                            const Pose* pose0, const Pose* pose1, const double* grid, double g1,
-                            T* u_next, double* force_out, index_t* tool_out) {
+PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits, const double* X,
+                            const T* mass, const T* u, index_t P, const RigidTool* tools, int n_tools,
+                            const Pose* pose0, const Pose* pose1, const double* grid, double g1, T* u_next,
+                            double* force_out, index_t* tool_out) {
     const index_t n = nodes[i];
     double x0[3], x1[3], xs[3];
     for (int d = 0; d < 3; ++d) {
@@ -236,9 +270,8 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node
 /// Adds contact node i's reaction to its tool's row of h (6 per tool: force [N] the tool
 /// receives, then torque [N·m] about the tool's position at t + Δt). No-op without contact.
 template <class T>
-PLIANT_HD void add_tool_reaction(index_t i, const index_t* nodes, const double* X, const T* u_next,
-                                 index_t P, const Pose* pose1, const double* force,
-                                 const index_t* tool, double* h) {
+PLIANT_HD void add_tool_reaction(index_t i, const index_t* nodes, const double* X, const T* u_next, index_t P,
+                                 const Pose* pose1, const double* force, const index_t* tool, double* h) {
     const index_t k = tool[i];
     if (k < 0) return;
     const index_t n = nodes[i];

@@ -38,7 +38,9 @@ PLIANT_HD T det(const Sym3<T>& s) {
 }
 
 template <class T>
-PLIANT_HD T trace(const Sym3<T>& s) { return s.xx + s.yy + s.zz; }
+PLIANT_HD T trace(const Sym3<T>& s) {
+    return s.xx + s.yy + s.zz;
+}
 
 /// Inverse of a symmetric matrix whose determinant `d` is already known.
 template <class T>
@@ -87,8 +89,7 @@ PLIANT_HD Mat3<T> mul(const Mat3<T>& F, const Sym3<T>& S) {
 template <class T>
 PLIANT_HD Sym3<T> sym(const Mat3<T>& A) {
     const T h = T(0.5);
-    return {A.a[0], A.a[4], A.a[8], h * (A.a[1] + A.a[3]), h * (A.a[5] + A.a[7]),
-            h * (A.a[2] + A.a[6])};
+    return {A.a[0], A.a[4], A.a[8], h * (A.a[1] + A.a[3]), h * (A.a[5] + A.a[7]), h * (A.a[2] + A.a[6])};
 }
 
 /// Product A·B of two symmetric matrices that commute (polynomials in one tensor, e.g. C⁻¹ and
@@ -109,8 +110,7 @@ PLIANT_HD Sym3<T> dev(const Sym3<T>& A) {
 /// Double contraction A : A of a symmetric matrix.
 template <class T>
 PLIANT_HD T ddot(const Sym3<T>& A) {
-    return A.xx * A.xx + A.yy * A.yy + A.zz * A.zz +
-           T(2) * (A.xy * A.xy + A.yz * A.yz + A.xz * A.xz);
+    return A.xx * A.xx + A.yy * A.yy + A.zz * A.zz + T(2) * (A.xy * A.xy + A.yz * A.yz + A.xz * A.xz);
 }
 
 /// ln y for y > 0 in plain arithmetic (no libm call: it vectorizes on CPUs and gives the same bits

@@ -28,13 +28,13 @@ namespace pliant {
 
 /// Material type codes, shared with Python (pliant.materials) and the model description.
 enum class MaterialKind : int {
-    NeoHookean = 0,         // decoupled, params (mu, K)
-    MooneyRivlin = 1,       // decoupled, params (C10, C01, K)
-    NeoHookeanCoupled = 2,  // Bonet & Wood, params (mu, lambda)
-    StVenantKirchhoff = 3,  // params (mu, lambda)
-    LinearElastic = 4,      // small strain, params (mu, lambda)
-    Polynomial = 5,         // decoupled, params (C10, C01, C20, C02, C11, K)
-    ArrudaBoyce = 6,        // decoupled, params (mu, lambda_m, K)
+    NeoHookean = 0,             // decoupled, params (mu, K)
+    MooneyRivlin = 1,           // decoupled, params (C10, C01, K)
+    NeoHookeanCoupled = 2,      // Bonet & Wood, params (mu, lambda)
+    StVenantKirchhoff = 3,      // params (mu, lambda)
+    LinearElastic = 4,          // small strain, params (mu, lambda)
+    Polynomial = 5,             // decoupled, params (C10, C01, C20, C02, C11, K)
+    ArrudaBoyce = 6,            // decoupled, params (mu, lambda_m, K)
     TransverselyIsotropic = 7,  // decoupled, params (mu, K, eta, a1, a2, a3)
 };
 
@@ -63,8 +63,8 @@ PLIANT_HD Kinematics<T> kinematics(const Mat3<T>& H) {
            hf * (h[5] + h[7] + h[1] * h[2] + h[4] * h[5] + h[7] * h[8]),
            hf * (h[2] + h[6] + h[0] * h[2] + h[3] * h[5] + h[6] * h[8])};
     const T tr = h[0] + h[4] + h[8];
-    const T tr2 = h[0] * h[0] + h[4] * h[4] + h[8] * h[8] +
-                  T(2) * (h[1] * h[3] + h[2] * h[6] + h[5] * h[7]);  // tr H²
+    const T tr2 =
+        h[0] * h[0] + h[4] * h[4] + h[8] * h[8] + T(2) * (h[1] * h[3] + h[2] * h[6] + h[5] * h[7]);  // tr H²
     k.Jm1 = tr + hf * (tr * tr - tr2) + det(H);
     k.J = T(1) + k.Jm1;
     return k;
@@ -125,8 +125,8 @@ PLIANT_HD Sym3<T> isochoric_pk2(const Kinematics<T>& k, const Sym3<T>& Ci, T W1,
     const T I1 = T(3) + T(2) * trace(k.E);
     const T a = T(2) * W1 * j23;
     const T b = T(2) * W2 * j23 * j23;
-    const Sym3<T> D = axpby(T(2) * a + b * (T(2) * I1 - T(4)), dev(k.E), T(-4) * b,
-                            dev(mul_commuting(k.E, k.E)));
+    const Sym3<T> D =
+        axpby(T(2) * a + b * (T(2) * I1 - T(4)), dev(k.E), T(-4) * b, dev(mul_commuting(k.E, k.E)));
     return mul_commuting(Ci, D);
 }
 
@@ -163,8 +163,7 @@ struct Polynomial {
         T I1b, I2b;
         isochoric_invariants(k, inv_cbrt(k.J * k.J), I1b, I2b);
         const T x = I1b - T(3), y = I2b - T(3);
-        return C10 * x + C01 * y + C20 * x * x + C02 * y * y + C11 * x * y +
-               K / T(2) * k.Jm1 * k.Jm1;
+        return C10 * x + C01 * y + C20 * x * x + C02 * y * y + C11 * x * y + K / T(2) * k.Jm1 * k.Jm1;
     }
 };
 
@@ -184,8 +183,8 @@ struct ArrudaBoyce {
     T mu, lambda_m, K;
     PLIANT_HD T W1(T I1b) const {  // ∂W/∂Ī1 = μ Σ i C_i Ī1^(i−1) / λm^(2i−2) (Horner in Ī1/λm²)
         const T x = I1b / (lambda_m * lambda_m);
-        return mu * (T(0.5) + x * (T(2) / T(20) + x * (T(33) / T(1050) +
-                                                      x * (T(76) / T(7000) + x * T(2595) / T(673750)))));
+        return mu * (T(0.5) + x * (T(2) / T(20) +
+                                   x * (T(33) / T(1050) + x * (T(76) / T(7000) + x * T(2595) / T(673750)))));
     }
     static constexpr bool decoupled = true;
     PLIANT_HD T dilatational_modulus() const { return K + T(8) / T(3) * W1(T(3)); }
@@ -318,8 +317,8 @@ struct LinearElastic {
 template <class M, class T>
 struct AveragedPressure {
     const M& m;
-    T p;      // p̄ [Pa]
-    T stab;   // γ [1]
+    T p;     // p̄ [Pa]
+    T stab;  // γ [1]
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         return decoupled_pk2(m, k, p + stab * (m.pressure(k) - p));
     }
@@ -374,8 +373,7 @@ struct ViscoMaterial {
                 const int slot = part == 0 ? i : pr.n_iso + i;
                 const int t = part * (kPronyMax / 2) + i;
                 T* d = q + 6 * slot * stride;
-                const T e[6] = {Se[part].xx, Se[part].yy, Se[part].zz, Se[part].xy, Se[part].yz,
-                                Se[part].xz};
+                const T e[6] = {Se[part].xx, Se[part].yy, Se[part].zz, Se[part].xy, Se[part].yz, Se[part].xz};
                 const T den = dt + pr.tau[t];
                 T D[6];
                 PLIANT_UNROLL
@@ -412,8 +410,8 @@ struct MaterialParams {
 /// Whether parameter k of a material kind is a modulus [Pa] (scaled by the viewer's stiffness
 /// slider) rather than a stretch or a direction.
 PLIANT_HD bool is_modulus(MaterialKind kind, int k) {
-    if (kind == MaterialKind::ArrudaBoyce) return k != 1;              // λm
-    if (kind == MaterialKind::TransverselyIsotropic) return k < 3;     // a
+    if (kind == MaterialKind::ArrudaBoyce) return k != 1;           // λm
+    if (kind == MaterialKind::TransverselyIsotropic) return k < 3;  // a
     return true;
 }
 
@@ -438,14 +436,23 @@ PLIANT_HD M make_material(const MaterialParams<T>& m) {
 template <class T, class Fn>
 inline auto with_material(const MaterialParams<T>& m, Fn&& f) {
     switch (m.kind) {
-        case MaterialKind::NeoHookean: return f(make_material<NeoHookean<T>>(m));
-        case MaterialKind::MooneyRivlin: return f(make_material<MooneyRivlin<T>>(m));
-        case MaterialKind::Polynomial: return f(make_material<Polynomial<T>>(m));
-        case MaterialKind::ArrudaBoyce: return f(make_material<ArrudaBoyce<T>>(m));
-        case MaterialKind::TransverselyIsotropic: return f(make_material<TransverselyIsotropic<T>>(m));
-        case MaterialKind::NeoHookeanCoupled: return f(make_material<NeoHookeanCoupled<T>>(m));
-        case MaterialKind::StVenantKirchhoff: return f(make_material<StVenantKirchhoff<T>>(m));
-        case MaterialKind::LinearElastic: default: return f(make_material<LinearElastic<T>>(m));
+        case MaterialKind::NeoHookean:
+            return f(make_material<NeoHookean<T>>(m));
+        case MaterialKind::MooneyRivlin:
+            return f(make_material<MooneyRivlin<T>>(m));
+        case MaterialKind::Polynomial:
+            return f(make_material<Polynomial<T>>(m));
+        case MaterialKind::ArrudaBoyce:
+            return f(make_material<ArrudaBoyce<T>>(m));
+        case MaterialKind::TransverselyIsotropic:
+            return f(make_material<TransverselyIsotropic<T>>(m));
+        case MaterialKind::NeoHookeanCoupled:
+            return f(make_material<NeoHookeanCoupled<T>>(m));
+        case MaterialKind::StVenantKirchhoff:
+            return f(make_material<StVenantKirchhoff<T>>(m));
+        case MaterialKind::LinearElastic:
+        default:
+            return f(make_material<LinearElastic<T>>(m));
     }
 }
 

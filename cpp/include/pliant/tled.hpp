@@ -25,17 +25,14 @@ struct ElementData {
     const T* vol;
 };
 
-PLIANT_HD index_t aosoa(index_t b, int l, int field, int width) {
-    return (b * width + field) * kLanes + l;
-}
+PLIANT_HD index_t aosoa(index_t b, int l, int field, int width) { return (b * width + field) * kLanes + l; }
 
 /// Displacement gradient H = ∇X u = Σ_a u_a ⊗ ∇X N_a of element slot (b, l), with
 /// ∇N_3 = −Σ_{a<3} ∇N_a so that H = Σ_{a<3} (u_a − u_3) ⊗ ∇N_a; F = I + H (Miller et al. 2007,
 /// CNME 23:121, eq. 4). Kept apart from I so that small strains keep their digits in float32.
 /// u: displacements [m], SoA (3, P).
 template <class T>
-PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& el, const T* u,
-                                        index_t P) {
+PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& el, const T* u, index_t P) {
     index_t n[4];
     PLIANT_UNROLL
     for (int a = 0; a < 4; ++a) n[a] = el.nodes[aosoa(b, l, a, 4)];
@@ -69,12 +66,16 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
         for (int a = 0; a < 3; ++a) {
             const T fa = V0 * (Pk.a[3 * i] * g[3 * a] + Pk.a[3 * i + 1] * g[3 * a + 1] +
                                Pk.a[3 * i + 2] * g[3 * a + 2]);
-            if constexpr (Add) f_out[aosoa(b, l, 3 * a + i, 12)] += fa;
-            else f_out[aosoa(b, l, 3 * a + i, 12)] = fa;
+            if constexpr (Add)
+                f_out[aosoa(b, l, 3 * a + i, 12)] += fa;
+            else
+                f_out[aosoa(b, l, 3 * a + i, 12)] = fa;
             f3 -= fa;
         }
-        if constexpr (Add) f_out[aosoa(b, l, 9 + i, 12)] += f3;
-        else f_out[aosoa(b, l, 9 + i, 12)] = f3;
+        if constexpr (Add)
+            f_out[aosoa(b, l, 9 + i, 12)] += f3;
+        else
+            f_out[aosoa(b, l, 9 + i, 12)] = f3;
     }
 }
 
@@ -83,8 +84,8 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
 /// Inputs: material, element data, displacements u [m] SoA (3, P).
 /// Outputs: f_out [N] AoSoA K=12; J_out (det F, K=1) for the instability check.
 template <class T, class Material>
-PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                              const T* u, index_t P, T* f_out, T* J_out) {
+PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
+                              index_t P, T* f_out, T* J_out) {
     const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
     store_forces<false>(b, l, el, mat.pk1(k), f_out);
     J_out[aosoa(b, l, 0, 1)] = k.J;
@@ -99,8 +100,8 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
 /// for Δt ≤ (2/ω_max)(√(1 + ξ²) − ξ), ξ = β ω_max / 2 (Belytschko et al. 2000, eq. 6.3.18).
 /// Inputs: material, element data, u and u⁻ [m] SoA (3, P), β/Δt [1]. Output: f_inout [N] (+=).
 template <class T, class Material>
-PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                                  const T* u, const T* u_prev, index_t P, T beta_over_dt, T* f_inout) {
+PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
+                                  const T* u_prev, index_t P, T beta_over_dt, T* f_inout) {
     const Mat3<T> H = displacement_gradient(b, l, el, u, P);
     const Mat3<T> Hp = displacement_gradient(b, l, el, u_prev, P);
     Mat3<T> FtFdot;  // Fᵀ Ḟ Δt, Ḟ Δt = H − H⁻, F = I + H
@@ -129,8 +130,8 @@ PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const E
 /// its own pressure. Volumetric locking of nearly incompressible tissue is much reduced.
 /// (1) Inputs: decoupled material, element data, u [m] SoA (3, P). Output: ep_out [N·m] (slot).
 template <class T, class Material>
-PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                                const T* u, index_t P, T* ep_out) {
+PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
+                                index_t P, T* ep_out) {
     const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
     ep_out[aosoa(b, l, 0, 1)] = el.vol[aosoa(b, l, 0, 1)] * mat.pressure(k);
 }
@@ -138,8 +139,8 @@ PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const Ele
 /// (2) Node n's averaged pressure p̄ [Pa] from the element values V0 p (slot layout), gathered
 /// through the node's incidence list (offsets into the 12-wide force layout), over Σ V0 [m³].
 template <class T>
-PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_index,
-                           const T* ep, const T* node_volume) {
+PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_index, const T* ep,
+                           const T* node_volume) {
     T sum = T(0);
     for (index_t k = inc_offsets[n]; k < inc_offsets[n + 1]; ++k) {
         const index_t o = inc_index[k];  // (b·12 + 3a)·kLanes + l
@@ -160,10 +161,10 @@ PLIANT_HD T corner_pressure(index_t b, int l, const ElementData<T>& el, const T*
 /// (3) Element forces of slot (b, l) with its corners' mean nodal pressure p̄ [Pa] (node_p), with
 /// the fraction stab (γ) of its own pressure mixed back in (AveragedPressure).
 template <class T, class Material>
-PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                                  const T* u, index_t P, const T* node_p, T stab, T* f_out, T* J_out) {
-    element_forces(b, l, AveragedPressure<Material, T>{mat, corner_pressure(b, l, el, node_p), stab}, el,
-                   u, P, f_out, J_out);
+PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
+                                  index_t P, const T* node_p, T stab, T* f_out, T* J_out) {
+    element_forces(b, l, AveragedPressure<Material, T>{mat, corner_pressure(b, l, el, node_p), stab}, el, u,
+                   P, f_out, J_out);
 }
 
 /// Time-integration coefficients of central differences with mass-proportional damping α [1/s]:
@@ -188,18 +189,19 @@ enum class CurveKind : int { Constant = 0, Step = 1, Ramp = 2, SmoothRamp = 3, T
 
 struct LoadCurve {
     CurveKind kind;
-    double t0, t1;           // Step: jumps at t0; Ramp/SmoothRamp: 0 at t0 → 1 at t1
+    double t0, t1;                     // Step: jumps at t0; Ramp/SmoothRamp: 0 at t0 → 1 at t1
     index_t table_begin, table_count;  // Table: piecewise linear in (times, values), held at the ends
 };
 
 /// Factor of curve c at time t: Ramp is linear; SmoothRamp is 10τ³ − 15τ⁴ + 6τ⁵ (NiftySim's
 /// POLY345, zero velocity and acceleration at both ends); Hilly is τ exp(cos(4πτ) − 1) (NiftySim's
 /// HILLY); Table interpolates linearly. τ = (t − t0)/(t1 − t0) clamped to [0, 1].
-PLIANT_HD double curve_value(const LoadCurve& c, double t, const double* table_t,
-                             const double* table_v) {
+PLIANT_HD double curve_value(const LoadCurve& c, double t, const double* table_t, const double* table_v) {
     switch (c.kind) {
-        case CurveKind::Constant: return 1.0;
-        case CurveKind::Step: return t >= c.t0 ? 1.0 : 0.0;
+        case CurveKind::Constant:
+            return 1.0;
+        case CurveKind::Step:
+            return t >= c.t0 ? 1.0 : 0.0;
         case CurveKind::Ramp:
         case CurveKind::SmoothRamp:
         case CurveKind::Hilly: {
@@ -233,7 +235,7 @@ struct NodeData {
     const index_t* inc_index;
     const T* inv_mass;  // 1/m_a [1/kg], m_a = Σ ρ V0 / 4 over incident elements
     const T* load_patterns;
-    int n_patterns;     // rows of load_patterns (pattern factors may have more slots: pressures)
+    int n_patterns;  // rows of load_patterns (pattern factors may have more slots: pressures)
     // Follower pressure on surface triangles: node → faces CSR, 3 nodes per face, reference edges
     // X1 − X0 and X2 − X0 [m] (6 per face), pressure [Pa] and its pattern-factor slot per face.
     const index_t* pface_offsets;
@@ -250,14 +252,13 @@ struct NodeData {
 /// tledPressureConstraint). Positive p pushes against the face normal (x1 − x0) × (x2 − x0).
 /// Inputs: node data, pattern factors s (slot per face), u [m] SoA (3, P). Output: out [N] (3).
 template <class T>
-PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors, const T* u,
-                              index_t P, T out[3]) {
+PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors, const T* u, index_t P,
+                              T out[3]) {
     out[0] = out[1] = out[2] = T(0);
     const index_t end = nd.pface_offsets[n + 1];
     for (index_t k = nd.pface_offsets[n]; k < end; ++k) {
         const index_t f = nd.pface_index[k];
-        const index_t a = nd.press_nodes[3 * f], b = nd.press_nodes[3 * f + 1],
-                      c = nd.press_nodes[3 * f + 2];
+        const index_t a = nd.press_nodes[3 * f], b = nd.press_nodes[3 * f + 1], c = nd.press_nodes[3 * f + 2];
         T e1[3], e2[3];
         PLIANT_UNROLL
         for (int d = 0; d < 3; ++d) {
@@ -278,9 +279,9 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
 /// Inputs: node data, element forces, load-pattern factors, u and u⁻ [m] SoA (3, P).
 /// Outputs: u_out [m]; f_node_out [N] (internal force per node, may be null).
 template <class T>
-PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem,
-                           const T* pattern_factors, const Integrator<T>& it, const T* u,
-                           const T* u_prev, index_t P, T* u_out, T* f_node_out) {
+PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, const T* pattern_factors,
+                           const Integrator<T>& it, const T* u, const T* u_prev, index_t P, T* u_out,
+                           T* f_node_out) {
     T f[3] = {T(0), T(0), T(0)};
     const index_t end = nd.inc_offsets[n + 1];
     for (index_t k = nd.inc_offsets[n]; k < end; ++k) {
@@ -305,22 +306,22 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem,
 /// Kinematic constraint i: u[dof_i] = value_i · curve factor (fixed nodes have value 0).
 /// dof is d*P + n in the SoA node layout.
 template <class T>
-PLIANT_HD void apply_constraint(index_t i, const index_t* dof, const T* value,
-                                const index_t* curve, const T* curve_factors, T* u_out) {
+PLIANT_HD void apply_constraint(index_t i, const index_t* dof, const T* value, const index_t* curve,
+                                const T* curve_factors, T* u_out) {
     u_out[dof[i]] = value[i] * curve_factors[curve[i]];
 }
 
 /// Stress and strain measures of one element, for output (not on the stepping path).
 template <class T>
 struct ElementMeasures {
-    T J, energy;           // det F; strain-energy density W [Pa]
-    Sym3<T> S, sigma, E;   // 2nd Piola–Kirchhoff [Pa]; Cauchy σ = J⁻¹ F S Fᵀ [Pa]; Green–Lagrange E
+    T J, energy;          // det F; strain-energy density W [Pa]
+    Sym3<T> S, sigma, E;  // 2nd Piola–Kirchhoff [Pa]; Cauchy σ = J⁻¹ F S Fᵀ [Pa]; Green–Lagrange E
 };
 
 /// σ = J⁻¹ P Fᵀ, E = ½(C − I), W of element slot (b, l) (Bonet & Wood, 2nd ed., eqs. 5.31, 3.15).
 template <class T, class Material>
-PLIANT_HD ElementMeasures<T> element_measures(index_t b, int l, const Material& mat,
-                                              const ElementData<T>& el, const T* u, index_t P) {
+PLIANT_HD ElementMeasures<T> element_measures(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                                              const T* u, index_t P) {
     const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
     ElementMeasures<T> m;
     m.J = k.J;
@@ -330,12 +331,10 @@ PLIANT_HD ElementMeasures<T> element_measures(index_t b, int l, const Material& 
     const T iJ = T(1) / m.J;
     const T* p = Pk.a;
     const T* f = k.F.a;
-    m.sigma = {iJ * (p[0] * f[0] + p[1] * f[1] + p[2] * f[2]),
-               iJ * (p[3] * f[3] + p[4] * f[4] + p[5] * f[5]),
-               iJ * (p[6] * f[6] + p[7] * f[7] + p[8] * f[8]),
-               iJ * (p[0] * f[3] + p[1] * f[4] + p[2] * f[5]),
-               iJ * (p[3] * f[6] + p[4] * f[7] + p[5] * f[8]),
-               iJ * (p[0] * f[6] + p[1] * f[7] + p[2] * f[8])};
+    m.sigma = {
+        iJ * (p[0] * f[0] + p[1] * f[1] + p[2] * f[2]), iJ * (p[3] * f[3] + p[4] * f[4] + p[5] * f[5]),
+        iJ * (p[6] * f[6] + p[7] * f[7] + p[8] * f[8]), iJ * (p[0] * f[3] + p[1] * f[4] + p[2] * f[5]),
+        iJ * (p[3] * f[6] + p[4] * f[7] + p[5] * f[8]), iJ * (p[0] * f[6] + p[1] * f[7] + p[2] * f[8])};
     m.E = k.E;
     return m;
 }
@@ -348,9 +347,8 @@ PLIANT_HD void tet_reference(const double X[4][3], double grad_out[4][3], double
                              double& altitude_out) {
     double A[3][3];
     PLIANT_UNROLL
-    for (int r = 0; r < 3; ++r)
-        PLIANT_UNROLL
-        for (int c = 0; c < 3; ++c) A[r][c] = X[c + 1][r] - X[0][r];  // columns X_a − X_0
+    for (int r = 0; r < 3; ++r) PLIANT_UNROLL
+    for (int c = 0; c < 3; ++c) A[r][c] = X[c + 1][r] - X[0][r];  // columns X_a − X_0
     const double d = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
                      A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
                      A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
@@ -359,12 +357,11 @@ PLIANT_HD void tet_reference(const double X[4][3], double grad_out[4][3], double
     const double inv = d != 0.0 ? 1.0 / d : 0.0;
     double B[3][3];
     PLIANT_UNROLL
-    for (int r = 0; r < 3; ++r)
-        PLIANT_UNROLL
-        for (int c = 0; c < 3; ++c) {
-            const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
-            B[r][c] = (A[r1][c1] * A[r2][c2] - A[r1][c2] * A[r2][c1]) * inv;
-        }
+    for (int r = 0; r < 3; ++r) PLIANT_UNROLL
+    for (int c = 0; c < 3; ++c) {
+        const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+        B[r][c] = (A[r1][c1] * A[r2][c2] - A[r1][c2] * A[r2][c1]) * inv;
+    }
     PLIANT_UNROLL
     for (int j = 0; j < 3; ++j) {
         grad_out[1][j] = B[0][j];

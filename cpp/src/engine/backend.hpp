@@ -49,8 +49,7 @@ public:
     virtual ~Backend() = default;
     /// n central-difference steps of s in place (Δt [s], mass damping α [1/s]), checking stability
     /// every check_every steps and at the end (|u| above blowup [m] is a blow-up).
-    virtual RunReport run(State<T>& s, long n, double dt, double alpha, int check_every,
-                          double blowup) = 0;
+    virtual RunReport run(State<T>& s, long n, double dt, double alpha, int check_every, double blowup) = 0;
     /// One step from `in` to `out` (distinct states).
     virtual RunReport step(const State<T>& in, State<T>& out, double dt, double alpha) = 0;
     /// Dynamic relaxation to the static equilibrium of the loads at time t_eval [s].

@@ -69,10 +69,10 @@ private:
 /// The model's arrays that the kernels read, on the device.
 template <class T, class Dev>
 struct ModelBuffers {
-    DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, pcurve, co, cdof,
-        ccurve, cnodes, cbits, pf_off, pf_idx, pnodes, pslot;
-    DeviceBuffer<T, Dev> elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
-        patterns, cval, pedges, pvalue, node_vol;
+    DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, pcurve, co, cdof, ccurve,
+        cnodes, cbits, pf_off, pf_idx, pnodes, pslot;
+    DeviceBuffer<T, Dev> elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask, patterns,
+        cval, pedges, pvalue, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
     DeviceBuffer<double, Dev> tt, tv, X, grid;
 

@@ -88,7 +88,9 @@ public:
     }
 
     template <class F>
-    void region(F&& body) { body(); }
+    void region(F&& body) {
+        body();
+    }
     template <class F>
     void each(index_t n, const F& f) {
         if (dry_ || n <= 0) return;
@@ -99,7 +101,8 @@ public:
     void blocks(index_t b0, index_t b1, const F& f) {
         if (dry_ || b1 <= b0) return;
         const long n = static_cast<long>(b1 - b0) * kLanes;
-        cuda_detail::blocks_kernel<<<cuda_detail::grid_for(n), cuda_detail::kThreads, 0, stream_>>>(b0, b1, f);
+        cuda_detail::blocks_kernel<<<cuda_detail::grid_for(n), cuda_detail::kThreads, 0, stream_>>>(b0, b1,
+                                                                                                    f);
         cuda_detail::check(cudaPeekAtLastError(), "launch");
     }
     void barrier() {}  // one stream: launches run in order
@@ -116,7 +119,9 @@ public:
         return v;
     }
     template <class F>
-    void repeat(long k, long key, F&& body) { graphs_.repeat(*this, k, key, body); }
+    void repeat(long k, long key, F&& body) {
+        graphs_.repeat(*this, k, key, body);
+    }
     void forget_graphs() { graphs_.clear(); }
     bool lead() const { return true; }
     double wtime() const { return 0.0; }

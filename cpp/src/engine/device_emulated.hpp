@@ -45,10 +45,14 @@ public:
     }
 
     template <class F>
-    void region(F&& body) { body(); }
+    void region(F&& body) {
+        body();
+    }
     template <class F>
     void each(index_t n, const F& f) {
-        launch_or_record([n, f] { for (index_t i = 0; i < n; ++i) f(i); });
+        launch_or_record([n, f] {
+            for (index_t i = 0; i < n; ++i) f(i);
+        });
     }
     template <class F>
     void blocks(index_t b0, index_t b1, const F& f) {
@@ -59,14 +63,18 @@ public:
     }
     void barrier() {}  // launches run in order, as on one CUDA stream
     template <class F>
-    void serial(const F& f) { launch_or_record([f] { f(); }); }
+    void serial(const F& f) {
+        launch_or_record([f] { f(); });
+    }
     template <class V>
     V read(const V* p) {
         no_capture("read");
         return *p;
     }
     template <class F>
-    void repeat(long k, long key, F&& body) { graphs_.repeat(*this, k, key, body); }
+    void repeat(long k, long key, F&& body) {
+        graphs_.repeat(*this, k, key, body);
+    }
     void forget_graphs() { graphs_.clear(); }
     bool lead() const { return true; }
     double wtime() const { return 0.0; }

@@ -41,8 +41,12 @@ public:
         return p;
     }
     void release(void* p) { std::free(p); }
-    void copy_in(void* dst, const void* src, std::size_t bytes) { if (bytes) std::memcpy(dst, src, bytes); }
-    void copy_out(void* dst, const void* src, std::size_t bytes) { if (bytes) std::memcpy(dst, src, bytes); }
+    void copy_in(void* dst, const void* src, std::size_t bytes) {
+        if (bytes) std::memcpy(dst, src, bytes);
+    }
+    void copy_out(void* dst, const void* src, std::size_t bytes) {
+        if (bytes) std::memcpy(dst, src, bytes);
+    }
 
     // --- launches ----------------------------------------------------------------------------------
     /// Runs body on every thread of one parallel region; the launches below bind to it.

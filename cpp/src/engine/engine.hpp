@@ -31,14 +31,14 @@ namespace pliant {
 /// back by the host at checks.
 template <class T>
 struct Scalars {
-    double t0;       // time at step 0 of this call [s]
-    long step;       // steps taken in this call
-    long row;        // tool-history row of the current step
+    double t0;  // time at step 0 of this call [s]
+    long step;  // steps taken in this call
+    long row;   // tool-history row of the current step
     Integrator<T> it;
-    double alpha;    // relax: adaptive damping [1/s]
-    double residual; // relax: relative out-of-balance force at the last measure
+    double alpha;            // relax: adaptive damping [1/s]
+    double residual;         // relax: relative out-of-balance force at the last measure
     int bad_slot, bad_node;  // check: smallest offending element slot / node (INT_MAX: none)
-    int status;      // check verdict (RunStatus)
+    int status;              // check verdict (RunStatus)
     index_t where;
     double value;
 };
@@ -48,12 +48,12 @@ template <class T>
 struct DeviceView {
     index_t n_nodes, P, slots, n_contact, chunks;
     int n_curves, n_factors, n_tools, visco_w;
-    T anp_stab;                          // T4ANP stabilization γ (AveragedPressure)
+    T anp_stab;  // T4ANP stabilization γ (AveragedPressure)
     ElementData<T> el;
     const index_t* elem_id;
-    const index_t* block_group;         // block → material group
-    const MaterialParams<T>* mats;      // per group (scaled moduli: scale_materials)
-    const Prony<T>* prony;              // per group
+    const index_t* block_group;      // block → material group
+    const MaterialParams<T>* mats;   // per group (scaled moduli: scale_materials)
+    const Prony<T>* prony;           // per group
     NodeData<T> nodes, relax_nodes;  // physical / dynamic-relaxation inverse masses
     const T *mass, *relax_mass, *free_mask, *node_volume, *cval;
     const index_t *co, *cdof, *ccurve, *pattern_curve, *cnodes, *cbits;
@@ -90,11 +90,10 @@ public:
     template <class... A>
     explicit Engine(const Model<T>& m, A&&... dev_args);
 
-    RunReport run(State<T>& s, long n, double dt, double alpha, int check_every,
-                  double blowup) override;
+    RunReport run(State<T>& s, long n, double dt, double alpha, int check_every, double blowup) override;
     RunReport step(const State<T>& in, State<T>& out, double dt, double alpha) override;
-    RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
-                    int check_every, double blowup) override;
+    RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps, int check_every,
+                    double blowup) override;
     ElementResults<T> measures(const State<T>& s) override;
     std::vector<T> internal_forces(const State<T>& s) override;
     std::vector<double> tool_history() override;
@@ -115,8 +114,7 @@ public:
             next = p;
         }
     };
-    void step_once(const Phase& ph, double dt, double time_dt, bool relaxing, T* f_node_out,
-                   RunReport& rep);
+    void step_once(const Phase& ph, double dt, double time_dt, bool relaxing, T* f_node_out, RunReport& rep);
     void step_scalars(double time_dt, bool fixed_row);
     void forces(const T* u, ViscoMode visco_mode, double dt);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
@@ -147,9 +145,9 @@ private:
 
     const Model<T>& m_;
     Dev dev_;
-    std::vector<Group<T>> groups_;     // the model's, with scaled moduli (scale_materials)
-    std::vector<Span> spans_;          // launches of the element kernels
-    std::vector<RigidTool> tools_;     // the model's, with replaced keyframes (set_tool_keys)
+    std::vector<Group<T>> groups_;  // the model's, with scaled moduli (scale_materials)
+    std::vector<Span> spans_;       // launches of the element kernels
+    std::vector<RigidTool> tools_;  // the model's, with replaced keyframes (set_tool_keys)
     ModelBuffers<T, Dev> mb_;
     DeviceBuffer<RigidTool, Dev> d_tools_;
     DeviceBuffer<double, Dev> d_keys_, cforce_, chunk_, hist_, fcon_, partial_;
@@ -163,7 +161,7 @@ private:
     Phase phase_;
     const State<T>* resident_ = nullptr;  // the state whose values the device holds
     std::uint64_t resident_version_ = 0;
-    long history_rows_ = 0;               // rows of the last run's tool history
+    long history_rows_ = 0;  // rows of the last run's tool history
 };
 
 }  // namespace pliant

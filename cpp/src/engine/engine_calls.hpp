@@ -28,8 +28,8 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     ctool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
     chunk_ = DeviceBuffer<double, Dev>(dev_, chunks * 6 * nt);
     fcon_ = DeviceBuffer<double, Dev>(dev_, nt ? P3 : 0);
-    partial_ = DeviceBuffer<double, Dev>(dev_, 4 * ((static_cast<std::size_t>(m.n_nodes) + kMeasureChunk - 1) /
-                                                    kMeasureChunk));
+    partial_ = DeviceBuffer<double, Dev>(
+        dev_, 4 * ((static_cast<std::size_t>(m.n_nodes) + kMeasureChunk - 1) / kMeasureChunk));
     d_tools_ = DeviceBuffer<RigidTool, Dev>(dev_, nt);
     d_tools_.upload(tools_.data(), nt);
     d_keys_ = DeviceBuffer<double, Dev>(dev_, m.tool_keys.size());
@@ -45,7 +45,8 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
         if (last && a.material.kind == last->material.kind &&
             (a.visco.terms() > 0) == (last->visco.terms() > 0))
             spans_.back().block_end = a.block_end;
-        else spans_.push_back({groups_[g].block_begin, groups_[g].block_end, static_cast<index_t>(g)});
+        else
+            spans_.push_back({groups_[g].block_begin, groups_[g].block_end, static_cast<index_t>(g)});
     }
     d_prony_ = DeviceBuffer<Prony<T>, Dev>(dev_, ng);
     d_prony_.upload(prony.data(), ng);
@@ -77,8 +78,8 @@ void Engine<T, Dev>::refresh_view() {
     v.mats = d_mats_.data();
     v.prony = d_prony_.data();
     v.nodes = {mb_.inc_off.data(), mb_.inc_idx.data(), mb_.inv_mass.data(), mb_.patterns.data(),
-               m.n_load_patterns, mb_.pf_off.data(), mb_.pf_idx.data(), mb_.pnodes.data(),
-               mb_.pedges.data(), mb_.pvalue.data(), mb_.pslot.data()};
+               m.n_load_patterns,  mb_.pf_off.data(),  mb_.pf_idx.data(),   mb_.pnodes.data(),
+               mb_.pedges.data(),  mb_.pvalue.data(),  mb_.pslot.data()};
     v.relax_nodes = v.nodes;
     v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
     v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();
@@ -138,8 +139,7 @@ void Engine<T, Dev>::ensure_history(long rows) {
 }
 
 template <class T, class Dev>
-RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int check_every,
-                              double blowup) {
+RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int check_every, double blowup) {
     if (keep_velocity(s, dt)) s.touch();
     load(s);
     ensure_history(n);
@@ -196,7 +196,7 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
                                 int check_every, double blowup) {
     load(s);
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // start at rest
-    ensure_history(1);  // relax keeps the last step's tool forces
+    ensure_history(1);                                        // relax keeps the last step's tool forces
     set_scalars(t_eval, dt, 0.0);
     RunReport rep;
     long done = 0;
@@ -260,9 +260,8 @@ ElementResults<T> Engine<T, Dev>::measures(const State<T>& s) {
         if (m_.anp) {  // T4ANP: the stresses the forces see, with the averaged pressure
             forces(u, ViscoMode::Stored, s.dt);
         }
-        dispatch([&]<class M_, Variant V>(const Span& sp) {
-            launch_measures<M_, V>(sp, u, s.dt, out.data());
-        });
+        dispatch(
+            [&]<class M_, Variant V>(const Span& sp) { launch_measures<M_, V>(sp, u, s.dt, out.data()); });
         dev_.barrier();
     });
     const std::vector<T> h = out.to_host();
@@ -315,7 +314,8 @@ template <class T, class Dev>
 void Engine<T, Dev>::set_tool_keys(const std::vector<std::vector<double>>& keys) {
     if (keys.size() != tools_.size())
         throw std::invalid_argument("set_tool_keys: " + std::to_string(keys.size()) +
-                                    " key lists, expected one per tool (" + std::to_string(tools_.size()) + ")");
+                                    " key lists, expected one per tool (" + std::to_string(tools_.size()) +
+                                    ")");
     std::vector<double> all;
     for (std::size_t k = 0; k < keys.size(); ++k) {
         if (keys[k].empty() || keys[k].size() % 8)

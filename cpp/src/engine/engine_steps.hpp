@@ -8,8 +8,8 @@ namespace pliant {
 /// One step of central differences (relaxing: the dynamic-relaxation masses, loads held at t0).
 /// time_dt: how far the load time advances per step (Δt in a run, 0 in a relaxation).
 template <class T, class Dev>
-void Engine<T, Dev>::step_once(const Phase& ph, double dt, double time_dt, bool relaxing,
-                               T* f_node_out, RunReport& rep) {
+void Engine<T, Dev>::step_once(const Phase& ph, double dt, double time_dt, bool relaxing, T* f_node_out,
+                               RunReport& rep) {
     step_scalars(time_dt, relaxing);
     const double w0 = dev_.wtime();
     forces(v_.u[ph.cur], relaxing ? ViscoMode::Relaxed : ViscoMode::Advance, dt);
@@ -33,7 +33,8 @@ void Engine<T, Dev>::step_scalars(double time_dt, bool fixed_row) {
     dev_.serial([=] PLIANT_KERNEL() {
         Scalars<T>& s = *v.sc;
         const double t = s.t0 + static_cast<double>(s.step) * time_dt;
-        for (int c = 0; c < v.n_curves; ++c) v.cnext[c] = T(curve_value(v.curves[c], t + time_dt, v.tt, v.tv));
+        for (int c = 0; c < v.n_curves; ++c)
+            v.cnext[c] = T(curve_value(v.curves[c], t + time_dt, v.tt, v.tv));
         for (int p = 0; p < v.n_factors; ++p)
             v.pf[p] = T(curve_value(v.curves[v.pattern_curve[p]], t, v.tt, v.tv));
         for (int k = 0; k < v.n_tools; ++k) {
@@ -143,7 +144,8 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     T* un = v.u[ph.next];
     dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
         node_update(n, nd, v.f_elem, v.pf, v.sc->it, uc, up, v.P, un, f_node_out);
-        for (index_t i = v.co[n]; i < v.co[n + 1]; ++i) apply_constraint(i, v.cdof, v.cval, v.ccurve, v.cnext, un);
+        for (index_t i = v.co[n]; i < v.co[n + 1]; ++i)
+            apply_constraint(i, v.cdof, v.cval, v.ccurve, v.cnext, un);
     });
 }
 
@@ -185,7 +187,7 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
 /// device scalars as read back (status 0: fine), so that callers need no second round trip.
 template <class T, class Dev>
 Scalars<T> Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, double blowup,
-                           RunReport& rep) {
+                                 RunReport& rep) {
     const DeviceView<T> v = v_;
     dev_.serial([=] PLIANT_KERNEL() { v.sc->bad_slot = v.sc->bad_node = INT_MAX; });
     const index_t n = v.slots > v.n_nodes ? v.slots : v.n_nodes;
@@ -297,8 +299,8 @@ void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* o
         ElementMeasures<T> r;
         if constexpr (V == Variant::Visco) {
             const Prony<T>& pr = v.prony[v.block_group[b]];
-            const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes,
-                                         ViscoMode::Stored};
+            const ViscoMaterial<M, T> vm{
+                mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, ViscoMode::Stored};
             r = element_measures(b, l, vm, v.el, u, v.P);
         } else if constexpr (V == Variant::Anp) {
             const T p = corner_pressure(b, l, v.el, v.node_p);
