@@ -9,7 +9,7 @@ from scipy.optimize import brentq
 import pliant as pl
 from pliant.errors import InputError
 from pliant.mesh.topology import boundary_faces
-from test_uniaxial import MATERIALS, nominal, uniaxial_reference
+from pliant.validate.references import UNIAXIAL, nominal, uniaxial_reference
 
 L, TOL = 1.0, 1e-9
 
@@ -27,11 +27,11 @@ def _cube(material, dtype="float64"):
     return X, b, on
 
 
-@pytest.mark.parametrize("name", list(MATERIALS))
+@pytest.mark.parametrize("name", list(UNIAXIAL))
 def test_hydrostatic_pressure_gives_the_closed_form_volume(name):
     """p on the three outer faces: σ = −p I, a uniform stretch λ with σ = P(λ, λ, λ)/λ² = −p, P the
     nominal stress ∂W/∂λ of the strain energy (test_uniaxial), independent of the engine's code."""
-    material, W = MATERIALS[name]
+    material, W, _ = UNIAXIAL[name]
     p = 300.0  # Pa: 30 % of μ, a volume change of a few percent
     X, b, on = _cube(material)
     b.add_pressure(np.vstack(on), p, curve=pl.Ramp(1.0))
@@ -48,7 +48,7 @@ def test_pressure_follows_the_loaded_face(p):
     """p on the face x = L only (compression, or suction for p < 0): the Cauchy stress there is
     −p on the deformed area, P_x / λ_lat² = −p with the uniaxial closed form. A dead load (p on
     the reference area, P_x = −p) would be off by the area change, 7–15 % here."""
-    material, W = MATERIALS["NeoHookean"]
+    material, W, _ = UNIAXIAL["NeoHookean"]
     X, b, on = _cube(material)
     b.add_pressure(on[0], p, curve=pl.Ramp(1.0))
     sim = pl.Simulation(b.finalize("float64"))
@@ -68,7 +68,7 @@ def test_pressure_follows_the_loaded_face(p):
 
 
 def test_pressure_float32_and_bad_faces():
-    material, _ = MATERIALS["NeoHookean"]
+    material = UNIAXIAL["NeoHookean"][0]
     X, b, on = _cube(material)
     b.add_pressure(np.vstack(on), 300.0, curve=pl.Ramp(1.0))
     s64 = pl.Simulation(b.finalize("float64"))
@@ -90,7 +90,7 @@ def test_pressure_float32_and_bad_faces():
 def test_hydrostatic_pressure_with_average_nodal_pressure():
     """T4ANP on a homogeneous state changes nothing: the same stretch, and every element's
     reported Cauchy stress (computed with the averaged pressure the forces see) is −p I."""
-    material, W = MATERIALS["NeoHookean"]
+    material, W, _ = UNIAXIAL["NeoHookean"]
     p = 300.0
     X, b, on = _cube(material)
     b.nodal_pressure = True

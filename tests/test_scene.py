@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 import pliant as pl
 from pliant.cli import app
 from pliant.scene import SceneError, load_scene
-from test_uniaxial import MATERIALS, uniaxial_reference
+from pliant.validate.references import UNIAXIAL, uniaxial_reference
 
 runner = CliRunner()
 
@@ -75,7 +75,7 @@ def test_scene_tension_matches_closed_form(tmp_path):
     X = model.reference_positions
     right = np.nonzero(X[:, 0] > 0.1 - 1e-9)[0]
     P = model.internal_forces(sim.state)[right, 0].sum() / 0.01
-    P_ref, _ = uniaxial_reference(MATERIALS["NeoHookean"][1], 1.3)
+    P_ref, _ = uniaxial_reference(UNIAXIAL["NeoHookean"][1], 1.3)
     assert P == pytest.approx(P_ref, rel=5e-3)
 
 
