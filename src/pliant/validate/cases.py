@@ -157,15 +157,11 @@ def damping(quick: bool) -> tuple[list[Check], dict]:
     bending mode decays at β ω²/2 (ζ = βω/2)."""
     rows = []
     alpha = 20.0
-    X, model = models.free_block(damping=alpha)
-    sim = Simulation(model)
-    sim.state.set_displacements(models.bend(X))
-    t, E = models.energy_history(sim, 100, 5)  # 0.5 s: the energy falls by e^-10
     rows.append(
         Check(
             "damped decay",
             f"energy decay rate with α = {alpha:g} /s (α)",
-            -np.polyfit(t, np.log(E), 1)[0],
+            models.energy_decay_rate(alpha),
             alpha,
             "1/s",
             "every mode's energy decays as exp(−αt); the envelope ripples at α/ω ≈ 0.02",
