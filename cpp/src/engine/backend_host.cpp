@@ -1,27 +1,14 @@
-// pliant — the backends that run on the host: the CPU (OpenMP + SIMD) and the emulated CUDA device.
-// Both are the one engine of engine.hpp; only the device differs.
-#include "device_emulated.hpp"
+// pliant — what the host side of the engine answers without a backend: the thread limit, and the
+// CUDA entry points of a build without nvcc. The host backends are host_cpu_*.cpp and
+// host_emulated_*.cpp.
+#include <stdexcept>
+
+#include "backend.hpp"
 #include "device_threads.hpp"
-#include "engine.hpp"
 
 namespace pliant {
 
 int thread_limit_value() { return thread_limit(); }
-
-template <class T>
-std::unique_ptr<Backend<T>> make_cpu_backend(const Model<T>& m, int threads) {
-    return std::make_unique<Engine<T, ThreadsDevice>>(m, threads);
-}
-
-template <class T>
-std::unique_ptr<Backend<T>> make_emulated_backend(const Model<T>& m) {
-    return std::make_unique<Engine<T, EmulatedDevice>>(m);
-}
-
-template std::unique_ptr<Backend<float>> make_cpu_backend(const Model<float>&, int);
-template std::unique_ptr<Backend<double>> make_cpu_backend(const Model<double>&, int);
-template std::unique_ptr<Backend<float>> make_emulated_backend(const Model<float>&);
-template std::unique_ptr<Backend<double>> make_emulated_backend(const Model<double>&);
 
 #ifndef PLIANT_WITH_CUDA
 bool cuda_compiled() { return false; }
