@@ -24,6 +24,7 @@ __all__ = [
     "energy_history",
     "hertz_indentation",
     "energy_decay_rate",
+    "wave_arrival",
 ]
 
 
@@ -227,3 +228,43 @@ def energy_decay_rate(alpha: float) -> float:
     sim.state.set_displacements(bend(X))
     t, E = energy_history(sim, 100, 5)
     return float(-np.polyfit(t, np.log(E), 1)[0])
+
+
+def wave_arrival(constrained=True, cells=100, L=1.0, E=1e5, nu=0.3, rho=1000.0, v0=1e-3, material="linear"):
+    """A longitudinal wave along x in a body of length L [m] (``cells`` cells, 2 × 2 across) whose
+    end x = 0 is pushed at the constant speed v0 [m/s] from t = 0: ``constrained``, a column with
+    every node held laterally (uniaxial strain: the P wave, c_p); otherwise a free slender bar
+    (width L/50: the bar wave, c_0 = √(E/ρ)). Before the reflection returns, the 1D solution at a
+    section x is u = v0 (t − x/c) once the front has passed (d'Alembert). The displacement of the
+    section x = L/2 is fitted by a line over t ∈ [0.7, 1.4] L/c (after the front, before the
+    reflection from the far end at 1.5 L/c): (measured speed [m/s], x over the time where the
+    line crosses zero; the line's slope [m/s], v0 exactly). ``material``: "linear" (small
+    strain) or "neo-hookean"."""
+    from ..materials import LinearElastic, NeoHookean
+    from .references import p_wave_speed
+
+    if cells < 2 or cells % 2:
+        raise ValueError(f"wave_arrival: cells = {cells}; expected an even number (a section at L/2)")
+    width = 2 * L / cells if constrained else L / 50
+    X, T = mesh.box_tets((L, width, width), (cells, 2, 2))
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    law = LinearElastic(E=E, nu=nu) if material == "linear" else NeoHookean(E=E, nu=nu)
+    b.set_material(law, density=rho)
+    if constrained:
+        b.fix(np.arange(len(X)), "yz")
+    c = p_wave_speed(E, nu, rho) if constrained else math.sqrt(E / rho)
+    duration = 1.45 * L / c
+    b.prescribe(np.nonzero(X[:, 0] < 1e-12)[0], v0 * duration, "x", curve=Ramp(duration))
+    model = b.finalize("float64")
+    probe = np.nonzero(np.abs(X[:, 0] - L / 2) < 1e-9)[0]
+    sim = Simulation(model)
+    t, u = [], []
+    while sim.time < duration:
+        sim.run(steps=5)
+        t.append(sim.time)
+        u.append(sim.displacements[probe, 0].mean())
+    t, u = np.array(t), np.array(u)
+    window = (t > 0.7 * L / c) & (t < 1.4 * L / c)
+    slope, intercept = np.polyfit(t[window], u[window], 1)
+    return float((L / 2) / (-intercept / slope)), float(slope)

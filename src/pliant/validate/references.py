@@ -141,3 +141,9 @@ def hertz_force(delta, R, E, nu):
     """Force [N] of a rigid sphere of radius R pressed δ [m] into an elastic half-space:
     F = 4/3 E* √R δ^1.5, E* = E / (1 − ν²) (Johnson, Contact Mechanics, 1985, §4.2, eq. 4.22-4.23)."""
     return 4.0 / 3.0 * E / (1 - nu**2) * math.sqrt(R) * delta**1.5
+
+
+def p_wave_speed(E, nu, rho):
+    """Speed [m/s] of a plane longitudinal (P) wave, c_p = √((λ + 2μ)/ρ) with the constrained
+    modulus λ + 2μ = E(1 − ν)/((1 + ν)(1 − 2ν)) (Graff, Wave Motion in Elastic Solids, 1975, §5.1)."""
+    return math.sqrt(E * (1 - nu) / ((1 + nu) * (1 - 2 * nu) * rho))
