@@ -1,13 +1,15 @@
-"""Print the path of the wheel in pip's cache that pip built from the checkout named by argv[1] and
-installed into this environment (the same extension-module hashes in the wheel's RECORD and in the
-installed one), or nothing. Used by .ci/wheel so that CI repairs and tests the wheel the README's
-test command built instead of compiling the engine a second time."""
+"""Print the path of the wheel pip built for this environment's pliant (the same extension-module
+hashes in the wheel's RECORD and in the installed one), or nothing. pip keeps a wheel it built
+from a local folder only in a temporary "ephemeral" cache, kept when pip runs with --no-clean
+(.ci/run sets PIP_NO_CLEAN and a private TMPDIR for the README's test command); pip's persistent
+cache is searched too. Used by .ci/wheel so that CI repairs and tests the very wheel the test
+command built and installed, instead of compiling the engine a second time."""
 
 import importlib.metadata as md
-import json
 import os
 import subprocess
 import sys
+import tempfile
 import zipfile
 from pathlib import Path
 
@@ -18,21 +20,23 @@ def module_hashes(record: str) -> dict[str, str]:
     return {r[0]: r[1] for r in rows if len(r) >= 2 and r[0].endswith(".so")}
 
 
-def main() -> None:
-    origin = Path(sys.argv[1]).resolve().as_uri()
-    try:
-        installed = module_hashes(md.distribution("pliant").read_text("RECORD") or "")
-    except md.PackageNotFoundError:
-        return
+def candidates() -> list[str]:
+    """pliant wheels in pip's ephemeral caches under the temporary folder and in its cache."""
+    found = [str(p) for p in Path(tempfile.gettempdir()).glob("pip-ephem-wheel-cache-*/wheels/**/pliant-*.whl")]
     listed = subprocess.run(
         [sys.executable, "-m", "pip", "cache", "list", "--format=abspath", "pliant-*"],
         capture_output=True,
         text=True,
     ).stdout.split()
-    for path in sorted(listed, key=os.path.getmtime, reverse=True):
-        info = Path(path).with_name("origin.json")
-        if not info.exists() or json.loads(info.read_text()).get("url") != origin:
-            continue
+    return sorted(found + listed, key=os.path.getmtime, reverse=True)
+
+
+def main() -> None:
+    try:
+        installed = module_hashes(md.distribution("pliant").read_text("RECORD") or "")
+    except md.PackageNotFoundError:
+        return
+    for path in candidates():
         with zipfile.ZipFile(path) as z:
             record = next(n for n in z.namelist() if n.endswith(".dist-info/RECORD"))
             if installed and module_hashes(z.read(record).decode()) == installed:

@@ -54,6 +54,8 @@ class Solver:
     check_every: steps between stability checks (NaN, J ≤ 0, blow-up). backend: where it runs,
     "cpu", "cuda" (CUDA device ``device``) or "cuda-emulated" (default: the model's, from
     ``finalize``); the solver owns its backend and its own copy of the tools' trajectories.
+    history_steps: the tools' force histories keep the last this many steps (default: all; an
+    interactive session that runs for hours, such as a viewer or a haptic loop, bounds it).
     """
 
     def __init__(
@@ -66,8 +68,14 @@ class Solver:
         check_every: int = 16,
         backend: str | None = None,
         device: int | None = None,
+        history_steps: int | None = None,
     ):
         _check_model(model, "Solver(model)")
+        if history_steps is not None:
+            history_steps = _step_count(history_steps, "history_steps")
+            if history_steps < 1:
+                raise InputError(f"history_steps = {shown(history_steps)}; expected >= 1 or None")
+        self.history_steps = history_steps
         self.model = model
         if not (0 < safety <= 1):
             raise InputError(f"safety = {shown(safety)}; expected 0 < safety <= 1")
@@ -254,10 +262,11 @@ class Solver:
             return
         h = np.asarray(self._backend.tool_history())[:steps]
         t = t0 + self.dt * np.arange(1, steps + 1)
+        keep = slice(-self.history_steps, None) if self.history_steps else slice(None)
         for k, H in enumerate(self._histories):
-            H.time = np.concatenate([H.time, t])
-            H.force = np.concatenate([H.force, h[:, k, :3]])
-            H.torque = np.concatenate([H.torque, h[:, k, 3:]])
+            H.time = np.concatenate([H.time, t])[keep]
+            H.force = np.concatenate([H.force, h[:, k, :3]])[keep]
+            H.torque = np.concatenate([H.torque, h[:, k, 3:]])[keep]
 
     def _tool_index(self, k) -> int:
         n = len(self.model.tools)

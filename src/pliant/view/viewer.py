@@ -67,7 +67,8 @@ class LiveViewer:
 
         self.scene = scene
         self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads)
-        self.sim = Simulation(self.model, dt=scene.dt, safety=scene.safety)
+        # An interactive session may run for hours: keep the last second or so of tool forces.
+        self.sim = Simulation(self.model, dt=scene.dt, safety=scene.safety, history_steps=100_000)
         self.dt0 = self.sim.solver.dt
         self.surface = _Surface(self.model.tets)
         self.embedding = None  # the fine surface of the scene, when it has one
