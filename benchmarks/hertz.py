@@ -52,8 +52,10 @@ def main() -> None:
         tool.at(k + 1.0, (0.0, 0.0, R - d))
     b.add_tool(tool)
     sim = pl.Simulation(b.finalize(a.dtype))
-    print(f"{len(T):,} tets, {len(xs) - 1} cells per side, block {xs[-1] / R:.2f} R, "
-          f"{a.dtype}; built in {time.perf_counter() - t0:.1f} s")
+    print(
+        f"{len(T):,} tets, {len(xs) - 1} cells per side, block {xs[-1] / R:.2f} R, "
+        f"{a.dtype}; built in {time.perf_counter() - t0:.1f} s"
+    )
     forces = []
     for k, d in enumerate(depths):
         t = time.perf_counter()
@@ -61,8 +63,10 @@ def main() -> None:
         F = 4 * sim.contact_report().relaxed[0][0][2]
         forces.append(F)
         a_c = math.sqrt(R * d)
-        print(f"  δ/R = {d / R:.4f}  a/h = {a_c / (a.h * R):4.1f}  F/F_Hertz = {F / hertz(d):.4f}  "
-              f"({info.steps} steps, residual {info.residual:.1e}, {time.perf_counter() - t:.1f} s)")
+        print(
+            f"  δ/R = {d / R:.4f}  a/h = {a_c / (a.h * R):4.1f}  F/F_Hertz = {F / hertz(d):.4f}  "
+            f"({info.steps} steps, residual {info.residual:.1e}, {time.perf_counter() - t:.1f} s)"
+        )
     if len(depths) > 1:
         print(f"  fitted exponent {np.polyfit(np.log(depths), np.log(forces), 1)[0]:.4f} (Hertz 1.5)")
 

@@ -61,11 +61,14 @@ def main(argv=None):
         r = bench(m)
         rows.append(r)
         p = r["pipeline_s"]
-        print(f"{r['mesh']}: check {r['check_s']:.1f} s, repair {r['repair_s']:.1f} s, simplify "
-              f"{r['simplify_10pct_s']:.2f} s, subdivide ×2 {r['subdivide_2_levels_s']:.2f} s; "
-              f"surface→tets: repair {p['repair']:.1f} s + simplify {p['simplify']:.1f} s + "
-              f"tetrahedralize {p['tetrahedralize']:.1f} s = {sum(p.values()):.1f} s → "
-              f"{r['tets']:,} tets; quality {r['quality_s']:.2f} s", flush=True)
+        print(
+            f"{r['mesh']}: check {r['check_s']:.1f} s, repair {r['repair_s']:.1f} s, simplify "
+            f"{r['simplify_10pct_s']:.2f} s, subdivide ×2 {r['subdivide_2_levels_s']:.2f} s; "
+            f"surface→tets: repair {p['repair']:.1f} s + simplify {p['simplify']:.1f} s + "
+            f"tetrahedralize {p['tetrahedralize']:.1f} s = {sum(p.values()):.1f} s → "
+            f"{r['tets']:,} tets; quality {r['quality_s']:.2f} s",
+            flush=True,
+        )
     if a.json:
         a.json.write_text(json.dumps(rows, indent=2))
     return 0

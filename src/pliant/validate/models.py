@@ -25,6 +25,7 @@ __all__ = [
     "hertz_indentation",
     "energy_decay_rate",
     "wave_arrival",
+    "bent_beam_tip",
 ]
 
 
@@ -268,3 +269,30 @@ def wave_arrival(constrained=True, cells=100, L=1.0, E=1e5, nu=0.3, rho=1000.0, 
     window = (t > 0.7 * L / c) & (t < 1.4 * L / c)
     slope, intercept = np.polyfit(t[window], u[window], 1)
     return float((L / 2) / (-intercept / slope)), float(slope)
+
+
+def bent_beam_tip(alpha, n=4, slenderness=20, nodal_pressure=False, increments=10):
+    """A slender cantilever (L = 1 m, square section L/slenderness, 20n × n × n cells, clamped at
+    x = 0; Neo-Hookean, E = 1 MPa, ν = 0) bent by a dead load P = α EI/L² along −z on its tip
+    face, relaxed in ``increments`` load steps (float64): (tip deflection / L, tip shortening / L)
+    of the tip face's centroid."""
+    from ..materials import NeoHookean
+
+    L, E = 1.0, 1.0e6
+    H = L / slenderness
+    X, T = mesh.box_tets((L, H, H), (20 * n, n, n))
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(NeoHookean(E=E, nu=0.0), density=1000.0)
+    b.nodal_pressure = nodal_pressure
+    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
+    tip = np.nonzero(X[:, 0] > L - 1e-9)[0]
+    w = np.ones(tip.size)  # trapezoid-rule weights: the resultant is exactly P
+    for d in (1, 2):
+        w[(X[tip, d] < 1e-9) | (X[tip, d] > H - 1e-9)] *= 0.5
+    P = alpha * E * H**4 / 12 / L**2
+    b.add_force(tip, np.outer(-P * w / w.sum(), [0, 0, 1]), curve=Ramp(1.0))
+    sim = Simulation(b.finalize("float64"))
+    sim.relax(at_time=1.0, tol=1e-8, increments=increments, max_steps=2_000_000)
+    u = sim.displacements[tip]
+    return float(-u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
