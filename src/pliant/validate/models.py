@@ -14,7 +14,9 @@ from .references import lame_radial_displacement
 
 __all__ = [
     "cube_with_symmetry_bcs",
+    "tip_loaded_cantilever",
     "cantilever_tip_deflection",
+    "sampled_displacement",
     "hollow_sphere",
     "lame_solve",
     "ringing_cantilever",
@@ -46,10 +48,12 @@ def cube_with_symmetry_bcs(material, stretch, cells=3, jitter=0.25, dtype="float
     return X, b.finalize(dtype), right
 
 
-def cantilever_tip_deflection(n, material, nodal_pressure=False, L=1.0, H=0.1, P=1.0e-2):
-    """Tip deflection [m] of an L × H × H cantilever (10n × n × n cells) clamped at x = 0 under a
-    uniform shear traction of resultant P [N] on its tip face, quasi-static (float64)."""
-    X, T = mesh.box_tets((L, H, H), (10 * n, n, n))
+def tip_loaded_cantilever(cells, material, P, L=1.0, H=0.1, nodal_pressure=False):
+    """An L × H × H cantilever of (cells × n × n) cells, n = cells·H/L, clamped at x = 0, under a
+    uniform transverse traction of resultant P [N] along −z on its tip face, ramped over 1 s
+    (float64): (model, tip node ids)."""
+    n = max(1, round(cells * H / L))
+    X, T = mesh.box_tets((L, H, H), (cells, n, n))
     b = ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(material, density=1000.0)
@@ -58,12 +62,29 @@ def cantilever_tip_deflection(n, material, nodal_pressure=False, L=1.0, H=0.1, P
     tip = np.nonzero(X[:, 0] > L - 1e-9)[0]
     w = np.ones(tip.size)  # trapezoid-rule nodal weights: the resultant is exactly P
     for d in (1, 2):
-        edge = (X[tip, d] < 1e-9) | (X[tip, d] > H - 1e-9)
-        w[edge] *= 0.5
+        w[(X[tip, d] < 1e-9) | (X[tip, d] > H - 1e-9)] *= 0.5
     b.add_force(tip, np.outer(-P * w / w.sum(), [0, 0, 1]), curve=Ramp(1.0))
-    sim = Simulation(b.finalize("float64"))
+    return b.finalize("float64"), tip
+
+
+def cantilever_tip_deflection(n, material, nodal_pressure=False, L=1.0, H=0.1, P=1.0e-2):
+    """Tip deflection [m] of an L × H × H cantilever (10n × n × n cells) clamped at x = 0 under a
+    uniform shear traction of resultant P [N] on its tip face, quasi-static (float64)."""
+    model, tip = tip_loaded_cantilever(10 * n, material, P, L, H, nodal_pressure)
+    sim = Simulation(model)
     sim.relax(tol=1e-9, max_steps=1_000_000)
     return -sim.displacements[tip, 2].mean()
+
+
+def sampled_displacement(sim, nodes, axis, until, every):
+    """Run ``sim`` to time ``until`` [s], sampling the mean displacement [m] of ``nodes`` along
+    ``axis`` every ``every`` steps: (times [s], displacements [m])."""
+    t, u = [], []
+    while sim.time < until:
+        sim.run(steps=every)
+        t.append(sim.time)
+        u.append(sim.displacements[nodes, axis].mean())
+    return np.array(t), np.array(u)
 
 
 def hollow_sphere(a=0.02, b=0.04, edge_length=0.006):
@@ -130,12 +151,7 @@ def decay_of_first_mode(model, tip, duration=1.0):
     ω_n² = ω_d² + σ²."""
     sim = Simulation(model)
     sim.relax(at_time=0.0, tol=1e-10)
-    t, z = [], []
-    while sim.time < duration:
-        sim.run(steps=40)
-        t.append(sim.time)
-        z.append(sim.displacements[tip, 2].mean())
-    t, z = np.array(t), np.array(z)
+    t, z = sampled_displacement(sim, tip, 2, duration, 40)
     up = np.nonzero((z[:-1] < 0) & (z[1:] >= 0))[0]
     tc = t[up] - z[up] * (t[up + 1] - t[up]) / (z[up + 1] - z[up])
     Td = float(np.mean(np.diff(tc)))
@@ -259,13 +275,7 @@ def wave_arrival(constrained=True, cells=100, L=1.0, E=1e5, nu=0.3, rho=1000.0, 
     b.prescribe(np.nonzero(X[:, 0] < 1e-12)[0], v0 * duration, "x", curve=Ramp(duration))
     model = b.finalize("float64")
     probe = np.nonzero(np.abs(X[:, 0] - L / 2) < 1e-9)[0]
-    sim = Simulation(model)
-    t, u = [], []
-    while sim.time < duration:
-        sim.run(steps=5)
-        t.append(sim.time)
-        u.append(sim.displacements[probe, 0].mean())
-    t, u = np.array(t), np.array(u)
+    t, u = sampled_displacement(Simulation(model), probe, 0, duration, 5)
     window = (t > 0.7 * L / c) & (t < 1.4 * L / c)
     slope, intercept = np.polyfit(t[window], u[window], 1)
     return float((L / 2) / (-intercept / slope)), float(slope)
@@ -275,24 +285,14 @@ def bent_beam_tip(alpha, n=4, slenderness=20, nodal_pressure=False, increments=1
     """A slender cantilever (L = 1 m, square section L/slenderness, 20n × n × n cells, clamped at
     x = 0; Neo-Hookean, E = 1 MPa, ν = 0) bent by a dead load P = α EI/L² along −z on its tip
     face, relaxed in ``increments`` load steps (float64): (tip deflection / L, tip shortening / L)
-    of the tip face's centroid."""
+    of the tip face's nodes, averaged."""
     from ..materials import NeoHookean
 
     L, E = 1.0, 1.0e6
     H = L / slenderness
-    X, T = mesh.box_tets((L, H, H), (20 * n, n, n))
-    b = ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(NeoHookean(E=E, nu=0.0), density=1000.0)
-    b.nodal_pressure = nodal_pressure
-    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
-    tip = np.nonzero(X[:, 0] > L - 1e-9)[0]
-    w = np.ones(tip.size)  # trapezoid-rule weights: the resultant is exactly P
-    for d in (1, 2):
-        w[(X[tip, d] < 1e-9) | (X[tip, d] > H - 1e-9)] *= 0.5
     P = alpha * E * H**4 / 12 / L**2
-    b.add_force(tip, np.outer(-P * w / w.sum(), [0, 0, 1]), curve=Ramp(1.0))
-    sim = Simulation(b.finalize("float64"))
+    model, tip = tip_loaded_cantilever(20 * n, NeoHookean(E=E, nu=0.0), P, L, H, nodal_pressure)
+    sim = Simulation(model)
     sim.relax(at_time=1.0, tol=1e-8, increments=increments, max_steps=2_000_000)
     u = sim.displacements[tip]
     return float(-u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
