@@ -77,6 +77,22 @@ def test_contact_report_is_one_object():
     np.testing.assert_array_equal(r.force(0)[0], r.relaxed[0][0])
 
 
+def test_history_steps_keeps_the_last_steps_of_the_full_history():
+    """A bounded history (for hours-long interactive sessions) is the tail of the unbounded one,
+    over several runs; a bound below one step is refused by name."""
+    full, short = pl.Simulation(_model(), dt=1e-4), pl.Simulation(_model(), dt=1e-4, history_steps=30)
+    for s in (full, short):
+        for _ in range(5):
+            s.run(steps=17)
+    F, S = full.contact_report().tools[0], short.contact_report().tools[0]
+    assert len(F.time) == 85 and len(S.time) == 30
+    np.testing.assert_array_equal(S.time, F.time[-30:])
+    np.testing.assert_array_equal(S.force, F.force[-30:])
+    np.testing.assert_array_equal(S.torque, F.torque[-30:])
+    with pytest.raises(pl.InputError, match="history_steps"):
+        pl.Solver(_model(), history_steps=0)
+
+
 def test_solvers_own_their_backends_and_tool_trajectories():
     """Two solvers of one (static) model: different backends, one tool moved in one of them only."""
     m = _model()

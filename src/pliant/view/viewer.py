@@ -67,7 +67,7 @@ class LiveViewer:
 
         self.scene = scene
         self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads)
-        # An interactive session may run for hours: keep the last second or so of tool forces.
+        # An interactive session may run for hours: keep the last 100,000 steps of tool forces.
         self.sim = Simulation(self.model, dt=scene.dt, safety=scene.safety, history_steps=100_000)
         self.dt0 = self.sim.solver.dt
         self.surface = _Surface(self.model.tets)
