@@ -43,7 +43,7 @@ def test_demo_writes_a_readable_series(tmp_path):
     last = meshio.read(out / "frame_00020.vtu")
     u, X, T = last.point_data["displacement"], last.points, last.cells_dict["tetra"]
     x = X + u
-    assert np.all(np.isfinite(u)) and T.shape[0] == summary["elements"] > 5000
+    assert np.all(np.isfinite(u)) and T.shape[0] == summary["elements"] > 2000
     assert x[:, 2].min() >= -1e-6  # float32 positions: nothing below the ground
     # The sphere (radius 15 mm) at t = 0.4 s: between keyframes z = 0.115 (t = 0.2) and 0.0995
     # (t = 0.55), linear.

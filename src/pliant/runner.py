@@ -209,12 +209,17 @@ def run_scene(
             if scene.png and out is not None:
                 from .view import render_png
 
+                surface = None
+                if embedding is not None:  # the fine surface, as the viewer and surface.pvd show
+                    Pe = embedding.positions(model.tets, state.positions)
+                    surface = (Pe, embedding.faces, embedding.tet[embedding.faces[:, 0]])
                 render_png(
                     out / "result.png",
                     state.positions,
                     model.tets,
                     res["von_mises"],
                     title=f"{scene.title[:200]}: t = {state.time:.4g} s",
+                    surface=surface,
                 )
                 summary["files"].append("result.png")
         if model.tools:

@@ -18,20 +18,27 @@ def render_png(
     label: str = "von Mises stress [Pa]",
     title: str = "",
     max_faces: int = 60000,
+    surface: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> Path:
     """Write a PNG [path] of the surface of the mesh at ``positions`` [m] (N, 3), coloured by
-    ``element_field`` (M,). Written atomically."""
+    ``element_field`` (M,). ``surface``: draw this surface instead of the mesh's boundary, as
+    (vertex positions [m] (V, 3), faces (F, 3), the element each face lies in (F,)): an embedded
+    fine surface following a coarse simulation mesh. Written atomically."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    faces, owner = boundary_faces(np.asarray(tets))
+    if surface is None:
+        faces, owner = boundary_faces(np.asarray(tets))
+        P = np.asarray(positions, float)
+    else:
+        P, faces, owner = (np.asarray(a) for a in surface)
+        P = P.astype(float)
     if len(faces) > max_faces:  # keep rendering time bounded
         keep = np.linspace(0, len(faces) - 1, max_faces).astype(int)
         faces, owner = faces[keep], owner[keep]
-    P = np.asarray(positions, float)
     vals = np.asarray(element_field, float)[owner]
     fig = plt.figure(figsize=(8, 6), dpi=100)
     ax = fig.add_subplot(111, projection="3d")
