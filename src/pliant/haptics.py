@@ -88,7 +88,6 @@ class HapticLoop:
         self._sim_start = sim.time
         # Passivity observer: device positions and the force rendered since the last read.
         self._x_prev: np.ndarray | None = None
-        self._t_prev: float | None = None
         self._last_dx: np.ndarray | None = None
         self._f_prev = np.zeros(3)
         self.port_energy = 0.0  # W [J]: energy the environment absorbed through the port
@@ -165,17 +164,16 @@ class HapticLoop:
         latest one wins; the tool moves to it at a speed the stable step allows."""
         p = finite_vector(position, 3, "write_pose: position", "m")
         q = tuple(finite_vector(rotation, 4, "write_pose: rotation", ""))
-        now = time.perf_counter()
         with self._lock:
             self._pose, self._pose_new = (p, q), True
-            self._observe(p, now)
+            self._observe(p)
 
-    def _observe(self, x: np.ndarray, now: float) -> None:
+    def _observe(self, x: np.ndarray) -> None:
         """Passivity observer: the energy absorbed since the last pose, with the force rendered."""
         if self._x_prev is not None:
             self._last_dx = x - self._x_prev
             self.port_energy -= float(self._f_prev @ self._last_dx)
-        self._x_prev, self._t_prev = x, now
+        self._x_prev = x
 
     def read_force(self) -> np.ndarray:
         """The force [N] (3,) to render on the device now: the simulated tool force, interpolated,
@@ -196,7 +194,7 @@ class HapticLoop:
     def _passivity_damping(self) -> np.ndarray:
         """Passivity controller: when the observed energy W is negative, a damping force along the
         device's last displacement that dissipates −W over it (Hannaford & Ryu 2002, eq. 9)."""
-        if self.port_energy >= 0 or self._x_prev is None or self._last_dx is None:
+        if self.port_energy >= 0 or self._last_dx is None:
             return np.zeros(3)
         dx = self._last_dx
         d2 = float(dx @ dx)
