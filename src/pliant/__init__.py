@@ -7,7 +7,7 @@ on tetrahedra, in SI units (m, kg, s, N, Pa).
     sim = pl.Simulation(b.finalize())
 """
 
-from . import _core, contact, haptics, io, mesh  # noqa: F401 (sub-packages, re-exported)
+from . import _core, contact, cutting, haptics, io, mesh  # noqa: F401 (sub-packages, re-exported)
 from .errors import (
     BackendError,
     ConvergenceError,

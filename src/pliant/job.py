@@ -35,6 +35,7 @@ class Scene:
     title: str = ""
     warnings: list[str] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
+    blades: list = field(default_factory=list)  # pliant.cutting.Blade: they cut while it runs
 
 
 def load_job(path, ignore=None, overrides: dict | None = None) -> Scene:

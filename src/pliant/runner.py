@@ -7,6 +7,7 @@ import json
 import math
 import time
 import warnings
+from typing import Any
 
 import numpy as np
 
@@ -118,13 +119,18 @@ def run_scene(
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     total = total_steps(scene.duration, solver.dt)
     state = model.state()
-    embedding = None
+    embedding: Any = None
     if out is not None and scene.meta.get("embed_surface"):
         from .mesh import embed_surface
 
         Ve, Fe = scene.meta["embed_surface"]
         embedding = embed_surface(model.reference_positions, model.tets, Ve, Fe)
     writer = _NoFiles() if out is None else ResultWriter(out, model, fields=scene.fields, embedding=embedding)
+    cutter = None
+    if scene.blades:  # blades cut as it runs: model, solver and state change with the topology
+        from .cutting import Cutter
+
+        cutter = Cutter(list(scene.blades), embedding=embedding)
     writer.write(state)
     build_s = time.perf_counter() - t_build
     summary = {
@@ -184,7 +190,17 @@ def run_scene(
                 done = 0
                 while done < total:
                     n = min(every - done % every, total - done)
-                    solver.run(state, steps=n)
+                    if cutter is None:
+                        solver.run(state, steps=n)
+                    else:
+                        solver, state = cutter.run(solver, state, n)
+                        model, embedding = solver.model, cutter.embedding
+                        if isinstance(writer, ResultWriter):
+                            writer.embedding = embedding
+                        # A cut may shorten the step (cutting/stability.py): the steps left.
+                        left = scene.duration - state.time
+                        total = done + n + (total_steps(left, solver.dt) if left > 1e-9 * solver.dt else 0)
+                        bar.update(task, total=total)
                     done += n
                     if done % every == 0 or done == total:
                         writer.write(state)
@@ -202,6 +218,8 @@ def run_scene(
         # Simulated seconds per wall second, output included (None for a quasi-static solve).
         summary["real_time_factor"] = None if scene.static else state.time / max(summary["wall_time"], 1e-12)
         summary["frames"] = len(writer.frames)
+        if cutter is not None:  # the topology after the cuts
+            summary.update(elements=model.n_elements, nodes=model.n_nodes, cuts=len(cutter.events))
         u = state.displacements
         if np.all(np.isfinite(u)):
             res = model.element_results(state)

@@ -17,7 +17,8 @@ class ResultWriter:
     (6 components xx, yy, zz, xy, yz, xz). ``fields`` chooses (default: the first five). With an
     ``embedding`` (pliant.mesh.embed_surface), each frame also writes the fine surface that follows
     the deformation, as surface_NNNNN.vtu in surface.pvd. The .pvd indexes are rewritten after each
-    frame."""
+    frame. Each frame is written with its state's model: after a cut, frames have the new
+    topology (ParaView reads a series whose meshes differ)."""
 
     def __init__(self, out_dir, model, fields=FIELDS[:5], embedding=None):
         self.dir = make_output_dir(out_dir)
@@ -42,7 +43,8 @@ class ResultWriter:
     def write(self, state) -> Path:
         import meshio
 
-        res = self.model.element_results(state)
+        model = state.model  # the state's: after a cut (pliant.cutting), a new topology
+        res = model.element_results(state)
         name = f"frame_{len(self.frames):05d}.vtu"
         f = self.fields
         point = {
@@ -56,8 +58,8 @@ class ResultWriter:
             "green_strain": res["green_strain"],
         }
         mesh = meshio.Mesh(
-            self.model.reference_positions,
-            [("tetra", self.model.tets)],
+            model.reference_positions,
+            [("tetra", model.tets)],
             point_data=point,
             cell_data={k: [v] for k, v in cell_src.items() if k in f},
         )
@@ -66,7 +68,7 @@ class ResultWriter:
         with deferred_interrupt():
             if self.embedding is not None:
                 emb = self.embedding
-                Vs = emb.positions(self.model.tets, state.positions)
+                Vs = emb.positions(model.tets, state.positions)
                 atomic_write(
                     self.dir / name.replace("frame_", "surface_"),
                     lambda tmp: meshio.write(tmp, meshio.Mesh(Vs, [("triangle", emb.faces)]), binary=True),

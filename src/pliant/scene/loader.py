@@ -117,8 +117,12 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     _materials(ctx, data["material"], b, X, T, sets)
     _constraints(ctx, data.get("constraint", []), b, X, T, scene)
     _loads(ctx, data.get("load", []), b, X, T, scene)
-    _tools(ctx, data.get("tool", []), b, X, T, path.parent)
+    _tools(ctx, data.get("tool", []), b, X, T, path.parent, scene)
     _output(ctx, data, scene)
+    if scene.blades and scene.static:
+        raise ctx.error(
+            "tool", "a blade cuts while a dynamic run steps; a quasi-static solve has no motion to cut along"
+        )
     return scene
 
 
@@ -349,15 +353,26 @@ def _loads(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) -> None:
             _add_load(ctx, b, ld, p, X, T, scene)
 
 
-def _tools(ctx: Ctx, tables: list, b: ModelBuilder, X, T, base: Path) -> None:
-    """The [[tool]] tables, each optionally restricted to a node selection."""
+def _tools(ctx: Ctx, tables: list, b: ModelBuilder, X, T, base: Path, scene: Scene) -> None:
+    """The [[tool]] tables, each optionally restricted to a node selection; blades go to the
+    scene (they cut; they are not contact tools)."""
+    from ..cutting import Blade
+
     for i, t in enumerate(tables):
         p = f"tool[{i}]"
         if not isinstance(t, dict):
             raise ctx.error(p, f"expected a table, got {type(t).__name__}")
         with ctx.under(p):
             only = select_nodes(ctx, t["nodes"], f"{p}.nodes", X, T) if "nodes" in t else None
-            b.add_tool(make_tool(ctx, t, p, base), nodes=only)
+            tool = make_tool(ctx, t, p, base)
+            if isinstance(tool, Blade):
+                if only is not None:
+                    raise ctx.error(
+                        f"{p}.nodes", "a blade cuts whatever it sweeps; expected no node selection"
+                    )
+                scene.blades.append(tool)
+            else:
+                b.add_tool(tool, nodes=only)
 
 
 def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -> None:

@@ -10,8 +10,8 @@ from .schema import Ctx, check_keys, vector
 
 
 def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
-    """A rigid tool from a [[tool]] table (see docs/scenes.md). Call it under ``ctx.under(p)``: the
-    tool classes' InputErrors then name this file and key."""
+    """A rigid tool (or a blade, which cuts) from a [[tool]] table (see docs/scenes.md). Call it
+    under ``ctx.under(p)``: the tool classes' InputErrors then name this file and key."""
     from .. import contact as ct
 
     check_keys(
@@ -25,6 +25,7 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
             "mu_k": "number",
             "radius": "number",
             "length": "number",
+            "depth": "number",
             "half_extents": "list",
             "point": "list",
             "normal": "list",
@@ -68,6 +69,10 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
         tool = ct.Cylinder(t.get("radius", 0.0), t.get("length", 0.0), **pose, **kw)
     elif kind == "box":
         tool = ct.Box(vector(ctx, t.get("half_extents", [0, 0, 0]), f"{p}.half_extents"), **pose, **kw)
+    elif kind == "blade":
+        from ..cutting import Blade
+
+        tool = Blade(t.get("length", 0.0), t.get("depth", 0.0), **pose, name=t.get("name"))
     elif kind == "mesh":
         from ..mesh import read_surface
 
@@ -77,7 +82,8 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
         tool = ct.MeshTool(V * float(t.get("scale", 1.0)), F, t.get("spacing"), **pose, **kw)
     else:
         raise ctx.error(
-            f"{p}.type", f"unknown tool {kind!r}; expected plane, sphere, capsule, cylinder, box or mesh"
+            f"{p}.type",
+            f"unknown tool {kind!r}; expected plane, sphere, capsule, cylinder, box, mesh or blade",
         )
     for j, k in enumerate(t.get("keyframes", [])):
         kp = f"{p}.keyframes[{j}]"

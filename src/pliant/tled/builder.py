@@ -7,6 +7,7 @@ positively oriented (det[X1 − X0, X2 − X0, X3 − X0] > 0); DOFs named x, y,
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -295,6 +296,58 @@ class ModelBuilder:
         self.tools.append(tool)
         self.tool_nodes.append(nodes)
         return tool
+
+    # --- topology changes -------------------------------------------------------------------
+    def snapshot(self) -> "ModelBuilder":
+        """A copy that later calls on this builder do not change (a Model keeps one, to rebuild
+        itself after a cut)."""
+        b = copy.copy(self)
+        b.sets, b._forces, b._pressures = list(self.sets), list(self._forces), list(self._pressures)
+        b._cons, b.tools, b.tool_nodes = dict(self._cons), list(self.tools), list(self.tool_nodes)
+        return b
+
+    def split(self, tets, parent) -> "ModelBuilder":
+        """A builder of the same model after node splitting (pliant.cutting): ``tets`` (M, 4) the
+        elements over the old nodes and the new ones, ``parent`` (K,) the node each new node
+        (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints and
+        node-set memberships; point forces stay on the parent (their total is unchanged); each
+        pressure face moves to the copies its element now uses."""
+        parent = np.asarray(parent, np.int64)
+        tets = np.asarray(tets, np.int64)
+        b = self.snapshot()
+        n0 = self.n_nodes
+        b.nodes = np.vstack([self.nodes, self.nodes[parent]])
+        b.tets = tets
+        copies: dict[int, list[int]] = {}
+        for i, n in enumerate(parent.tolist()):
+            copies.setdefault(n, []).append(n0 + i)
+        for (n, d), v in self._cons.items():
+            for c in copies.get(n, ()):
+                b._cons[(c, d)] = v
+        b.tool_nodes = [
+            None if s is None else np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]]))
+            for s in self.tool_nodes
+        ]
+        if self._pressures:
+            from ..cutting.split import LOCAL_FACES
+
+            owner = {  # face → its element (a boundary face has one)
+                tuple(sorted(f)): e
+                for e, t in enumerate(self.tets.tolist())
+                for f in np.asarray(t)[LOCAL_FACES].tolist()
+            }
+            b._pressures = []
+            for F, p, curve in self._pressures:
+                moved = []
+                for f in F.tolist():
+                    e = owner.get(tuple(sorted(f)))
+                    if e is None:  # not a face of the mesh (orient=False): keep it
+                        moved.append(f)
+                        continue
+                    local = [int(np.nonzero(self.tets[e] == n)[0][0]) for n in f]  # same winding
+                    moved.append([int(tets[e, j]) for j in local])
+                b._pressures.append((np.array(moved, np.int64), p, curve))
+        return b
 
     # --- finalize ---------------------------------------------------------------------------
     def finalize(self, dtype="float32", threads: int | None = None, backend: str = "cpu", device: int = 0):

@@ -146,6 +146,7 @@ class Model:
         self.damping = float(builder.damping)
         self.stiffness_damping = float(builder.stiffness_damping)
         self.sets = list(builder.sets)
+        self._builder = builder.snapshot()  # what rebuilds the model after a cut (pliant.cutting)
         N, M = X.shape[0], T.shape[0]
 
         # Element order: by element set, then along a Morton curve of the centroids.

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import copy
 import weakref
+from typing import Any
 
 import numpy as np
 
@@ -106,6 +107,31 @@ class Solver:
         for t in self.tools:
             t.keys = [np.array(k, copy=True) for k in t.keys]
         self._backend = model.make_backend(backend, device)
+        self._options: dict[str, Any] = dict(
+            dt=dt,
+            damping=self.damping,
+            check_every=self.check_every,
+            backend=self.backend,
+            device=device,
+            history_steps=history_steps,
+            allow_unstable=allow_unstable,
+        )
+        self._material_scale = 1.0
+
+    def over(self, model: Model, dt: float | None = None) -> "Solver":
+        """A solver of ``model`` (the same model after a topology change: pliant.cutting) with this
+        one's settings (Δt unless ``dt`` [s] is given, damping, checks, backend, stiffness scale),
+        tool trajectories and force histories, which go on from where this one's stopped."""
+        _check_model(model, "Solver.over(model)")
+        options = dict(self._options, dt=self.dt if dt is None else dt)
+        new = Solver(model, **options)
+        new.tools = self.tools
+        new._histories = self._histories
+        if model.tools:
+            new.set_tool_keys()
+        if self._material_scale != 1.0:
+            new.scale_materials(self._material_scale)
+        return new
 
     @property
     def backend(self) -> str:
@@ -126,6 +152,7 @@ class Solver:
         if not factor > 0:
             raise InputError(f"factor = {shown(factor)}; expected > 0")
         self._backend.scale_materials(factor)
+        self._material_scale = factor
 
     def contact_report(self) -> ContactReport:
         """The tools' force histories, the last step's contact forces per node and, after a
@@ -356,6 +383,28 @@ class Simulation:
         self.model = model
         self.solver = Solver(model, **solver_options)
         self.state = model.state()
+        self.cutter: Any = None  # pliant.cutting.Cutter, once a blade was added
+
+    def add_blade(self, blade, every: int = 10):
+        """Cut with ``blade`` (pliant.cutting.Blade) while running: every ``every`` steps, the
+        elements it swept separate (``self.model``, ``state`` and ``solver`` are then new objects
+        over the new topology). Returns the blade."""
+        from ..cutting import Cutter
+
+        if self.cutter is None:
+            self.cutter = Cutter([], every)
+        self.cutter.blades.append(blade)
+        self.cutter.__post_init__()
+        return blade
+
+    def cut(self, triangles):
+        """Cut now along the surface ``triangles`` [m] (K, 3, 3) of the current configuration
+        (pliant.cutting.cut); returns the :class:`~pliant.cutting.Cut`."""
+        from ..cutting import cut
+
+        res = cut(self.state, triangles, self.solver)
+        self.model, self.state, self.solver = res.model, res.state, res.solver
+        return res
 
     @property
     def dt(self) -> float:
@@ -376,8 +425,20 @@ class Simulation:
         return self.solver.run(self.state, steps=1)
 
     def run(self, steps: int | None = None, until: float | None = None) -> RunInfo:
-        """Advance by ``steps`` steps or to time ``until`` [s] (Solver.run on the current state)."""
-        return self.solver.run(self.state, steps=steps, until=until)
+        """Advance by ``steps`` steps or to time ``until`` [s] (Solver.run on the current state;
+        with blades, in runs of ``cutter.every`` steps, each followed by a cut)."""
+        if self.cutter is None or not self.cutter.blades:
+            return self.solver.run(self.state, steps=steps, until=until)
+        if (steps is None) == (until is None):
+            raise InputError("run: give exactly one of steps= or until=")
+        if steps is None:
+            until = finite_number(until, "until", "s")
+            steps = self.cutter.steps_until(self.solver, self.state, until)
+        steps = _step_count(steps)
+        n0 = self.state.steps
+        self.solver, self.state = self.cutter.run(self.solver, self.state, steps)
+        self.model = self.solver.model
+        return RunInfo(self.state.steps - n0, self.state.time)
 
     def relax(self, **options) -> RelaxInfo:
         """Quasi-static equilibrium of the current state (Solver.relax; same options)."""

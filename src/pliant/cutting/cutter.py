@@ -1,0 +1,79 @@
+"""Running with blades: steps in short runs, after each a cut along what every blade swept."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..checks import shown
+from .blade import Blade
+from .cut import cut, cut_embedding
+from .split import interior_faces
+
+__all__ = ["Cutter", "CutEvent"]
+
+
+@dataclass
+class CutEvent:
+    """One cut during a run: time [s], the blade's name, nodes split and faces opened."""
+
+    time: float
+    blade: str
+    new_nodes: int
+    opened_faces: int
+
+
+@dataclass
+class Cutter:
+    """Blades that cut while a solver runs. ``every``: steps between cuts (the blade's motion over
+    them should stay below an element's size, so that no element is skipped; the default 10 steps
+    of a stable Δt move a blade slower than the tissue's wave speed by well under an element).
+    ``embedding``: an embedded visual surface (pliant.mesh.Embedding) kept open along the cuts."""
+
+    blades: list = field(default_factory=list)
+    every: int = 10
+    embedding: object = None
+    events: list = field(default_factory=list)
+    _faces: tuple = (None, None)  # (model, its interior faces): computed once per topology
+
+    def __post_init__(self):
+        for b in self.blades:
+            if not isinstance(b, Blade):
+                raise InputError(f"Cutter: {shown(b)} is not a pliant.cutting.Blade")
+        if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
+            raise InputError(f"Cutter: every = {shown(self.every)}; expected a whole number of steps >= 1")
+
+    def cut_now(self, solver, state, t0: float):
+        """Cut along what each blade swept from t0 to the state's time [s]; returns the solver and
+        state to go on with (new ones after a cut)."""
+        for blade in self.blades:
+            if self._faces[0] is not state.model:
+                self._faces = (state.model, interior_faces(state.model.tets))
+            res = cut(state, blade.swept(t0, state.time), solver, self._faces[1])
+            if not res.changed:
+                continue
+            if self.embedding is not None:
+                self.embedding = cut_embedding(self.embedding, state.model.tets, res)
+            solver, state = res.solver, res.state
+            self.events.append(CutEvent(state.time, blade.name, len(res.parent), len(res.faces)))
+        return solver, state
+
+    def run(self, solver, state, steps: int):
+        """Advance ``state`` by ``steps`` steps of ``solver``, cutting every :attr:`every` steps.
+        Returns (solver, state): new objects once something was cut (the old ones stay as they
+        were at the cut)."""
+        done = 0
+        while done < steps:
+            n = min(self.every, steps - done)
+            t0 = state.time
+            solver.run(state, steps=n)
+            done += n
+            solver, state = self.cut_now(solver, state, t0)
+        return solver, state
+
+    def steps_until(self, solver, state, until: float) -> int:
+        """Steps of the solver from the state's time to ``until`` [s]."""
+        return max(0, math.ceil((until - state.time) / solver.dt - 1e-9))
