@@ -153,6 +153,25 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  for (std::size_t i = 0; i < q.size(); ++i) s.s.q[i] = T(q[i]);
                  s.s.touch();
              })
+        .def("get_grip",
+             [](const S& s) {  // grasping, per contact node (engine order): tool, position (n, 3)
+                 const size_t n = s.s.grip_tool.size();
+                 std::vector<index_t> tool = s.s.grip_tool;
+                 std::vector<double> at = s.s.grip_at;
+                 return nb::make_tuple(to_numpy(std::move(tool), {n}), to_numpy(std::move(at), {n, 3}));
+             })
+        .def("set_grip",
+             [](S& s, std::vector<index_t> tool, std::vector<double> at) {
+                 if (tool.size() != s.s.grip_tool.size() || at.size() != s.s.grip_at.size())
+                     throw nb::value_error(("grasp state: " + std::to_string(tool.size()) + " nodes and " +
+                                            std::to_string(at.size()) + " coordinates, expected " +
+                                            std::to_string(s.s.grip_tool.size()) + " and " +
+                                            std::to_string(s.s.grip_at.size()))
+                                               .c_str());
+                 s.s.grip_tool = std::move(tool);
+                 s.s.grip_at = std::move(at);
+                 s.s.touch();
+             })
         .def("copy",
              [](const S& s) {
                  S c(s);
@@ -180,7 +199,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<std::vector<double>> tool_grids, std::vector<index_t> press_nodes,
                std::vector<double> press_value, std::vector<index_t> press_curve, bool anp,
                std::vector<double> group_visco, double stiffness_damping, double anp_stabilization,
-               int threads) {
+               std::vector<std::vector<double>> tool_grips, std::vector<double> tool_reach, int threads) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -224,6 +243,10 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                     in.tool_keys.insert(in.tool_keys.end(), tool_keys[k].begin(), tool_keys[k].end());
                     t.grid_begin = static_cast<index_t>(in.tool_grid.size());
                     for (int c = 0; c < 3; ++c) t.grid_dims[c] = tool_grid_dims[3 * k + c];
+                    t.grip_begin = static_cast<index_t>(in.tool_grips.size());
+                    t.grip_count = static_cast<index_t>(tool_grips[k].size());
+                    t.reach = tool_reach[k];
+                    in.tool_grips.insert(in.tool_grips.end(), tool_grips[k].begin(), tool_grips[k].end());
                     in.tool_grid.insert(in.tool_grid.end(), tool_grids[k].begin(), tool_grids[k].end());
                     in.tools.push_back(t);
                 }
@@ -236,7 +259,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a,
             "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a,
             "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a,
-            "stiffness_damping"_a, "anp_stabilization"_a, "threads"_a)
+            "stiffness_damping"_a, "anp_stabilization"_a, "tool_grips"_a, "tool_reach"_a, "threads"_a)
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
@@ -248,7 +271,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
              [](const E& e) {
                  const std::size_t q = static_cast<std::size_t>(e.model.n_blocks) * kLanes * 6 *
                                        static_cast<std::size_t>(e.model.visco_terms);
-                 return S{State<T>(e.model.n_pad, q), e.model.n_nodes};
+                 return S{State<T>(e.model.n_pad, q, e.model.contact_nodes.size()), e.model.n_nodes};
              })
         .def("critical_steps",
              [](const E& e) {
@@ -318,9 +341,9 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                                        to_numpy(std::move(r.E), {M, 6}));
              })
         .def("set_tool_keys",
-             [](B& e, std::vector<std::vector<double>> keys) {
+             [](B& e, std::vector<std::vector<double>> keys, std::vector<std::vector<double>> grips) {
                  try {
-                     e->set_tool_keys(keys);
+                     e->set_tool_keys(keys, grips);
                  } catch (const std::invalid_argument& x) {
                      throw nb::value_error(x.what());
                  }

@@ -262,6 +262,7 @@ void Model<T>::build_contact_and_tables(const ModelInput& in) {
     tool_keys = in.tool_keys;
     tool_grid = in.tool_grid;
     if (tool_grid.empty()) tool_grid.push_back(0.0);
+    tool_grips = in.tool_grips;
     curves = in.curves;
     if (curves.empty()) curves.push_back({CurveKind::Constant, 0.0, 0.0, 0, 0});
     table_t = in.table_t;

@@ -51,6 +51,7 @@ struct ModelInput {
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys;     // 8 per keyframe: t, position (3), quaternion (4)
     std::vector<double> tool_grid;     // signed-distance grids [m]
+    std::vector<double> tool_grips;    // grasping tools' close/open times [s] (RigidTool::grip_begin)
     std::vector<index_t> press_nodes;  // follower-pressure triangles, 3 nodes each
     std::vector<double> press_value;   // [Pa] per triangle (positive: against its normal)
     std::vector<index_t> press_curve;  // curve per triangle
@@ -92,7 +93,7 @@ struct Model {
     std::vector<index_t> contact_nodes;
     std::vector<index_t> contact_bits;  // per contact node: bits 0–2 free DOFs, bit 3 + k tool k
     std::vector<RigidTool> tools;
-    std::vector<double> tool_keys, tool_grid;
+    std::vector<double> tool_keys, tool_grid, tool_grips;
     double dt_critical = 0.0;  // min over elements of h_min / c_d [s]
     index_t dt_critical_elem = -1;
     std::vector<double> elem_dt;  // per builder element: h_min / c_d [s] (host only, for reports)
@@ -142,11 +143,19 @@ template <class T>
 struct State {
     std::vector<T> u, u_prev;
     std::vector<T> q;  // viscoelastic state: 6 × visco_terms per element slot, AoSoA (may be empty)
+    // Grasping, per contact node (the model's contact-node order): the tool holding it (−1: none)
+    // and its position in that tool's frame [m], (n_contact, 3).
+    std::vector<index_t> grip_tool;
+    std::vector<double> grip_at;
     double t = 0.0, dt = 0.0;
     long step = 0;
     std::uint64_t version = new_version();
-    explicit State(index_t n_pad, std::size_t q_size = 0)
-        : u(3 * static_cast<std::size_t>(n_pad), T(0)), u_prev(u), q(q_size, T(0)) {}
+    explicit State(index_t n_pad, std::size_t q_size = 0, std::size_t n_contact = 0)
+        : u(3 * static_cast<std::size_t>(n_pad), T(0)),
+          u_prev(u),
+          q(q_size, T(0)),
+          grip_tool(n_contact, -1),
+          grip_at(3 * n_contact, 0.0) {}
     void touch() { version = new_version(); }
 };
 

@@ -33,7 +33,21 @@ struct RigidTool {
     double mu_s, mu_k;
     index_t key_begin, key_count;  // keyframes: time [s], position [m] (3), quaternion (w,x,y,z)
     index_t grid_begin, grid_dims[3];
+    index_t grip_begin, grip_count;  // grasping: times [s] it closes, opens, closes… (ascending)
+    double reach;                    // a closing tool grasps the nodes within this distance [m]
 };
+
+/// Whether a grasping tool is closed at time t [s]: an odd number of its close/open times lie
+/// before t (closed on (t_close, t_open]: a tool that closes at t0 holds from the step after t0).
+PLIANT_HD bool tool_closed(const RigidTool& tl, double t, const double* grips) {
+    int before = 0;
+    for (index_t j = 0; j < tl.grip_count; ++j) before += grips[tl.grip_begin + j] < t ? 1 : 0;
+    return (before & 1) != 0;
+}
+
+/// Grip bits of a tool over a step from t to t + Δt: bit 0 closed at t, bit 1 closed at t + Δt
+/// (value 2: it closes during the step and grasps).
+constexpr index_t kGripClosedBefore = 1, kGripClosedAfter = 2;
 
 struct Pose {
     double R[9];  // rotation, row-major: x_world = R x_tool + t
@@ -204,30 +218,11 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
     }
 }
 
-/// Contact kernel, one surface node per lane: for each tool in turn, a node x⁺ = X + u⁺ with
-/// φ(x⁺) < 0 is moved out along the normal by δ_n = −φ n, then friction acts on its tangential
-/// motion relative to the tool over the step, d_t: stick (remove d_t) if |d_t| ≤ μs|δ_n|, else slip
-/// (remove μk|δ_n| along d_t). The force it took, m (x_corrected − x⁺)/γ1 [N], is stored per node
-/// in force_out (3) with the tool index in tool_out (−1: no contact; force_out then untouched).
-/// Only the node's free DOFs move (node_bits[i] bit d: DOF d is not constrained): on a symmetry
-/// plane or a roller the constraint carries the rest of the correction. Tool k < kMaskedTools acts
-/// on the node only if bit 3 + k is set (tools restricted to node sets, NiftySim's SlvNodes).
-/// Inputs: contact node i → node nodes[i], its bits, reference X [m] (3 per node, AoS,
-/// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt.
-/// Outputs: u⁺ corrected, force_out, tool_out.
-template <class T>
-PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits, const double* X,
-                            const T* mass, const T* u, index_t P, const RigidTool* tools, int n_tools,
-                            const Pose* pose0, const Pose* pose1, const double* grid, double g1, T* u_next,
-                            double* force_out, index_t* tool_out) {
-    const index_t n = nodes[i];
-    double x0[3], x1[3], xs[3];
-    for (int d = 0; d < 3; ++d) {
-        x0[d] = X[3 * n + d] + double(u[d * P + n]);
-        x1[d] = X[3 * n + d] + double(u_next[d * P + n]);
-        xs[d] = x1[d];
-    }
-    tool_out[i] = -1;
+/// The contact part of contact_node: x1 (the node at t + Δt) moved out of every tool it
+/// penetrates, with friction against the tool's motion from x0; tool_out[i]: the last tool touched.
+PLIANT_HD void contact_tools(index_t i, const index_t* node_bits, const RigidTool* tools, int n_tools,
+                             const Pose* pose0, const Pose* pose1, const double* grid, const double x0[3],
+                             double x1[3], index_t* tool_out) {
     for (int k = 0; k < n_tools; ++k) {
         if (k < kMaskedTools && !((node_bits[i] >> (3 + k)) & 1)) continue;
         double y[3], nt[3], nw[3];
@@ -257,6 +252,66 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node
             for (int d = 0; d < 3; ++d) x1[d] -= s * dt_[d];
         }
         tool_out[i] = k;
+    }
+}
+
+/// Grasp of contact node i by a tool closing during this step: the first such tool (allowed on
+/// the node) whose surface is within its reach of x⁺ [m] holds it from now on at its tool-frame
+/// position (grip_tool, grip_at). Returns the tool, or −1.
+PLIANT_HD index_t try_grasp(index_t i, const index_t* node_bits, const RigidTool* tools, int n_tools,
+                            const Pose* pose1, const index_t* closed, const double* grid, const double x1[3],
+                            index_t* grip_tool, double* grip_at) {
+    for (int k = 0; k < n_tools; ++k) {
+        if (closed[k] != kGripClosedAfter) continue;
+        if (k < kMaskedTools && !((node_bits[i] >> (3 + k)) & 1)) continue;
+        double y[3], nt[3];
+        to_tool(pose1[k], x1, y);
+        if (!(tool_sdf(tools[k], y, grid, nt) <= tools[k].reach)) continue;
+        grip_tool[i] = k;
+        for (int d = 0; d < 3; ++d) grip_at[3 * i + d] = y[d];
+        return k;
+    }
+    return -1;
+}
+
+/// Contact kernel, one surface node per lane: for each tool in turn, a node x⁺ = X + u⁺ with
+/// φ(x⁺) < 0 is moved out along the normal by δ_n = −φ n, then friction acts on its tangential
+/// motion relative to the tool over the step, d_t: stick (remove d_t) if |d_t| ≤ μs|δ_n|, else slip
+/// (remove μk|δ_n| along d_t). The force it took, m (x_corrected − x⁺)/γ1 [N], is stored per node
+/// in force_out (3) with the tool index in tool_out (−1: no contact; force_out then untouched).
+/// Only the node's free DOFs move (node_bits[i] bit d: DOF d is not constrained): on a symmetry
+/// plane or a roller the constraint carries the rest of the correction. Tool k < kMaskedTools acts
+/// on the node only if bit 3 + k is set (tools restricted to node sets, NiftySim's SlvNodes).
+/// Grasping: a node held by a closed tool (grip_tool[i] = k) moves with it, at its tool-frame
+/// position grip_at (3 per contact node), and the force that takes is the grasp force; a tool
+/// that opens lets its nodes go; a tool that closes during the step grasps (try_grasp).
+/// Inputs: contact node i → node nodes[i], its bits, reference X [m] (3 per node, AoS,
+/// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt and their
+/// grip bits (closed). Outputs: u⁺ corrected, force_out, tool_out; grip_tool, grip_at updated.
+template <class T>
+PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits, const double* X,
+                            const T* mass, const T* u, index_t P, const RigidTool* tools, int n_tools,
+                            const Pose* pose0, const Pose* pose1, const index_t* closed, const double* grid,
+                            double g1, T* u_next, double* force_out, index_t* tool_out, index_t* grip_tool,
+                            double* grip_at) {
+    const index_t n = nodes[i];
+    double x0[3], x1[3], xs[3];
+    for (int d = 0; d < 3; ++d) {
+        x0[d] = X[3 * n + d] + double(u[d * P + n]);
+        x1[d] = X[3 * n + d] + double(u_next[d * P + n]);
+        xs[d] = x1[d];
+    }
+    tool_out[i] = -1;
+    const index_t held = grip_tool[i];
+    if (held >= 0 && (closed[held] & kGripClosedAfter)) {  // held: it moves with the jaws
+        to_world(pose1[held], grip_at + 3 * i, x1);
+        tool_out[i] = held;
+    } else {
+        if (held >= 0) grip_tool[i] = -1;  // the tool opened: released
+        contact_tools(i, node_bits, tools, n_tools, pose0, pose1, grid, x0, x1, tool_out);
+        const index_t g =
+            try_grasp(i, node_bits, tools, n_tools, pose1, closed, grid, x1, grip_tool, grip_at);
+        if (g >= 0 && tool_out[i] < 0) tool_out[i] = g;
     }
     if (tool_out[i] < 0) return;  // force_out is only meaningful where tool_out >= 0
     const double m_over_g1 = double(mass[n]) / g1;

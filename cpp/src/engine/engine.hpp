@@ -7,8 +7,8 @@
 // A step (step_once): (1) step scalars: load-curve factors, tool poses, the step counter;
 // (2) element forces per material group (T4ANP: element pressures, nodal averages, then forces;
 // viscoelastic: the Prony state advances); (3) per node: gather, central difference update,
-// kinematic constraints; (4) contact with the rigid tools and the per-tool force sums. Stability
-// checks every `check_every` steps (J ≤ 0 or NaN per element; non-finite or blown-up nodes).
+// kinematic constraints; (4) contact with the rigid tools (and grasping) and the per-tool force sums.
+// Stability checks every `check_every` steps (J ≤ 0 or NaN per element; non-finite or blown-up nodes).
 // Everything a kernel needs is captured by value (a DeviceView of device pointers): CUDA kernels
 // cannot read the host object, and graphs keep the values they were captured with.
 #pragma once
@@ -60,12 +60,15 @@ struct DeviceView {
     const LoadCurve* curves;
     const double *tt, *tv, *X, *grid;
     const RigidTool* tools;
-    const double* keys;
+    const double *keys, *grips;  // keyframes, grasping tools' close/open times
     T *u[3], *q, *f_elem, *J, *elem_p, *node_p, *f_node[2], *cnext, *pf;
     Scalars<T>* sc;
     Pose *pose0, *pose1;
     double *cforce, *chunk, *hist, *fcon, *partial;
     index_t* ctool;
+    index_t* closed;  // per tool: grip bits of the step (kGripClosedBefore / After)
+    index_t* gtool;   // per contact node: the tool holding it, −1 (State::grip_tool)
+    double* gat;      // per contact node: its position in that tool's frame [m] (State::grip_at)
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -98,7 +101,8 @@ public:
     std::vector<T> internal_forces(const State<T>& s) override;
     std::vector<double> tool_history() override;
     ContactReport contact_report() override;
-    void set_tool_keys(const std::vector<std::vector<double>>& keys) override;
+    void set_tool_keys(const std::vector<std::vector<double>>& keys,
+                       const std::vector<std::vector<double>>& grips) override;
     void scale_materials(double factor) override;
     std::string name() const override { return Dev::kName; }
     int threads() const override { return dev_.threads(); }
@@ -150,11 +154,11 @@ private:
     std::vector<RigidTool> tools_;  // the model's, with replaced keyframes (set_tool_keys)
     ModelBuffers<T, Dev> mb_;
     DeviceBuffer<RigidTool, Dev> d_tools_;
-    DeviceBuffer<double, Dev> d_keys_, cforce_, chunk_, hist_, fcon_, partial_;
+    DeviceBuffer<double, Dev> d_keys_, d_grips_, cforce_, chunk_, hist_, fcon_, partial_, gat_;
     DeviceBuffer<T, Dev> u_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_;
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
-    DeviceBuffer<index_t, Dev> ctool_;
+    DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceView<T> v_{};

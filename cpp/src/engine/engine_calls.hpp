@@ -26,6 +26,9 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     const std::size_t chunks = (nc + kContactChunk - 1) / kContactChunk;
     cforce_ = DeviceBuffer<double, Dev>(dev_, 3 * nc);
     ctool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
+    gtool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
+    gat_ = DeviceBuffer<double, Dev>(dev_, 3 * nc);
+    closed_ = DeviceBuffer<index_t, Dev>(dev_, nt);
     chunk_ = DeviceBuffer<double, Dev>(dev_, chunks * 6 * nt);
     fcon_ = DeviceBuffer<double, Dev>(dev_, nt ? P3 : 0);
     partial_ = DeviceBuffer<double, Dev>(
@@ -34,8 +37,11 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     d_tools_.upload(tools_.data(), nt);
     d_keys_ = DeviceBuffer<double, Dev>(dev_, m.tool_keys.size());
     d_keys_.upload(m.tool_keys.data(), m.tool_keys.size());
+    d_grips_ = DeviceBuffer<double, Dev>(dev_, m.tool_grips.size());
+    d_grips_.upload(m.tool_grips.data(), m.tool_grips.size());
     const std::vector<index_t> none(nc, -1);
     ctool_.upload(none.data(), nc);
+    gtool_.upload(none.data(), nc);
     const std::size_t ng = groups_.size();
     std::vector<Prony<T>> prony(ng);
     for (std::size_t g = 0; g < ng; ++g) {  // spans: runs of groups of one kind and variant
@@ -87,7 +93,7 @@ void Engine<T, Dev>::refresh_view() {
     v.co = mb_.co.data(), v.cdof = mb_.cdof.data(), v.ccurve = mb_.ccurve.data();
     v.pattern_curve = mb_.pcurve.data(), v.cnodes = mb_.cnodes.data(), v.cbits = mb_.cbits.data();
     v.curves = mb_.curves.data(), v.tt = mb_.tt.data(), v.tv = mb_.tv.data(), v.X = mb_.X.data();
-    v.grid = mb_.grid.data(), v.tools = d_tools_.data(), v.keys = d_keys_.data();
+    v.grid = mb_.grid.data(), v.tools = d_tools_.data(), v.keys = d_keys_.data(), v.grips = d_grips_.data();
     for (int k = 0; k < 3; ++k) v.u[k] = u_[k].data();
     v.q = q_.data(), v.f_elem = f_elem_.data(), v.J = J_.data();
     v.elem_p = elem_p_.data(), v.node_p = node_p_.data();
@@ -96,6 +102,7 @@ void Engine<T, Dev>::refresh_view() {
     v.pose0 = pose0_.data(), v.pose1 = pose1_.data();
     v.cforce = cforce_.data(), v.chunk = chunk_.data(), v.hist = hist_.data();
     v.fcon = fcon_.data(), v.partial = partial_.data(), v.ctool = ctool_.data();
+    v.closed = closed_.data(), v.gtool = gtool_.data(), v.gat = gat_.data();
 }
 
 /// Copies a state to the device unless the device holds it already (same object, same version).
@@ -105,6 +112,8 @@ void Engine<T, Dev>::load(const State<T>& s) {
     u_[phase_.cur].upload(s.u.data(), s.u.size());
     u_[phase_.prev].upload(s.u_prev.data(), s.u_prev.size());
     q_.upload(s.q.data(), s.q.size());
+    gtool_.upload(s.grip_tool.data(), s.grip_tool.size());
+    gat_.upload(s.grip_at.data(), s.grip_at.size());
     resident_ = &s;
     resident_version_ = s.version;
 }
@@ -115,6 +124,8 @@ void Engine<T, Dev>::store(State<T>& s) {
     u_[phase_.cur].download(s.u.data(), s.u.size());
     u_[phase_.prev].download(s.u_prev.data(), s.u_prev.size());
     q_.download(s.q.data(), s.q.size());
+    gtool_.download(s.grip_tool.data(), s.grip_tool.size());
+    gat_.download(s.grip_at.data(), s.grip_at.size());
     s.touch();
     resident_ = &s;
     resident_version_ = s.version;
@@ -311,11 +322,25 @@ ContactReport Engine<T, Dev>::contact_report() {
 }
 
 template <class T, class Dev>
-void Engine<T, Dev>::set_tool_keys(const std::vector<std::vector<double>>& keys) {
-    if (keys.size() != tools_.size())
-        throw std::invalid_argument("set_tool_keys: " + std::to_string(keys.size()) +
-                                    " key lists, expected one per tool (" + std::to_string(tools_.size()) +
-                                    ")");
+void Engine<T, Dev>::set_tool_keys(const std::vector<std::vector<double>>& keys,
+                                   const std::vector<std::vector<double>>& grips) {
+    if (keys.size() != tools_.size() || grips.size() != tools_.size())
+        throw std::invalid_argument("set_tool_keys: " + std::to_string(keys.size()) + " key lists and " +
+                                    std::to_string(grips.size()) +
+                                    " grip lists, expected one each per tool (" +
+                                    std::to_string(tools_.size()) + ")");
+    std::vector<double> times;
+    for (std::size_t k = 0; k < grips.size(); ++k) {
+        for (std::size_t j = 1; j < grips[k].size(); ++j)
+            if (!(grips[k][j] > grips[k][j - 1]))
+                throw std::invalid_argument("set_tool_keys: tool " + std::to_string(k) +
+                                            ": grip times must increase");
+        tools_[k].grip_begin = static_cast<index_t>(times.size());
+        tools_[k].grip_count = static_cast<index_t>(grips[k].size());
+        times.insert(times.end(), grips[k].begin(), grips[k].end());
+    }
+    if (times.size() > d_grips_.size()) d_grips_ = DeviceBuffer<double, Dev>(dev_, times.size());
+    d_grips_.upload(times.data(), times.size());
     std::vector<double> all;
     for (std::size_t k = 0; k < keys.size(); ++k) {
         if (keys[k].empty() || keys[k].size() % 8)

@@ -40,6 +40,8 @@ void Engine<T, Dev>::step_scalars(double time_dt, bool fixed_row) {
         for (int k = 0; k < v.n_tools; ++k) {
             v.pose0[k] = tool_pose(v.tools[k], t, v.keys);
             v.pose1[k] = tool_pose(v.tools[k], t + time_dt, v.keys);
+            v.closed[k] = (tool_closed(v.tools[k], t, v.grips) ? kGripClosedBefore : 0) |
+                          (tool_closed(v.tools[k], t + time_dt, v.grips) ? kGripClosedAfter : 0);
         }
         s.row = fixed_row ? 0 : s.step;
         s.step += 1;
@@ -149,9 +151,9 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     });
 }
 
-/// Contact of the surface nodes with the rigid tools, in fixed chunks of nodes each summing its
-/// per-tool force and torque; then one thread adds the chunks in order into the step's history
-/// row (the same bits for any thread count).
+/// Contact of the surface nodes with the rigid tools (and grasping), in fixed chunks of nodes each summing
+/// its per-tool force and torque; then one thread adds the chunks in order into the step's history row (the
+/// same bits for any thread count).
 template <class T, class Dev>
 void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
     const DeviceView<T> v = v_;
@@ -166,7 +168,7 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
         const double g1 = double(v.sc->it.g1);
         for (index_t i = c * kContactChunk; i < end; ++i) {
             contact_node(i, v.cnodes, v.cbits, v.X, mass, uc, v.P, v.tools, v.n_tools, v.pose0, v.pose1,
-                         v.grid, g1, un, v.cforce, v.ctool);
+                         v.closed, v.grid, g1, un, v.cforce, v.ctool, v.gtool, v.gat);
             add_tool_reaction(i, v.cnodes, v.X, un, v.P, v.pose1, v.cforce, v.ctool, h);
         }
     });

@@ -70,7 +70,8 @@ def _quat(q) -> np.ndarray:
 class RigidTool:
     """Base class. ``mu_s``/``mu_k``: static/kinetic friction coefficients (μk ≤ μs; 0 for
     frictionless). Trajectory: :meth:`at` adds keyframes (time [s], position [m], rotation);
-    between keyframes positions are linear and rotations normalized-linear; held outside."""
+    between keyframes positions are linear and rotations normalized-linear; held outside. Any
+    tool can grasp (:meth:`grasp`, :meth:`release`): a grasper's jaws are its shape."""
 
     kind: _core.ToolKind | None = None
 
@@ -93,6 +94,8 @@ class RigidTool:
         self.keys: list[np.ndarray] = []
         self.at(0.0, position, rotation)
         self._fixed = True
+        self.grips: list[float] = []  # times [s] it closes, opens, closes… (grasp, release)
+        self.reach = 0.0  # a closing tool grasps the surface nodes within this distance [m]
 
     def at(self, t: float, position, rotation=(1.0, 0.0, 0.0, 0.0)) -> "RigidTool":
         """Add a keyframe: at time t [s] the tool is at ``position`` [m] with ``rotation``."""
@@ -105,6 +108,39 @@ class RigidTool:
             raise InputError(f"{self.name}: keyframe times must increase ({t} after {self.keys[-1][0]})")
         self.keys.append(key)
         return self
+
+    def grasp(self, t: float, reach: float | None = None) -> "RigidTool":
+        """Close the tool at time t [s]: from the next step on, it holds the surface nodes within
+        ``reach`` [m] of its surface (inside it, or up to reach outside) and moves them with it
+        until :meth:`release`; the force that takes is part of the tool's reported force."""
+        t = finite_number(t, f"{self.name}: grasp time", "s")
+        if reach is not None:
+            reach = finite_number(reach, f"{self.name}: reach", "m")
+            if reach < 0:
+                raise InputError(f"{self.name}: reach = {shown(reach)}; expected a distance >= 0 [m]")
+            self.reach = reach
+        if len(self.grips) % 2:
+            raise InputError(f"{self.name}: grasp at t = {t:g} s, but it is already closed; release it first")
+        return self._grip_event(t, "grasp")
+
+    def release(self, t: float) -> "RigidTool":
+        """Open the tool at time t [s]: the nodes it holds are free again."""
+        t = finite_number(t, f"{self.name}: release time", "s")
+        if len(self.grips) % 2 == 0:
+            raise InputError(f"{self.name}: release at t = {t:g} s, but it is not closed; grasp first")
+        return self._grip_event(t, "release")
+
+    def _grip_event(self, t: float, what: str) -> "RigidTool":
+        if self.grips and t <= self.grips[-1]:
+            raise InputError(
+                f"{self.name}: {what} at t = {t:g} s; expected a time after {self.grips[-1]:g} s"
+            )
+        self.grips.append(float(t))
+        return self
+
+    def closed(self, t: float) -> bool:
+        """Whether the tool is closed (holding) at time t [s], as the engine sees it."""
+        return sum(g < t for g in self.grips) % 2 == 1
 
     def key_array(self) -> np.ndarray:
         return np.concatenate(self.keys)

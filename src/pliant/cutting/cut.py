@@ -67,6 +67,14 @@ def _carry_state(state, model, parent: np.ndarray):
     q = np.asarray(state._s.get_q())
     if q.size:
         s._s.set_q(q.tolist())
+    tool, at = (np.asarray(a) for a in state._s.get_grip())
+    if tool.size:  # grasped nodes stay grasped, and so do their copies
+        held = {int(n): i for i, n in enumerate(old._contact_engine) if tool[i] >= 0}
+        source = np.concatenate([np.arange(old.n_nodes), parent])[model._contact_engine]
+        row = np.array([held.get(int(n), -1) for n in source], dtype=np.int64)
+        new_tool = np.where(row >= 0, tool[row], -1)
+        new_at = np.where(row[:, None] >= 0, at[row], 0.0)
+        s._s.set_grip(new_tool.astype(np.int32).tolist(), new_at.ravel().tolist())
     s._s.t, s._s.dt, s._s.step = state._s.t, state._s.dt, state._s.step
     return s
 

@@ -13,6 +13,7 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
     """A rigid tool (or a blade, which cuts) from a [[tool]] table (see docs/scenes.md). Call it
     under ``ctx.under(p)``: the tool classes' InputErrors then name this file and key."""
     from .. import contact as ct
+    from ..cutting import Blade
 
     check_keys(
         ctx,
@@ -36,6 +37,8 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
             "rotation": "list",
             "keyframes": "list",
             "nodes": "table",
+            "grip": "list",
+            "reach": "number",
         },
         ("type",),
     )
@@ -70,8 +73,6 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
     elif kind == "box":
         tool = ct.Box(vector(ctx, t.get("half_extents", [0, 0, 0]), f"{p}.half_extents"), **pose, **kw)
     elif kind == "blade":
-        from ..cutting import Blade
-
         tool = Blade(t.get("length", 0.0), t.get("depth", 0.0), **pose, name=t.get("name"))
     elif kind == "mesh":
         from ..mesh import read_surface
@@ -97,4 +98,17 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
             if tool.keys
             else (1.0, 0, 0, 0),
         )
+    if "grip" in t or "reach" in t:
+        if isinstance(tool, Blade):
+            raise ctx.error(f"{p}.grip", "a blade cuts; it does not grasp")
+        times = t.get("grip", [])
+        for j, g in enumerate(times):
+            if isinstance(g, bool) or not isinstance(g, (int, float)):
+                raise ctx.error(f"{p}.grip[{j}]", f"expected a time [s], got {g!r}")
+            if j % 2 == 0:
+                tool.grasp(g, t.get("reach"))
+            else:
+                tool.release(g)
+        if "reach" in t and not times:
+            tool.reach = float(t["reach"])
     return tool

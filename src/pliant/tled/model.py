@@ -234,6 +234,7 @@ class Model:
             cn, masks = np.zeros(0, np.int64), np.zeros(0, np.int64)
         self.contact_nodes = cn
         cn_order = np.argsort(node_rank[cn], kind="stable")
+        self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
@@ -283,6 +284,8 @@ class Model:
                 group_visco=visco,
                 stiffness_damping=self.stiffness_damping,
                 anp_stabilization=float(builder.nodal_pressure_stabilization),
+                tool_grips=[list(t.grips) for t in self.tools],
+                tool_reach=[float(t.reach) for t in self.tools],
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on
@@ -494,6 +497,13 @@ class State:
         return self.model.reference_positions + self.displacements
 
     @property
+    def held(self) -> dict[int, int]:
+        """The nodes grasped now: user node → the tool holding it."""
+        tool = np.asarray(self._s.get_grip()[0])
+        nodes = self.model._contact_engine
+        return {int(nodes[i]): int(tool[i]) for i in np.nonzero(tool >= 0)[0]}
+
+    @property
     def velocities(self) -> np.ndarray:
         if self._s.dt <= 0:
             return np.zeros((self.model.n_nodes, 3))
@@ -557,6 +567,8 @@ class State:
             n_elements=self.model.n_elements,
             fingerprint=self.model.fingerprint,
             visco=np.asarray(self._s.get_q(), dtype=float),
+            grip_tool=np.asarray(self._s.get_grip()[0]),
+            grip_at=np.asarray(self._s.get_grip()[1]),
         )  # engine layout, same model
         atomic_write(path, lambda tmp: np.savez(tmp, **data), "state file")
 
@@ -603,6 +615,13 @@ class State:
         if "visco" in data:
             try:
                 self._s.set_q(data["visco"].ravel().tolist())
+            except (TypeError, ValueError) as e:
+                raise InputError(f"{path}: {e}") from None
+        if "grip_tool" in data and "grip_at" in data:
+            try:
+                self._s.set_grip(
+                    data["grip_tool"].astype(np.int32).ravel().tolist(), data["grip_at"].ravel().tolist()
+                )
             except (TypeError, ValueError) as e:
                 raise InputError(f"{path}: {e}") from None
         self._s.set_u(u)

@@ -106,6 +106,7 @@ class Solver:
         self.tools = [copy.copy(t) for t in model.tools]  # trajectories: set_tool_pose edits them
         for t in self.tools:
             t.keys = [np.array(k, copy=True) for k in t.keys]
+            t.grips = list(t.grips)
         self._backend = model.make_backend(backend, device)
         self._options: dict[str, Any] = dict(
             dt=dt,
@@ -142,8 +143,11 @@ class Solver:
         self.model._solver = weakref.ref(self)
 
     def set_tool_keys(self):
-        """Send the solver's tool trajectories (``solver.tools[k].keys``) to its backend."""
-        self._backend.set_tool_keys([t.key_array().tolist() for t in self.tools])
+        """Send the solver's tool trajectories (``solver.tools[k].keys``) and grasp times
+        (``solver.tools[k].grips``) to its backend."""
+        self._backend.set_tool_keys(
+            [t.key_array().tolist() for t in self.tools], [list(t.grips) for t in self.tools]
+        )
 
     def scale_materials(self, factor: float):
         """Multiply every material's moduli by ``factor`` relative to the model's (a stiffness
@@ -507,6 +511,17 @@ class Simulation:
         tool.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
         tool._fixed = False
         tool.at(t + duration, target, rotation)
+        self.solver.set_tool_keys()
+
+    def grasp(self, k: int = 0, reach: float | None = None):
+        """Close tool k now: from the next step it holds the surface nodes within ``reach`` [m] of
+        it (default: the tool's own :attr:`reach`) and moves them with it (RigidTool.grasp)."""
+        self.solver.tools[self.solver._tool_index(k)].grasp(self.state.time, reach)
+        self.solver.set_tool_keys()
+
+    def release(self, k: int = 0):
+        """Open tool k now: the nodes it holds are free from the next step."""
+        self.solver.tools[self.solver._tool_index(k)].release(self.state.time)
         self.solver.set_tool_keys()
 
     def tool_force(self, k: int = 0):
