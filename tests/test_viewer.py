@@ -172,3 +172,86 @@ def test_playback_of_a_results_folder(chromium, tmp_path):
         browser.close()
     assert frac > 0.02
     v.server.stop()
+
+
+EXAMPLES = Path(__file__).parents[1] / "examples"
+
+GRASP_SCENE = """
+[mesh]
+primitive = "box"
+size = [0.02, 0.02, 0.02]
+cells = [4, 4, 4]
+translate = [0.0, 0.0, 0.01]
+[[material]]
+type = "neo-hookean"
+E = 2e4
+nu = 0.4
+density = 1000.0
+[solver]
+duration = 1.0
+damping = 20.0
+[[load]]
+type = "gravity"
+[[tool]]
+type = "plane"
+[[tool]]
+type = "box"
+name = "jaws"
+half_extents = [0.006, 0.006, 0.003]
+position = [0.0, 0.0, 0.023]
+"""
+
+
+def test_the_live_viewer_cuts_with_a_dragged_blade_and_resets():
+    """The viewer runs a scene with a blade (its keyframes cut the cantilever through), draws the
+    new topology, moves the blade where its gizmo is dragged (cutting on the way), and Reset
+    brings back the uncut model."""
+    from pliant.view.viewer import LiveViewer
+
+    v = LiveViewer(load_scene(EXAMPLES / "cut_cantilever.toml"), port=_free_port())
+    try:
+        n0 = v.model.n_nodes
+        with v.lock:
+            v.sim.run(until=0.3)
+        v.draw()
+        assert v.sim.model.n_nodes > n0 and v._surface[0] is v.sim.model
+        assert "cuts" in v.status.content
+        v.reset()
+        assert v.sim.model is v.model and v.sim.time == 0.0
+        # Drag the scalpel from its start straight down through the beam at x = 7 cm.
+        start = np.array([0.0725, 0.0, 0.02])
+        v.move_blade(0, start, v.scene.blades[0].keys[0][4:])
+        with v.lock:
+            v.sim.run(until=v.scene.blades[0].keys[-1][0])
+        v.move_blade(0, start - [0.0, 0.0, 0.06], v.scene.blades[0].keys[0][4:])
+        with v.lock:
+            v.sim.run(until=v.scene.blades[0].keys[-1][0] + 0.01)
+        assert v.sim.cutter.events and v.sim.model.n_nodes > n0
+        v.draw()
+    finally:
+        v.stop_event.set()
+        v.server.stop()
+
+
+def test_the_live_viewer_grasps_and_releases(tmp_path):
+    from pliant.view.viewer import LiveViewer
+
+    f = tmp_path / "grasp.toml"
+    f.write_text(GRASP_SCENE)
+    v = LiveViewer(load_scene(f), port=_free_port())
+    try:
+        assert list(v.grasp_buttons) == [1]  # the plane does not grasp
+        v.toggle_grasp(1)
+        assert v.grasp_buttons[1].label.startswith("Release")
+        with v.lock:
+            v.sim.run(steps=5)
+        assert set(v.sim.state.held.values()) == {1}
+        v.draw()
+        assert "held" in v.status.content
+        v.toggle_grasp(1)
+        with v.lock:
+            v.sim.run(steps=1)
+        assert v.sim.state.held == {}
+    finally:
+        v.stop_event.set()
+        v.server.stop()

@@ -341,9 +341,10 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                                        to_numpy(std::move(r.E), {M, 6}));
              })
         .def("set_tool_keys",
-             [](B& e, std::vector<std::vector<double>> keys, std::vector<std::vector<double>> grips) {
+             [](B& e, std::vector<std::vector<double>> keys, std::vector<std::vector<double>> grips,
+                std::vector<double> reach) {
                  try {
-                     e->set_tool_keys(keys, grips);
+                     e->set_tool_keys(keys, grips, reach);
                  } catch (const std::invalid_argument& x) {
                      throw nb::value_error(x.what());
                  }

@@ -63,9 +63,11 @@ public:
     virtual std::vector<double> tool_history() = 0;
     virtual ContactReport contact_report() = 0;
     /// Replace every tool's keyframes (8 numbers each: t, position (3), quaternion w x y z)
-    /// and every tool's grip times (closes, opens, closes…: times [s], ascending; empty: never).
+    /// and every tool's grip times (closes, opens, closes…: times [s], ascending; empty: never)
+    /// and grasping reach [m].
     virtual void set_tool_keys(const std::vector<std::vector<double>>& keys,
-                               const std::vector<std::vector<double>>& grips) = 0;
+                               const std::vector<std::vector<double>>& grips,
+                               const std::vector<double>& reach) = 0;
     /// Multiply every material's moduli by factor, relative to the model's.
     virtual void scale_materials(double factor) = 0;
     virtual std::string name() const = 0;

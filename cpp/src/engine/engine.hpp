@@ -102,7 +102,8 @@ public:
     std::vector<double> tool_history() override;
     ContactReport contact_report() override;
     void set_tool_keys(const std::vector<std::vector<double>>& keys,
-                       const std::vector<std::vector<double>>& grips) override;
+                       const std::vector<std::vector<double>>& grips,
+                       const std::vector<double>& reach) override;
     void scale_materials(double factor) override;
     std::string name() const override { return Dev::kName; }
     int threads() const override { return dev_.threads(); }

@@ -323,30 +323,34 @@ ContactReport Engine<T, Dev>::contact_report() {
 
 template <class T, class Dev>
 void Engine<T, Dev>::set_tool_keys(const std::vector<std::vector<double>>& keys,
-                                   const std::vector<std::vector<double>>& grips) {
-    if (keys.size() != tools_.size() || grips.size() != tools_.size())
-        throw std::invalid_argument("set_tool_keys: " + std::to_string(keys.size()) + " key lists and " +
-                                    std::to_string(grips.size()) +
-                                    " grip lists, expected one each per tool (" +
+                                   const std::vector<std::vector<double>>& grips,
+                                   const std::vector<double>& reach) {
+    if (keys.size() != tools_.size() || grips.size() != tools_.size() || reach.size() != tools_.size())
+        throw std::invalid_argument("set_tool_keys: " + std::to_string(keys.size()) + " key lists, " +
+                                    std::to_string(grips.size()) + " grip lists and " +
+                                    std::to_string(reach.size()) + " reaches, expected one each per tool (" +
                                     std::to_string(tools_.size()) + ")");
-    std::vector<double> times;
-    for (std::size_t k = 0; k < grips.size(); ++k) {
+    for (std::size_t k = 0; k < tools_.size(); ++k) {  // everything checked before anything changes
+        if (keys[k].empty() || keys[k].size() % 8)
+            throw std::invalid_argument("set_tool_keys: tool " + std::to_string(k) + " has " +
+                                        std::to_string(keys[k].size()) +
+                                        " numbers; expected 8 per keyframe (t, position, quaternion)");
         for (std::size_t j = 1; j < grips[k].size(); ++j)
             if (!(grips[k][j] > grips[k][j - 1]))
                 throw std::invalid_argument("set_tool_keys: tool " + std::to_string(k) +
                                             ": grip times must increase");
+    }
+    std::vector<double> times;
+    for (std::size_t k = 0; k < grips.size(); ++k) {
         tools_[k].grip_begin = static_cast<index_t>(times.size());
         tools_[k].grip_count = static_cast<index_t>(grips[k].size());
+        tools_[k].reach = reach[k];
         times.insert(times.end(), grips[k].begin(), grips[k].end());
     }
     if (times.size() > d_grips_.size()) d_grips_ = DeviceBuffer<double, Dev>(dev_, times.size());
     d_grips_.upload(times.data(), times.size());
     std::vector<double> all;
     for (std::size_t k = 0; k < keys.size(); ++k) {
-        if (keys[k].empty() || keys[k].size() % 8)
-            throw std::invalid_argument("set_tool_keys: tool " + std::to_string(k) + " has " +
-                                        std::to_string(keys[k].size()) +
-                                        " numbers; expected 8 per keyframe (t, position, quaternion)");
         tools_[k].key_begin = static_cast<index_t>(all.size() / 8);
         tools_[k].key_count = static_cast<index_t>(keys[k].size() / 8);
         all.insert(all.end(), keys[k].begin(), keys[k].end());

@@ -5,6 +5,7 @@ trajectories and force histories, and an embedded visual surface opened along th
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 from typing import Any
@@ -105,9 +106,9 @@ def cut(state, triangles, solver=None, faces=None) -> Cut:
     if solver is not None:  # the step stays below the cut body's own stable step (stability.py)
         from .stability import stable_step
 
-        new_solver = solver.over(
-            new_model, dt=min(solver.dt, STEP_SAFETY * stable_step(new_model, new_state))
-        )
+        # Moduli scaled by the solver (a stiffness slider) scale ω² as well.
+        dt_stable = stable_step(new_model, new_state) / math.sqrt(solver._material_scale)
+        new_solver = solver.over(new_model, dt=min(solver.dt, STEP_SAFETY * dt_stable))
     return Cut(new_model, new_state, new_solver, split.parent, split.faces, split.face_elements, len(crossed))
 
 

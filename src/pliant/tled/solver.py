@@ -146,7 +146,9 @@ class Solver:
         """Send the solver's tool trajectories (``solver.tools[k].keys``) and grasp times
         (``solver.tools[k].grips``) to its backend."""
         self._backend.set_tool_keys(
-            [t.key_array().tolist() for t in self.tools], [list(t.grips) for t in self.tools]
+            [t.key_array().tolist() for t in self.tools],
+            [list(t.grips) for t in self.tools],
+            [float(t.reach) for t in self.tools],
         )
 
     def scale_materials(self, factor: float):

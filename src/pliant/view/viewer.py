@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _core
+from ..contact import quat_from_matrix
 from ..errors import InputError, PliantError
 from ..io.files import read_meshio
 from ..mesh.topology import boundary_faces
@@ -64,19 +66,30 @@ class LiveViewer:
         import viser
 
         from ..tled import Simulation
+        from ..tled.model import _auto_threads
 
         self.scene = scene
-        self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads)
+        # The engine leaves one core to the drawing loop: on 2 cores the demo then keeps up with the
+        # wall clock (1 engine thread: simulated/wall 1.00, capacity 1.0-2.4x; 2 threads: 0.99, with
+        # the capacity dipping to 0.7x while a frame is drawn; docs/viewer.md).
+        auto = max(1, min(_auto_threads(scene.builder.n_elements), _core.max_threads() - 1))
+        self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads or auto)  # at reset
         # An interactive session may run for hours: keep the last 100,000 steps of tool forces.
         self.sim = Simulation(self.model, dt=scene.dt, safety=scene.safety, history_steps=100_000)
+        for blade in scene.blades:  # blades cut as the simulation runs (sim.model then changes)
+            self.sim.add_blade(blade)
+        self._solver0 = self.sim.solver
         self.dt0 = self.sim.solver.dt
-        self.surface = _Surface(self.model.tets)
+        self._dt_model = self.model  # the model dt0 belongs to (a cut may lower the step)
+        self._surface = (self.model, _Surface(self.model.tets))
         self.embedding = None  # the fine surface of the scene, when it has one
         if scene.meta.get("embed_surface"):
             from ..mesh import embed_surface
 
             Ve, Fe = scene.meta["embed_surface"]
             self.embedding = embed_surface(self.model.reference_positions, self.model.tets, Ve, Fe)
+        if self.sim.cutter is not None:
+            self.sim.cutter.embedding = self.embedding  # it opens along the cuts
         self.lock = threading.Lock()
         self.playing = True
         self.stop_event = threading.Event()
@@ -102,6 +115,12 @@ class LiveViewer:
         self.field_dropdown = g.add_dropdown("Colour by", ["von Mises stress [Pa]", "displacement [m]"])
         self.stiffness = g.add_slider("Stiffness × (live)", 0.25, 4.0, 0.05, 1.0)
         self.damping = g.add_slider("Damping α [1/s] (live)", 0.0, 100.0, 0.5, float(self.sim.solver.damping))
+        self.grasp_buttons = {}
+        for k, tool in enumerate(self.model.tools):
+            if tool.kind != _core.ToolKind.Plane:
+                button = g.add_button(f"Grasp with {tool.name}")
+                button.on_click(lambda _, k=k: self.toggle_grasp(k))
+                self.grasp_buttons[k] = button
         self.status = g.add_markdown("")
         self.colourbar = g.add_markdown("")
         self.force_text = g.add_markdown("")
@@ -118,12 +137,7 @@ class LiveViewer:
 
         @self.reset_button.on_click
         def _(_):
-            with self.lock:
-                self.sim.state = self.model.state()
-                self.error = ""
-                for k, t in enumerate(self.sim.solver.tools):
-                    t.keys = [k0.copy() for k0 in self._initial_keys[k]]
-                self.sim.solver.set_tool_keys() if self.model.tools else None
+            self.reset()
 
         @self.field_dropdown.on_update
         def _(_):
@@ -136,6 +150,38 @@ class LiveViewer:
                 # Stiffer material, faster waves: the stable step shrinks as 1/sqrt(factor).
                 self.sim.solver.dt = self.dt0 / np.sqrt(max(1.0, float(self.stiffness.value)))
 
+    def reset(self):
+        """Back to the scene's model and state at t = 0: cuts undone, tools, blades and grasps as
+        the scene has them."""
+        with self.lock:
+            self.sim.model, self.sim.solver = self.model, self._solver0
+            self.sim.state = self.model.state()
+            self.dt0, self._dt_model = self._solver0.dt, self.model
+            self.error = ""
+            for k, t in enumerate(self.sim.solver.tools):
+                t.keys = [k0.copy() for k0 in self._initial_keys[k]]
+                t.grips = list(self._initial_grips[k])
+            self.sim.solver.set_tool_keys() if self.model.tools else None
+            for j, b in enumerate(self.scene.blades):
+                b.keys = [k0.copy() for k0 in self._initial_blade_keys[j]]
+            if self.sim.cutter is not None:
+                self.sim.cutter.embedding, self.sim.cutter.events = self.embedding, []
+
+    def toggle_grasp(self, k: int):
+        """What tool k's grasp button does: close it (it holds the surface nodes within its reach,
+        or half the smallest element altitude if it has none) or open it, from the next step."""
+        with self.lock:
+            tool = self.sim.solver.tools[k]
+            try:
+                if len(tool.grips) % 2:
+                    self.sim.release(k)
+                else:
+                    self.sim.grasp(k, reach=tool.reach or 0.5 * self.model.min_altitude)
+            except InputError as e:  # a grasp the scene has scheduled later
+                self.error = str(e)
+                return
+            self.grasp_buttons[k].label = f"{'Release' if len(tool.grips) % 2 else 'Grasp with'} {tool.name}"
+
         @self.damping.on_update
         def _(_):
             with self.lock:
@@ -144,11 +190,13 @@ class LiveViewer:
     def _build_scene(self):
         sc = self.server.scene
         self._initial_keys = [[k.copy() for k in t.keys] for t in self.sim.solver.tools]
+        self._initial_grips = [list(t.grips) for t in self.sim.solver.tools]
+        self._initial_blade_keys = [[k.copy() for k in b.keys] for b in self.scene.blades]
         self.controls = []
         ext = float(np.ptp(self.model.reference_positions, axis=0).max())
         for k, tool in enumerate(self.model.tools):
             R, p = tool.pose(0.0)
-            from ..contact import Box, Capsule, Plane, Sphere, quat_from_matrix
+            from ..contact import Box, Capsule, Plane, Sphere
 
             q = quat_from_matrix(R)
             name = f"/tools/{k}"
@@ -166,6 +214,38 @@ class LiveViewer:
             ctrl.on_update(lambda _, k=k, c=ctrl: self._dragged(k, c))
             self.controls.append(ctrl)
         self._last_drag = [0.0] * len(self.model.tools)
+        self.blade_controls = []
+        for j, blade in enumerate(self.scene.blades):  # a thin plate: the edge at its local z = 0
+            R, p = blade.pose(0.0)
+            ctrl = sc.add_transform_controls(
+                f"/blades/{j}", scale=0.5 * ext, position=p, wxyz=quat_from_matrix(R)
+            )
+            depth = max(blade.depth, 0.02 * blade.length)
+            sc.add_box(
+                f"/blades/{j}/shape",
+                dimensions=(blade.length, 0.005 * blade.length, depth),
+                position=(0.0, 0.0, depth / 2),
+                color=(150, 150, 170),
+            )
+            ctrl.on_update(lambda _, j=j, c=ctrl: self._dragged_blade(j, c))
+            self.blade_controls.append(ctrl)
+        self._last_blade_drag = [0.0] * len(self.scene.blades)
+
+    def _dragged_blade(self, j, ctrl):
+        self._last_blade_drag[j] = time.perf_counter()
+        self.move_blade(j, ctrl.position, ctrl.wxyz)
+
+    def move_blade(self, j: int, position, wxyz=(1.0, 0.0, 0.0, 0.0)):
+        """What dragging blade j's gizmo does: the blade moves there, no faster than 0.1 of the
+        smallest element altitude per step (so that it skips no element), cutting as it goes."""
+        with self.lock:
+            blade, t, dt = self.scene.blades[j], self.sim.time, self.sim.dt
+            R, p = blade.pose(t)
+            target = np.asarray(position, float)
+            duration = max(dt, float(np.linalg.norm(target - p)) / (0.1 * self.sim.model.min_altitude / dt))
+            blade.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
+            blade._fixed = False
+            blade.at(t + duration, target, np.asarray(wxyz, float))
 
     def _dragged(self, k, ctrl):
         self._last_drag[k] = time.perf_counter()
@@ -198,6 +278,9 @@ class LiveViewer:
                     self.play_button.label = "Play"
                     continue
                 el = time.perf_counter() - t0
+                if self.sim.model is not self._dt_model:  # a cut may have lowered the step
+                    self.dt0 = self.sim.solver.dt * np.sqrt(max(1.0, float(self.stiffness.value)))
+                    self._dt_model = self.sim.model
             self.steps_per_second = n / max(el, 1e-9)
             self.realtime_factor = self.steps_per_second * dt
             time.sleep(0.001)
@@ -207,53 +290,54 @@ class LiveViewer:
         import trimesh
 
         with self.lock:
+            model = self.sim.model  # after a cut, a new topology
             P = self.sim.positions
-            vm = (
-                self.model.element_results(self.sim.state)["von_mises"]
-                if self.field.startswith("von")
-                else None
-            )
+            vm = model.element_results(self.sim.state)["von_mises"] if self.field.startswith("von") else None
             u = self.sim.displacements
             t = self.sim.time
-            forces = [self.sim.tool_force(k) for k in range(len(self.model.tools))]
+            forces = [self.sim.tool_force(k) for k in range(len(model.tools))]
             poses = [tool.pose(t) for tool in self.sim.solver.tools]
-        if self.embedding is not None:  # the fine surface follows the tets
-            emb = self.embedding
-            V, F = emb.positions(self.model.tets, P), emb.faces
-            vals = (
-                vm[emb.tet] if vm is not None else np.linalg.norm(emb.positions(self.model.tets, u), axis=1)
-            )
+            blade_poses = [b.pose(t) for b in self.scene.blades]
+            emb = self.sim.cutter.embedding if self.sim.cutter is not None else self.embedding
+            held = len(self.sim.state.held) if model.tools else 0
+            cuts = len(self.sim.cutter.events) if self.sim.cutter is not None else 0
+        if self._surface[0] is not model:
+            self._surface = (model, _Surface(model.tets))
+        surface = self._surface[1]
+        if emb is not None:  # the fine surface follows the tets
+            V, F = emb.positions(model.tets, P), emb.faces
+            vals = vm[emb.tet] if vm is not None else np.linalg.norm(emb.positions(model.tets, u), axis=1)
         else:
-            V, F = P[self.surface.nodes], self.surface.faces
-            vals = (
-                self.surface.node_values(vm)
-                if vm is not None
-                else np.linalg.norm(u[self.surface.nodes], axis=1)
-            )
+            V, F = P[surface.nodes], surface.faces
+            vals = surface.node_values(vm) if vm is not None else np.linalg.norm(u[surface.nodes], axis=1)
         lo, hi = float(vals.min()), float(vals.max())
         mesh = trimesh.Trimesh(V, F, process=False, vertex_colors=_colours(vals, lo, hi))
         self.server.scene.add_mesh_trimesh("/body", mesh)
         self.status.content = (
             f"t = {t:.3f} s · {self.steps_per_second:,.0f} steps/s · "
             f"real-time factor {self.realtime_factor:.2f}"
+            + (f" · {cuts} cuts, {model.n_nodes:,} nodes" if self.scene.blades else "")
+            + (f" · {held} nodes held" if held else "")
             + (f"  \n**stopped:** {self.error}" if self.error else "")
         )
         self.colourbar.content = f"{self.field}: {lo:.3g} (dark blue) … {hi:.3g} (yellow)"
         lines = []
         ext = float(np.ptp(self.model.reference_positions, axis=0).max())
-        from ..contact import quat_from_matrix
-
         for k, ((f, _), (R, p)) in enumerate(zip(forces, poses)):
             ctrl = self.controls[k]
             if ctrl is not None and time.perf_counter() - self._last_drag[k] > 1.0:
                 ctrl.position, ctrl.wxyz = tuple(p), tuple(quat_from_matrix(R))  # follow keyframes
-            lines.append(f"tool {k} ({self.model.tools[k].name}): |F| = {np.linalg.norm(f):.3g} N")
+            lines.append(f"tool {k} ({model.tools[k].name}): |F| = {np.linalg.norm(f):.3g} N")
             fmax = max(np.linalg.norm(f), 1e-12)
             seg = np.array([[p, p + 0.3 * ext * f / fmax]])
             self.server.scene.add_line_segments(
                 f"/forces/{k}", seg, (255, 60, 60), thickness=3, thickness_units="screen"
             )
         self.force_text.content = "  \n".join(lines)
+        for j, (R, p) in enumerate(blade_poses):
+            if time.perf_counter() - self._last_blade_drag[j] > 1.0:
+                ctrl = self.blade_controls[j]
+                ctrl.position, ctrl.wxyz = tuple(p), tuple(quat_from_matrix(R))  # follow keyframes
 
     def serve(self, duration: float | None = None):
         """Run the simulation thread and the drawing loop (until Ctrl-C or ``duration`` [s])."""
@@ -301,8 +385,8 @@ class PlaybackViewer:
         first = read_meshio(self.files[0], "result frame")
         if "tetra" not in first.cells_dict:
             raise InputError(f"{self.files[0]}: no tetrahedra; expected a pliant result frame")
-        self.X = first.points
-        self.surface = _Surface(first.cells_dict["tetra"])
+        self.X, self._tets = first.points, first.cells_dict["tetra"]
+        self.surface = _Surface(self._tets)  # of the frame shown (frames after a cut differ)
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         _frame_camera(self.server, self.X)
         self.slider = self.server.gui.add_slider("frame", 0, len(self.files) - 1, 1, 0)
@@ -314,14 +398,20 @@ class PlaybackViewer:
         import trimesh
 
         m = read_meshio(self.files[i], "result frame")
-        u = m.point_data.get("displacement", np.zeros_like(self.X))
+        X = m.points
+        tets = m.cells_dict.get("tetra")
+        if tets is None:
+            raise InputError(f"{self.files[i]}: no tetrahedra; expected a pliant result frame")
+        if len(X) != len(self.X) or not np.array_equal(tets, self._tets):  # a cut: a new topology
+            self.X, self._tets, self.surface = X, tets, _Surface(tets)
+        u = m.point_data.get("displacement", np.zeros_like(X))
         vm = m.cell_data_dict.get("von_mises", {}).get("tetra")
         vals = (
             self.surface.node_values(vm) if vm is not None else np.linalg.norm(u[self.surface.nodes], axis=1)
         )
         lo, hi = float(vals.min()), float(vals.max())
         mesh = trimesh.Trimesh(
-            (self.X + u)[self.surface.nodes],
+            (X + u)[self.surface.nodes],
             self.surface.faces,
             process=False,
             vertex_colors=_colours(vals, lo, hi),
