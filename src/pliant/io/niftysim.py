@@ -1,8 +1,9 @@
 """NiftySim model import (XML, T4 and T4ANP elements): nodes, elements, element sets with their
 materials, Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
 analytical rigid contacts (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and
-motions), fixed closed ContactSurfaces, Output frequency and SystemParams. Anything else is
-refused by name (``unsupported`` lists what may be skipped knowingly).
+motions), fixed closed ContactSurfaces, SubModels (merged into one model, with
+SubModelNodeMergerDistance: niftysim_submodels.py), Output frequency and SystemParams. Anything
+else is refused by name (``unsupported`` lists what may be skipped knowingly).
 
 Format: NiftySim user guide v2.4 (Johnsen et al. 2015). Materials: NH = decoupled Neo-Hookean
 (μ, K) — pliant's NeoHookean; PY, AB and TI (App. A.1) — Polynomial, ArrudaBoyce and
@@ -183,6 +184,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
             f"unsupported NiftySim feature {name}: {why}; pass --ignore {name} to skip it knowingly", f, name
         )
 
+    root = _flatten(root, f)
     for child in root:
         if child.tag not in _KNOWN_TOP:
             unsupported(child.tag, "not implemented in pliant")
@@ -229,6 +231,26 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     )
     scene.meta["mesh_source"] = f
     return scene
+
+
+def _flatten(root, f: str):
+    """The model with its <SubModel>s merged into one (niftysim_submodels.py)."""
+    from .niftysim_submodels import flatten_submodels
+
+    def sub_mesh(el, key):
+        try:
+            return _mesh(el, f)
+        except NiftySimError as e:
+            where = f + (f" [{e.key}]" if e.key else "")
+            raise NiftySimError(str(e)[len(where) + 2 :], f, f"{key}/{e.key}" if e.key else key) from None
+
+    return flatten_submodels(
+        root,
+        f,
+        sub_mesh,
+        lambda el, key, dtype=float: _numbers(el, f, key, dtype),
+        lambda message, key: NiftySimError(message, f, key),
+    )
 
 
 def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:

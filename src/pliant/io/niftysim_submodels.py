@@ -1,0 +1,195 @@
+"""NiftySim <SubModel>s (user guide v2.4 §3.7): several models, each with its mesh, element sets
+and constraints, assembled into one, as NiftySim does it (tledModel::LoadFromXML with
+tledSubModelManager): the model's mesh is the sub-models' meshes one after the other, their
+element sets offset to the merged element numbering and their constraints' nodes (and pressure
+faces) mapped to the merged node numbering, appended after the model's own element sets and
+constraints (which refer to the merged mesh). With <SubModelNodeMergerDistance> d, each node of a
+later sub-mesh is the first node already in the mesh closer than d [m], if there is one (meshes
+assembled from blocks share their interface nodes). A sub-model's <SystemParams> is ignored.
+
+The result is an ordinary <Model> element: the importer reads it as it reads any model, with its
+checks and messages (the sub-models named in them by their index)."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+__all__ = ["flatten_submodels"]
+
+_SUB_CHILDREN = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams"}
+
+
+def flatten_submodels(root: ET.Element, f: str, mesh, numbers, error) -> ET.Element:
+    """``root`` with its sub-models merged (``root`` itself if it has none). ``mesh(el, key)`` reads
+    an element's <Nodes>/<Elements> (the importer's reader), ``numbers(el, key, dtype)`` its
+    numbers, ``error(message, key)`` makes the importer's error naming this file."""
+    subs = root.findall("SubModel")
+    if not subs:
+        return root
+    d = _merge_distance(root, numbers, error)
+    flat = ET.Element("Model", root.attrib)
+    for child in root:
+        if child.tag not in ("SubModel", "SubModelNodeMergerDistance", "Nodes", "Elements"):
+            flat.append(child)  # the model's own sets and constraints come first (NiftySim appends)
+    X_all = np.zeros((0, 3))
+    T_all: list[np.ndarray] = []
+    etype = None
+    for i, sm in enumerate(subs):
+        key = f"SubModel[{i}]"
+        for child in sm:
+            if child.tag not in _SUB_CHILDREN:
+                raise error(
+                    f"<{child.tag}> in a sub-model: NiftySim reads a sub-model's mesh, element "
+                    "sets and constraints only; move it to the model",
+                    f"{key}/{child.tag}",
+                )
+        X, T, et = mesh(sm, key)
+        if etype is not None and et != etype:
+            raise error(f"Elements Type={et}, but an earlier sub-model has {etype}: one element type", key)
+        etype = et
+        node_map, X_all = _add_nodes(X_all, X, d)
+        first = sum(len(t) for t in T_all)
+        T_all.append(node_map[T])
+        for k, es in enumerate(sm.findall("ElementSet")):
+            flat.append(_offset_set(es, len(T), first, numbers, error, f"{key}/ElementSet[{k}]"))
+        for k, c in enumerate(sm.findall("Constraint")):
+            flat.append(_mapped_constraint(c, node_map, X, T, numbers, error, f"{key}/Constraint[{k}]"))
+    nodes = ET.SubElement(flat, "Nodes", {"DOF": "3", "NumNodes": str(len(X_all))})
+    nodes.text = "\n".join(" ".join(repr(float(v)) for v in x) for x in X_all)
+    T = np.concatenate(T_all)
+    elements = ET.SubElement(flat, "Elements", {"Type": etype, "NumEls": str(len(T))})
+    elements.text = "\n".join(" ".join(str(int(v)) for v in t) for t in T)
+    return flat
+
+
+def _merge_distance(root, numbers, error) -> float:
+    """<SubModelNodeMergerDistance> [m], or −1 (no merging) without it."""
+    el = root.find("SubModelNodeMergerDistance")
+    if el is None:
+        return -1.0
+    v = numbers(el, "SubModelNodeMergerDistance", float)
+    if v.size != 1 or not np.isfinite(v[0]) or v[0] < 0:
+        raise error(
+            "<SubModelNodeMergerDistance>: expected one distance >= 0 [m]", "SubModelNodeMergerDistance"
+        )
+    return float(v[0])
+
+
+def _add_nodes(X_all: np.ndarray, X: np.ndarray, d: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each node of X becomes the first node of the mesh so far closer than d (with d >= 0), else a
+    new one. Returns the sub-mesh's node → mesh node map and the mesh's nodes."""
+    n0 = len(X_all)
+    if d < 0 or n0 == 0:  # NiftySim merges into nodes of earlier sub-meshes only, once there are some
+        return np.arange(n0, n0 + len(X)), np.vstack([X_all, X])
+    from scipy.spatial import cKDTree
+
+    before = cKDTree(X_all) if n0 else None
+    own = cKDTree(X)
+    node_map = np.empty(len(X), np.int64)
+    added: list[np.ndarray] = []
+    for j, x in enumerate(X):
+        near = before.query_ball_point(x, d, p=2.0) if before is not None else []
+        hits = [i for i in near if np.linalg.norm(X_all[i] - x) < d]
+        if hits:
+            node_map[j] = min(hits)
+            continue
+        earlier = [k for k in own.query_ball_point(x, d, p=2.0) if k < j and np.linalg.norm(X[k] - x) < d]
+        new_of = [node_map[k] for k in earlier if node_map[k] >= n0]
+        if new_of:  # an earlier node of this sub-mesh, itself new
+            node_map[j] = min(new_of)
+            continue
+        node_map[j] = n0 + len(added)
+        added.append(x)
+    return node_map, np.vstack([X_all, *added]) if added else X_all
+
+
+def _offset_set(es: ET.Element, M: int, first: int, numbers, error, key: str) -> ET.Element:
+    """A sub-model's element set in the merged numbering (its Size shorthands expanded locally)."""
+    size = es.get("Size", "")
+    listed = numbers(es, key, np.int64) if (es.text or "").strip() else np.zeros(0, np.int64)
+    if size == "all":
+        elems = np.arange(M)
+    else:
+        try:
+            n = int(size)
+        except ValueError:
+            raise error(f"<ElementSet Size={size[:40]!r}>: expected a count or 'all'", key) from None
+        if listed.size == n:
+            elems = listed
+        elif listed.size <= 1 and n >= 0:
+            elems = np.arange(
+                int(listed[0]) if listed.size else 0, (int(listed[0]) if listed.size else 0) + n
+            )
+        else:
+            raise error(f"<ElementSet Size={n}> lists {listed.size} elements", key)
+    if elems.size and (elems.min() < 0 or elems.max() >= M):
+        raise error(f"element index out of range 0..{M - 1} of its sub-model", key)
+    out = ET.Element("ElementSet", dict(es.attrib, Size=str(elems.size)))
+    out.text = " ".join(str(int(e) + first) for e in elems)
+    out.extend(list(es))
+    return out
+
+
+def _mapped_constraint(c: ET.Element, node_map, X, T, numbers, error, key: str) -> ET.Element:
+    """A sub-model's constraint with its nodes (or pressure faces) in the merged numbering; a
+    pressure on the sub-model's whole surface or on its facets facing a normal becomes the list of
+    those facets, chosen on the sub-model's own surface (as NiftySim resolves it)."""
+    out = ET.Element("Constraint", dict(c.attrib))
+    for child in c:
+        if child.tag in ("Nodes", "Faces"):
+            continue
+        out.append(child)
+    n = len(node_map)
+
+    def mapped(ids: np.ndarray, what: str) -> str:
+        if ids.size and (ids.min() < 0 or ids.max() >= n):
+            raise error(f"<{what}>: node index out of range 0..{n - 1} of its sub-model", key)
+        return " ".join(str(int(v)) for v in node_map[ids])
+
+    if c.get("Type") == "Pressure":
+        faces = _local_faces(c, X, T, numbers, error, key)
+        if faces is not None:
+            fe = ET.SubElement(out, "Faces")
+            fe.text = mapped(faces.ravel(), "Faces")
+            out.set("NumFaces", str(len(faces)))
+            out.set("SpecType", "FACES")
+            out.attrib.pop("FaceType", None)
+        return out
+    nodes = c.find("Nodes")
+    if nodes is not None:
+        ne = ET.SubElement(out, "Nodes", dict(nodes.attrib))
+        ne.text = mapped(numbers(nodes, f"{key}/Nodes", np.int64), "Nodes")
+    return out
+
+
+def _local_faces(c, X, T, numbers, error, key):
+    """The pressure facets of a sub-model's constraint in its own numbering, or None to keep it
+    as it is (the importer then reports what is wrong with it)."""
+    from ..mesh.topology import boundary_faces
+
+    if c.get("SpecType") == "NORMAL" or c.get("NumFaces") == "all":
+        B, _ = boundary_faces(T)
+        if c.get("NumFaces") == "all":
+            return B
+        nrm = c.find("Normal")
+        if nrm is None:
+            return None
+        v = numbers(nrm, f"{key}/Normal", float)
+        if v.size != 3 or not np.linalg.norm(v) > 0:
+            return None
+        try:
+            angle = float(nrm.get("ToleranceAngle", "0"))
+        except ValueError:
+            return None
+        area = np.cross(X[B[:, 1]] - X[B[:, 0]], X[B[:, 2]] - X[B[:, 0]])
+        cosang = area @ (v / np.linalg.norm(v)) / np.linalg.norm(area, axis=1)
+        return B[cosang >= np.cos(np.radians(angle)) - 1e-12]
+    fe = c.find("Faces")
+    if fe is None:
+        return None
+    faces = numbers(fe, f"{key}/Faces", np.int64)
+    if faces.size % 3:
+        raise error(f"<Faces>: {faces.size} indices, not a multiple of 3", key)
+    return faces.reshape(-1, 3)
