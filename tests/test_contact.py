@@ -178,3 +178,35 @@ def test_tool_restricted_to_a_node_set():
     t, a = sim.time + sim.solver.dt / 2, 20.0
     drop = G / a * (t - (1 - math.exp(-a * t)) / a)
     np.testing.assert_allclose(second[:, 2] - X2[:, 2], -drop, atol=1e-6)
+
+
+def _box_distance(p, lo, hi):
+    """Closed form: the distance from points p (n, 3) outside an axis-aligned box to it."""
+    return np.linalg.norm(np.maximum(np.maximum(lo - p, p - hi), 0.0), axis=1)
+
+
+def test_a_mesh_tool_is_far_from_points_far_outside_its_grid(backend):
+    """A MeshTool's grid covers its surface and 4 cells more. Points beyond it are at least their
+    distance to the grid's box away (the engine once extrapolated the trilinear field there, which
+    went negative 10 mm out: spurious contact, then a blow-up, then a crash on the NaN); a body
+    far from the tool is not touched."""
+    from pliant.contact import MeshTool
+    from pliant.mesh import box_tets
+    from pliant.mesh.topology import boundary_faces
+
+    lo, hi = np.array([0.005, 0.005, 0.011]), np.array([0.015, 0.015, 0.021])
+    V, T = box_tets(hi - lo, (1, 1, 1), origin=lo)
+    F, _ = boundary_faces(T)
+    tool = MeshTool(V, F)
+    X, Tb = box_tets((0.02, 0.02, 0.01), (4, 4, 2))
+    phi = tool.signed_distance(X)
+    exact = _box_distance(X, lo, hi)
+    # Never closer than the box really is, up to the grid's own error (a cell on its diagonal).
+    assert np.all(phi >= exact - math.sqrt(3) * tool.spacing) and phi.min() > 0
+    b = pl.ModelBuilder()
+    b.add_mesh(X, Tb)
+    b.set_material(pl.NeoHookean(E=1e4, nu=0.4), density=1000.0)
+    b.add_tool(tool)
+    sim = pl.Simulation(b.finalize("float64", backend=backend))
+    sim.run(steps=50)
+    assert np.all(sim.displacements == 0.0) and np.all(sim.contact_report().node_tool < 0)

@@ -116,7 +116,7 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path, etyp
             dict(extra_constraint='<Constraint Type="Traction" NumFaces="all" LoadShape="RAMP"/>'),
             "Constraint Type=Traction",
         ),
-        (dict(extra_constraint="<ContactSurface><Motion/></ContactSurface>"), "ContactSurface/Motion"),
+        (dict(extra_constraint="<ContactSurface><Friction/></ContactSurface>"), "ContactSurface/Friction"),
         (
             dict(
                 extra_constraint="<ContactCylinder><Origin>0 0 0</Origin><Axis>0 0 1</Axis><Radius>0.01"

@@ -26,7 +26,7 @@ PLIANT_HD index_t node_bits(index_t tools) {
 /// Plane: the half-space z' ≤ 0 of the tool frame (outward normal +z'). Sphere: radius p[0].
 /// Capsule: segment from (0,0,−p[1]) to (0,0,+p[1]) in the tool frame, radius p[0]. Cylinder: the
 /// same axis and radius with flat ends. Box: half extents p[0..2]. Grid: signed-distance grid
-/// (origin p[0..2], spacing p[3], dims in grid_dims).
+/// (origin p[0..2], spacing p[3], dims in grid_dims; the surface lies inside it, with a margin).
 struct RigidTool {
     ToolKind kind;
     double p[4];
@@ -177,13 +177,25 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
         }
         default: {  // Grid
             const index_t nx = tl.grid_dims[0], ny = tl.grid_dims[1], nz = tl.grid_dims[2];
-            double g[3];
+            double g[3], off[3], off2 = 0.0;
             index_t i0[3];
             const index_t dims[3] = {nx, ny, nz};
             for (int c = 0; c < 3; ++c) {
                 g[c] = (y[c] - tl.p[c]) / tl.p[3];
+                if (!std::isfinite(g[c])) {  // a non-finite position: no contact (the check reports it)
+                    n[0] = 0.0;
+                    n[1] = 0.0;
+                    n[2] = 1.0;
+                    return INFINITY;
+                }
+                // Outside the grid (which holds the surface with a margin), the point is clamped
+                // onto the grid's box and its distance to the box added below: extrapolating the
+                // trilinear field far beyond its last cell is not a distance, and can be negative.
+                const double gc = g[c] < 0.0 ? 0.0 : (g[c] > dims[c] - 1 ? double(dims[c] - 1) : g[c]);
+                off[c] = (g[c] - gc) * tl.p[3];
+                off2 += off[c] * off[c];
+                g[c] = gc;
                 double f = std::floor(g[c]);
-                if (f < 0.0) f = 0.0;
                 if (f > dims[c] - 2) f = dims[c] - 2;
                 i0[c] = static_cast<index_t>(f);
                 g[c] -= f;
@@ -205,6 +217,11 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
                         lerp(v[1][1][0] - v[1][0][0], v[1][1][1] - v[1][0][1], z), x);
             n[2] = lerp(lerp(v[0][0][1] - v[0][0][0], v[0][1][1] - v[0][1][0], yy),
                         lerp(v[1][0][1] - v[1][0][0], v[1][1][1] - v[1][1][0], yy), x);
+            if (off2 > 0.0) {  // outside the grid: at least its distance to the grid's box
+                const double d = std::sqrt(off2);
+                for (int c = 0; c < 3; ++c) n[c] = off[c] / d;
+                return d + (phi > 0.0 ? phi : 0.0);
+            }
             const double r = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             if (r > 0.0) {
                 n[0] /= r;

@@ -277,7 +277,9 @@ class Box(RigidTool):
 
 class MeshTool(RigidTool):
     """Any closed triangle mesh (vertices [m] in the tool frame, faces), through a signed-distance
-    grid of spacing ``spacing`` [m] (default: 1/64 of its largest extent) interpolated trilinearly."""
+    grid of spacing ``spacing`` [m] (default: 1/64 of its largest extent) interpolated trilinearly;
+    beyond the grid (the surface's box and 4 cells more), the distance to the grid's box is added
+    to the value at its nearest point."""
 
     kind = _core.ToolKind.Grid
 
@@ -298,8 +300,15 @@ class MeshTool(RigidTool):
         return list(self.values.shape), self.values.ravel()
 
     def _sdf_local(self, y):
+        """As the engine (contact.hpp, tool_sdf): trilinear inside the grid; outside it, the
+        value at the nearest point of the grid's box plus the distance to that box."""
         from scipy.interpolate import RegularGridInterpolator
 
         axes = [self.origin[d] + self.spacing * np.arange(self.values.shape[d]) for d in range(3)]
-        f = RegularGridInterpolator(axes, self.values, bounds_error=False, fill_value=None)
-        return f(y)
+        f = RegularGridInterpolator(axes, self.values)
+        y = np.asarray(y, float)
+        lo, hi = np.array([a[0] for a in axes]), np.array([a[-1] for a in axes])
+        yc = np.clip(y, lo, hi)
+        out = np.linalg.norm(y - yc, axis=1)
+        phi = f(yc)
+        return np.where(out > 0, out + np.maximum(phi, 0.0), phi)

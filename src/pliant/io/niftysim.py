@@ -1,7 +1,7 @@
 """NiftySim model import (XML, T4 and T4ANP elements): nodes, elements, element sets with their
 materials, Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
 analytical rigid contacts (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and
-motions), fixed closed ContactSurfaces, SubModels (merged into one model, with
+motions), closed ContactSurfaces (fixed or moving, with SlvNodes), SubModels (merged into one model, with
 SubModelNodeMergerDistance: niftysim_submodels.py), Output frequency and SystemParams. Anything
 else is refused by name (``unsupported`` lists what may be skipped knowingly).
 
@@ -213,7 +213,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     with _named(f, "ContactPlate/ContactCylinder/ContactUSProbe"):
         _rigid_contacts(root, b, total, f, unsupported, warnings)
     with _named(f, "ContactSurface"):
-        _rigid_surfaces(root, b, path, f, unsupported)
+        _rigid_surfaces(root, b, path, total, f, unsupported)
 
     out_every = None
     for o in root.findall("Output"):
@@ -586,18 +586,21 @@ def _pressure(c, b: ModelBuilder, T: np.ndarray, shapes: dict, f: str, key: str,
         raise NiftySimError(str(e), f, key) from None
 
 
-def _rigid_surfaces(root, b: ModelBuilder, path: Path, f: str, unsupported) -> None:
-    """<ContactSurface> (user guide v2.4 §3.9.2): a fixed rigid triangle surface, inline (<Nodes>,
+def _rigid_surfaces(root, b: ModelBuilder, path: Path, total: float, f: str, unsupported) -> None:
+    """<ContactSurface> (user guide v2.4 §3.9.2): a rigid triangle surface, inline (<Nodes>,
     <Elements Type="T3">) or from <VTKSurface Type="T3"> (a path relative to the model file), as a
-    pliant MeshTool (signed-distance grid: the surface must be closed). Frictionless."""
+    pliant MeshTool (signed-distance grid: the surface must be closed). Frictionless. With
+    <Motion>s it moves (_surface_motion); with <SlvNodes> it meets only those nodes."""
     from ..contact import MeshTool
     from ..mesh import check_surface, read_surface
 
     for k, el in enumerate(root.findall("ContactSurface")):
         key = f"ContactSurface[{k}]"
         for child in el:
-            if child.tag not in ("Nodes", "Elements", "VTKSurface"):
-                unsupported(f"ContactSurface/{child.tag}", "pliant imports fixed rigid surfaces")
+            if child.tag not in ("Nodes", "Elements", "VTKSurface", "Motion", "SlvNodes"):
+                unsupported(
+                    f"ContactSurface/{child.tag}", "pliant imports rigid surfaces, their Motion and SlvNodes"
+                )
                 return
         vtk = el.find("VTKSurface")
         try:
@@ -610,6 +613,8 @@ def _rigid_surfaces(root, b: ModelBuilder, path: Path, f: str, unsupported) -> N
                     raise NiftySimError("ContactSurface needs <VTKSurface> or <Nodes> and <Elements>", f, key)
                 V = _numbers(ne, f, f"{key}/Nodes").reshape(-1, 3)
                 F = _numbers(ee, f, f"{key}/Elements", np.int64).reshape(-1, 3)
+        except NiftySimError:
+            raise
         except (InputError, ValueError) as e:
             raise NiftySimError(f"ContactSurface: {e}", f, key) from None
         if not check_surface(V, F).watertight:
@@ -619,7 +624,59 @@ def _rigid_surfaces(root, b: ModelBuilder, path: Path, f: str, unsupported) -> N
                 f,
                 key,
             )
-        b.add_tool(MeshTool(V, F, name=f"niftysim {key}"))
+        tool = MeshTool(V, F, name=f"niftysim {key}")
+        for t, position, q in _surface_motion(el, total, f, key):
+            tool.at(t, position, q)
+        slv = el.find("SlvNodes")
+        with _named(f, f"{key}/SlvNodes"):
+            b.add_tool(tool, nodes=None if slv is None else _numbers(slv, f, f"{key}/SlvNodes", np.int64))
+
+
+def _surface_motion(el, total: float, f: str, key: str) -> list:
+    """A moving ContactSurface's keyframes (time [s], position [m], quaternion): NiftySim
+    (tledMovingRigidContactSurface) moves its vertices y to R(s)(y − c) + c + s·t at the fraction
+    s = time/TotalTime of the analysis, with <Motion Type="Translation"> t (3 numbers [m]) and
+    <Motion Type="Rotation"> the total angles (αx, αy, αz) [rad] then the centre c [m], R(s) =
+    Rz(s αz) Ry(s αy) Rx(s αx). A pliant tool's pose maps y to R y + p: p = c + s·t − R c; sampled
+    at 101 keyframes (nlerp between them: within 1e-5 rad of the path for total angles up to 1
+    rad). No <Motion>: no keyframes (a fixed surface)."""
+    from ..contact import quat_from_matrix
+
+    t_total, angles, centre = np.zeros(3), np.zeros(3), np.zeros(3)
+    motions = el.findall("Motion")
+    for m in motions:
+        kind = m.get("Type")
+        v = _numbers(m, f, f"{key}/Motion")
+        if kind == "Translation" and v.size == 3:
+            t_total = v
+        elif kind == "Rotation" and v.size == 6:
+            angles, centre = v[:3], v[3:]
+        else:
+            raise NiftySimError(
+                f'<Motion Type="{kind}"> with {v.size} numbers; expected Type="Translation" (tx ty tz) '
+                'or Type="Rotation" (three angles [rad], then the centre)',
+                f,
+                f"{key}/Motion",
+            )
+    if not motions:
+        return []
+
+    def rotation(s: float) -> np.ndarray:
+        R = np.eye(3)
+        for axis in range(3):  # x, then y, then z (tledMovingRigidContactSurface.tpp)
+            a = s * angles[axis]
+            c, sn = math.cos(a), math.sin(a)
+            i, j = (axis + 1) % 3, (axis + 2) % 3
+            G = np.eye(3)
+            G[i, i], G[i, j], G[j, i], G[j, j] = c, -sn, sn, c
+            R = G @ R
+        return R
+
+    keys = []
+    for s in np.linspace(0.0, 1.0, 101 if np.any(angles) else 2):
+        R = rotation(s)
+        keys.append((s * total, centre + s * t_total - R @ centre, quat_from_matrix(R)))
+    return keys
 
 
 def _visco(m, material, f: str, key: str):
