@@ -59,7 +59,7 @@ def flatten_submodels(root: ET.Element, f: str, mesh, numbers, error) -> ET.Elem
     nodes = ET.SubElement(flat, "Nodes", {"DOF": "3", "NumNodes": str(len(X_all))})
     nodes.text = "\n".join(" ".join(repr(float(v)) for v in x) for x in X_all)
     T = np.concatenate(T_all)
-    elements = ET.SubElement(flat, "Elements", {"Type": etype, "NumEls": str(len(T))})
+    elements = ET.SubElement(flat, "Elements", {"Type": str(etype), "NumEls": str(len(T))})
     elements.text = "\n".join(" ".join(str(int(v)) for v in t) for t in T)
     return flat
 
