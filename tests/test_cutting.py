@@ -351,3 +351,30 @@ def test_the_stable_step_after_a_cut_is_the_exact_one_of_a_lone_element(dtype):
     # 2e-3: Lanczos stops at a relative tolerance of 1e-3; float32 force differences add ~1e-4.
     assert stable_step(m, m.state()) == pytest.approx(2 / w, rel=2e-3)
     assert 2 / w < 0.7 * m.dt_critical  # why a lone element needs this: h/c overestimates it
+
+
+@pytest.mark.parametrize("kind", ["viscoelastic", "t4anp"])
+def test_a_cut_keeps_the_element_state_and_options(kind):
+    """Viscoelastic: each element's Prony state goes on unchanged through the cut (elements keep
+    their engine order); T4ANP: the cut model averages its pressures over the new topology (the
+    split nodes' node volumes are their own elements' only); both run on after the cut."""
+    X, T = box_tets(SIZE, CELLS)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    base = pl.NeoHookean(E=1e4, nu=0.45)
+    material = pl.Viscoelastic(base, iso=[(0.3, 0.05)]) if kind == "viscoelastic" else base
+    b.set_material(material, density=1000.0)
+    b.nodal_pressure = kind == "t4anp"
+    b.fix(np.nonzero(X[:, 2] > SIZE[2] - 1e-9)[0])
+    b.set_gravity()
+    sim = pl.Simulation(b.finalize("float64"), damping=10.0)
+    sim.run(steps=100)
+    q0 = np.asarray(sim.state._s.get_q())
+    z = 0.052
+    res = sim.cut(np.array([[[-1, -1, z], [1, -1, z], [1, 1, z]], [[-1, -1, z], [1, 1, z], [-1, 1, z]]]))
+    assert res.changed and sim.model._builder.nodal_pressure == (kind == "t4anp")
+    assert np.array_equal(np.asarray(sim.state._s.get_q()), q0)
+    if kind == "viscoelastic":
+        assert q0.size and np.abs(q0).max() > 0  # a state worth carrying
+    sim.run(steps=200)
+    assert sim.element_results()["J"].min() > 0.5
