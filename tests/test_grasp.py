@@ -122,3 +122,42 @@ def test_grasp_and_release_from_python_now():
 def test_bad_grasps_are_refused(call, match):
     with pytest.raises(pl.InputError, match=match):
         call(Box((0.01, 0.01, 0.01)))
+
+
+SCENE = """
+[mesh]
+primitive = "box"
+size = [0.02, 0.02, 0.02]
+cells = [2, 2, 2]
+[[material]]
+type = "neo-hookean"
+E = 2e4
+nu = 0.4
+density = 1000.0
+[[tool]]
+type = "{kind}"
+{shape}
+{extra}
+"""
+
+
+@pytest.mark.parametrize(
+    "kind, extra, match",
+    [
+        ("box", "grip = [0.5, 0.2]", "expected a time after 0.5"),
+        ("box", 'grip = ["a"]', r"tool\[0\]\.grip\[0\]"),
+        ("box", "grip = [0.1]\nreach = -1", "reach"),
+        ("box", "reach = -1", "reach"),
+        ("box", "grip = [nan]", "finite"),
+        ("blade", "grip = [0.1]", "does not grasp"),
+    ],
+)
+def test_bad_grasps_in_a_scene_are_refused_naming_file_and_tool(tmp_path, kind, extra, match):
+    from pliant.scene import load_scene
+
+    shape = "half_extents = [0.01, 0.01, 0.01]" if kind == "box" else "length = 0.01"
+    f = tmp_path / "s.toml"
+    f.write_text(SCENE.format(kind=kind, shape=shape, extra=extra))
+    with pytest.raises(pl.InputError, match=match) as e:
+        load_scene(f)
+    assert str(f) in str(e.value) and "tool[0]" in str(e.value)

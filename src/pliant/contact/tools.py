@@ -115,13 +115,18 @@ class RigidTool:
         until :meth:`release`; the force that takes is part of the tool's reported force."""
         t = finite_number(t, f"{self.name}: grasp time", "s")
         if reach is not None:
-            reach = finite_number(reach, f"{self.name}: reach", "m")
-            if reach < 0:
-                raise InputError(f"{self.name}: reach = {shown(reach)}; expected a distance >= 0 [m]")
-            self.reach = reach
+            self.set_reach(reach)
         if len(self.grips) % 2:
             raise InputError(f"{self.name}: grasp at t = {t:g} s, but it is already closed; release it first")
         return self._grip_event(t, "grasp")
+
+    def set_reach(self, reach: float) -> "RigidTool":
+        """How far from its surface a closing tool grasps [m] (>= 0)."""
+        reach = finite_number(reach, f"{self.name}: reach", "m")
+        if reach < 0:
+            raise InputError(f"{self.name}: reach = {shown(reach)}; expected a distance >= 0 [m]")
+        self.reach = reach
+        return self
 
     def release(self, t: float) -> "RigidTool":
         """Open the tool at time t [s]: the nodes it holds are free again."""

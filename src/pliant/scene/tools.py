@@ -110,5 +110,5 @@ def make_tool(ctx: Ctx, t: dict, p: str, base: Path):
             else:
                 tool.release(g)
         if "reach" in t and not times:
-            tool.reach = float(t["reach"])
+            tool.set_reach(t["reach"])
     return tool
