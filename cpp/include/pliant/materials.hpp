@@ -351,7 +351,9 @@ enum class ViscoMode : int {
 /// and S = S_e,iso + S_e,vol − Σ D_i. `mode` (ViscoMode): advance the state, use it, or the fully
 /// relaxed response D_i = α_i S_e (and store it).
 /// q: the element's 6·(n_iso + n_vol) state values, stride `stride` between components.
-template <class M, class T>
+/// kMode >= 0 fixes the mode at compile time (the ViscoMode of that value; `mode` is then unused):
+/// the CPU's lane loop then carries one mode's arithmetic, not every mode's behind masks.
+template <class M, class T, int kMode = -1>
 struct ViscoMaterial {
     const M& m;
     const Prony<T>& pr;
@@ -360,6 +362,7 @@ struct ViscoMaterial {
     int stride;
     ViscoMode mode;
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
+        const ViscoMode md = kMode >= 0 ? static_cast<ViscoMode>(kMode) : mode;
         const Sym3<T> Ci = inverse_cauchy_green(k);
         const Sym3<T> Se[2] = {m.pk2_iso(k, Ci), scale(k.J * m.pressure(k), Ci)};
         Sym3<T> S = axpby(T(1), Se[0], T(1), Se[1]);
@@ -378,10 +381,10 @@ struct ViscoMaterial {
                 T D[6];
                 PLIANT_UNROLL
                 for (int c = 0; c < 6; ++c) {
-                    if (mode == ViscoMode::Relaxed || mode == ViscoMode::RelaxedStore) {
+                    if (md == ViscoMode::Relaxed || md == ViscoMode::RelaxedStore) {
                         D[c] = pr.alpha[t] * e[c];
-                        if (mode == ViscoMode::RelaxedStore) d[c * stride] = D[c];
-                    } else if (mode == ViscoMode::Stored) {
+                        if (md == ViscoMode::RelaxedStore) d[c * stride] = D[c];
+                    } else if (md == ViscoMode::Stored) {
                         D[c] = d[c * stride];
                     } else {
                         D[c] = pr.tau[t] / den * d[c * stride] + dt * pr.alpha[t] / den * e[c];

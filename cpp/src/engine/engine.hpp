@@ -132,6 +132,8 @@ public:
     void launch_pressure(const Span& sp, const T* u);
     template <class M, Variant V>
     void launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt);
+    template <class M, int kMode>
+    void launch_visco_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt);
     template <class M, Variant V>
     void launch_measures(const Span& sp, const T* u, double dt, T* out);
     void damping(const Phase& ph, double dt);

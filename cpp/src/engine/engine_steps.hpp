@@ -78,24 +78,41 @@ void Engine<T, Dev>::launch_pressure(const Span& sp, const T* u) {
     }
 }
 
+/// Viscoelastic element forces; kMode >= 0: the mode fixed at compile time (ViscoMaterial).
 template <class T, class Dev>
-template <class M, Variant V>
-void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
+template <class M, int kMode>
+void Engine<T, Dev>::launch_visco_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
     const T tdt = T(dt);
     dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
-        (void)tdt, (void)visco_mode, (void)v, (void)u;  // captured before any `if constexpr` (nvcc)
         const M mat = make_material<M>(v.mats[v.block_group[b]]);
-        if constexpr (V == Variant::Visco) {
-            const Prony<T>& pr = v.prony[v.block_group[b]];
-            const ViscoMaterial<M, T> vm{mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, visco_mode};
-            element_forces(b, l, vm, v.el, u, v.P, v.f_elem, v.J);
-        } else if constexpr (V == Variant::Anp) {
-            element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.anp_stab, v.f_elem, v.J);
-        } else {
-            element_forces(b, l, mat, v.el, u, v.P, v.f_elem, v.J);
-        }
+        const Prony<T> pr = v.prony[v.block_group[b]];  // a copy: the state's stores cannot alias it
+        const ViscoMaterial<M, T, kMode> vm{mat,    pr,        tdt, v.q + aosoa(b, l, 0, v.visco_w),
+                                            kLanes, visco_mode};
+        element_forces(b, l, vm, v.el, u, v.P, v.f_elem, v.J);
     });
+}
+
+template <class T, class Dev>
+template <class M, Variant V>
+void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
+    if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own: the hot path
+        if (visco_mode == ViscoMode::Advance)
+            launch_visco_forces<M, static_cast<int>(ViscoMode::Advance)>(sp, u, visco_mode, dt);
+        else
+            launch_visco_forces<M, -1>(sp, u, visco_mode, dt);
+    } else {
+        const DeviceView<T> v = v_;
+        dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+            (void)v, (void)u;  // captured before any `if constexpr` (nvcc)
+            const M mat = make_material<M>(v.mats[v.block_group[b]]);
+            if constexpr (V == Variant::Anp) {
+                element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.anp_stab, v.f_elem, v.J);
+            } else {
+                element_forces(b, l, mat, v.el, u, v.P, v.f_elem, v.J);
+            }
+        });
+    }
 }
 
 /// Kernel 1 (element forces f_elem and J), or with T4ANP its three passes; visco_mode: what the
