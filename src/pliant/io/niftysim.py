@@ -319,34 +319,44 @@ def _system_params(root, f: str, unsupported, warnings: list[str]):
     return dt, total, damping, default_rho
 
 
+def element_set(es, M: int, f: str, key: str) -> np.ndarray:
+    """The elements of an <ElementSet> among M: its list, Size="all", or the shorthand of Size
+    consecutive elements from the first listed (user guide v2.4 §3.3; tledModel::GetElSet)."""
+    size = es.get("Size", "")
+    listed = _numbers(es, f, key, np.int64) if (es.text or "").strip() else np.zeros(0, np.int64)
+    if size == "all":
+        return np.arange(M)
+    try:
+        n = int(size)
+    except ValueError:
+        raise NiftySimError(f"<ElementSet Size={size[:40]!r}>: expected a count or 'all'", f, key) from None
+    if not 0 <= n <= M:
+        raise NiftySimError(f"<ElementSet Size={n}>: expected 0 to {M} (the element count) or 'all'", f, key)
+    if listed.size == n:
+        elems = listed
+    elif listed.size <= 1:  # shorthand: N consecutive elements from the first listed (or 0)
+        first = int(listed[0]) if listed.size else 0
+        elems = np.arange(first, first + n)
+    else:
+        raise NiftySimError(f"<ElementSet Size={n}> lists {listed.size} elements", f, key)
+    if elems.size and (elems.min() < 0 or elems.max() >= M):
+        raise NiftySimError(f"element index out of range 0..{M - 1}", f, key)
+    return elems
+
+
+def facets_facing(X: np.ndarray, B: np.ndarray, normal: np.ndarray, angle: float) -> np.ndarray:
+    """The facets B (F, 3) of nodes X whose normal is within ``angle`` degrees of ``normal``
+    (NiftySim's SpecType="NORMAL" with its ToleranceAngle)."""
+    area = np.cross(X[B[:, 1]] - X[B[:, 0]], X[B[:, 2]] - X[B[:, 0]])
+    cosang = area @ (normal / np.linalg.norm(normal)) / np.linalg.norm(area, axis=1)
+    return B[cosang >= np.cos(np.radians(angle)) - 1e-12]
+
+
 def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupported) -> None:
     """<ElementSet>s: a material and a density on listed (or all) elements."""
     for k, es in enumerate(root.findall("ElementSet")):
         key = f"ElementSet[{k}]"
-        size = es.get("Size", "")
-        listed = _numbers(es, f, key, np.int64) if (es.text or "").strip() else np.zeros(0, np.int64)
-        if size == "all":
-            elems = np.arange(M)
-        else:
-            try:
-                n = int(size)
-            except ValueError:
-                raise NiftySimError(
-                    f"<ElementSet Size={size[:40]!r}>: expected a count or 'all'", f, key
-                ) from None
-            if not 0 <= n <= M:
-                raise NiftySimError(
-                    f"<ElementSet Size={n}>: expected 0 to {M} (the element count) or 'all'", f, key
-                )
-            if listed.size == n:
-                elems = listed
-            elif listed.size <= 1:  # shorthand: N consecutive elements from the first listed (or 0)
-                first = int(listed[0]) if listed.size else 0
-                elems = np.arange(first, first + n)
-            else:
-                raise NiftySimError(f"<ElementSet Size={n}> lists {listed.size} elements", f, key)
-        if elems.size and (elems.min() < 0 or elems.max() >= M):
-            raise NiftySimError(f"element index out of range 0..{M - 1}", f, key)
+        elems = element_set(es, M, f, key)
         m = es.find("Material")
         if m is None:
             raise NiftySimError("<ElementSet> without <Material>", f, key)
@@ -559,10 +569,7 @@ def _pressure(c, b: ModelBuilder, T: np.ndarray, shapes: dict, f: str, key: str,
             raise NiftySimError("<Normal ToleranceAngle>: expected degrees", f, key) from None
         if n.size != 3 or not np.linalg.norm(n) > 0:
             raise NiftySimError("<Normal>: expected a non-zero vector", f, f"{key}/Normal")
-        X = b.nodes
-        area = np.cross(X[B[:, 1]] - X[B[:, 0]], X[B[:, 2]] - X[B[:, 0]])
-        cosang = area @ (n / np.linalg.norm(n)) / np.linalg.norm(area, axis=1)
-        faces = B[cosang >= np.cos(np.radians(angle)) - 1e-12]
+        faces = facets_facing(b.nodes, B, n, angle)
     elif c.get("NumFaces") == "all":
         faces = B
     else:

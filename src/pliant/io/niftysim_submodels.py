@@ -53,7 +53,7 @@ def flatten_submodels(root: ET.Element, f: str, mesh, numbers, error) -> ET.Elem
         first = sum(len(t) for t in T_all)
         T_all.append(node_map[T])
         for k, es in enumerate(sm.findall("ElementSet")):
-            flat.append(_offset_set(es, len(T), first, numbers, error, f"{key}/ElementSet[{k}]"))
+            flat.append(_offset_set(es, len(T), first, f, f"{key}/ElementSet[{k}]"))
         for k, c in enumerate(sm.findall("Constraint")):
             flat.append(_mapped_constraint(c, node_map, X, T, numbers, error, f"{key}/Constraint[{k}]"))
     nodes = ET.SubElement(flat, "Nodes", {"DOF": "3", "NumNodes": str(len(X_all))})
@@ -105,27 +105,11 @@ def _add_nodes(X_all: np.ndarray, X: np.ndarray, d: float) -> tuple[np.ndarray, 
     return node_map, np.vstack([X_all, *added]) if added else X_all
 
 
-def _offset_set(es: ET.Element, M: int, first: int, numbers, error, key: str) -> ET.Element:
+def _offset_set(es: ET.Element, M: int, first: int, f: str, key: str) -> ET.Element:
     """A sub-model's element set in the merged numbering (its Size shorthands expanded locally)."""
-    size = es.get("Size", "")
-    listed = numbers(es, key, np.int64) if (es.text or "").strip() else np.zeros(0, np.int64)
-    if size == "all":
-        elems = np.arange(M)
-    else:
-        try:
-            n = int(size)
-        except ValueError:
-            raise error(f"<ElementSet Size={size[:40]!r}>: expected a count or 'all'", key) from None
-        if listed.size == n:
-            elems = listed
-        elif listed.size <= 1 and n >= 0:
-            elems = np.arange(
-                int(listed[0]) if listed.size else 0, (int(listed[0]) if listed.size else 0) + n
-            )
-        else:
-            raise error(f"<ElementSet Size={n}> lists {listed.size} elements", key)
-    if elems.size and (elems.min() < 0 or elems.max() >= M):
-        raise error(f"element index out of range 0..{M - 1} of its sub-model", key)
+    from .niftysim import element_set
+
+    elems = element_set(es, M, f, key)
     out = ET.Element("ElementSet", dict(es.attrib, Size=str(elems.size)))
     out.text = " ".join(str(int(e) + first) for e in elems)
     out.extend(list(es))
@@ -168,6 +152,7 @@ def _local_faces(c, X, T, numbers, error, key):
     """The pressure facets of a sub-model's constraint in its own numbering, or None to keep it
     as it is (the importer then reports what is wrong with it)."""
     from ..mesh.topology import boundary_faces
+    from .niftysim import facets_facing
 
     if c.get("SpecType") == "NORMAL" or c.get("NumFaces") == "all":
         B, _ = boundary_faces(T)
@@ -183,9 +168,7 @@ def _local_faces(c, X, T, numbers, error, key):
             angle = float(nrm.get("ToleranceAngle", "0"))
         except ValueError:
             return None
-        area = np.cross(X[B[:, 1]] - X[B[:, 0]], X[B[:, 2]] - X[B[:, 0]])
-        cosang = area @ (v / np.linalg.norm(v)) / np.linalg.norm(area, axis=1)
-        return B[cosang >= np.cos(np.radians(angle)) - 1e-12]
+        return facets_facing(X, B, v, angle)
     fe = c.find("Faces")
     if fe is None:
         return None
