@@ -40,11 +40,18 @@ class Cutter:
     _faces: tuple = (None, None)  # (model, its interior faces): computed once per topology
 
     def __post_init__(self):
-        for b in self.blades:
-            if not isinstance(b, Blade):
-                raise InputError(f"Cutter: {shown(b)} is not a pliant.cutting.Blade")
+        blades, self.blades = list(self.blades), []
+        for b in blades:
+            self.add(b)
         if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
             raise InputError(f"Cutter: every = {shown(self.every)}; expected a whole number of steps >= 1")
+
+    def add(self, blade) -> Blade:
+        """Cut with ``blade`` too."""
+        if not isinstance(blade, Blade):
+            raise InputError(f"Cutter: {shown(blade)} is not a pliant.cutting.Blade")
+        self.blades.append(blade)
+        return blade
 
     def cut_now(self, solver, state, t0: float):
         """Cut along what each blade swept from t0 to the state's time [s]; returns the solver and

@@ -399,9 +399,7 @@ class Simulation:
 
         if self.cutter is None:
             self.cutter = Cutter([], every)
-        self.cutter.blades.append(blade)
-        self.cutter.__post_init__()
-        return blade
+        return self.cutter.add(blade)
 
     def cut(self, triangles):
         """Cut now along the surface ``triangles`` [m] (K, 3, 3) of the current configuration
