@@ -378,3 +378,13 @@ def test_a_cut_keeps_the_element_state_and_options(kind):
         assert q0.size and np.abs(q0).max() > 0  # a state worth carrying
     sim.run(steps=200)
     assert sim.element_results()["J"].min() > 0.5
+
+
+def test_the_solver_after_a_cut_keeps_the_settings_it_has_now():
+    """A viewer's damping slider changes the solver's damping while it runs: the solver made for
+    the cut model takes the current value, not the one it was built with."""
+    sim = pl.Simulation(hanging_bar(), damping=2.0)
+    sim.solver.damping = 7.0
+    z = 0.052
+    sim.cut(np.array([[[-1, -1, z], [1, -1, z], [1, 1, z]], [[-1, -1, z], [1, 1, z], [-1, 1, z]]]))
+    assert sim.solver.damping == 7.0 and sim.solver.check_every == 16

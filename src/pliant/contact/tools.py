@@ -147,6 +147,18 @@ class RigidTool:
         """Whether the tool is closed (holding) at time t [s], as the engine sees it."""
         return sum(g < t for g in self.grips) % 2 == 1
 
+    def move_to(self, t: float, position, rotation, max_step: float, dt: float) -> "RigidTool":
+        """From its pose at time t [s], move to ``position`` [m] with ``rotation``, then stay: the
+        trajectory restarts at t, and the move takes at least one step of ``dt`` [s] and no less
+        than the distance over ``max_step`` [m] per step (a jump deeper than an element would
+        invert it; a blade would skip elements)."""
+        R, p = self.pose(t)
+        target = finite_vector(position, 3, f"{self.name}: position", "m")
+        duration = max(dt, float(np.linalg.norm(target - p)) / (max_step / dt))
+        self.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
+        self._fixed = False
+        return self.at(t + duration, target, rotation)
+
     def key_array(self) -> np.ndarray:
         return np.concatenate(self.keys)
 

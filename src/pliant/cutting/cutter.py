@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -80,7 +79,3 @@ class Cutter:
             done += n
             solver, state = self.cut_now(solver, state, t0)
         return solver, state
-
-    def steps_until(self, solver, state, until: float) -> int:
-        """Steps of the solver from the state's time to ``until`` [s]."""
-        return max(0, math.ceil((until - state.time) / solver.dt - 1e-9))

@@ -237,20 +237,7 @@ def _flatten(root, f: str):
     """The model with its <SubModel>s merged into one (niftysim_submodels.py)."""
     from .niftysim_submodels import flatten_submodels
 
-    def sub_mesh(el, key):
-        try:
-            return _mesh(el, f)
-        except NiftySimError as e:
-            where = f + (f" [{e.key}]" if e.key else "")
-            raise NiftySimError(str(e)[len(where) + 2 :], f, f"{key}/{e.key}" if e.key else key) from None
-
-    return flatten_submodels(
-        root,
-        f,
-        sub_mesh,
-        lambda el, key, dtype=float: _numbers(el, f, key, dtype),
-        lambda message, key: NiftySimError(message, f, key),
-    )
+    return flatten_submodels(root, f)
 
 
 def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:

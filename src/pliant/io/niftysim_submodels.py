@@ -16,19 +16,20 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from .niftysim import NiftySimError, _mesh, _numbers, element_set, facets_facing
+
 __all__ = ["flatten_submodels"]
 
 _SUB_CHILDREN = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams"}
 
 
-def flatten_submodels(root: ET.Element, f: str, mesh, numbers, error) -> ET.Element:
-    """``root`` with its sub-models merged (``root`` itself if it has none). ``mesh(el, key)`` reads
-    an element's <Nodes>/<Elements> (the importer's reader), ``numbers(el, key, dtype)`` its
-    numbers, ``error(message, key)`` makes the importer's error naming this file."""
+def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
+    """``root`` with its sub-models merged (``root`` itself if it has none); errors name the file
+    ``f`` and the sub-model."""
     subs = root.findall("SubModel")
     if not subs:
         return root
-    d = _merge_distance(root, numbers, error)
+    d = _merge_distance(root, f)
     flat = ET.Element("Model", root.attrib)
     for child in root:
         if child.tag not in ("SubModel", "SubModelNodeMergerDistance", "Nodes", "Elements"):
@@ -40,14 +41,17 @@ def flatten_submodels(root: ET.Element, f: str, mesh, numbers, error) -> ET.Elem
         key = f"SubModel[{i}]"
         for child in sm:
             if child.tag not in _SUB_CHILDREN:
-                raise error(
+                raise NiftySimError(
                     f"<{child.tag}> in a sub-model: NiftySim reads a sub-model's mesh, element "
                     "sets and constraints only; move it to the model",
+                    f,
                     f"{key}/{child.tag}",
                 )
-        X, T, et = mesh(sm, key)
+        X, T, et = _sub_mesh(sm, f, key)
         if etype is not None and et != etype:
-            raise error(f"Elements Type={et}, but an earlier sub-model has {etype}: one element type", key)
+            raise NiftySimError(
+                f"Elements Type={et}, but an earlier sub-model has {etype}: one element type", f, key
+            )
         etype = et
         node_map, X_all = _add_nodes(X_all, X, d)
         first = sum(len(t) for t in T_all)
@@ -55,7 +59,7 @@ def flatten_submodels(root: ET.Element, f: str, mesh, numbers, error) -> ET.Elem
         for k, es in enumerate(sm.findall("ElementSet")):
             flat.append(_offset_set(es, len(T), first, f, f"{key}/ElementSet[{k}]"))
         for k, c in enumerate(sm.findall("Constraint")):
-            flat.append(_mapped_constraint(c, node_map, X, T, numbers, error, f"{key}/Constraint[{k}]"))
+            flat.append(_mapped_constraint(c, node_map, X, T, f, f"{key}/Constraint[{k}]"))
     nodes = ET.SubElement(flat, "Nodes", {"DOF": "3", "NumNodes": str(len(X_all))})
     nodes.text = "\n".join(" ".join(repr(float(v)) for v in x) for x in X_all)
     T = np.concatenate(T_all)
@@ -64,15 +68,24 @@ def flatten_submodels(root: ET.Element, f: str, mesh, numbers, error) -> ET.Elem
     return flat
 
 
-def _merge_distance(root, numbers, error) -> float:
+def _sub_mesh(sm: ET.Element, f: str, key: str):
+    """A sub-model's <Nodes> and <Elements> (the importer's reader), its errors naming it."""
+    try:
+        return _mesh(sm, f)
+    except NiftySimError as e:
+        where = f + (f" [{e.key}]" if e.key else "")
+        raise NiftySimError(str(e)[len(where) + 2 :], f, f"{key}/{e.key}" if e.key else key) from None
+
+
+def _merge_distance(root, f) -> float:
     """<SubModelNodeMergerDistance> [m], or −1 (no merging) without it."""
     el = root.find("SubModelNodeMergerDistance")
     if el is None:
         return -1.0
-    v = numbers(el, "SubModelNodeMergerDistance", float)
+    v = _numbers(el, f, "SubModelNodeMergerDistance", float)
     if v.size != 1 or not np.isfinite(v[0]) or v[0] < 0:
-        raise error(
-            "<SubModelNodeMergerDistance>: expected one distance >= 0 [m]", "SubModelNodeMergerDistance"
+        raise NiftySimError(
+            "<SubModelNodeMergerDistance>: expected one distance >= 0 [m]", f, "SubModelNodeMergerDistance"
         )
     return float(v[0])
 
@@ -107,8 +120,6 @@ def _add_nodes(X_all: np.ndarray, X: np.ndarray, d: float) -> tuple[np.ndarray, 
 
 def _offset_set(es: ET.Element, M: int, first: int, f: str, key: str) -> ET.Element:
     """A sub-model's element set in the merged numbering (its Size shorthands expanded locally)."""
-    from .niftysim import element_set
-
     elems = element_set(es, M, f, key)
     out = ET.Element("ElementSet", dict(es.attrib, Size=str(elems.size)))
     out.text = " ".join(str(int(e) + first) for e in elems)
@@ -116,7 +127,7 @@ def _offset_set(es: ET.Element, M: int, first: int, f: str, key: str) -> ET.Elem
     return out
 
 
-def _mapped_constraint(c: ET.Element, node_map, X, T, numbers, error, key: str) -> ET.Element:
+def _mapped_constraint(c: ET.Element, node_map, X, T, f: str, key: str) -> ET.Element:
     """A sub-model's constraint with its nodes (or pressure faces) in the merged numbering; a
     pressure on the sub-model's whole surface or on its facets facing a normal becomes the list of
     those facets, chosen on the sub-model's own surface (as NiftySim resolves it)."""
@@ -129,11 +140,11 @@ def _mapped_constraint(c: ET.Element, node_map, X, T, numbers, error, key: str) 
 
     def mapped(ids: np.ndarray, what: str) -> str:
         if ids.size and (ids.min() < 0 or ids.max() >= n):
-            raise error(f"<{what}>: node index out of range 0..{n - 1} of its sub-model", key)
+            raise NiftySimError(f"<{what}>: node index out of range 0..{n - 1} of its sub-model", f, key)
         return " ".join(str(int(v)) for v in node_map[ids])
 
     if c.get("Type") == "Pressure":
-        faces = _local_faces(c, X, T, numbers, error, key)
+        faces = _local_faces(c, X, T, f, key)
         if faces is not None:
             fe = ET.SubElement(out, "Faces")
             fe.text = mapped(faces.ravel(), "Faces")
@@ -144,15 +155,14 @@ def _mapped_constraint(c: ET.Element, node_map, X, T, numbers, error, key: str) 
     nodes = c.find("Nodes")
     if nodes is not None:
         ne = ET.SubElement(out, "Nodes", dict(nodes.attrib))
-        ne.text = mapped(numbers(nodes, f"{key}/Nodes", np.int64), "Nodes")
+        ne.text = mapped(_numbers(nodes, f, f"{key}/Nodes", np.int64), "Nodes")
     return out
 
 
-def _local_faces(c, X, T, numbers, error, key):
+def _local_faces(c, X, T, f, key):
     """The pressure facets of a sub-model's constraint in its own numbering, or None to keep it
     as it is (the importer then reports what is wrong with it)."""
     from ..mesh.topology import boundary_faces
-    from .niftysim import facets_facing
 
     if c.get("SpecType") == "NORMAL" or c.get("NumFaces") == "all":
         B, _ = boundary_faces(T)
@@ -161,7 +171,7 @@ def _local_faces(c, X, T, numbers, error, key):
         nrm = c.find("Normal")
         if nrm is None:
             return None
-        v = numbers(nrm, f"{key}/Normal", float)
+        v = _numbers(nrm, f, f"{key}/Normal", float)
         if v.size != 3 or not np.linalg.norm(v) > 0:
             return None
         try:
@@ -172,7 +182,7 @@ def _local_faces(c, X, T, numbers, error, key):
     fe = c.find("Faces")
     if fe is None:
         return None
-    faces = numbers(fe, f"{key}/Faces", np.int64)
+    faces = _numbers(fe, f, f"{key}/Faces", np.int64)
     if faces.size % 3:
-        raise error(f"<Faces>: {faces.size} indices, not a multiple of 3", key)
+        raise NiftySimError(f"<Faces>: {faces.size} indices, not a multiple of 3", f, key)
     return faces.reshape(-1, 3)

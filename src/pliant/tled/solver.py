@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .._core import RunStatus
-from ..checks import finite_number, finite_vector, shown
+from ..checks import finite_number, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
 from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory, tool_force
@@ -108,15 +108,7 @@ class Solver:
             t.keys = [np.array(k, copy=True) for k in t.keys]
             t.grips = list(t.grips)
         self._backend = model.make_backend(backend, device)
-        self._options: dict[str, Any] = dict(
-            dt=dt,
-            damping=self.damping,
-            check_every=self.check_every,
-            backend=self.backend,
-            device=device,
-            history_steps=history_steps,
-            allow_unstable=allow_unstable,
-        )
+        self._device, self._allow_unstable = device, allow_unstable  # for over()
         self._material_scale = 1.0
 
     def over(self, model: Model, dt: float | None = None) -> "Solver":
@@ -124,8 +116,16 @@ class Solver:
         one's settings (Δt unless ``dt`` [s] is given, damping, checks, backend, stiffness scale),
         tool trajectories and force histories, which go on from where this one's stopped."""
         _check_model(model, "Solver.over(model)")
-        options = dict(self._options, dt=self.dt if dt is None else dt)
-        new = Solver(model, **options)
+        new = Solver(
+            model,
+            dt=self.dt if dt is None else dt,
+            damping=self.damping,  # as it is now (a viewer's slider may have changed it)
+            allow_unstable=self._allow_unstable,
+            check_every=self.check_every,
+            backend=self.backend,
+            device=self._device,
+            history_steps=self.history_steps,
+        )
         new.tools = self.tools
         new._histories = self._histories
         if model.tools:
@@ -261,18 +261,7 @@ class Solver:
     def run(self, state: State, steps: int | None = None, until: float | None = None) -> RunInfo:
         """Advance ``state`` in place by ``steps`` steps or to time ``until`` [s]."""
         self._same_model(state)
-        if (steps is None) == (until is None):
-            raise InputError("run: give exactly one of steps= or until=")
-        if steps is None:
-            until = finite_number(until, "until", "s")
-            n = (until - state.time) / self.dt - 1e-9
-            if not n <= MAX_STEPS:
-                raise InputError(
-                    f"until = {until:g} s is {n:.3g} steps of {self.dt:.3g} s away; "
-                    f"expected at most {MAX_STEPS:.0e} steps in one call"
-                )
-            steps = max(0, math.ceil(n))
-        steps = _step_count(steps)
+        steps = self.step_count(state, steps, until)
         if steps == 0:
             return RunInfo(0, state.time)
         t0 = state.time
@@ -289,6 +278,22 @@ class Solver:
             float(rep["node_seconds"]),
             float(rep["contact_seconds"]),
         )
+
+    def step_count(self, state: State, steps: int | None = None, until: float | None = None) -> int:
+        """The steps of ``run(state, steps=…)`` or ``run(state, until=…)``: exactly one given, a
+        whole number from 0 to MAX_STEPS (``until`` [s]: the steps of Δt that reach it)."""
+        if (steps is None) == (until is None):
+            raise InputError("run: give exactly one of steps= or until=")
+        if steps is None:
+            until = finite_number(until, "until", "s")
+            n = (until - state.time) / self.dt - 1e-9
+            if not n <= MAX_STEPS:
+                raise InputError(
+                    f"until = {until:g} s is {n:.3g} steps of {self.dt:.3g} s away; "
+                    f"expected at most {MAX_STEPS:.0e} steps in one call"
+                )
+            steps = max(0, math.ceil(n))
+        return _step_count(steps)
 
     def _record_tools(self, t0: float, steps: int):
         if not self.model.tools:
@@ -433,12 +438,7 @@ class Simulation:
         with blades, in runs of ``cutter.every`` steps, each followed by a cut)."""
         if self.cutter is None or not self.cutter.blades:
             return self.solver.run(self.state, steps=steps, until=until)
-        if (steps is None) == (until is None):
-            raise InputError("run: give exactly one of steps= or until=")
-        if steps is None:
-            until = finite_number(until, "until", "s")
-            steps = self.cutter.steps_until(self.solver, self.state, until)
-        steps = _step_count(steps)
+        steps = self.solver.step_count(self.state, steps, until)
         n0 = self.state.steps
         self.solver, self.state = self.cutter.run(self.solver, self.state, steps)
         self.model = self.solver.model
@@ -501,16 +501,7 @@ class Simulation:
         tool's speed under 0.1 × the smallest element altitude per step (a sudden jump deeper than
         an element would invert it)."""
         tool = self.solver.tools[self.solver._tool_index(k)]
-        R, p = tool.pose(self.state.time)
-        from ..contact import quat_from_matrix
-
-        t, dt = self.state.time, self.solver.dt
-        target = finite_vector(position, 3, "set_tool_pose: position", "m")
-        v_max = 0.1 * self.model.min_altitude / dt
-        duration = max(dt, float(np.linalg.norm(target - p)) / v_max)
-        tool.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
-        tool._fixed = False
-        tool.at(t + duration, target, rotation)
+        tool.move_to(self.state.time, position, rotation, 0.1 * self.model.min_altitude, self.solver.dt)
         self.solver.set_tool_keys()
 
     def grasp(self, k: int = 0, reach: float | None = None):

@@ -239,13 +239,13 @@ class LiveViewer:
         """What dragging blade j's gizmo does: the blade moves there, no faster than 0.1 of the
         smallest element altitude per step (so that it skips no element), cutting as it goes."""
         with self.lock:
-            blade, t, dt = self.scene.blades[j], self.sim.time, self.sim.dt
-            R, p = blade.pose(t)
-            target = np.asarray(position, float)
-            duration = max(dt, float(np.linalg.norm(target - p)) / (0.1 * self.sim.model.min_altitude / dt))
-            blade.keys = [np.concatenate([[t], p, quat_from_matrix(R)])]
-            blade._fixed = False
-            blade.at(t + duration, target, np.asarray(wxyz, float))
+            self.scene.blades[j].move_to(
+                self.sim.time,
+                position,
+                np.asarray(wxyz, float),
+                0.1 * self.sim.model.min_altitude,
+                self.sim.dt,
+            )
 
     def _dragged(self, k, ctrl):
         self._last_drag[k] = time.perf_counter()
