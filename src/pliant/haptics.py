@@ -228,8 +228,10 @@ class HapticLoop:
 
 class VirtualDevice:
     """A scripted haptic device for tests and demonstrations: a thread that, ``rate`` times per
-    second [Hz], writes the pose ``path(t)`` [m] (t [s] since start) and reads the force, as a
-    device's servo loop does. Late reads are caught up, never skipped."""
+    second [Hz], writes the pose ``path(t)`` [m] and reads the force, as a device's servo loop
+    does. Its k-th tick writes ``path(k / rate)`` (the script's own clock, t [s] since start), so
+    every step is the script's step; a tick the machine delays runs late, never skipped and never
+    a larger step (a loaded machine then shows as late reads, not as a faster hand)."""
 
     def __init__(self, loop: HapticLoop, path: Callable[[float], object], rate: float = 1000.0):
         self.loop, self.path = loop, path
@@ -248,7 +250,7 @@ class VirtualDevice:
             if wait > 0:
                 time.sleep(wait)
             now = time.perf_counter() - start
-            self.loop.write_pose(self.path(now))
+            self.loop.write_pose(self.path(k / self.rate))
             forces[k] = self.loop.read_force()
             times[k], energy[k] = now, self.loop.port_energy
         rest = n / self.rate - (time.perf_counter() - start)  # the last read's period
