@@ -42,9 +42,8 @@ def main() -> None:
     print(f"{sim.model.n_elements:,} tets, dt = {sim.dt:.4g} s, {loop.steps_per_update} steps per update")
     print(f"reads per second: {log.reads_per_second:,.0f} (asked {args.rate:,.0f})")
     print(f"simulation updates: {loop.updates:,}; real-time factor {loop.real_time_factor:.3f}")
-    print(
-        f"largest force jump per read: {jumps.max():.3g} N of peak {np.linalg.norm(log.forces, axis=1).max():.3g} N"
-    )
+    peak = np.linalg.norm(log.forces, axis=1).max()
+    print(f"largest force jump per read: {jumps.max():.3g} N of peak {peak:.3g} N")
 
 
 if __name__ == "__main__":
