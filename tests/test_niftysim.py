@@ -15,8 +15,24 @@ BALLS = Path(__file__).parent / "data" / "niftysim_ball_ball.xml"
 runner = CliRunner()
 
 
-def test_ball_ball_refuses_deformable_contact_by_name(tmp_path):
-    r = runner.invoke(app, ["run", str(BALLS), "-o", str(tmp_path / "o")])
+def test_deformable_and_self_collision_map_to_soft_contact(tmp_path):
+    """DoDeformableCollision: every pair of bodies, frictionless (NiftySim's mesh-based contact);
+    DoSelfCollision: each body with itself; a value that is not 0 or 1 is refused by name."""
+    sc = load_niftysim(BALLS)
+    c = sc.builder.soft_contact
+    assert (c.pairs, c.self_contact, c.mu_s, c.mu_k) == (None, False, 0.0, 0.0)
+    xml = BALLS.read_text().replace(
+        "<DoDeformableCollision>", "<DoSelfCollision>1</DoSelfCollision><DoDeformableCollision>", 1
+    )
+    xml = xml.replace("\n      1\n    </DoDeformableCollision>", "0</DoDeformableCollision>")
+    p = tmp_path / "self.xml"
+    p.write_text(xml)
+    c = load_niftysim(p).builder.soft_contact
+    assert (c.pairs, c.self_contact) == ((), True)
+    p.write_text(
+        BALLS.read_text().replace("\n      1\n    </DoDeformableCollision>", "x</DoDeformableCollision>")
+    )
+    r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "o")])
     assert r.exit_code == 2 and "DoDeformableCollision" in r.output
 
 
@@ -28,8 +44,7 @@ def test_ball_ball_import_and_driven_nodes_follow_ramp():
         (np.array(c.find("Nodes").text.split(), int), float(c.find("Magnitudes").text))
         for c in root.findall("Constraint")
     ]
-    sc = load_niftysim(BALLS, ignore=("DoDeformableCollision",))
-    assert any("DoDeformableCollision" in w for w in sc.warnings)
+    sc = load_niftysim(BALLS)
     b = sc.builder
     assert (b.n_nodes, b.n_elements) == (556, 1578)
     (s,) = b.sets

@@ -199,7 +199,10 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<std::vector<double>> tool_grids, std::vector<index_t> press_nodes,
                std::vector<double> press_value, std::vector<index_t> press_curve, bool anp,
                std::vector<double> group_visco, double stiffness_damping, double anp_stabilization,
-               std::vector<std::vector<double>> tool_grips, std::vector<double> tool_reach, int threads) {
+               std::vector<std::vector<double>> tool_grips, std::vector<double> tool_reach,
+               std::vector<index_t> soft_nodes, std::vector<index_t> soft_label,
+               std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
+               std::vector<double> soft_mu, double soft_skin, int threads) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -232,6 +235,13 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.stiffness_damping = stiffness_damping;
                 in.anp_stabilization = anp_stabilization;
                 in.group_visco = std::move(group_visco);
+                in.soft_nodes = std::move(soft_nodes);
+                in.soft_label = std::move(soft_label);
+                in.soft_tris = std::move(soft_tris);
+                in.soft_pair = std::move(soft_pair);
+                in.soft_labels = soft_labels;
+                in.soft_mu = std::move(soft_mu);
+                in.soft_skin = soft_skin;
                 for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                     RigidTool t{};
                     t.kind = static_cast<ToolKind>(tool_kind[k]);
@@ -259,7 +269,9 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a,
             "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a,
             "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a,
-            "stiffness_damping"_a, "anp_stabilization"_a, "tool_grips"_a, "tool_reach"_a, "threads"_a)
+            "stiffness_damping"_a, "anp_stabilization"_a, "tool_grips"_a, "tool_reach"_a, "soft_nodes"_a,
+            "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a, "soft_mu"_a, "soft_skin"_a,
+            "threads"_a)
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
@@ -364,6 +376,13 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  const size_t nt = e.engine->model.tools.size();
                  const size_t steps = nt ? h.size() / (6 * nt) : 0;
                  return to_numpy(std::move(h), {steps, nt, 6});
+             })
+        .def("pair_history",
+             [](const B& e) {
+                 std::vector<double> h = e->pair_history();
+                 const size_t np = static_cast<size_t>(e.engine->model.soft_pairs);
+                 const size_t steps = np ? h.size() / (3 * np) : 0;
+                 return to_numpy(std::move(h), {steps, np, 3});
              })
         .def("contact_state",
              [](const B& e) {

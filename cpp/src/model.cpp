@@ -25,6 +25,7 @@ Model<T>::Model(const ModelInput& in) {
     build_pressure(in);
     build_constraints(in);
     build_contact_and_tables(in);
+    build_soft_contact(in);
 }
 
 /// Material groups; each starts on a fresh block so that a block has a single material.
@@ -271,6 +272,54 @@ void Model<T>::build_contact_and_tables(const ModelInput& in) {
         table_t.push_back(0.0);
         table_v.push_back(0.0);
     }
+}
+
+/// The soft-contact surface (soft_contact.hpp), checked: its nodes' free-DOF bits, each triangle's
+/// mean reference edge, the grid's cell (the longest reference edge, at least the skin) and a hash
+/// table of at least twice as many buckets as triangles.
+template <class T>
+void Model<T>::build_soft_contact(const ModelInput& in) {
+    const std::size_t ns = in.soft_nodes.size(), nt = in.soft_tris.size() / 3;
+    const std::size_t L = static_cast<std::size_t>(in.soft_labels);
+    if (ns == 0) return;
+    if (in.soft_label.size() != ns || in.soft_tris.size() % 3 || in.soft_pair.size() != L * L ||
+        !(in.soft_skin > 0.0))
+        throw std::invalid_argument("soft contact: inconsistent surface arrays");
+    for (std::size_t i = 0; i < ns; ++i)
+        if (in.soft_nodes[i] < 0 || in.soft_nodes[i] >= n_nodes || in.soft_label[i] < 0 ||
+            in.soft_label[i] >= in.soft_labels)
+            throw std::invalid_argument("soft contact: surface node " + std::to_string(i) + " out of range");
+    for (index_t v : in.soft_tris)
+        if (v < 0 || static_cast<std::size_t>(v) >= ns)
+            throw std::invalid_argument("soft contact: a triangle names surface node " + std::to_string(v));
+    index_t pairs = 0;
+    for (index_t p : in.soft_pair) pairs = p + 1 > pairs ? p + 1 : pairs;
+    if (in.soft_mu.size() != 2 * static_cast<std::size_t>(pairs))
+        throw std::invalid_argument("soft contact: expected μs and μk for each of " + std::to_string(pairs) +
+                                    " pairs");
+    soft_nodes = in.soft_nodes, soft_label = in.soft_label, soft_tris = in.soft_tris;
+    soft_pair = in.soft_pair, soft_mu = in.soft_mu, soft_labels = in.soft_labels, soft_pairs = pairs;
+    soft_skin = in.soft_skin;
+    soft_bits.assign(ns, 0);
+    for (std::size_t i = 0; i < ns; ++i)
+        for (int d = 0; d < 3; ++d)
+            if (free_mask[d * n_pad + soft_nodes[i]] != T(0)) soft_bits[i] |= index_t(1) << d;
+    soft_tri_h.assign(nt, 0.0);
+    double longest = 0.0;
+    for (std::size_t t = 0; t < nt; ++t) {
+        for (int k = 0; k < 3; ++k) {
+            const index_t a = soft_nodes[soft_tris[3 * t + k]],
+                          b = soft_nodes[soft_tris[3 * t + (k + 1) % 3]];
+            double e2 = 0.0;
+            for (int d = 0; d < 3; ++d) e2 += (X[3 * a + d] - X[3 * b + d]) * (X[3 * a + d] - X[3 * b + d]);
+            soft_tri_h[t] += std::sqrt(e2) / 3.0;
+            longest = std::sqrt(e2) > longest ? std::sqrt(e2) : longest;
+        }
+    }
+    soft_cell = longest > soft_skin ? longest : soft_skin;
+    std::size_t H = 1;
+    while (H < 2 * nt) H *= 2;
+    soft_hash_mask = static_cast<index_t>(H - 1);
 }
 
 template <class T>

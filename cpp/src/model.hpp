@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "pliant/contact.hpp"
+#include "pliant/soft_contact.hpp"
 
 namespace pliant {
 
@@ -58,6 +59,13 @@ struct ModelInput {
     bool anp = false;                  // average nodal pressure (T4ANP)
     double stiffness_damping = 0.0;    // Rayleigh β [s] (tled.hpp: add_damping_forces)
     double anp_stabilization = 0.0;    // T4ANP: fraction γ of the element's own pressure
+    // Contact between deformable surfaces (soft_contact.hpp): its surface nodes (engine nodes) with
+    // their body labels, its triangles (3 surface-node indices each, outward), the pair table
+    // (labels × labels, pair index or −1), μs and μk per pair, the Verlet skin [m].
+    std::vector<index_t> soft_nodes, soft_label, soft_tris, soft_pair;
+    std::vector<double> soft_mu;
+    index_t soft_labels = 0;
+    double soft_skin = 0.0;
 };
 
 template <class T>
@@ -94,6 +102,12 @@ struct Model {
     std::vector<index_t> contact_bits;  // per contact node: bits 0–2 free DOFs, bit 3 + k tool k
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys, tool_grid, tool_grips;
+    // Soft contact (ModelInput's, plus each surface node's free-DOF bits, each triangle's mean
+    // reference edge [m], the grid's cell size [m] and hash mask, the number of pairs).
+    std::vector<index_t> soft_nodes, soft_bits, soft_label, soft_tris, soft_pair;
+    std::vector<double> soft_mu, soft_tri_h;
+    index_t soft_labels = 0, soft_pairs = 0, soft_hash_mask = 0;
+    double soft_skin = 0.0, soft_cell = 0.0;
     double dt_critical = 0.0;  // min over elements of h_min / c_d [s]
     index_t dt_critical_elem = -1;
     std::vector<double> elem_dt;  // per builder element: h_min / c_d [s] (host only, for reports)
@@ -131,6 +145,7 @@ private:
     void build_pressure(const ModelInput& in);
     void build_constraints(const ModelInput& in);
     void build_contact_and_tables(const ModelInput& in);
+    void build_soft_contact(const ModelInput& in);
 };
 
 /// A stamp unique in the process (State::version).

@@ -50,6 +50,7 @@ from .tled import (
     Step,
     Table,
     ToolHistory,
+    PairHistory,
 )
 
 
@@ -75,6 +76,7 @@ __all__ = [
     "RelaxInfo",
     "ContactReport",
     "ToolHistory",
+    "PairHistory",
     "Constant",
     "Step",
     "Ramp",

@@ -61,6 +61,9 @@ public:
     /// Force [N] and torque [N·m] each tool received at each step of the last run, (steps, tools, 6);
     /// after a relaxation, the last step's only.
     virtual std::vector<double> tool_history() = 0;
+    /// Force [N] the first body of each soft-contact pair received from the second at each step of
+    /// the last run, (steps, pairs, 3) (a self-contact pair: the sum over its slave nodes).
+    virtual std::vector<double> pair_history() = 0;
     virtual ContactReport contact_report() = 0;
     /// Replace every tool's keyframes (8 numbers each: t, position (3), quaternion w x y z)
     /// and every tool's grip times (closes, opens, closes…: times [s], ascending; empty: never)

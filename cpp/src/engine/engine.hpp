@@ -7,7 +7,8 @@
 // A step (step_once): (1) step scalars: load-curve factors, tool poses, the step counter;
 // (2) element forces per material group (T4ANP: element pressures, nodal averages, then forces;
 // viscoelastic: the Prony state advances); (3) per node: gather, central difference update,
-// kinematic constraints; (4) contact with the rigid tools (and grasping) and the per-tool force sums.
+// kinematic constraints; (4) contact with the rigid tools (and grasping) and the per-tool force sums;
+// (5) contact between deformable surfaces (soft_contact.hpp) and the per-pair force sums.
 // Stability checks every `check_every` steps (J ≤ 0 or NaN per element; non-finite or blown-up nodes).
 // Everything a kernel needs is captured by value (a DeviceView of device pointers): CUDA kernels
 // cannot read the host object, and graphs keep the values they were captured with.
@@ -41,6 +42,8 @@ struct Scalars {
     int status;              // check verdict (RunStatus)
     index_t where;
     double value;
+    int soft_rebuild;  // soft contact: rebuild the candidate lists this step (set at each run's start)
+    double soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m]
 };
 
 /// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
@@ -69,6 +72,15 @@ struct DeviceView {
     index_t* closed;  // per tool: grip bits of the step (kGripClosedBefore / After)
     index_t* gtool;   // per contact node: the tool holding it, −1 (State::grip_tool)
     double* gat;      // per contact node: its position in that tool's frame [m] (State::grip_at)
+    // Tool and pair forces per step: hist_width = 6 per tool + 3 per soft-contact pair.
+    index_t hist_width, n_pairs;
+    // Soft contact (engine_soft.hpp): the surface, positions at the last rebuild (3 per surface node),
+    // each chunk's largest move², the grid (bucket heads, cursors, each triangle's bucket, centroid,
+    // radius; triangles by bucket), candidates (kSoftCandidates per node), each node's contact
+    // (triangle, weights, impulse), contacts per node, impulse sums and forces [N] (3 per node).
+    SoftSurface soft;
+    double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce;
+    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *scount;
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -100,6 +112,7 @@ public:
     ElementResults<T> measures(const State<T>& s) override;
     std::vector<T> internal_forces(const State<T>& s) override;
     std::vector<double> tool_history() override;
+    std::vector<double> pair_history() override;
     ContactReport contact_report() override;
     void set_tool_keys(const std::vector<std::vector<double>>& keys,
                        const std::vector<std::vector<double>>& grips,
@@ -124,6 +137,7 @@ public:
     void forces(const T* u, ViscoMode visco_mode, double dt);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
     void contact_pass(const Phase& ph, bool relaxing);
+    void soft_pass(const Phase& ph, bool relaxing);
     Scalars<T> check(const T* u_new, double t_elem, double t_node, double blowup, RunReport& rep);
     void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt);
     void copy(T* dst, const T* src, std::size_t n);
@@ -147,6 +161,8 @@ private:
     void store(State<T>& s);
     void set_scalars(double t0, double dt, double alpha);
     void ensure_history(long rows);
+    void allocate_soft(std::size_t ns, std::size_t nst);
+    std::vector<double> history_columns(std::size_t begin, std::size_t width);
     void refresh_view();
     void upload_materials();
 
@@ -162,6 +178,8 @@ private:
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
+    DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, d_soft_mu_;
+    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, scount_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceView<T> v_{};
@@ -174,4 +192,5 @@ private:
 }  // namespace pliant
 
 #include "engine_steps.hpp"
+#include "engine_soft.hpp"
 #include "engine_calls.hpp"

@@ -30,7 +30,9 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     gat_ = DeviceBuffer<double, Dev>(dev_, 3 * nc);
     closed_ = DeviceBuffer<index_t, Dev>(dev_, nt);
     chunk_ = DeviceBuffer<double, Dev>(dev_, chunks * 6 * nt);
-    fcon_ = DeviceBuffer<double, Dev>(dev_, nt ? P3 : 0);
+    const std::size_t ns = m.soft_nodes.size(), nst = m.soft_tris.size() / 3;
+    fcon_ = DeviceBuffer<double, Dev>(dev_, nt || ns ? P3 : 0);
+    allocate_soft(ns, nst);
     partial_ = DeviceBuffer<double, Dev>(
         dev_, 4 * ((static_cast<std::size_t>(m.n_nodes) + kMeasureChunk - 1) / kMeasureChunk));
     d_tools_ = DeviceBuffer<RigidTool, Dev>(dev_, nt);
@@ -62,6 +64,28 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     refresh_view();
     const std::vector<T> ones(S, T(1));  // J before any step: every element fine
     J_.upload(ones.data(), S);
+}
+
+/// The soft-contact buffers (engine_soft.hpp) for ns surface nodes and nst triangles.
+template <class T, class Dev>
+void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
+    const std::size_t H = ns ? static_cast<std::size_t>(m_.soft_hash_mask) + 1 : 0;
+    sb_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
+    smove_ = DeviceBuffer<double, Dev>(dev_, (ns + kSoftChunk - 1) / kSoftChunk);
+    stc_ = DeviceBuffer<double, Dev>(dev_, 3 * nst);
+    str_ = DeviceBuffer<double, Dev>(dev_, nst);
+    srec_w_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
+    srec_p_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
+    sacc_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
+    sforce_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
+    shead_ = DeviceBuffer<index_t, Dev>(dev_, H + 1);
+    scursor_ = DeviceBuffer<index_t, Dev>(dev_, H);
+    sbucket_ = DeviceBuffer<index_t, Dev>(dev_, nst);
+    scell_ = DeviceBuffer<index_t, Dev>(dev_, nst);
+    scand_ = DeviceBuffer<index_t, Dev>(dev_, ns * kSoftCandidates);
+    srec_ = DeviceBuffer<index_t, Dev>(dev_, ns);
+    scount_ = DeviceBuffer<index_t, Dev>(dev_, ns);
+    d_soft_mu_ = DeviceBuffer<double, Dev>::mirror(dev_, m_.soft_mu);
 }
 
 /// The kernels' view of every device array (after any of them was reallocated).
@@ -103,6 +127,19 @@ void Engine<T, Dev>::refresh_view() {
     v.cforce = cforce_.data(), v.chunk = chunk_.data(), v.hist = hist_.data();
     v.fcon = fcon_.data(), v.partial = partial_.data(), v.ctool = ctool_.data();
     v.closed = closed_.data(), v.gtool = gtool_.data(), v.gat = gat_.data();
+    v.n_pairs = m.soft_pairs;
+    v.hist_width = 6 * v.n_tools + 3 * v.n_pairs;
+    SoftSurface& sf = v.soft;
+    sf.n_nodes = static_cast<index_t>(m.soft_nodes.size());
+    sf.n_tris = static_cast<index_t>(m.soft_tris.size() / 3);
+    sf.labels = m.soft_labels, sf.hash_mask = m.soft_hash_mask;
+    sf.node = mb_.snodes.data(), sf.bits = mb_.sbits.data(), sf.label = mb_.slabel.data();
+    sf.tri = mb_.stris.data(), sf.tri_h = mb_.stri_h.data(), sf.pair = mb_.spair.data();
+    sf.mu = d_soft_mu_.data(), sf.skin = m.soft_skin, sf.cell = m.soft_cell;
+    v.sb = sb_.data(), v.smove = smove_.data(), v.stc = stc_.data(), v.str = str_.data();
+    v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();
+    v.shead = shead_.data(), v.scursor = scursor_.data(), v.sbucket = sbucket_.data();
+    v.scell = scell_.data(), v.scand = scand_.data(), v.srec = srec_.data(), v.scount = scount_.data();
 }
 
 /// Copies a state to the device unless the device holds it already (same object, same version).
@@ -137,12 +174,14 @@ void Engine<T, Dev>::set_scalars(double t0, double dt, double alpha) {
     s.t0 = t0;
     s.it = central_difference<T>(dt, alpha);
     s.alpha = alpha;
+    s.soft_rebuild = 1;  // the state may have changed since the last run: new candidate lists
     sc_.upload(&s, 1);
 }
 
 template <class T, class Dev>
 void Engine<T, Dev>::ensure_history(long rows) {
-    const std::size_t need = static_cast<std::size_t>(rows < 1 ? 1 : rows) * 6 * tools_.size();
+    const std::size_t width = 6 * tools_.size() + 3 * static_cast<std::size_t>(m_.soft_pairs);
+    const std::size_t need = static_cast<std::size_t>(rows < 1 ? 1 : rows) * width;
     if (need > hist_.size() || hist_.data() == nullptr) {
         hist_ = DeviceBuffer<double, Dev>(dev_, need);
         refresh_view();
@@ -309,11 +348,26 @@ std::vector<T> Engine<T, Dev>::internal_forces(const State<T>& s) {
     return f_node_[0].to_host();
 }
 
+/// Columns [begin, begin + width) of the last run's history rows (tools: 6 each, then pairs: 3 each).
+template <class T, class Dev>
+std::vector<double> Engine<T, Dev>::history_columns(std::size_t begin, std::size_t width) {
+    const std::size_t rows = static_cast<std::size_t>(history_rows_);
+    const std::size_t w = 6 * tools_.size() + 3 * static_cast<std::size_t>(m_.soft_pairs);
+    std::vector<double> all(rows * w), h(rows * width);
+    hist_.download(all.data(), all.size());
+    for (std::size_t r = 0; r < rows; ++r)
+        for (std::size_t c = 0; c < width; ++c) h[r * width + c] = all[r * w + begin + c];
+    return h;
+}
+
 template <class T, class Dev>
 std::vector<double> Engine<T, Dev>::tool_history() {
-    std::vector<double> h(static_cast<std::size_t>(history_rows_) * 6 * tools_.size());
-    hist_.download(h.data(), h.size());
-    return h;
+    return history_columns(0, 6 * tools_.size());
+}
+
+template <class T, class Dev>
+std::vector<double> Engine<T, Dev>::pair_history() {
+    return history_columns(6 * tools_.size(), 3 * static_cast<std::size_t>(m_.soft_pairs));
 }
 
 template <class T, class Dev>

@@ -18,6 +18,7 @@ void Engine<T, Dev>::step_once(const Phase& ph, double dt, double time_dt, bool 
     node_pass(ph, relaxing, f_node_out);
     const double w2 = dev_.wtime();
     if (v_.n_tools) contact_pass(ph, relaxing);
+    if (v_.soft.n_nodes) soft_pass(ph, relaxing);
     if (dev_.lead()) {
         rep.elem_seconds += w1 - w0;
         rep.node_seconds += w2 - w1;
@@ -191,7 +192,7 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
     });
     dev_.serial([=] PLIANT_KERNEL() {
         const int w = 6 * v.n_tools;
-        double* row = v.hist + v.sc->row * w;
+        double* row = v.hist + v.sc->row * v.hist_width;
         for (int k = 0; k < w; ++k) {
             double s = 0.0;
             for (index_t c = 0; c < v.chunks; ++c) s += v.chunk[static_cast<std::size_t>(c) * w + k];
@@ -251,11 +252,15 @@ template <class T, class Dev>
 void Engine<T, Dev>::relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev,
                                    double dt) {
     const DeviceView<T> v = v_;
-    if (v.n_tools) {  // contact forces are external loads at equilibrium
+    const bool contact = v.n_tools || v.soft.n_nodes;
+    if (contact) {  // contact forces are external loads at equilibrium
         dev_.each(3 * v.P, [=] PLIANT_KERNEL(index_t i) { v.fcon[i] = 0.0; });
         dev_.each(v.n_contact, [=] PLIANT_KERNEL(index_t c) {
             if (v.ctool[c] < 0) return;
             for (int d = 0; d < 3; ++d) v.fcon[d * v.P + v.cnodes[c]] = v.cforce[3 * c + d];
+        });
+        dev_.each(v.soft.n_nodes, [=] PLIANT_KERNEL(index_t i) {  // after the tools: a node may have both
+            for (int d = 0; d < 3; ++d) v.fcon[d * v.P + v.soft.node[i]] += v.sforce[3 * i + d];
         });
     }
     const index_t chunks = (v.n_nodes + kMeasureChunk - 1) / kMeasureChunk;
@@ -267,7 +272,7 @@ void Engine<T, Dev>::relax_measure(const T* u_cur, const T* u_prev, const T* f_c
             pressure_force(n, v.relax_nodes, v.pf, u_cur, v.P, q);
             for (int d = 0; d < 3; ++d) {
                 const std::size_t i = static_cast<std::size_t>(d) * v.P + n;
-                double r = double(q[d]) + (v.n_tools ? v.fcon[i] : 0.0);
+                double r = double(q[d]) + (contact ? v.fcon[i] : 0.0);
                 for (int p = 0; p < v.nodes.n_patterns; ++p)
                     r += double(v.pf[p]) * v.nodes.load_patterns[p * 3 * static_cast<std::size_t>(v.P) + i];
                 const double fm = v.free_mask[i], fc = f_cur[i];

@@ -41,7 +41,15 @@ _KNOWN_TOP = {
     "ContactUSProbe",
     "ContactSurface",
 }
-_SYSTEM = {"TimeStep", "TotalTime", "DampingCoeff", "Density", "HGKappa", "DoDeformableCollision"}
+_SYSTEM = {
+    "TimeStep",
+    "TotalTime",
+    "DampingCoeff",
+    "Density",
+    "HGKappa",
+    "DoDeformableCollision",
+    "DoSelfCollision",
+}
 
 
 # NiftySim user guide v2.4, App. A.1: material code → (pliant class, parameters in file order).
@@ -190,7 +198,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
             unsupported(child.tag, "not implemented in pliant")
 
     X, T, etype = _mesh(root, f)
-    dt, total, damping, default_rho = _system_params(root, f, unsupported, warnings)
+    dt, total, damping, default_rho, collide = _system_params(root, f, unsupported, warnings)
     b = ModelBuilder()
     with _named(f, "Elements"):
         b.add_mesh(X, T, source=f)
@@ -214,6 +222,9 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         _rigid_contacts(root, b, total, f, unsupported, warnings)
     with _named(f, "ContactSurface"):
         _rigid_surfaces(root, b, path, total, f, unsupported)
+    deformable, self_collide = collide
+    if deformable or self_collide:  # NiftySim's mesh-based contact is frictionless
+        b.set_soft_contact(friction=0.0, pairs=None if deformable else [], self_contact=self_collide)
 
     out_every = None
     for o in root.findall("Output"):
@@ -298,12 +309,15 @@ def _system_params(root, f: str, unsupported, warnings: list[str]):
     default_rho = (
         _scalar(params["Density"], f, "SystemParams/Density", float, 0.0) if "Density" in params else None
     )
-    if params.get("DoDeformableCollision", "0").strip() not in ("0", ""):
-        unsupported("DoDeformableCollision", "contact between deformable bodies is not yet in pliant")
+    # Mesh-based contact (user guide §3.9.2): between the deformable bodies, and of each with itself.
+    collide = tuple(
+        bool(_scalar(params.get(k, "0") or "0", f, f"SystemParams/{k}", int, 0, False))
+        for k in ("DoDeformableCollision", "DoSelfCollision")
+    )
     if "HGKappa" in params:
         warnings.append(f"{f}: HGKappa ignored (hourglass control applies to H8 elements only)")
 
-    return dt, total, damping, default_rho
+    return dt, total, damping, default_rho, collide
 
 
 def element_set(es, M: int, f: str, key: str) -> np.ndarray:

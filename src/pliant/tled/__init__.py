@@ -3,7 +3,7 @@
 from .builder import ModelBuilder
 from .curves import Constant, LoadCurve, Ramp, SmoothRamp, Hilly, Step, Table
 from .model import Model, State
-from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory
+from .report import ContactReport, PairHistory, RelaxInfo, RunInfo, ToolHistory
 from .solver import Simulation, Solver
 
 __all__ = [
@@ -16,6 +16,7 @@ __all__ = [
     "RelaxInfo",
     "ContactReport",
     "ToolHistory",
+    "PairHistory",
     "LoadCurve",
     "Constant",
     "Step",

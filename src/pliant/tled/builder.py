@@ -81,6 +81,7 @@ class ModelBuilder:
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
         self.tools: list = []  # rigid tools (pliant.contact)
         self.tool_nodes: list = []  # per tool: node ids it is restricted to, or None (all)
+        self.soft_contact = None  # contact between deformable bodies (pliant.contact.SoftContact)
         self.source = "arrays"  # what the mesh came from, for error messages
 
     # --- mesh -------------------------------------------------------------------------------
@@ -297,6 +298,27 @@ class ModelBuilder:
         self.tool_nodes.append(nodes)
         return tool
 
+    def bodies(self) -> np.ndarray:
+        """Body number of each element (M,): the connected parts of the mesh (elements joined by
+        shared nodes), numbered in the order of their first element (pliant.contact.soft)."""
+        from ..contact.soft import body_labels
+
+        if self.soft_contact is not None and self.soft_contact.labels is not None:
+            return self.soft_contact.labels.copy()
+        return body_labels(self.tets, self.n_nodes)
+
+    def set_soft_contact(self, friction=0.0, pairs=None, self_contact=False, skin: float | None = None):
+        """Contact between deformable bodies: the surface nodes of each body are kept out of the
+        surfaces of the bodies it touches, with Coulomb friction ``friction`` (μ or (μs, μk));
+        momentum is conserved by each pair (docs/contact.md). ``pairs``: the pairs of body numbers
+        (:meth:`bodies`) that touch, or None for every pair of different bodies; ``self_contact``:
+        True for every body, or the body numbers that touch themselves (a fold, a grasped flap);
+        ``skin`` [m]: the broad phase's Verlet skin (default 0.3 × the median surface edge)."""
+        from ..contact.soft import SoftContact
+
+        self.soft_contact = SoftContact.make(friction, pairs, self_contact, skin)
+        return self.soft_contact
+
     # --- topology changes -------------------------------------------------------------------
     def snapshot(self) -> "ModelBuilder":
         """A copy that later calls on this builder do not change (a Model keeps one, to rebuild
@@ -324,6 +346,9 @@ class ModelBuilder:
         for (n, d), v in self._cons.items():
             for c in copies.get(n, ()):
                 b._cons[(c, d)] = v
+        if self.soft_contact is not None:  # cut pieces keep their body's number
+            b.soft_contact = copy.copy(self.soft_contact)
+            b.soft_contact.labels = self.bodies()
         b.tool_nodes = [
             None if s is None else np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]]))
             for s in self.tool_nodes

@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import _core
 from ..checks import shown
+from ..contact.soft import engine_surface, no_surface
 from ..errors import InputError, MeshError, PliantWarning
 from .curves import Constant, LoadCurve
 
@@ -236,6 +237,13 @@ class Model:
         cn_order = np.argsort(node_rank[cn], kind="stable")
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
+        soft = (
+            engine_surface(builder.soft_contact, X, T, node_rank)
+            if builder.soft_contact is not None
+            else dict(no_surface(), pairs=[], labels=None)
+        )
+        self.contact_pairs = soft.pop("pairs")  # soft-contact pairs of bodies (a <= b), index order
+        self.bodies = soft.pop("labels")  # body of each element (user order), or None
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
             for grp in np.nonzero(keep)[0]:
@@ -286,6 +294,7 @@ class Model:
                 anp_stabilization=float(builder.nodal_pressure_stabilization),
                 tool_grips=[list(t.grips) for t in self.tools],
                 tool_reach=[float(t.reach) for t in self.tools],
+                **soft,
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on

@@ -37,6 +37,17 @@ class ToolHistory:
 
 
 @dataclass
+class PairHistory:
+    """Per soft-contact pair of bodies (a, b), a <= b: ``time`` [s] (steps,) and ``force`` [N]
+    (steps, 3), the force body a received from body b at each step run so far (self contact,
+    a == b: the sum of the forces on the nodes pressed onto the body's own surface)."""
+
+    bodies: tuple[int, int]
+    time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+
+@dataclass
 class ContactReport:
     """Everything a solver knows about contact with its rigid tools (``Solver.contact_report()``).
 
@@ -44,6 +55,7 @@ class ContactReport:
     nodes (user numbering) (n,); ``node_tool``: the tool touching each at the last step (−1: none)
     (n,); ``node_force``: the force that tool exerts on it [N] (n, 3). ``relaxed``: after
     ``Solver.relax``, per tool (force [N], torque [N·m]) at the equilibrium; else None.
+    ``pairs``: a :class:`PairHistory` per pair of bodies in soft contact (``Model.contact_pairs``).
     """
 
     tools: list[ToolHistory]
@@ -51,6 +63,7 @@ class ContactReport:
     node_tool: np.ndarray
     node_force: np.ndarray
     relaxed: list[tuple[np.ndarray, np.ndarray]] | None = None
+    pairs: list[PairHistory] = field(default_factory=list)
 
     def force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """(force [N], torque [N·m]) tool k received: at the equilibrium if the last call was a

@@ -18,7 +18,7 @@ from .._core import RunStatus
 from ..checks import finite_number, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .model import Model, State
-from .report import ContactReport, RelaxInfo, RunInfo, ToolHistory, tool_force
+from .report import ContactReport, PairHistory, RelaxInfo, RunInfo, ToolHistory, tool_force
 
 __all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation", "MAX_STEPS"]
 
@@ -102,6 +102,7 @@ class Solver:
         # Blow-up: any displacement beyond 100 × the body's size.
         self.blowup = 100.0 * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
         self._histories = [ToolHistory(t.name) for t in model.tools]
+        self._pairs = [PairHistory(p) for p in model.contact_pairs]
         self._relaxed: list | None = None
         self.tools = [copy.copy(t) for t in model.tools]  # trajectories: set_tool_pose edits them
         for t in self.tools:
@@ -128,6 +129,8 @@ class Solver:
         )
         new.tools = self.tools
         new._histories = self._histories
+        if [h.bodies for h in self._pairs] == list(model.contact_pairs):
+            new._pairs = self._pairs
         if model.tools:
             new.set_tool_keys()
         if self._material_scale != 1.0:
@@ -167,7 +170,7 @@ class Solver:
         tool, f = np.asarray(tool), np.array(f)
         f[tool < 0] = 0.0
         return ContactReport(
-            self._histories, self.model._node_order[np.asarray(nodes)], tool, f, self._relaxed
+            self._histories, self.model._node_order[np.asarray(nodes)], tool, f, self._relaxed, self._pairs
         )
 
     @property
@@ -296,11 +299,16 @@ class Solver:
         return _step_count(steps)
 
     def _record_tools(self, t0: float, steps: int):
+        t = t0 + self.dt * np.arange(1, steps + 1)
+        keep = slice(-self.history_steps, None) if self.history_steps else slice(None)
+        if self._pairs:
+            hp = np.asarray(self._backend.pair_history())[:steps]
+            for k, P in enumerate(self._pairs):
+                P.time = np.concatenate([P.time, t])[keep]
+                P.force = np.concatenate([P.force, hp[:, k, :]])[keep]
         if not self.model.tools:
             return
         h = np.asarray(self._backend.tool_history())[:steps]
-        t = t0 + self.dt * np.arange(1, steps + 1)
-        keep = slice(-self.history_steps, None) if self.history_steps else slice(None)
         for k, H in enumerate(self._histories):
             H.time = np.concatenate([H.time, t])[keep]
             H.force = np.concatenate([H.force, h[:, k, :3]])[keep]

@@ -1,0 +1,178 @@
+"""Contact between deformable bodies (and of a body with itself): which bodies touch which, with
+what friction, and the surface the engine needs (cpp/include/pliant/soft_contact.hpp).
+
+A *body* is a connected part of the mesh (elements joined through shared nodes), numbered in the
+order of its first element: :func:`body_labels`. Two meshes added with ``ModelBuilder.add_mesh``
+are two bodies; NiftySim sub-models that are not merged are bodies too. Pieces cut from a body
+keep its number (they touch each other if that body has self contact).
+
+Method (docs/contact.md): node-to-triangle kinematic contact with Coulomb friction, momentum
+conserved by each pair; every surface node of a body is checked against the triangles of the
+bodies it may touch (the boundary triangles of the tetrahedra, so the simulation surface, not an
+embedded visual one, collides).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..checks import finite_number, shown
+from ..errors import InputError
+
+__all__ = ["SoftContact", "body_labels"]
+
+# Verlet skin as a fraction of the median surface edge (soft_contact.hpp: candidate lists are
+# rebuilt when a node has moved half of it; larger skins rebuild less often and list more).
+SKIN_FRACTION = 0.3
+
+
+def body_labels(tets: np.ndarray, n_nodes: int) -> np.ndarray:
+    """Body of each element (M,): connected components of the mesh through shared nodes, numbered
+    in the order of their first element."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    T = np.asarray(tets, np.int64)
+    M = T.shape[0]
+    rows = np.repeat(np.arange(M), 4)
+    g = coo_matrix((np.ones(4 * M), (rows, T.ravel())), shape=(M, n_nodes)).tocsr()
+    _, comp = connected_components(g @ g.T, directed=False)
+    first = np.full(comp.max() + 1, M)
+    np.minimum.at(first, comp, np.arange(M))
+    rank = np.empty_like(first)
+    rank[np.argsort(first, kind="stable")] = np.arange(first.size)
+    return rank[comp]
+
+
+@dataclass
+class SoftContact:
+    """Contact between bodies (``ModelBuilder.set_soft_contact``).
+
+    mu_s, mu_k: Coulomb friction (static, kinetic) between soft surfaces; pairs: the pairs of
+    bodies (a, b) that touch, or None for every pair of different bodies; self_contact: True for
+    every body, or the bodies that touch themselves; skin: the broad phase's Verlet skin [m]
+    (default SKIN_FRACTION × the median surface edge); labels: body per element, fixed (set by
+    ``ModelBuilder.split`` so that cut pieces keep their body), or None (computed at finalize).
+    """
+
+    mu_s: float = 0.0
+    mu_k: float = 0.0
+    pairs: tuple[tuple[int, int], ...] | None = None
+    self_contact: bool | tuple[int, ...] = False
+    skin: float | None = None
+    labels: np.ndarray | None = None
+
+    @staticmethod
+    def make(friction=0.0, pairs=None, self_contact=False, skin=None) -> SoftContact:
+        """Checked settings; friction: μ or (μs, μk)."""
+        mu = np.atleast_1d(np.asarray(friction, dtype=float)) if _numeric(friction) else None
+        if mu is None or mu.shape not in ((1,), (2,)) or not np.all(np.isfinite(mu)) or np.any(mu < 0):
+            raise InputError(
+                f"soft contact friction = {shown(friction)}; expected μ or (μs, μk), finite, >= 0"
+            )
+        mu_s, mu_k = (float(mu[0]), float(mu[-1]))
+        if mu_k > mu_s:
+            raise InputError(f"soft contact friction = {shown(friction)}: kinetic μk above static μs")
+        if pairs is not None:
+            try:
+                pairs = tuple((int(a), int(b)) for a, b in pairs)
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"soft contact pairs = {shown(pairs)}; expected pairs of body numbers [(a, b), ...]"
+                ) from None
+        if not isinstance(self_contact, bool):
+            try:
+                self_contact = tuple(int(b) for b in self_contact)
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"self_contact = {shown(self_contact)}; expected True, False or a list of body numbers"
+                ) from None
+        if skin is not None:
+            skin = finite_number(skin, "soft contact skin", "m")
+            if not skin > 0:
+                raise InputError(f"soft contact skin = {shown(skin)}; expected > 0 [m]")
+        return SoftContact(mu_s, mu_k, pairs, self_contact, skin)
+
+    def pair_table(self, n_bodies: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
+        """The engine's pair table (n_bodies, n_bodies): pair index of (slave body, master body), −1
+        where they do not touch; and the pairs (a ≤ b) in index order."""
+        wanted: set[tuple[int, int]] = set()
+        if self.pairs is None:
+            wanted |= {(a, b) for a in range(n_bodies) for b in range(a + 1, n_bodies)}
+        else:
+            for a, b in self.pairs:
+                for x in (a, b):
+                    if not 0 <= x < n_bodies:
+                        raise InputError(
+                            f"soft contact pair ({a}, {b}): body {x} does not exist; the mesh has "
+                            f"{n_bodies} bodies (0 to {n_bodies - 1}; ModelBuilder.bodies())"
+                        )
+                wanted.add((min(a, b), max(a, b)))
+        selfs = range(n_bodies) if self.self_contact is True else (self.self_contact or ())
+        for b in selfs:
+            if not 0 <= b < n_bodies:
+                raise InputError(f"self_contact body {b} does not exist; the mesh has {n_bodies} bodies")
+            wanted.add((b, b))
+        order = sorted(wanted)
+        table = np.full((n_bodies, n_bodies), -1, np.int64)
+        for k, (a, b) in enumerate(order):
+            table[a, b] = table[b, a] = k
+        return table, order
+
+
+def _numeric(x) -> bool:
+    try:
+        np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def engine_surface(contact: SoftContact, X: np.ndarray, T: np.ndarray, node_rank: np.ndarray) -> dict:
+    """The engine's soft-contact arrays (Model → _core.Engine): the boundary triangles of the bodies
+    that touch something (outward), their nodes in engine numbering with body labels, the pair
+    table and friction per pair, the skin [m]. Also 'pairs' (the pairs in index order) and
+    'labels' (body per element)."""
+    from ..mesh.topology import boundary_faces
+
+    labels = contact.labels if contact.labels is not None else body_labels(T, X.shape[0])
+    n_bodies = int(labels.max()) + 1 if labels.size else 0
+    table, pairs = contact.pair_table(n_bodies)
+    if not pairs:  # one body without self contact: nothing to touch
+        return dict(no_surface(), pairs=[], labels=labels)
+    active = np.nonzero((table >= 0).any(axis=1))[0]
+    faces, owner = boundary_faces(T)
+    faces = faces[np.isin(labels[owner], active)]
+    face_body = labels[owner[np.isin(labels[owner], active)]]
+    nodes = np.unique(faces)
+    node_body = np.zeros(X.shape[0], np.int64)
+    node_body[faces.ravel()] = np.repeat(face_body, 3)
+    order = np.argsort(node_rank[nodes], kind="stable")  # engine order: sequential access
+    nodes = nodes[order]
+    index = np.full(X.shape[0], -1, np.int64)
+    index[nodes] = np.arange(nodes.size)
+    edges = np.linalg.norm(X[faces] - X[np.roll(faces, 1, axis=1)], axis=-1)
+    skin = contact.skin if contact.skin is not None else SKIN_FRACTION * float(np.median(edges))
+    if not (math.isfinite(skin) and skin > 0):
+        raise InputError("soft contact: the bodies have no surface to touch")
+    return dict(
+        soft_nodes=[int(n) for n in node_rank[nodes]],
+        soft_label=[int(b) for b in node_body[nodes]],
+        soft_tris=[int(i) for i in index[faces].ravel()],
+        soft_pair=[int(p) for p in table.ravel()],
+        soft_labels=int(n_bodies),
+        soft_mu=[m for _ in pairs for m in (contact.mu_s, contact.mu_k)],
+        soft_skin=float(skin),
+        pairs=pairs,
+        labels=labels,
+    )
+
+
+def no_surface() -> dict:
+    """The engine's soft-contact arrays of a model without soft contact."""
+    return dict(
+        soft_nodes=[], soft_label=[], soft_tris=[], soft_pair=[], soft_labels=0, soft_mu=[], soft_skin=0.0
+    )
