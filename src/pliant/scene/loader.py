@@ -11,13 +11,13 @@ import numpy as np
 
 from .. import _core
 from .. import materials as mat
-from ..errors import MeshError, PliantWarning
+from ..errors import PliantWarning
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from ..tled.model import BACKENDS
 from ..tled.solver import MAX_INCREMENTS
 from ..job import Scene
-from .mesh import load_mesh
+from .bodies import load_bodies, set_contact
 from .keys import apply_overrides
 from .schema import Ctx, SceneError, check_keys, vector
 from .tools import make_tool
@@ -102,19 +102,18 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
             "load": "list",
             "tool": "list",
             "output": "table",
+            "body": "list",
+            "contact": "table",
         },
         ("mesh", "material"),
     )
     b = ModelBuilder()
     scene = Scene(str(path), b, title=data.get("title", path.stem))
     _solver_settings(ctx, data.get("solver", {}), scene)
-    with ctx.under("mesh"):
-        X, T, sets = load_mesh(ctx, data["mesh"], path.parent, scene)
-    try:
-        b.add_mesh(X, T, source=scene.meta["mesh_source"])
-    except MeshError as e:
-        raise ctx.error("mesh", str(e)) from None
+    X, T, sets, names = load_bodies(ctx, data, path.parent, scene, b)
     _materials(ctx, data["material"], b, X, T, sets)
+    if "contact" in data:
+        set_contact(ctx, data["contact"], b, sets, names)
     _constraints(ctx, data.get("constraint", []), b, X, T, scene)
     _loads(ctx, data.get("load", []), b, X, T, scene)
     _tools(ctx, data.get("tool", []), b, X, T, path.parent, scene)

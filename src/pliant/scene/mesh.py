@@ -29,15 +29,17 @@ def _rotation(deg) -> np.ndarray:
     return R
 
 
-def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
+def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh"):
+    """The mesh of a [mesh] table (or of a [[body]] table: ``key`` names it in errors)."""
     from .. import mesh as pm
     from ..io.mesh import read_volume_mesh
 
     check_keys(
         ctx,
         spec,
-        "mesh",
+        key,
         {
+            "name": "str",
             "file": "str",
             "primitive": "str",
             "size": "list|number",
@@ -61,28 +63,28 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
         },
     )
     if ("file" in spec) == ("primitive" in spec):
-        raise ctx.error("mesh", "give exactly one of 'file' or 'primitive'")
+        raise ctx.error(key, "give exactly one of 'file' or 'primitive'")
     sets: dict[str, np.ndarray] = {}
     scale = float(spec.get("scale", 1.0))
     if not scale > 0:
-        raise ctx.error("mesh.scale", "expected a scale > 0")
+        raise ctx.error(f"{key}.scale", "expected a scale > 0")
 
-    def pos(key):
-        v = spec.get(key)
+    def pos(name):
+        v = spec.get(name)
         if v is None:
-            raise ctx.error("mesh", f"primitive {spec['primitive']!r} needs '{key}' [m]")
+            raise ctx.error(key, f"primitive {spec['primitive']!r} needs '{name}' [m]")
         if not v > 0:
-            raise ctx.error(f"mesh.{key}", f"{key} = {v!r}: expected a length > 0 [m]")
+            raise ctx.error(f"{key}.{name}", f"{name} = {v!r}: expected a length > 0 [m]")
         return float(v)
 
     el = spec.get("edge_length")
     if el is not None and not el > 0:
-        raise ctx.error("mesh.edge_length", "expected a length > 0 [m]")
+        raise ctx.error(f"{key}.edge_length", "expected a length > 0 [m]")
     if "file" in spec:
         f = Path(spec["file"])
         f = f if f.is_absolute() else base / f
         if not f.is_file():
-            raise ctx.error("mesh.file", f"no such file: {f}")
+            raise ctx.error(f"{key}.file", f"no such file: {f}")
         surface_ext = {".obj", ".stl", ".ply", ".off"}
         try:
             if f.suffix.lower() in surface_ext:
@@ -91,12 +93,12 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
 
                 if spec.get("bodies", "union") not in BODIES:
                     raise ctx.error(
-                        "mesh.bodies", f"bodies = {spec['bodies']!r}; expected one of {', '.join(BODIES)}"
+                        f"{key}.bodies", f"bodies = {spec['bodies']!r}; expected one of {', '.join(BODIES)}"
                     )
                 env = spec.get("envelope")
                 if env is not None and not 0 < env < 0.1:
                     raise ctx.error(
-                        "mesh.envelope",
+                        f"{key}.envelope",
                         f"envelope = {env}; expected 0 < envelope < "
                         "0.1 (a fraction of the bounding-box diagonal)",
                     )
@@ -116,19 +118,19 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
             else:
                 X, T, sets = read_volume_mesh(f)
         except MeshError as e:
-            raise ctx.error("mesh.file", str(e)) from None
+            raise ctx.error(f"{key}.file", str(e)) from None
         scene.meta["mesh_source"] = str(f)
     else:
         kind = spec["primitive"]
         if kind == "box":
             size = spec.get("size", [0.1, 0.1, 0.1])
-            size = vector(ctx, size, "mesh.size") if isinstance(size, list) else [float(size)] * 3
+            size = vector(ctx, size, f"{key}.size") if isinstance(size, list) else [float(size)] * 3
             if min(size) <= 0:
-                raise ctx.error("mesh.size", "expected lengths > 0 [m]")
+                raise ctx.error(f"{key}.size", "expected lengths > 0 [m]")
             h = el or min(size) / 4
             cells = spec.get("cells") or [max(1, round(s / h)) for s in size]
             if not (len(cells) == 3 and all(isinstance(c, int) and c >= 1 for c in cells)):
-                raise ctx.error("mesh.cells", "expected three integers >= 1")
+                raise ctx.error(f"{key}.cells", "expected three integers >= 1")
             X, T = pm.box_tets(
                 size, cells, origin=[-s / 2 for s in size], jitter=float(spec.get("jitter", 0.0))
             )
@@ -151,18 +153,18 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene):
             scene.meta["mesh_pipeline"] = info
         else:
             raise ctx.error(
-                "mesh.primitive", f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus"
+                f"{key}.primitive", f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus"
             )
         scene.meta["mesh_source"] = f"primitive {kind}"
     X = np.asarray(X, float) * scale
     emb = scene.meta.get("embed_surface")
     if "rotate" in spec:
-        R = _rotation(vector(ctx, spec["rotate"], "mesh.rotate"))
+        R = _rotation(vector(ctx, spec["rotate"], f"{key}.rotate"))
         X = X @ R.T
         if emb:
             emb[0] = emb[0] @ R.T
     if "translate" in spec:
-        X = X + np.array(vector(ctx, spec["translate"], "mesh.translate"))
+        X = X + np.array(vector(ctx, spec["translate"], f"{key}.translate"))
         if emb:
             emb[0] = emb[0] + np.array(spec["translate"], float)
     extent = float(np.ptp(X, axis=0).max())

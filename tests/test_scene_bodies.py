@@ -1,0 +1,85 @@
+"""Scenes with several bodies ([[body]]) and soft contact between them ([contact])."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pliant as pl
+from pliant.scene import load_scene
+from pliant.scene.schema import SceneError
+
+SCENE = """
+title = "two blocks"
+[mesh]
+name = "base"
+primitive = "box"
+size = [0.04, 0.04, 0.01]
+cells = [8, 8, 2]
+[[body]]
+name = "block"
+primitive = "box"
+size = [0.02, 0.02, 0.01]
+cells = [4, 4, 2]
+translate = [0.0, 0.0, 0.0101]
+[[material]]
+type = "neo-hookean"
+E = 1.0e5
+nu = 0.3
+density = 1000.0
+region = { set = "base" }
+[[material]]
+type = "neo-hookean"
+E = 2.0e4
+nu = 0.3
+density = 500.0
+region = { set = "block" }
+[solver]
+duration = 0.3
+damping = 60.0
+[[constraint]]
+type = "fix"
+nodes = { plane = { point = [0, 0, -0.005], normal = [0, 0, 1] } }
+[[load]]
+type = "gravity"
+[contact]
+friction = [0.4, 0.3]
+pairs = [["block", "base"]]
+"""
+
+
+def _write(tmp_path, text):
+    p = tmp_path / "s.toml"
+    p.write_text(text)
+    return p
+
+
+def test_two_bodies_rest_one_on_the_other(tmp_path):
+    sc = load_scene(_write(tmp_path, SCENE))
+    b = sc.builder
+    assert np.bincount(b.bodies()).tolist() == [8 * 8 * 2 * 6, 4 * 4 * 2 * 6]  # two bodies
+    c = b.soft_contact
+    assert (c.mu_s, c.mu_k, c.pairs, c.self_contact) == (0.4, 0.3, ((1, 0),), False)
+    assert [s.density for s in b.sets] == [1000.0, 500.0]  # materials by body name
+    sim = pl.Simulation(b.finalize("float64"))
+    sim.run(until=sc.duration)
+    pair = sim.solver.contact_report().pairs[0]
+    weight = 500.0 * 0.02 * 0.02 * 0.01 * 9.81
+    # Statics: the base receives the block's weight (1 % for the last ripple at α = 60 /s).
+    np.testing.assert_allclose(pair.force[-100:].mean(axis=0), [0, 0, -weight], atol=0.01 * weight)
+
+
+@pytest.mark.parametrize(
+    "edit, key, words",
+    [
+        (('name = "block"\n', ""), "body[0].name", "needs a name"),
+        (('name = "block"', 'name = "base"'), "body[0].name", "two bodies are named"),
+        (('pairs = [["block", "base"]]', 'pairs = [["block", "liver"]]'), "contact.pairs[0]", "unknown body"),
+        (("friction = [0.4, 0.3]", "friction = [0.3, 0.4]"), "contact", "kinetic"),
+        (("friction = [0.4, 0.3]", "frictoin = 0.3"), "contact.frictoin", ""),
+    ],
+)
+def test_bad_bodies_and_contact_name_the_key(tmp_path, edit, key, words):
+    with pytest.raises(SceneError) as e:
+        load_scene(_write(tmp_path, SCENE.replace(*edit)))
+    assert e.value.key == key and words in str(e.value)
