@@ -44,6 +44,7 @@ struct Scalars {
     double value;
     int soft_rebuild;  // soft contact: rebuild the candidate lists this step (set at each run's start)
     double soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m]
+    index_t soft_active, soft_touched;  // soft contact: nodes with candidates; nodes of a sweep's contacts
 };
 
 /// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
@@ -80,7 +81,7 @@ struct DeviceView {
     // (triangle, weights, impulse), contacts per node, impulse sums and forces [N] (3 per node).
     SoftSurface soft;
     double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce;
-    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *scount;
+    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *scount, *sactive, *stouched;
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -179,7 +180,8 @@ private:
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
     DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, d_soft_mu_;
-    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, scount_;
+    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, scount_, sactive_,
+        stouched_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceView<T> v_{};

@@ -85,6 +85,8 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     scand_ = DeviceBuffer<index_t, Dev>(dev_, ns * kSoftCandidates);
     srec_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     scount_ = DeviceBuffer<index_t, Dev>(dev_, ns);
+    sactive_ = DeviceBuffer<index_t, Dev>(dev_, ns);
+    stouched_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     d_soft_mu_ = DeviceBuffer<double, Dev>::mirror(dev_, m_.soft_mu);
 }
 
@@ -140,6 +142,7 @@ void Engine<T, Dev>::refresh_view() {
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();
     v.shead = shead_.data(), v.scursor = scursor_.data(), v.sbucket = sbucket_.data();
     v.scell = scell_.data(), v.scand = scand_.data(), v.srec = srec_.data(), v.scount = scount_.data();
+    v.sactive = sactive_.data(), v.stouched = stouched_.data();
 }
 
 /// Copies a state to the device unless the device holds it already (same object, same version).

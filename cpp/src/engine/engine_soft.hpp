@@ -7,33 +7,54 @@ namespace pliant {
 /// Surface nodes per chunk of the skin test (a chunk's largest move is one number).
 constexpr index_t kSoftChunk = 512;
 
+/// After a rebuild, one thread: the surface nodes with candidates, in order (sactive; their count
+/// in the scalars). Only they are checked until the next rebuild.
+template <class T>
+PLIANT_HD void soft_activate(const DeviceView<T>& v, const SoftSurface& s) {
+    Scalars<T>& sc = *v.sc;
+    if (!sc.soft_rebuild) return;
+    index_t n = 0;
+    for (index_t i = 0; i < s.n_nodes; ++i)
+        if (v.scand[static_cast<std::size_t>(i) * kSoftCandidates] >= 0) v.sactive[n++] = i;
+    sc.soft_active = n;
+    sc.soft_rebuild = 0;
+}
+
+/// Adds w p to surface node n's impulse sum; a node's first impulse of the sweep lists it in
+/// stouched (scount: its contacts; 0 again once applied).
+template <class T>
+PLIANT_HD void soft_count(const DeviceView<T>& v, index_t n) {
+    if (v.scount[n]++ == 0) v.stouched[v.sc->soft_touched++] = n;
+}
+
 /// Step (3) of soft_pass, one thread: the contacts' impulses, averaged over the contacts sharing a
 /// node (Macklin et al. 2014 §4.2), into sacc (3 per surface node) in node order, and the force each
 /// pair's first body received from its second, p/γ1 [N], into the step's history row.
 template <class T>
 PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool first) {
-    for (index_t i = 0; i < s.n_nodes; ++i) v.scount[i] = 0;
-    for (index_t i = 0; i < s.n_nodes; ++i) {
-        const index_t t = v.srec[i];
+    Scalars<T>& sc = *v.sc;
+    sc.soft_touched = 0;
+    for (index_t a = 0; a < sc.soft_active; ++a) {
+        const index_t i = v.sactive[a], t = v.srec[i];
         if (t < 0) continue;
-        ++v.scount[i];
+        soft_count(v, i);
         for (int k = 0; k < 3; ++k)
-            if (v.srec_w[3 * i + k] > 0.0) ++v.scount[s.tri[3 * t + k]];
+            if (v.srec_w[3 * i + k] > 0.0) soft_count(v, s.tri[3 * t + k]);
     }
-    double* row = v.hist + v.sc->row * v.hist_width + 6 * v.n_tools;
+    double* row = v.hist + sc.row * v.hist_width + 6 * v.n_tools;
     if (first)
         for (index_t k = 0; k < 3 * v.n_pairs; ++k) row[k] = 0.0;
-    const double g1 = double(v.sc->it.g1);
-    for (index_t i = 0; i < s.n_nodes; ++i) {
-        const index_t t = v.srec[i];
+    const double g1 = double(sc.it.g1);
+    for (index_t a = 0; a < sc.soft_active; ++a) {
+        const index_t i = v.sactive[a], t = v.srec[i];
         if (t < 0) continue;
         const index_t* tri = s.tri + 3 * t;
         index_t share = v.scount[i];
         for (int k = 0; k < 3; ++k)
             if (v.srec_w[3 * i + k] > 0.0 && v.scount[tri[k]] > share) share = v.scount[tri[k]];
-        const index_t a = s.label[i], b = s.label[tri[0]];
-        const index_t pr = s.pair[static_cast<std::size_t>(a) * s.labels + b];
-        const double sign = a <= b ? 1.0 : -1.0;  // the pair's first body is its lower label
+        const index_t la = s.label[i], lb = s.label[tri[0]];
+        const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
+        const double sign = la <= lb ? 1.0 : -1.0;  // the pair's first body is its lower label
         for (int d = 0; d < 3; ++d) {
             const double p = v.srec_p[3 * i + d] / share;
             v.sacc[3 * i + d] += p;
@@ -44,11 +65,12 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
 }
 
 /// The soft-contact pass of a step: (1) skin test, a rebuild of the candidate lists if a surface
-/// node moved more than skin/2 since the last one (or the run just started); (2) per surface node,
-/// its contact and impulse (soft_detect); (3) one thread adds the impulses into the nodes, in node
-/// order, each averaged over the contacts sharing its nodes, and into the step's per-pair forces;
-/// (4) per surface node, the correction W p applied to u⁺ and its force p/γ1 kept for reports;
-/// (2)–(4) repeated kSoftSweeps times (Jacobi sweeps on the corrected positions).
+/// node moved more than skin/2 since the last one (or the run just started), and the list of the
+/// nodes that have candidates; (2) per such node, its contact and impulse (soft_detect); (3) one
+/// thread adds the impulses into the nodes, in node order, each averaged over the contacts sharing
+/// its nodes, and into the step's per-pair forces; (4) per node touched, the correction W p applied
+/// to u⁺ and its force p/γ1 kept for reports; (2)–(4) repeated kSoftSweeps times (Jacobi sweeps on
+/// the corrected positions).
 template <class T, class Dev>
 void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     const DeviceView<T> v = v_;
@@ -67,6 +89,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
             const double d2 =
                 (x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) + (x[2] - b[2]) * (x[2] - b[2]);
             if (!(d2 <= m)) m = d2;  // NaN: rebuild (the check reports the node)
+            for (int d = 0; d < 3; ++d) v.sforce[3 * i + d] = 0.0;
         }
         v.smove[c] = m;
     });
@@ -82,13 +105,17 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
             soft_candidates(i, s, v.X, un, v.P, v.sc->soft_rmax, v.shead, v.scell, v.stc, v.str, v.scand,
                             v.sb);
     });
+    dev_.serial([=] PLIANT_KERNEL() { soft_activate(v, s); });
     for (int sweep = 0; sweep < kSoftSweeps; ++sweep) {
         const bool first = sweep == 0;
-        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
-            soft_detect(i, s, v.X, mass, uc, un, v.P, v.scand, v.srec, v.srec_w, v.srec_p);
+        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t a) {
+            if (a < v.sc->soft_active)
+                soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.scand, v.srec, v.srec_w, v.srec_p);
         });
         dev_.serial([=] PLIANT_KERNEL() { soft_gather(v, s, first); });
-        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
+        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t a) {
+            if (a >= v.sc->soft_touched) return;
+            const index_t i = v.stouched[a];
             double W[3];
             soft_inverse_mass(i, s, mass, W);
             const index_t n = s.node[i];
@@ -96,9 +123,10 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
             for (int d = 0; d < 3; ++d) {
                 const double p = v.sacc[3 * i + d];
                 un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
-                v.sforce[3 * i + d] = (first ? 0.0 : v.sforce[3 * i + d]) + (W[d] > 0.0 ? p / g1 : 0.0);
+                v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
                 v.sacc[3 * i + d] = 0.0;
             }
+            v.scount[i] = 0;
         });
     }
 }
