@@ -11,15 +11,16 @@ updates, the simulation's real-time factor and the largest jump of the rendered 
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 import numpy as np
 
 import pliant as pl
-from pliant.contact import Sphere
 from pliant.haptics import HapticLoop, VirtualDevice
 
-CENTRE = np.array([0.05, 0.05, 0.0505])  # the probe's start: 0.5 mm above the block [m]
-DEPTH = 0.004  # [m]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from test_haptics import _block_with_a_probe, _press  # noqa: E402  (the test's model and path)
 
 
 def main() -> None:
@@ -27,17 +28,10 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--rate", type=float, default=1200.0)
     args = ap.parse_args()
-    X, T = pl.mesh.box_tets((0.1, 0.1, 0.04), (10, 10, 4))
-    b = pl.ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(pl.NeoHookean(E=5e3, nu=0.4), density=1000.0)
-    b.fix(np.nonzero(X[:, 2] < 1e-9)[0])
-    b.damping = 30.0
-    b.add_tool(Sphere(0.01).at(0.0, tuple(CENTRE)))
-    sim = pl.Simulation(b.finalize("float64"), history_steps=1000)
+    sim = pl.Simulation(_block_with_a_probe(), history_steps=1000)
     loop = HapticLoop(sim, tool=0)
     with loop:
-        log = VirtualDevice(loop, lambda t: CENTRE - (0, 0, DEPTH * min(t, 1.0)), args.rate).run(args.seconds)
+        log = VirtualDevice(loop, _press, args.rate).run(args.seconds)
     jumps = np.linalg.norm(np.diff(log.forces, axis=0), axis=1)
     print(f"{sim.model.n_elements:,} tets, dt = {sim.dt:.4g} s, {loop.steps_per_update} steps per update")
     print(f"reads per second: {log.reads_per_second:,.0f} (asked {args.rate:,.0f})")

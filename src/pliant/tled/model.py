@@ -128,7 +128,9 @@ class Model:
     Attributes: ``n_nodes``, ``n_elements``, ``dtype``, ``damping`` α [1/s],
     ``stiffness_damping`` β [s], ``dt_critical`` [s] (smallest h_min/c_d over elements, reduced for
     β by the factor √(1 + ξ²) − ξ, ξ = β/(h_min/c_d)), ``dt_critical_element`` (user element index),
-    ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,).
+    ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,); with soft contact,
+    ``bodies`` (body of each element, (M,); else None) and ``contact_pairs`` (the pairs of bodies
+    (a, b), a <= b, in the order of ``ContactReport.pairs``).
     """
 
     def __init__(
