@@ -237,3 +237,42 @@ def test_bad_soft_contact_settings_name_themselves():
     b.set_soft_contact(self_contact=[7])
     with pytest.raises(InputError, match="self_contact body 7"):
         b.finalize()
+
+
+def cut_column(self_contact: bool):
+    """A 2 × 2 × 10 cm column standing on its fixed base under gravity, cut through at mid-height
+    by a blade (tests/test_cutting.py's): the upper piece then rests on the lower one."""
+    from pliant.cutting import Blade
+    from test_cutting import CELLS, EDGE_Y, SIZE
+
+    X, T = box_tets(SIZE, CELLS)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=1e4, nu=0.4), density=1000.0)
+    b.fix(np.nonzero(X[:, 2] < 1e-9)[0])
+    b.set_gravity()
+    b.damping = 20.0
+    if self_contact:
+        b.set_soft_contact(friction=0.5, self_contact=True)
+    sim = pl.Simulation(b.finalize("float64"))
+    z = 0.051
+    blade = Blade(0.05, depth=0.01, position=(-0.02, 0.01, z), rotation=EDGE_Y)
+    sim.add_blade(blade.at(0.0, (-0.02, 0.01, z), EDGE_Y).at(0.02, (0.04, 0.01, z), EDGE_Y))
+    sim.run(until=0.03)
+    centroid_z = sim.model.reference_positions[sim.model.tets].mean(axis=1)[:, 2]
+    return sim, sim.model.tets[centroid_z < z], np.unique(sim.model.tets[centroid_z > z])
+
+
+def test_cut_pieces_keep_their_body_and_do_not_pass_through_each_other():
+    """A cut splits a body into pieces that keep its number (ModelBuilder.split): with self
+    contact, the upper piece rests on the lower one; without it, it sinks through."""
+    sim, lower, upper = cut_column(True)
+    assert sim.model.contact_pairs == [(0, 0)] and set(sim.model.bodies.tolist()) == {0}
+    for k in range(3):
+        sim.run(until=0.03 + (k + 1) * 0.05)
+        x = sim.positions
+        assert depth_inside(x[upper], x, lower).max() < 0.05  # as for two bodies
+    free, lower, upper = cut_column(False)
+    free.run(until=0.18)
+    x = free.positions
+    assert depth_inside(x[upper], x, lower).max() > 0.1
