@@ -239,6 +239,26 @@ def test_bad_soft_contact_settings_name_themselves():
         b.finalize()
 
 
+def test_a_mesh_of_thousands_of_loose_elements_is_refused_not_allocated():
+    """3,000 separate tets would ask for a 9-million-entry pair table: refused, naming the count."""
+    X, T = box_tets((0.001, 0.001, 0.001), (1, 1, 1))
+    b = pl.ModelBuilder()
+    for k in range(500):  # 6 tets each, sharing nodes within a cube: 500 bodies...
+        b.add_mesh(X + (0.002 * k, 0, 0), T)
+    loose = pl.ModelBuilder()  # ...and 3,000 bodies: every tet on its own nodes
+    tets = T.reshape(-1)
+    loose.add_mesh(
+        np.concatenate([X[tets] + (0.002 * k, 0, 0) for k in range(500)]),
+        np.arange(6 * 4 * 500).reshape(-1, 4),
+    )
+    for builder, n in ((b, 500), (loose, 3000)):
+        builder.set_material(pl.NeoHookean(E=1e4, nu=0.3), density=1000.0)
+        builder.set_soft_contact()
+        assert len(np.unique(builder.bodies())) == n
+    with pytest.raises(InputError, match="3000 separate bodies"):
+        loose.finalize()
+
+
 def cut_column(self_contact: bool):
     """A 2 × 2 × 10 cm column standing on its fixed base under gravity, cut through at mid-height
     by a blade (tests/test_cutting.py's): the upper piece then rests on the lower one."""

@@ -24,6 +24,9 @@ from ..errors import InputError
 
 __all__ = ["SoftContact", "body_labels"]
 
+# Most bodies soft contact takes (its pair table holds one entry per ordered pair of bodies).
+MAX_BODIES = 2048
+
 # Verlet skin as a fraction of the median surface edge (soft_contact.hpp: candidate lists are
 # rebuilt when a node has moved half of it; larger skins rebuild less often and list more).
 SKIN_FRACTION = 0.3
@@ -99,6 +102,11 @@ class SoftContact:
     def pair_table(self, n_bodies: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
         """The engine's pair table (n_bodies, n_bodies): pair index of (slave body, master body), −1
         where they do not touch; and the pairs (a ≤ b) in index order."""
+        if n_bodies > MAX_BODIES:
+            raise InputError(
+                f"soft contact: the mesh has {n_bodies} separate bodies (connected parts); expected at "
+                f"most {MAX_BODIES} (check for loose elements: pliant mesh quality)"
+            )
         wanted: set[tuple[int, int]] = set()
         if self.pairs is None:
             wanted |= {(a, b) for a in range(n_bodies) for b in range(a + 1, n_bodies)}
