@@ -1,5 +1,5 @@
 """Several bodies in a scene, and contact between them: the [[body]] tables (each a mesh like
-[mesh], with a name) and the [contact] table (soft contact: friction, pairs, self contact).
+[mesh], with a name) and the [contact] table (soft contact: friction, pairs, self contact)::
 
     [mesh]                      # the first body; name = "..." optional (default "body0")
     [[body]]                    # every further body: name and the keys of [mesh]
