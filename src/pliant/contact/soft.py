@@ -153,8 +153,8 @@ def engine_surface(contact: SoftContact, X: np.ndarray, T: np.ndarray, node_rank
         return dict(no_surface(), pairs=[], labels=labels)
     active = np.nonzero((table >= 0).any(axis=1))[0]
     faces, owner = boundary_faces(T)
-    faces = faces[np.isin(labels[owner], active)]
-    face_body = labels[owner[np.isin(labels[owner], active)]]
+    touching = np.isin(labels[owner], active)
+    faces, face_body = faces[touching], labels[owner[touching]]
     nodes = np.unique(faces)
     node_body = np.zeros(X.shape[0], np.int64)
     node_body[faces.ravel()] = np.repeat(face_body, 3)
