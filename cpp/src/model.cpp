@@ -317,9 +317,25 @@ void Model<T>::build_soft_contact(const ModelInput& in) {
         }
     }
     soft_cell = longest > soft_skin ? longest : soft_skin;
+    build_soft_adjacency();
     std::size_t H = 1;
     while (H < 2 * nt) H *= 2;
     soft_hash_mask = static_cast<index_t>(H - 1);
+}
+
+/// Each surface node's triangles, ascending, in CSR form (soft_vtri_off, soft_vtri): the
+/// neighbourhood self contact skips (soft_adjacent) and the faces around a vertex or an edge whose
+/// pseudo-normal tells inside from outside (soft_pseudo_normal).
+template <class T>
+void Model<T>::build_soft_adjacency() {
+    const std::size_t ns = soft_nodes.size(), nt = soft_tris.size() / 3;
+    soft_vtri_off.assign(ns + 1, 0);
+    for (index_t v : soft_tris) ++soft_vtri_off[static_cast<std::size_t>(v) + 1];
+    for (std::size_t i = 0; i < ns; ++i) soft_vtri_off[i + 1] += soft_vtri_off[i];
+    soft_vtri.resize(3 * nt);
+    std::vector<index_t> fill(soft_vtri_off.begin(), soft_vtri_off.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)  // triangles in order: each node's list ascends
+        for (int k = 0; k < 3; ++k) soft_vtri[fill[soft_tris[3 * t + k]]++] = static_cast<index_t>(t);
 }
 
 template <class T>

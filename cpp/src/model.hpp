@@ -105,6 +105,7 @@ struct Model {
     // Soft contact (ModelInput's, plus each surface node's free-DOF bits, each triangle's mean
     // reference edge [m], the grid's cell size [m] and hash mask, the number of pairs).
     std::vector<index_t> soft_nodes, soft_bits, soft_label, soft_tris, soft_pair;
+    std::vector<index_t> soft_vtri_off, soft_vtri;  // surface node → its triangles (CSR)
     std::vector<double> soft_mu, soft_tri_h;
     index_t soft_labels = 0, soft_pairs = 0, soft_hash_mask = 0;
     double soft_skin = 0.0, soft_cell = 0.0;
@@ -146,6 +147,7 @@ private:
     void build_constraints(const ModelInput& in);
     void build_contact_and_tables(const ModelInput& in);
     void build_soft_contact(const ModelInput& in);
+    void build_soft_adjacency();
 };
 
 /// A stamp unique in the process (State::version).

@@ -3,9 +3,12 @@
 //
 // Node-to-triangle, kinematic, after the explicit predictor and the tool contact (the approach of
 // NiftySim's deformable contact: Johnsen et al. 2015, IJCARS 10:1077, §2.4, after Taylor, Cheng &
-// Ourselin 2008): a surface node that crossed a triangle of another body (or a non-incident triangle
-// of its own body) during the step is moved back onto it, and the triangle's three nodes are moved
-// the other way. One position impulse p [kg·m] per contact, split by inverse mass and barycentric
+// Ourselin 2008): a surface node found inside another body (or inside its own body, away from its
+// neighbourhood) is moved back onto its closest point on that body's surface, and the nodes of the
+// triangle holding that point are moved the other way. Inside or outside is told by the angle-
+// weighted pseudo-normal at the closest point (Bærentzen & Aanæs 2005), so that a node at an edge
+// or a corner of the other surface is pushed towards it, not along one face's normal and then the
+// other's. One position impulse p [kg·m] per contact, split by inverse mass and barycentric
 // weight (slave Δx_s = W_s p, triangle node j: Δx_j = −w_j W_j p, W = diag of free-DOF inverse
 // masses), so that Σ m Δx = 0: the pair conserves linear momentum (Heinstein, Mello, Attaway &
 // Laursen 2000, CMAME 187:621, §3: mass-weighted kinematic contact). Friction: Coulomb in
@@ -28,18 +31,13 @@ namespace pliant {
 
 /// Triangles a surface node keeps as contact candidates (the nearest by bounding-sphere distance).
 constexpr int kSoftCandidates = 32;
-/// A node crossing a triangle's plane counts as a contact only if it lay at most this fraction of
-/// the triangle's mean edge behind the plane at the step's start (crossing test: a node deep behind
-/// a face, e.g. on the far side of a sharp ridge of its own body, is not in contact with it).
+/// A node inside a body counts as a contact only if its closest point on that body's surface lies
+/// within this fraction of the triangle's mean edge (a node that went deeper than that in one step
+/// is lost; self contact: the nearest triangles that are not the node's neighbours lie about an
+/// edge away, farther than this band, so the node's own surface at a convex edge is no contact).
 constexpr double kSoftBehind = 0.25;
-/// Barycentric tolerance of the projection onto a triangle (a node on an edge meets both triangles).
-constexpr double kSoftEdge = 1e-3;
 /// Most grid cells searched in each direction around a node (a blown-up mesh stops at this).
 constexpr int kSoftReach = 8;
-/// Self contact: a triangle of the node's own body counts only if its reference centroid lies at
-/// least this many of its mean edges from the node's reference position (the triangles around the
-/// node are its own surface, not an obstacle; folds closer than this are not detected).
-constexpr double kSoftSelfGap = 0.5;
 /// Jacobi sweeps of the soft-contact response per step: each detects on the corrected positions
 /// and closes what the averaging left (soft_pass).
 constexpr int kSoftSweeps = 3;
@@ -52,6 +50,8 @@ struct SoftSurface {
     const index_t* label = nullptr;  // surface node → body label
     const index_t* tri = nullptr;    // 3 surface-node indices per triangle, outward (right hand)
     const double* tri_h = nullptr;   // mean reference edge per triangle [m]
+    const index_t* vtri_off = nullptr;  // surface node i's triangles:
+    const index_t* vtri = nullptr;      //   vtri[vtri_off[i] .. vtri_off[i + 1]), ascending
     const index_t* pair = nullptr;   // labels × labels: pair index of (slave, master), −1: none
     const double* mu = nullptr;      // per pair: μs, μk
     double skin = 0.0, cell = 0.0;   // Verlet skin and grid cell size [m]
@@ -113,23 +113,26 @@ PLIANT_HD double soft_grid(const SoftSurface& s, const double* X, const T* u, in
     return rmax;
 }
 
-/// Whether triangle t lies within kSoftSelfGap mean edges of surface node i in the reference
-/// configuration (self contact skips it).
-PLIANT_HD bool soft_reference_near(index_t i, index_t t, const SoftSurface& s, const double* X) {
-    const index_t n = s.node[i];
-    double d2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-        double c = 0.0;
-        for (int k = 0; k < 3; ++k) c += X[3 * s.node[s.tri[3 * t + k]] + d] / 3.0;
-        d2 += (X[3 * n + d] - c) * (X[3 * n + d] - c);
+/// Whether triangle t touches surface node i's neighbourhood: it shares a vertex with a triangle
+/// around i (one of its vertices is i or a node joined to i by a surface edge). Self contact skips
+/// such triangles: they are the node's own surface, not an obstacle (at a convex edge the node lies
+/// behind its neighbours' faces). The test is topological, so that two faces that coincide without
+/// sharing nodes (the sides of a cut) do meet.
+PLIANT_HD bool soft_adjacent(index_t i, index_t t, const SoftSurface& s) {
+    const index_t* v = s.tri + 3 * t;
+    for (index_t j = s.vtri_off[i]; j < s.vtri_off[i + 1]; ++j) {
+        const index_t* r = s.tri + 3 * s.vtri[j];
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                if (v[a] == r[b]) return true;
     }
-    const double gap = kSoftSelfGap * s.tri_h[t];
-    return d2 < gap * gap;
+    return false;
 }
 
 /// Candidate triangles of surface node i (cand: kSoftCandidates entries, nearest first by the
 /// distance from the node to the triangle's bounding sphere, ties by triangle; −1 pads): those
-/// within `skin` [m], of a body the node's body may touch, not incident to the node. xb (3 per
+/// within `skin` [m], of a body the node's body may touch, not incident to the node nor, in its own
+/// body, to its neighbours (soft_adjacent). xb (3 per
 /// node) records where the node was, for the rebuild test.
 template <class T>
 PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X, const T* u, index_t P,
@@ -155,7 +158,7 @@ PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X,
                         const index_t t = cell_tris[j];
                         const index_t* v = s.tri + 3 * t;
                         if (v[0] == i || v[1] == i || v[2] == i || pair_row[s.label[v[0]]] < 0) continue;
-                        if (s.label[v[0]] == s.label[i] && soft_reference_near(i, t, s, X)) continue;
+                        if (s.label[v[0]] == s.label[i] && soft_adjacent(i, t, s)) continue;
                         const double dx = x[0] - tc[3 * t], dy = x[1] - tc[3 * t + 1],
                                      dz = x[2] - tc[3 * t + 2];
                         const double dist = std::sqrt(dx * dx + dy * dy + dz * dz) - tr[t];
@@ -182,32 +185,6 @@ PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X,
     for (int q = n; q < kSoftCandidates; ++q) out[q] = -1;
 }
 
-/// Signed distance [m] of x from the plane of triangle (a, b, c) along its unit normal n (out), and
-/// the barycentric weights w (out) of x's projection; returns false for a degenerate triangle.
-PLIANT_HD bool soft_project(const double a[3], const double b[3], const double c[3], const double x[3],
-                            double n[3], double w[3], double& dist) {
-    const double e0[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double e1[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = e0[1] * e1[2] - e0[2] * e1[1];
-    n[1] = e0[2] * e1[0] - e0[0] * e1[2];
-    n[2] = e0[0] * e1[1] - e0[1] * e1[0];
-    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 0.0)) return false;
-    for (int d = 0; d < 3; ++d) n[d] /= len;
-    const double r[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
-    dist = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
-    const double d00 = e0[0] * e0[0] + e0[1] * e0[1] + e0[2] * e0[2];
-    const double d01 = e0[0] * e1[0] + e0[1] * e1[1] + e0[2] * e1[2];
-    const double d11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
-    const double d20 = r[0] * e0[0] + r[1] * e0[1] + r[2] * e0[2];
-    const double d21 = r[0] * e1[0] + r[1] * e1[1] + r[2] * e1[2];
-    const double den = d00 * d11 - d01 * d01;
-    w[1] = (d11 * d20 - d01 * d21) / den;
-    w[2] = (d00 * d21 - d01 * d20) / den;
-    w[0] = 1.0 - w[1] - w[2];
-    return true;
-}
-
 /// Free-DOF inverse mass of surface node i [1/kg] per DOF.
 template <class T>
 PLIANT_HD void soft_inverse_mass(index_t i, const SoftSurface& s, const T* mass, double W[3]) {
@@ -215,13 +192,105 @@ PLIANT_HD void soft_inverse_mass(index_t i, const SoftSurface& s, const T* mass,
     for (int d = 0; d < 3; ++d) W[d] = ((s.bits[i] >> d) & 1) && m > 0.0 ? 1.0 / m : 0.0;
 }
 
-/// Narrow phase and response of surface node i (the slave): among its candidates, the triangle it
-/// crossed during the step (x⁺ behind its plane, x at most kSoftBehind × h behind it at the step's
-/// start, projection inside) closest to x⁺; the position impulse p [kg·m] on the node that puts it
-/// back on the triangle (normal part λ n, λ = gap / (nᵀW_s n + Σ w_j² nᵀW_j n)) with Coulomb friction
-/// on the relative tangential motion over the step (stick if the impulse that removes it is within
-/// μs λ, else μk λ against it). Outputs rec_tri[i] (−1: no contact), rec_w (3 weights), rec_p (3).
-/// Inputs: reference X [m] AoS, mass [kg], u and u⁺ [m] SoA (3, P) (u⁺ after the tool contact).
+/// Closest point of triangle (a, b, c) to x (Ericson 2005, Real-Time Collision Detection, §5.1.5,
+/// by Voronoi regions): its barycentric weights w (out) and the feature it lies on, returned: k
+/// (0–2) vertex k, 3 + k the edge from vertex k to vertex k + 1 (mod 3), 6 the face's inside.
+PLIANT_HD int soft_closest(const double a[3], const double b[3], const double c[3], const double x[3],
+                           double w[3]) {
+    double ab[3], ac[3], ap[3], bp[3], cp[3];
+    for (int d = 0; d < 3; ++d) {
+        ab[d] = b[d] - a[d], ac[d] = c[d] - a[d];
+        ap[d] = x[d] - a[d], bp[d] = x[d] - b[d], cp[d] = x[d] - c[d];
+    }
+    auto dot = [](const double* p, const double* q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; };
+    auto set = [&](double w0, double w1, double w2, int feature) {
+        w[0] = w0, w[1] = w1, w[2] = w2;
+        return feature;
+    };
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return set(1.0, 0.0, 0.0, 0);
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return set(0.0, 1.0, 0.0, 1);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        const double v = d1 / (d1 - d3);
+        return set(1.0 - v, v, 0.0, 3);
+    }
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return set(0.0, 0.0, 1.0, 2);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        const double v = d2 / (d2 - d6);
+        return set(1.0 - v, 0.0, v, 5);
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+        const double v = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return set(0.0, 1.0 - v, v, 4);
+    }
+    const double den = va + vb + vc;
+    if (!(den > 0.0)) return -1;  // degenerate triangle
+    return set(va / den, vb / den, vc / den, 6);
+}
+
+/// Unit normal (out) of triangle t at u [m] (right hand: outward), and the interior angle [rad] at
+/// its vertex k; false for a degenerate triangle.
+template <class T>
+PLIANT_HD bool soft_face(index_t t, int k, const SoftSurface& s, const double* X, const T* u, index_t P,
+                         double n[3], double& angle) {
+    double v[3][3];
+    for (int j = 0; j < 3; ++j) soft_position(s.tri[3 * t + j], s, X, u, P, v[j]);
+    double e0[3], e1[3];
+    for (int d = 0; d < 3; ++d) {
+        e0[d] = v[(k + 1) % 3][d] - v[k][d];
+        e1[d] = v[(k + 2) % 3][d] - v[k][d];
+    }
+    n[0] = e0[1] * e1[2] - e0[2] * e1[1];
+    n[1] = e0[2] * e1[0] - e0[0] * e1[2];
+    n[2] = e0[0] * e1[1] - e0[1] * e1[0];
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0.0)) return false;
+    for (int d = 0; d < 3; ++d) n[d] /= len;
+    angle = std::atan2(len, e0[0] * e1[0] + e0[1] * e1[1] + e0[2] * e1[2]);
+    return true;
+}
+
+/// Pseudo-normal (out, not normalized) of the feature of triangle t that a closest point lies on
+/// (soft_closest's numbering), at u [m]: the face's normal; for an edge, the sum of the normals of
+/// the triangles sharing it; for a vertex, the normals of its triangles weighted by their angles
+/// there (Bærentzen & Aanæs 2005, IEEE TVCG 11(3):243: x lies outside a closed surface if
+/// (x − c)·n > 0 for the pseudo-normal n at its closest point c).
+template <class T>
+PLIANT_HD void soft_pseudo_normal(index_t t, int feature, const SoftSurface& s, const double* X, const T* u,
+                                  index_t P, double n[3]) {
+    double f[3], angle;
+    n[0] = n[1] = n[2] = 0.0;
+    if (feature == 6) {
+        if (soft_face(t, 0, s, X, u, P, f, angle))
+            for (int d = 0; d < 3; ++d) n[d] = f[d];
+        return;
+    }
+    const index_t a = s.tri[3 * t + feature % 3], b = s.tri[3 * t + (feature % 3 + 1) % 3];
+    for (index_t j = s.vtri_off[a]; j < s.vtri_off[a + 1]; ++j) {
+        const index_t q = s.vtri[j];
+        const index_t* r = s.tri + 3 * q;
+        const int k = r[0] == a ? 0 : (r[1] == a ? 1 : 2);
+        if (feature >= 3 && r[0] != b && r[1] != b && r[2] != b) continue;  // not on the edge
+        if (!soft_face(q, k, s, X, u, P, f, angle)) continue;
+        const double weight = feature >= 3 ? 1.0 : angle;
+        for (int d = 0; d < 3; ++d) n[d] += weight * f[d];
+    }
+}
+
+/// Narrow phase and response of surface node i (the slave). For each body among its candidates,
+/// the closest point c on that body's candidate triangles to x⁺; the node is inside the body if
+/// (x⁺ − c)·n < 0 for the pseudo-normal n there (soft_pseudo_normal) and it lies at most
+/// kSoftBehind × the triangle's mean edge from c. Of the bodies it is inside, the shallowest: the
+/// position impulse p [kg·m] on the node that puts it back on c (along the unit vector from x⁺ to c,
+/// λ = gap / (eᵀW_s e + Σ w_j² eᵀW_j e)) with Coulomb friction on the relative tangential motion
+/// over the step (stick if the impulse that removes it is within μs λ, else μk λ against it).
+/// Outputs rec_tri[i] (−1: no contact), rec_w (3 weights of c), rec_p (3). Inputs: reference X
+/// [m] AoS, mass [kg], u and u⁺ [m] SoA (3, P) (u⁺ after the tool contact).
 template <class T>
 PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, const T* mass, const T* u,
                            const T* u_next, index_t P, const index_t* cand, index_t* rec_tri, double* rec_w,
@@ -232,43 +301,56 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
     double x0[3], x1[3];
     soft_position(i, s, X, u, P, x0);
     soft_position(i, s, X, u_next, P, x1);
-    index_t best = -1;
-    double best_d = -INFINITY, best_n[3] = {0.0, 0.0, 0.0}, best_w[3] = {0.0, 0.0, 0.0};
-    // Triangles whose plane the node is in front of (outside) while projecting onto them, for the
-    // inside test below: at most kSoftCandidates, their bodies.
-    index_t front[kSoftCandidates];
-    int n_front = 0;
+    // The closest candidate triangle of each body: body, triangle, squared distance, feature, weights.
+    index_t body[kSoftCandidates], near[kSoftCandidates];
+    double near_d2[kSoftCandidates], near_w[kSoftCandidates][3];
+    int near_f[kSoftCandidates], n_bodies = 0;
     for (int q = 0; q < kSoftCandidates && list[q] >= 0; ++q) {
         const index_t t = list[q];
         const index_t* v = s.tri + 3 * t;
-        double a[3], b[3], c[3], n[3], w[3], d1, d0;
+        double a[3], b[3], c[3], w[3];
         soft_position(v[0], s, X, u_next, P, a);
         soft_position(v[1], s, X, u_next, P, b);
         soft_position(v[2], s, X, u_next, P, c);
-        if (!soft_project(a, b, c, x1, n, w, d1)) continue;
-        if (w[0] < -kSoftEdge || w[1] < -kSoftEdge || w[2] < -kSoftEdge) continue;
-        if (!(d1 < 0.0)) {
-            front[n_front++] = s.label[v[0]];
-            continue;
-        }
-        if (!(d1 > best_d || (d1 == best_d && t < best))) continue;
-        double a0[3], b0[3], c0[3], n0[3], w0[3];
-        soft_position(v[0], s, X, u, P, a0);
-        soft_position(v[1], s, X, u, P, b0);
-        soft_position(v[2], s, X, u, P, c0);
-        if (!soft_project(a0, b0, c0, x0, n0, w0, d0) || d0 < -kSoftBehind * s.tri_h[t]) continue;
-        best = t, best_d = d1;
+        const int feature = soft_closest(a, b, c, x1, w);
+        if (feature < 0) continue;
+        double d2 = 0.0;
         for (int d = 0; d < 3; ++d) {
-            best_n[d] = n[d];
-            best_w[d] = w[d] < 0.0 ? 0.0 : w[d];
+            const double e = x1[d] - (w[0] * a[d] + w[1] * b[d] + w[2] * c[d]);
+            d2 += e * e;
+        }
+        const index_t lb = s.label[v[0]];
+        int k = 0;
+        while (k < n_bodies && body[k] != lb) ++k;
+        if (k == n_bodies) ++n_bodies;
+        else if (!(d2 < near_d2[k] || (d2 == near_d2[k] && t < near[k]))) continue;
+        body[k] = lb, near[k] = t, near_d2[k] = d2, near_f[k] = feature;
+        for (int d = 0; d < 3; ++d) near_w[k][d] = w[d];
+    }
+    index_t best = -1;
+    double best_d = -INFINITY, best_n[3] = {0.0, 0.0, 0.0}, best_w[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < n_bodies; ++k) {
+        const index_t t = near[k];
+        const double band = kSoftBehind * s.tri_h[t];
+        if (!(near_d2[k] > 0.0 && near_d2[k] <= band * band)) continue;
+        const double gap = std::sqrt(near_d2[k]);
+        if (!(-gap > best_d || (-gap == best_d && t < best))) continue;
+        double pn[3], y[3][3], e[3], side = 0.0;
+        soft_pseudo_normal(t, near_f[k], s, X, u_next, P, pn);
+        for (int j = 0; j < 3; ++j) soft_position(s.tri[3 * t + j], s, X, u_next, P, y[j]);
+        for (int d = 0; d < 3; ++d) {
+            const double c = near_w[k][0] * y[0][d] + near_w[k][1] * y[1][d] + near_w[k][2] * y[2][d];
+            e[d] = (c - x1[d]) / gap;  // from the node to c: out of the body if the node is inside
+            side -= e[d] * pn[d];
+        }
+        if (!(side < 0.0)) continue;  // outside this body
+        best = t, best_d = -gap;
+        for (int d = 0; d < 3; ++d) {
+            best_n[d] = e[d];
+            best_w[d] = near_w[k][d];
         }
     }
     if (best < 0) return;
-    // Inside test: a node in front of a face of that body which it projects onto is outside it
-    // (e.g. a node beside a sliding block's bottom edge, behind its side face's plane only).
-    const index_t body = s.label[s.tri[3 * best]];
-    for (int q = 0; q < n_front; ++q)
-        if (front[q] == body) return;
     const double wsum = best_w[0] + best_w[1] + best_w[2];
     for (int d = 0; d < 3; ++d) best_w[d] /= wsum;
     // Effective inverse mass along a direction e: eᵀ W_s e + Σ w_j² eᵀ W_j e.

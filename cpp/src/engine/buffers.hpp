@@ -70,7 +70,7 @@ private:
 template <class T, class Dev>
 struct ModelBuffers {
     DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, pcurve, co, cdof, ccurve,
-        cnodes, cbits, pf_off, pf_idx, pnodes, pslot, snodes, sbits, slabel, stris, spair;
+        cnodes, cbits, pf_off, pf_idx, pnodes, pslot, snodes, sbits, slabel, stris, spair, svtri_off, svtri;
     DeviceBuffer<T, Dev> elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask, patterns,
         cval, pedges, pvalue, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
@@ -94,7 +94,8 @@ struct ModelBuffers {
         curves = DeviceBuffer<LoadCurve, Dev>::mirror(d, m.curves);
         tt = D(m.table_t), tv = D(m.table_v), X = D(m.X), grid = D(m.tool_grid);
         snodes = I(m.soft_nodes), sbits = I(m.soft_bits), slabel = I(m.soft_label), stris = I(m.soft_tris);
-        spair = I(m.soft_pair), stri_h = D(m.soft_tri_h);
+        spair = I(m.soft_pair), stri_h = D(m.soft_tri_h), svtri_off = I(m.soft_vtri_off);
+        svtri = I(m.soft_vtri);
     }
 };
 

@@ -137,6 +137,7 @@ void Engine<T, Dev>::refresh_view() {
     sf.labels = m.soft_labels, sf.hash_mask = m.soft_hash_mask;
     sf.node = mb_.snodes.data(), sf.bits = mb_.sbits.data(), sf.label = mb_.slabel.data();
     sf.tri = mb_.stris.data(), sf.tri_h = mb_.stri_h.data(), sf.pair = mb_.spair.data();
+    sf.vtri_off = mb_.svtri_off.data(), sf.vtri = mb_.svtri.data();
     sf.mu = d_soft_mu_.data(), sf.skin = m.soft_skin, sf.cell = m.soft_cell;
     v.sb = sb_.data(), v.smove = smove_.data(), v.stc = stc_.data(), v.str = str_.data();
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();

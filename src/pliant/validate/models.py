@@ -25,6 +25,8 @@ __all__ = [
     "bend",
     "energy_history",
     "hertz_indentation",
+    "paraboloid_block",
+    "hertz_two_bodies",
     "energy_decay_rate",
     "wave_arrival",
     "bent_beam_tip",
@@ -235,6 +237,62 @@ def hertz_indentation(depths, R=0.01, E=1e4, nu=0.3):
         if np.linalg.norm(c, axis=1).min() < R - 1e-9:
             raise RuntimeError(f"a node is inside the sphere at depth {depths[k]:g} m")
     return np.array(forces), np.array(reactions)
+
+
+def paraboloid_block(R, L, h, ratio=1.3):
+    """A quarter block [0, L]² × [−L, 0] [m] whose top face is bent down into the paraboloid
+    z = −r²/(2R) (Hertz's profile of a sphere of radius R [m]); the bend fades linearly to nothing
+    at the bottom z = −L. Cells of h [m] over r < 12 h, growing by ``ratio`` beyond. Returns
+    (nodes [m] (N, 3), tets (M, 4))."""
+    xs = mesh.graded_coordinates(h, 12 * h, ratio, L)
+    X, T = mesh.grid_tets(xs, xs, -xs[::-1])
+    r2 = X[:, 0] ** 2 + X[:, 1] ** 2
+    X[:, 2] -= r2 / (2 * R) * (1 + X[:, 2] / xs[-1])
+    return X, T
+
+
+def hertz_two_bodies(depths, R=0.02, E=1e4, nu=0.3, h=None, soft=True):
+    """Two identical elastic paraboloids (radius R [m], linear elastic E [Pa], ν) pressed together
+    frictionlessly, quarter models (symmetry planes x = 0, y = 0), quasi-static (dynamic
+    relaxation) at each total approach δ of ``depths`` [m]: the lower body's bottom on rollers, the
+    upper body (the lower one mirrored in z = 0) moved down by δ at its top. ``soft``: the two
+    bodies in soft contact; otherwise the lower body alone against a rigid frictionless plane at
+    z = −δ/2, which by symmetry is the same problem (the contact plane of two identical bodies stays
+    flat and carries no shear). Cells of h [m] (default R/60) over the contact. Returns the contact
+    force [N] at each δ (from the lower body's support reaction, whole model)."""
+    from ..contact import Plane
+    from ..materials import LinearElastic
+
+    L = 2 * R
+    X, T = paraboloid_block(R, L, h or R / 60)
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    Y = X
+    if soft:
+        b.add_mesh(X * (1, 1, -1), T[:, [0, 2, 1, 3]])  # mirrored: swapping two nodes keeps J > 0
+        Y = np.vstack([X, X * (1, 1, -1)])
+    b.set_material(LinearElastic(E=E, nu=nu), density=1000.0)
+    b.fix(np.nonzero(Y[:, 0] == 0.0)[0], "x")
+    b.fix(np.nonzero(Y[:, 1] == 0.0)[0], "y")
+    bottom = np.nonzero(Y[:, 2] == -L)[0]
+    b.fix(bottom, "z")
+    steps = Table([0.0] + [k + 1.0 for k in range(len(depths))], [0.0, *depths])
+    if soft:
+        top = np.nonzero(Y[:, 2] == L)[0]
+        b.prescribe(top, -1.0, "z", curve=steps)
+        b.set_soft_contact(friction=0.0)
+    else:
+        plane = Plane((0.0, 0.0, 0.0))
+        plane.at(0.0, (0.0, 0.0, 0.0))
+        for k, d in enumerate(depths):
+            plane.at(k + 1.0, (0.0, 0.0, -d / 2))
+        b.add_tool(plane)
+    sim = Simulation(b.finalize("float64"))
+    forces = []
+    for k in range(len(depths)):
+        sim.solver.relax(sim.state, at_time=k + 1.0, tol=1e-5)
+        forces.append(4 * sim.model.internal_forces(sim.state)[bottom, 2].sum())
+    return np.array(forces)
 
 
 def energy_decay_rate(alpha: float) -> float:
