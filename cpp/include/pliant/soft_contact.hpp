@@ -45,16 +45,16 @@ constexpr int kSoftSweeps = 3;
 /// The contact surface and its settings, as device pointers (trivially copyable).
 struct SoftSurface {
     index_t n_nodes = 0, n_tris = 0, labels = 0, hash_mask = 0;
-    const index_t* node = nullptr;   // surface node → engine node
-    const index_t* bits = nullptr;   // surface node: bit d set if DOF d is free
-    const index_t* label = nullptr;  // surface node → body label
-    const index_t* tri = nullptr;    // 3 surface-node indices per triangle, outward (right hand)
-    const double* tri_h = nullptr;   // mean reference edge per triangle [m]
+    const index_t* node = nullptr;      // surface node → engine node
+    const index_t* bits = nullptr;      // surface node: bit d set if DOF d is free
+    const index_t* label = nullptr;     // surface node → body label
+    const index_t* tri = nullptr;       // 3 surface-node indices per triangle, outward (right hand)
+    const double* tri_h = nullptr;      // mean reference edge per triangle [m]
     const index_t* vtri_off = nullptr;  // surface node i's triangles:
     const index_t* vtri = nullptr;      //   vtri[vtri_off[i] .. vtri_off[i + 1]), ascending
-    const index_t* pair = nullptr;   // labels × labels: pair index of (slave, master), −1: none
-    const double* mu = nullptr;      // per pair: μs, μk
-    double skin = 0.0, cell = 0.0;   // Verlet skin and grid cell size [m]
+    const index_t* pair = nullptr;      // labels × labels: pair index of (slave, master), −1: none
+    const double* mu = nullptr;         // per pair: μs, μk
+    double skin = 0.0, cell = 0.0;      // Verlet skin and grid cell size [m]
 };
 
 /// Current position [m] of surface node i: X + u.
@@ -322,8 +322,10 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
         const index_t lb = s.label[v[0]];
         int k = 0;
         while (k < n_bodies && body[k] != lb) ++k;
-        if (k == n_bodies) ++n_bodies;
-        else if (!(d2 < near_d2[k] || (d2 == near_d2[k] && t < near[k]))) continue;
+        if (k == n_bodies)
+            ++n_bodies;
+        else if (!(d2 < near_d2[k] || (d2 == near_d2[k] && t < near[k])))
+            continue;
         body[k] = lb, near[k] = t, near_d2[k] = d2, near_f[k] = feature;
         for (int d = 0; d < 3; ++d) near_w[k][d] = w[d];
     }

@@ -80,8 +80,8 @@ struct DeviceView {
     // radius; triangles by bucket), candidates (kSoftCandidates per node), each node's contact
     // (triangle, weights, impulse), contacts per node, impulse sums and forces [N] (3 per node).
     SoftSurface soft;
-    double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce;
-    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *scount, *sactive, *stouched;
+    double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare;
+    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *sactive, *stouched;
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -179,9 +179,8 @@ private:
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
-    DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, d_soft_mu_;
-    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, scount_, sactive_,
-        stouched_;
+    DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, d_soft_mu_;
+    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, sactive_, stouched_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceView<T> v_{};

@@ -84,7 +84,7 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     scell_ = DeviceBuffer<index_t, Dev>(dev_, nst);
     scand_ = DeviceBuffer<index_t, Dev>(dev_, ns * kSoftCandidates);
     srec_ = DeviceBuffer<index_t, Dev>(dev_, ns);
-    scount_ = DeviceBuffer<index_t, Dev>(dev_, ns);
+    sshare_ = DeviceBuffer<double, Dev>(dev_, ns);
     sactive_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     stouched_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     d_soft_mu_ = DeviceBuffer<double, Dev>::mirror(dev_, m_.soft_mu);
@@ -142,7 +142,7 @@ void Engine<T, Dev>::refresh_view() {
     v.sb = sb_.data(), v.smove = smove_.data(), v.stc = stc_.data(), v.str = str_.data();
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();
     v.shead = shead_.data(), v.scursor = scursor_.data(), v.sbucket = sbucket_.data();
-    v.scell = scell_.data(), v.scand = scand_.data(), v.srec = srec_.data(), v.scount = scount_.data();
+    v.scell = scell_.data(), v.scand = scand_.data(), v.srec = srec_.data(), v.sshare = sshare_.data();
     v.sactive = sactive_.data(), v.stouched = stouched_.data();
 }
 

@@ -20,16 +20,20 @@ PLIANT_HD void soft_activate(const DeviceView<T>& v, const SoftSurface& s) {
     sc.soft_rebuild = 0;
 }
 
-/// Adds w p to surface node n's impulse sum; a node's first impulse of the sweep lists it in
-/// stouched (scount: its contacts; 0 again once applied).
+/// Adds weight w to surface node n's share of the sweep's contacts (sshare: 1 for each contact it
+/// is the slave of, its barycentric weight in each it is a triangle node of; 0 again once
+/// applied); its first contact lists it in stouched.
 template <class T>
-PLIANT_HD void soft_count(const DeviceView<T>& v, index_t n) {
-    if (v.scount[n]++ == 0) v.stouched[v.sc->soft_touched++] = n;
+PLIANT_HD void soft_count(const DeviceView<T>& v, index_t n, double w) {
+    if (v.sshare[n] == 0.0) v.stouched[v.sc->soft_touched++] = n;
+    v.sshare[n] += w;
 }
 
 /// Step (3) of soft_pass, one thread: the contacts' impulses, averaged over the contacts sharing a
-/// node (Macklin et al. 2014 §4.2), into sacc (3 per surface node) in node order, and the force each
-/// pair's first body received from its second, p/γ1 [N], into the step's history row.
+/// node (Macklin et al. 2014 §4.2: each impulse divided by the largest share among its nodes, the
+/// shares counted by barycentric weight, so that a node at the corner of a triangle others hit
+/// counts about once, not once per triangle), into sacc (3 per surface node) in node order, and the
+/// force each pair's first body received from its second, p/γ1 [N], into the step's history row.
 template <class T>
 PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool first) {
     Scalars<T>& sc = *v.sc;
@@ -37,9 +41,9 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
     for (index_t a = 0; a < sc.soft_active; ++a) {
         const index_t i = v.sactive[a], t = v.srec[i];
         if (t < 0) continue;
-        soft_count(v, i);
+        soft_count(v, i, 1.0);
         for (int k = 0; k < 3; ++k)
-            if (v.srec_w[3 * i + k] > 0.0) soft_count(v, s.tri[3 * t + k]);
+            if (v.srec_w[3 * i + k] > 0.0) soft_count(v, s.tri[3 * t + k], v.srec_w[3 * i + k]);
     }
     double* row = v.hist + sc.row * v.hist_width + 6 * v.n_tools;
     if (first)
@@ -49,9 +53,9 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
         const index_t i = v.sactive[a], t = v.srec[i];
         if (t < 0) continue;
         const index_t* tri = s.tri + 3 * t;
-        index_t share = v.scount[i];
+        double share = v.sshare[i];
         for (int k = 0; k < 3; ++k)
-            if (v.srec_w[3 * i + k] > 0.0 && v.scount[tri[k]] > share) share = v.scount[tri[k]];
+            if (v.srec_w[3 * i + k] > 0.0 && v.sshare[tri[k]] > share) share = v.sshare[tri[k]];
         const index_t la = s.label[i], lb = s.label[tri[0]];
         const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
         const double sign = la <= lb ? 1.0 : -1.0;  // the pair's first body is its lower label
@@ -126,7 +130,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
                 v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
                 v.sacc[3 * i + d] = 0.0;
             }
-            v.scount[i] = 0;
+            v.sshare[i] = 0.0;
         });
     }
 }

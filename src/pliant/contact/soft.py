@@ -139,9 +139,28 @@ def _numeric(x) -> bool:
     return True
 
 
-def engine_surface(contact: SoftContact, X: np.ndarray, T: np.ndarray, node_rank: np.ndarray) -> dict:
+def on_rollers(X: np.ndarray, faces: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """Per boundary face (F, 3): whether it lies on a roller or a symmetry plane, i.e. its
+    reference normal is a coordinate axis d and each of its nodes has DOF d held while some DOF
+    of the face stays free. Such a face is a mirror or a support, not a surface another body can
+    reach; in contact it would be (a node on a quarter model's symmetry plane lies on the other
+    body's symmetry face: at distance zero, never inside). X: nodes [m] (N, 3); held: (N, 3)
+    bool, DOF held by a constraint."""
+    n = np.cross(X[faces[:, 1]] - X[faces[:, 0]], X[faces[:, 2]] - X[faces[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    axis = np.argmax(np.abs(n), axis=1)
+    aligned = np.abs(n[np.arange(len(n)), axis]) > 1.0 - 1e-9
+    held_normal = held[faces, axis[:, None]].all(axis=1)
+    all_held = held[faces].all(axis=(1, 2))
+    return aligned & held_normal & ~all_held
+
+
+def engine_surface(
+    contact: SoftContact, X: np.ndarray, T: np.ndarray, node_rank: np.ndarray, held: np.ndarray | None = None
+) -> dict:
     """The engine's soft-contact arrays (Model → _core.Engine): the boundary triangles of the bodies
-    that touch something (outward), their nodes in engine numbering with body labels, the pair
+    that touch something (outward) but those on rollers or symmetry planes (:func:`on_rollers`;
+    ``held``: (N, 3) bool, DOFs held), their nodes in engine numbering with body labels, the pair
     table and friction per pair, the skin [m]. Also 'pairs' (the pairs in index order) and
     'labels' (body per element)."""
     from ..mesh.topology import boundary_faces
@@ -154,6 +173,8 @@ def engine_surface(contact: SoftContact, X: np.ndarray, T: np.ndarray, node_rank
     active = np.nonzero((table >= 0).any(axis=1))[0]
     faces, owner = boundary_faces(T)
     touching = np.isin(labels[owner], active)
+    if held is not None:
+        touching &= ~on_rollers(X, faces, held)
     faces, face_body = faces[touching], labels[owner[touching]]
     nodes = np.unique(faces)
     node_body = np.zeros(X.shape[0], np.int64)

@@ -202,6 +202,9 @@ class Model:
         patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve else np.zeros((0, N, 3))
         cons = sorted(builder._cons.items())
         self._cons_user = [(n, d) for (n, d), _ in cons]
+        held = np.zeros((X.shape[0], 3), dtype=bool)  # DOFs a constraint holds (user numbering)
+        if cons:
+            held[tuple(np.array(self._cons_user).T)] = True
         g, gcurve = (builder._gravity[0], cid(builder._gravity[1])) if builder._gravity else (np.zeros(3), -1)
         cons_curve = [cid(c) for _, (v, c) in cons]  # register every curve before the tables
         self.curves = curves
@@ -240,7 +243,7 @@ class Model:
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
         soft = (
-            engine_surface(builder.soft_contact, X, T, node_rank)
+            engine_surface(builder.soft_contact, X, T, node_rank, held)
             if builder.soft_contact is not None
             else dict(no_surface(), pairs=[], labels=None)
         )
@@ -317,9 +320,7 @@ class Model:
         )
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)
-        self.constrained = np.zeros((N, 3), dtype=bool)
-        for n, d in self._cons_user:
-            self.constrained[n, d] = True
+        self.constrained = held
 
     # --- numbering ----------------------------------------------------------------------------
     def to_user_nodes(self, a: np.ndarray) -> np.ndarray:
