@@ -71,9 +71,9 @@ def test_colliding_blocks_keep_their_momentum_and_stay_apart(backend):
     vA, vB = sim.state.velocities[:n0, 0].mean(), sim.state.velocities[n0:, 0].mean()
     assert vA < -0.1 and vB > 0.1  # they bounced
     # A node of B at most 5 % of an element into A while the blocks (1 m/s relative, 0.5 mm per
-    # step) are pressed together: what three Jacobi sweeps may leave of a step's approach
-    # (measured: none inside, the deepest node 2e-8 of an element outside; 2.7 % inside before the
-    # shares were counted by barycentric weight).
+    # step) are pressed together: what two Jacobi sweeps leave of a step's approach is closed
+    # at the next steps (measured: 0.04 %; 2.7 % before the shares were counted by barycentric
+    # weight).
     assert max(deepest) < 0.05
     force = sim.solver.contact_report().pairs[0].force
     assert force[:, 0].min() < -0.1  # block 0 was pushed back (−x) by block 1
@@ -311,7 +311,7 @@ def test_a_stiff_cut_column_rests_on_its_jagged_cut(friction):
     sim, lower, upper = cut_column(True, E=1e5, friction=friction)
     sim.run(until=0.25)
     x = sim.positions
-    # 5 % of an element, as for two bodies (measured: 0.03-0.08 %).
+    # 5 % of an element, as for two bodies (measured: 0.01 %).
     assert depth_inside(x[upper], x, lower).max() < 0.05
     # Sideways: the piece's mean displacement is its elastic sag's lateral part, tens of µm
     # (measured 4e-5 m; the self-weight buckling length at 100 kPa, 13.8 cm, exceeds the column).

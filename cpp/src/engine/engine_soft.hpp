@@ -5,7 +5,7 @@
 namespace pliant {
 
 /// Surface nodes per chunk of the skin test (a chunk's largest move is one number).
-constexpr index_t kSoftChunk = 512;
+constexpr index_t kSoftChunk = 128;
 
 /// After a rebuild, one thread: the surface nodes with candidates, in order (sactive; their count
 /// in the scalars). Only they are checked until the next rebuild.
@@ -73,8 +73,8 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
 /// nodes that have candidates; (2) per such node, its contact and impulse (soft_detect); (3) one
 /// thread adds the impulses into the nodes, in node order, each averaged over the contacts sharing
 /// its nodes, and into the step's per-pair forces; (4) per node touched, the correction W p applied
-/// to u⁺ and its force p/γ1 kept for reports; (2)–(4) repeated kSoftSweeps times (Jacobi sweeps on
-/// the corrected positions).
+/// to u⁺ and its force p/γ1 kept for reports; (2)–(4) repeated kSoftSweeps times, kSoftRelaxSweeps in a
+/// relaxation (Jacobi sweeps on the corrected positions).
 template <class T, class Dev>
 void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     const DeviceView<T> v = v_;
@@ -110,7 +110,8 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
                             v.sb);
     });
     dev_.serial([=] PLIANT_KERNEL() { soft_activate(v, s); });
-    for (int sweep = 0; sweep < kSoftSweeps; ++sweep) {
+    const int sweeps = relaxing ? kSoftRelaxSweeps : kSoftSweeps;
+    for (int sweep = 0; sweep < sweeps; ++sweep) {
         const bool first = sweep == 0;
         dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t a) {
             if (a < v.sc->soft_active)
