@@ -240,10 +240,11 @@ def hertz_indentation(depths, R=0.01, E=1e4, nu=0.3):
 
 
 def paraboloid_block(R, L, h, ratio=1.3, r1=None):
-    """A quarter block [0, L]² × [−L, 0] [m] whose top face is bent down into Hertz's profile of a
-    sphere of radius R [m], the paraboloid z = −r²/(2R), out to r1 [m] (default 12 h) and its
-    tangent cone beyond (so that the bend stays within the block); the bend fades linearly to
-    nothing at the bottom z = −L. Cells of h [m] over r < 12 h, growing by ``ratio`` beyond.
+    """A quarter block [0, L']² × [−L', 0] [m] (L' ≥ L: the last graded cell is kept whole) whose
+    top face is bent down into Hertz's profile of a sphere of radius R [m], the paraboloid
+    z = −r²/(2R), out to r1 [m] (default 12 h), and its tangent cone beyond (so that the bend
+    stays within the block); the bend fades linearly to nothing at the bottom z = −L'. Cells of
+    h [m] over r < 12 h, growing by ``ratio`` beyond.
     Returns (nodes [m] (N, 3), tets (M, 4))."""
     r1 = 12 * h if r1 is None else r1
     xs = mesh.graded_coordinates(h, 12 * h, ratio, L)
