@@ -185,6 +185,13 @@ def test_unknown_output_format_is_named(tmp_path):
     )
 
 
+def test_a_sweep_file_given_to_run_says_to_use_sweep(tmp_path):
+    refused(
+        cli("run", ROOT / "examples" / "cantilever_sweep.toml", "-o", tmp_path / "o"), "pliant sweep", "base"
+    )
+    assert not (tmp_path / "o").exists()
+
+
 def test_results_folder_that_cannot_be_made(tmp_path):
     (tmp_path / "file").write_text("x")
     refused(cli("run", scene(tmp_path), "-o", tmp_path / "file" / "o"), "file", "o")

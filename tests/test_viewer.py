@@ -233,6 +233,22 @@ def test_the_live_viewer_cuts_with_a_dragged_blade_and_resets():
         v.server.stop()
 
 
+def test_the_live_viewer_colours_a_scene_by_body():
+    """With soft contact the viewer offers to colour the surface by body: each body one colour,
+    the liver (body 0) the lowest and the ball (body 1) the highest of the colour bar."""
+    from pliant.view.viewer import BODY_FIELD, LiveViewer
+
+    v = LiveViewer(load_scene(EXAMPLES / "organs_contact.toml"), port=_free_port())
+    try:
+        assert BODY_FIELD in v.field_dropdown.options
+        v.field = BODY_FIELD
+        v.draw()
+        assert v.colourbar.content.startswith(f"{BODY_FIELD}: 0 ") and "… 1 " in v.colourbar.content
+    finally:
+        v.stop_event.set()
+        v.server.stop()
+
+
 def test_the_live_viewer_grasps_and_releases(tmp_path):
     from pliant.view.viewer import LiveViewer
 

@@ -247,7 +247,8 @@ Scalars<T> Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, d
 /// Dynamic relaxation's measures (Joldes, Wittek & Miller 2009, CMAME 198:3313, §3): the relative
 /// out-of-balance force on the free DOFs (external loads: patterns, follower pressure and contact,
 /// against the internal forces) and the adaptive damping α = 2 √(Rayleigh quotient of the
-/// stiffness change) from u and f at the step and the one before; α sets the integrator.
+/// stiffness change) from u and f at the step and the one before, over the free DOFs that no
+/// contact holds; α sets the integrator.
 template <class T, class Dev>
 void Engine<T, Dev>::relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev,
                                    double dt) {
@@ -279,8 +280,11 @@ void Engine<T, Dev>::relax_measure(const T* u_cur, const T* u_prev, const T* f_c
                 const double du = double(u_cur[i]) - u_prev[i];
                 sum[0] += fm * (r - fc) * (r - fc);
                 sum[1] += r * r + (1.0 - fm) * fc * fc;
-                sum[2] += fm * du * (fc - f_prev[i]);
-                sum[3] += fm * double(v.relax_mass[n]) * du * du;
+                // A DOF that contact moved this step is held by it, as a fixed DOF by its support:
+                // its jump in and out of contact is no stiffness of the structure's.
+                const double fr = contact && v.fcon[i] != 0.0 ? 0.0 : fm;
+                sum[2] += fr * du * (fc - f_prev[i]);
+                sum[3] += fr * double(v.relax_mass[n]) * du * du;
             }
         }
         for (int k = 0; k < 4; ++k) v.partial[4 * c + k] = sum[k];

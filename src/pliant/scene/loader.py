@@ -89,6 +89,12 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     text, data = _read_toml(path)
     data = apply_overrides(data, overrides, str(path))
     ctx = Ctx(str(path), text)
+    if isinstance(data, dict) and "base" in data and ("parameter" in data or "design" in data):
+        raise ctx.error(
+            "base",
+            "this is a sweep file (a base scene, a design, parameters), not a scene: "
+            "run it with `pliant sweep`",
+        )
     check_keys(
         ctx,
         data,

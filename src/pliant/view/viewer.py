@@ -1,7 +1,7 @@
-"""Interactive viewer in the browser (viser): the deforming body coloured by von Mises stress or
-displacement, rigid tools draggable with a transform gizmo while the simulation runs in real time,
-play / pause / reset / step, live stiffness and damping, the tool's contact force as a number and
-an arrow; and playback of a results folder with a time slider.
+"""Interactive viewer in the browser (viser): the deforming body coloured by von Mises stress,
+displacement or (with soft contact) body, rigid tools draggable with a transform gizmo while the
+simulation runs in real time, play / pause / reset / step, live stiffness and damping, the tool's
+contact force as a number and an arrow; and playback of a results folder with a time slider.
 
 Threads: the simulation runs in its own thread (sub-stepping at its stable Δt to follow the wall
 clock); the drawing loop sends the surface to the browser at about 20 frames per second.
@@ -20,6 +20,8 @@ from ..contact import quat_from_matrix
 from ..errors import InputError, PliantError
 from ..io.files import read_meshio
 from ..mesh.topology import boundary_faces
+
+BODY_FIELD = "body"  # the colour choice that tells a scene's bodies apart (Model.bodies)
 
 
 def _colours(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -112,7 +114,10 @@ class LiveViewer:
         self.play_button = g.add_button("Pause")
         self.step_button = g.add_button("Single step")
         self.reset_button = g.add_button("Reset")
-        self.field_dropdown = g.add_dropdown("Colour by", ["von Mises stress [Pa]", "displacement [m]"])
+        fields = ["von Mises stress [Pa]", "displacement [m]"]
+        if self.model.bodies is not None:  # soft contact: several bodies, told apart by colour
+            fields.append(BODY_FIELD)
+        self.field_dropdown = g.add_dropdown("Colour by", fields)
         self.stiffness = g.add_slider("Stiffness × (live)", 0.25, 4.0, 0.05, 1.0)
         self.damping = g.add_slider("Damping α [1/s] (live)", 0.0, 100.0, 0.5, float(self.sim.solver.damping))
         self.grasp_buttons = {}
@@ -285,6 +290,15 @@ class LiveViewer:
             self.realtime_factor = self.steps_per_second * dt
             time.sleep(0.001)
 
+    def _element_values(self, model) -> np.ndarray | None:
+        """The colour field per element (von Mises stress [Pa] or body number), or None for the
+        displacement (per node). Call under the lock."""
+        if self.field == BODY_FIELD and model.bodies is not None:
+            return np.asarray(model.bodies, dtype=float)
+        if self.field.startswith("von"):
+            return model.element_results(self.sim.state)["von_mises"]
+        return None
+
     def draw(self):
         """Send the current surface, colours, status and tool forces to the browser."""
         import trimesh
@@ -292,7 +306,7 @@ class LiveViewer:
         with self.lock:
             model = self.sim.model  # after a cut, a new topology
             P = self.sim.positions
-            vm = model.element_results(self.sim.state)["von_mises"] if self.field.startswith("von") else None
+            ev = self._element_values(model)
             u = self.sim.displacements
             t = self.sim.time
             forces = [self.sim.tool_force(k) for k in range(len(model.tools))]
@@ -306,10 +320,10 @@ class LiveViewer:
         surface = self._surface[1]
         if emb is not None:  # the fine surface follows the tets
             V, F = emb.positions(model.tets, P), emb.faces
-            vals = vm[emb.tet] if vm is not None else np.linalg.norm(emb.positions(model.tets, u), axis=1)
+            vals = ev[emb.tet] if ev is not None else np.linalg.norm(emb.positions(model.tets, u), axis=1)
         else:
             V, F = P[surface.nodes], surface.faces
-            vals = surface.node_values(vm) if vm is not None else np.linalg.norm(u[surface.nodes], axis=1)
+            vals = surface.node_values(ev) if ev is not None else np.linalg.norm(u[surface.nodes], axis=1)
         lo, hi = float(vals.min()), float(vals.max())
         mesh = trimesh.Trimesh(V, F, process=False, vertex_colors=_colours(vals, lo, hi))
         self.server.scene.add_mesh_trimesh("/body", mesh)
