@@ -318,6 +318,7 @@ void Model<T>::build_soft_contact(const ModelInput& in) {
     }
     soft_cell = longest > soft_skin ? longest : soft_skin;
     build_soft_adjacency();
+    build_soft_edges();
     std::size_t H = 1;
     while (H < 2 * nt) H *= 2;
     soft_hash_mask = static_cast<index_t>(H - 1);
@@ -336,6 +337,57 @@ void Model<T>::build_soft_adjacency() {
     std::vector<index_t> fill(soft_vtri_off.begin(), soft_vtri_off.end() - 1);
     for (std::size_t t = 0; t < nt; ++t)  // triangles in order: each node's list ascends
         for (int k = 0; k < 3; ++k) soft_vtri[fill[soft_tris[3 * t + k]]++] = static_cast<index_t>(t);
+}
+
+/// The sharp edges of the contact surface (soft_edges), those where its two triangles' reference
+/// normals differ by more than acos(kSoftSharpCos), and each triangle's edges among them
+/// (soft_tri_edge): the edges the edge–edge test watches (soft_edge_detect).
+template <class T>
+void Model<T>::build_soft_edges() {
+    const std::size_t nt = soft_tris.size() / 3;
+    auto normal = [&](std::size_t t, double n[3]) {
+        double v[3][3];
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 3; ++d) v[k][d] = X[3 * soft_nodes[soft_tris[3 * t + k]] + d];
+        const double e0[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
+        const double e1[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
+        n[0] = e0[1] * e1[2] - e0[2] * e1[1];
+        n[1] = e0[2] * e1[0] - e0[0] * e1[2];
+        n[2] = e0[0] * e1[1] - e0[1] * e1[0];
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int d = 0; d < 3; ++d) n[d] = len > 0.0 ? n[d] / len : 0.0;
+    };
+    struct Half {
+        index_t a, b, t, k;
+    };
+    std::vector<Half> half;
+    half.reserve(3 * nt);
+    for (std::size_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const index_t a = soft_tris[3 * t + k], b = soft_tris[3 * t + (k + 1) % 3];
+            half.push_back({a < b ? a : b, a < b ? b : a, static_cast<index_t>(t), k});
+        }
+    std::sort(half.begin(), half.end(), [](const Half& p, const Half& q) {
+        return p.a != q.a ? p.a < q.a : (p.b != q.b ? p.b < q.b : p.t < q.t);
+    });
+    soft_edges.clear();
+    soft_tri_edge.assign(3 * nt, -1);
+    for (std::size_t i = 0; i < half.size();) {
+        std::size_t j = i;
+        while (j < half.size() && half[j].a == half[i].a && half[j].b == half[i].b) ++j;
+        if (j - i == 2) {  // a manifold edge: sharp if its faces meet at an angle
+            double n0[3], n1[3];
+            normal(static_cast<std::size_t>(half[i].t), n0);
+            normal(static_cast<std::size_t>(half[i + 1].t), n1);
+            if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < kSoftSharpCos) {
+                const index_t e = static_cast<index_t>(soft_edges.size() / 2);
+                soft_edges.push_back(half[i].a);
+                soft_edges.push_back(half[i].b);
+                for (std::size_t q = i; q < j; ++q) soft_tri_edge[3 * half[q].t + half[q].k] = e;
+            }
+        }
+        i = j;
+    }
 }
 
 template <class T>

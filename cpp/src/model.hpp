@@ -106,6 +106,8 @@ struct Model {
     // reference edge [m], the grid's cell size [m] and hash mask, the number of pairs).
     std::vector<index_t> soft_nodes, soft_bits, soft_label, soft_tris, soft_pair;
     std::vector<index_t> soft_vtri_off, soft_vtri;  // surface node → its triangles (CSR)
+    std::vector<index_t> soft_edges;     // sharp surface edges: 2 surface nodes each (soft_contact.hpp)
+    std::vector<index_t> soft_tri_edge;  // per triangle, its edge k (v_k, v_k+1): sharp edge or −1
     std::vector<double> soft_mu, soft_tri_h;
     index_t soft_labels = 0, soft_pairs = 0, soft_hash_mask = 0;
     double soft_skin = 0.0, soft_cell = 0.0;
@@ -148,6 +150,7 @@ private:
     void build_contact_and_tables(const ModelInput& in);
     void build_soft_contact(const ModelInput& in);
     void build_soft_adjacency();
+    void build_soft_edges();
 };
 
 /// A stamp unique in the process (State::version).

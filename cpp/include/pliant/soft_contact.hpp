@@ -8,8 +8,9 @@
 // triangle holding that point are moved the other way. Inside or outside is told by the angle-
 // weighted pseudo-normal at the closest point (Bærentzen & Aanæs 2005), so that a node at an edge
 // or a corner of the other surface is pushed towards it, not along one face's normal and then the
-// other's. One position impulse p [kg·m] per contact, split by inverse mass and barycentric
-// weight (slave Δx_s = W_s p, triangle node j: Δx_j = −w_j W_j p, W = diag of free-DOF inverse
+// other's. Sharp edges of different bodies that crossed each other between nodes are put back in
+// touch the same way (soft_edge_detect). One position impulse p [kg·m] per contact, split by inverse mass and
+// barycentric weight (slave Δx_s = W_s p, triangle node j: Δx_j = −w_j W_j p, W = diag of free-DOF inverse
 // masses), so that Σ m Δx = 0: the pair conserves linear momentum (Heinstein, Mello, Attaway &
 // Laursen 2000, CMAME 187:621, §3: mass-weighted kinematic contact). Friction: Coulomb in
 // displacement form as for the tools (contact.hpp), on the relative tangential motion over the step.
@@ -48,6 +49,11 @@ constexpr int kSoftSweeps = 2;
 /// the step (a block resting on another, μ = 0.5: converged to 3e-6 in 90 steps with three; one
 /// stalls at 2e-4).
 constexpr int kSoftRelaxSweeps = 3;
+/// A surface edge is sharp, and watched by the edge–edge test, where its two faces' reference
+/// normals differ by more than 40° (cos 40°): at such edges two surfaces can cross edge through edge
+/// with no node going through a face (two blocks' edges, thin parts); smooth regions are covered by
+/// the nodes.
+constexpr double kSoftSharpCos = 0.766;
 
 /// The contact surface and its settings, as device pointers (trivially copyable).
 struct SoftSurface {
@@ -59,6 +65,9 @@ struct SoftSurface {
     const double* tri_h = nullptr;      // mean reference edge per triangle [m]
     const index_t* vtri_off = nullptr;  // surface node i's triangles:
     const index_t* vtri = nullptr;      //   vtri[vtri_off[i] .. vtri_off[i + 1]), ascending
+    index_t n_edges = 0;                // sharp surface edges (kSoftSharpCos)
+    const index_t* edge = nullptr;      // 2 surface nodes per sharp edge
+    const index_t* tri_edge = nullptr;  // per triangle, its edge k (v_k, v_k+1): sharp edge or −1
     const index_t* pair = nullptr;      // labels × labels: pair index of (slave, master), −1: none
     const double* mu = nullptr;         // per pair: μs, μk
     double skin = 0.0, cell = 0.0;      // Verlet skin and grid cell size [m]
@@ -412,6 +421,114 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
         rec_w[3 * i + d] = best_w[d];
         rec_p[3 * i + d] = p[d];
     }
+}
+
+/// Triple product ((b − a) × (d − c)) · (c − a) [m³]: its sign tells on which side of edge ab the
+/// edge cd passes (Provot 1997's coplanarity test of two edges).
+PLIANT_HD double soft_edge_volume(const double a[3], const double b[3], const double c[3], const double d[3],
+                                  double n[3]) {
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double v[3] = {d[0] - c[0], d[1] - c[1], d[2] - c[2]};
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+    return n[0] * (c[0] - a[0]) + n[1] * (c[1] - a[1]) + n[2] * (c[2] - a[2]);
+}
+
+/// Closest points of segments ab and cd: parameters s, t in [0, 1] (out); false if parallel.
+PLIANT_HD bool soft_segments(const double a[3], const double b[3], const double c[3], const double d[3],
+                             double& s, double& t) {
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; ++k) u[k] = b[k] - a[k], v[k] = d[k] - c[k], w[k] = a[k] - c[k];
+    const double A = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], B = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    const double C = v[0] * v[0] + v[1] * v[1] + v[2] * v[2], D = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+    const double E = v[0] * w[0] + v[1] * w[1] + v[2] * w[2];
+    const double den = A * C - B * B;
+    if (!(den > 1e-12 * A * C)) return false;
+    s = (B * E - C * D) / den;
+    t = (A * E - B * D) / den;
+    return true;
+}
+
+/// Edge–edge test of sharp edge e (nodes a, b) and response, after the node-to-triangle one: among
+/// the sharp edges of its end nodes' candidate triangles of other bodies (not its own: the
+/// coincident staircases of a cut, whose edges lie in each other's planes, made resting pieces
+/// jitter), an
+/// edge f (c, d) that crossed it during the step — the sign of soft_edge_volume changed between u
+/// and u⁺ (each beyond round-off) with the closest points inside both edges at u⁺ and no further
+/// apart than kSoftBehind × the edges' length — the closest to it. The position impulse p [kg·m]
+/// on e's closest point puts the edges back in touch along n = ±(b − a) × (d − c), on the side
+/// they came from: e's nodes get w p (w = 1 − s, s), f's nodes −w p (1 − t, t), so momentum is
+/// conserved; frictionless. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3).
+template <class T>
+PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X, const T* mass, const T* u,
+                                const T* u_next, index_t P, const index_t* cand, index_t* erec,
+                                double* erec_w, double* erec_p) {
+    erec[e] = -1;
+    const index_t ea = s.edge[2 * e], eb = s.edge[2 * e + 1];
+    const index_t* lists[2] = {cand + static_cast<std::size_t>(ea) * kSoftCandidates,
+                               cand + static_cast<std::size_t>(eb) * kSoftCandidates};
+    if (lists[0][0] < 0 && lists[1][0] < 0) return;
+    double a0[3], b0[3], a1[3], b1[3];
+    soft_position(ea, s, X, u, P, a0);
+    soft_position(eb, s, X, u, P, b0);
+    soft_position(ea, s, X, u_next, P, a1);
+    soft_position(eb, s, X, u_next, P, b1);
+    index_t best = -1;
+    double best_gap = INFINITY, best_s = 0.0, best_t = 0.0, best_n[3] = {0.0, 0.0, 0.0};
+    for (int l = 0; l < 2; ++l)
+        for (int q = 0; q < kSoftCandidates && lists[l][q] >= 0; ++q)
+            for (int k = 0; k < 3; ++k) {
+                const index_t f = s.tri_edge[3 * lists[l][q] + k];
+                if (f < 0 || f == e) continue;
+                const index_t fc = s.edge[2 * f], fd = s.edge[2 * f + 1];
+                if (s.label[fc] == s.label[ea]) continue;  // between bodies only (see below)
+                double c0[3], d0[3], c1[3], d1[3], n0[3], n1[3], sp, tp;
+                soft_position(fc, s, X, u, P, c0);
+                soft_position(fd, s, X, u, P, d0);
+                soft_position(fc, s, X, u_next, P, c1);
+                soft_position(fd, s, X, u_next, P, d1);
+                const double v0 = soft_edge_volume(a0, b0, c0, d0, n0);
+                const double v1 = soft_edge_volume(a1, b1, c1, d1, n1);
+                // Round-off: a volume below 1e-9 of |ab × cd| × the edges' length is no side.
+                const double len =
+                    std::sqrt((b1[0] - a1[0]) * (b1[0] - a1[0]) + (b1[1] - a1[1]) * (b1[1] - a1[1]) +
+                              (b1[2] - a1[2]) * (b1[2] - a1[2])) +
+                    std::sqrt((d1[0] - c1[0]) * (d1[0] - c1[0]) + (d1[1] - c1[1]) * (d1[1] - c1[1]) +
+                              (d1[2] - c1[2]) * (d1[2] - c1[2]));
+                const double area = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
+                const double eps = 1e-9 * area * len;
+                if (!(area > 0.0) || !((v0 > eps && v1 < -eps) || (v0 < -eps && v1 > eps))) continue;
+                if (!soft_segments(a1, b1, c1, d1, sp, tp) || sp <= 0.0 || sp >= 1.0 || tp <= 0.0 ||
+                    tp >= 1.0)
+                    continue;
+                const double sign = v0 > 0.0 ? 1.0 : -1.0;  // f was on the +n side of e
+                double gap = 0.0, nn[3];
+                for (int d = 0; d < 3; ++d) {
+                    nn[d] = sign * n1[d] / area;
+                    const double pe = a1[d] + sp * (b1[d] - a1[d]), pf = c1[d] + tp * (d1[d] - c1[d]);
+                    gap -= nn[d] * (pf - pe);
+                }
+                if (!(gap > 0.0 && gap <= kSoftBehind * 0.5 * len) ||
+                    !(gap < best_gap || (gap == best_gap && f < best)))
+                    continue;
+                best = f, best_gap = gap, best_s = sp, best_t = tp;
+                for (int d = 0; d < 3; ++d) best_n[d] = nn[d];
+            }
+    if (best < 0) return;
+    // Effective inverse mass along n: Σ w² nᵀ W n over the four nodes.
+    const index_t nodes[4] = {ea, eb, s.edge[2 * best], s.edge[2 * best + 1]};
+    const double w[4] = {1.0 - best_s, best_s, 1.0 - best_t, best_t};
+    double k = 0.0;
+    for (int j = 0; j < 4; ++j) {
+        double W[3];
+        soft_inverse_mass(nodes[j], s, mass, W);
+        for (int d = 0; d < 3; ++d) k += w[j] * w[j] * best_n[d] * best_n[d] * W[d];
+    }
+    if (!(k > 0.0)) return;
+    erec[e] = best;
+    erec_w[2 * e] = best_s, erec_w[2 * e + 1] = best_t;
+    for (int d = 0; d < 3; ++d) erec_p[3 * e + d] = -best_gap / k * best_n[d];  // e moves against n
 }
 
 }  // namespace pliant

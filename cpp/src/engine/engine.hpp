@@ -45,6 +45,7 @@ struct Scalars {
     int soft_rebuild;  // soft contact: rebuild the candidate lists this step (set at each run's start)
     double soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m]
     index_t soft_active, soft_touched;  // soft contact: nodes with candidates; nodes of a sweep's contacts
+    index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
 };
 
 /// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
@@ -80,8 +81,8 @@ struct DeviceView {
     // radius; triangles by bucket), candidates (kSoftCandidates per node), each node's contact
     // (triangle, weights, impulse), contacts per node, impulse sums and forces [N] (3 per node).
     SoftSurface soft;
-    double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare;
-    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *sactive, *stouched;
+    double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare, *erec_w, *erec_p;
+    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *sactive, *stouched, *erec, *eactive;
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -179,8 +180,10 @@ private:
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
-    DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, d_soft_mu_;
-    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, sactive_, stouched_;
+    DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, erec_w_,
+        erec_p_, d_soft_mu_;
+    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, sactive_, stouched_, erec_,
+        eactive_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceView<T> v_{};

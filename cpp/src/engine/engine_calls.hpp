@@ -85,6 +85,11 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     scand_ = DeviceBuffer<index_t, Dev>(dev_, ns * kSoftCandidates);
     srec_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     sshare_ = DeviceBuffer<double, Dev>(dev_, ns);
+    const std::size_t ne = m_.soft_edges.size() / 2;
+    erec_ = DeviceBuffer<index_t, Dev>(dev_, ne);
+    eactive_ = DeviceBuffer<index_t, Dev>(dev_, ne);
+    erec_w_ = DeviceBuffer<double, Dev>(dev_, 2 * ne);
+    erec_p_ = DeviceBuffer<double, Dev>(dev_, 3 * ne);
     sactive_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     stouched_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     d_soft_mu_ = DeviceBuffer<double, Dev>::mirror(dev_, m_.soft_mu);
@@ -138,12 +143,15 @@ void Engine<T, Dev>::refresh_view() {
     sf.node = mb_.snodes.data(), sf.bits = mb_.sbits.data(), sf.label = mb_.slabel.data();
     sf.tri = mb_.stris.data(), sf.tri_h = mb_.stri_h.data(), sf.pair = mb_.spair.data();
     sf.vtri_off = mb_.svtri_off.data(), sf.vtri = mb_.svtri.data();
+    sf.n_edges = static_cast<index_t>(m.soft_edges.size() / 2);
+    sf.edge = mb_.sedges.data(), sf.tri_edge = mb_.stri_edge.data();
     sf.mu = d_soft_mu_.data(), sf.skin = m.soft_skin, sf.cell = m.soft_cell;
     v.sb = sb_.data(), v.smove = smove_.data(), v.stc = stc_.data(), v.str = str_.data();
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();
     v.shead = shead_.data(), v.scursor = scursor_.data(), v.sbucket = sbucket_.data();
     v.scell = scell_.data(), v.scand = scand_.data(), v.srec = srec_.data(), v.sshare = sshare_.data();
-    v.sactive = sactive_.data(), v.stouched = stouched_.data();
+    v.erec = erec_.data(), v.erec_w = erec_w_.data(), v.erec_p = erec_p_.data();
+    v.sactive = sactive_.data(), v.stouched = stouched_.data(), v.eactive = eactive_.data();
 }
 
 /// Copies a state to the device unless the device holds it already (same object, same version).

@@ -17,6 +17,12 @@ PLIANT_HD void soft_activate(const DeviceView<T>& v, const SoftSurface& s) {
     for (index_t i = 0; i < s.n_nodes; ++i)
         if (v.scand[static_cast<std::size_t>(i) * kSoftCandidates] >= 0) v.sactive[n++] = i;
     sc.soft_active = n;
+    index_t ne = 0;
+    for (index_t e = 0; e < s.n_edges; ++e)
+        if (v.scand[static_cast<std::size_t>(s.edge[2 * e]) * kSoftCandidates] >= 0 ||
+            v.scand[static_cast<std::size_t>(s.edge[2 * e + 1]) * kSoftCandidates] >= 0)
+            v.eactive[ne++] = e;
+    sc.soft_edges_active = ne;
     sc.soft_rebuild = 0;
 }
 
@@ -45,6 +51,14 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
         for (int k = 0; k < 3; ++k)
             if (v.srec_w[3 * i + k] > 0.0) soft_count(v, s.tri[3 * t + k], v.srec_w[3 * i + k]);
     }
+    for (index_t q = 0; q < sc.soft_edges_active; ++q) {  // edge–edge contacts: four nodes, weighted
+        const index_t e = v.eactive[q], f = v.erec[e];
+        if (f < 0) continue;
+        const index_t nodes[4] = {s.edge[2 * e], s.edge[2 * e + 1], s.edge[2 * f], s.edge[2 * f + 1]};
+        const double w[4] = {1.0 - v.erec_w[2 * e], v.erec_w[2 * e], 1.0 - v.erec_w[2 * e + 1],
+                             v.erec_w[2 * e + 1]};
+        for (int j = 0; j < 4; ++j) soft_count(v, nodes[j], w[j]);
+    }
     double* row = v.hist + sc.row * v.hist_width + 6 * v.n_tools;
     if (first)
         for (index_t k = 0; k < 3 * v.n_pairs; ++k) row[k] = 0.0;
@@ -63,6 +77,23 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
             const double p = v.srec_p[3 * i + d] / share;
             v.sacc[3 * i + d] += p;
             for (int k = 0; k < 3; ++k) v.sacc[3 * tri[k] + d] -= v.srec_w[3 * i + k] * p;
+            row[3 * pr + d] += sign * p / g1;
+        }
+    }
+    for (index_t q = 0; q < sc.soft_edges_active; ++q) {
+        const index_t e = v.eactive[q], f = v.erec[e];
+        if (f < 0) continue;
+        const index_t nodes[4] = {s.edge[2 * e], s.edge[2 * e + 1], s.edge[2 * f], s.edge[2 * f + 1]};
+        const double w[4] = {1.0 - v.erec_w[2 * e], v.erec_w[2 * e], -(1.0 - v.erec_w[2 * e + 1]),
+                             -v.erec_w[2 * e + 1]};
+        double share = 0.0;
+        for (int j = 0; j < 4; ++j) share = v.sshare[nodes[j]] > share ? v.sshare[nodes[j]] : share;
+        const index_t la = s.label[nodes[0]], lb = s.label[nodes[2]];
+        const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
+        const double sign = la <= lb ? 1.0 : -1.0;
+        for (int d = 0; d < 3; ++d) {
+            const double p = v.erec_p[3 * e + d] / share;
+            for (int j = 0; j < 4; ++j) v.sacc[3 * nodes[j] + d] += w[j] * p;
             row[3 * pr + d] += sign * p / g1;
         }
     }
@@ -113,9 +144,12 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     const int sweeps = relaxing ? kSoftRelaxSweeps : kSoftSweeps;
     for (int sweep = 0; sweep < sweeps; ++sweep) {
         const bool first = sweep == 0;
-        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t a) {
+        const index_t items = s.n_nodes > s.n_edges ? s.n_nodes : s.n_edges;
+        dev_.each(items, [=] PLIANT_KERNEL(index_t a) {
             if (a < v.sc->soft_active)
                 soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.scand, v.srec, v.srec_w, v.srec_p);
+            if (a < s.n_edges)
+                soft_edge_detect(a, s, v.X, mass, uc, un, v.P, v.scand, v.erec, v.erec_w, v.erec_p);
         });
         dev_.serial([=] PLIANT_KERNEL() { soft_gather(v, s, first); });
         dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t a) {
