@@ -233,12 +233,16 @@ def test_the_live_viewer_cuts_with_a_dragged_blade_and_resets():
         v.server.stop()
 
 
-def test_the_live_viewer_colours_a_scene_by_body():
+def test_the_live_viewer_colours_a_scene_by_body(tmp_path):
     """With soft contact the viewer offers to colour the surface by body: each body one colour,
-    the liver (body 0) the lowest and the ball (body 1) the highest of the colour bar."""
+    the base (body 0) the lowest and the block on it (body 1) the highest of the colour bar."""
     from pliant.view.viewer import BODY_FIELD, LiveViewer
 
-    v = LiveViewer(load_scene(EXAMPLES / "organs_contact.toml"), port=_free_port())
+    from test_scene_bodies import SCENE
+
+    path = tmp_path / "two.toml"
+    path.write_text(SCENE)
+    v = LiveViewer(load_scene(path), port=_free_port())
     try:
         assert BODY_FIELD in v.field_dropdown.options
         v.field = BODY_FIELD
