@@ -8,7 +8,8 @@ namespace pliant {
 constexpr index_t kSoftChunk = 128;
 
 /// After a rebuild, one thread: the surface nodes with candidates, in order (sactive; their count
-/// in the scalars). Only they are checked until the next rebuild.
+/// in the scalars), and the sharp edges with an end node that has some (eactive). Only they are
+/// checked until the next rebuild.
 template <class T>
 PLIANT_HD void soft_activate(const DeviceView<T>& v, const SoftSurface& s) {
     Scalars<T>& sc = *v.sc;
@@ -148,8 +149,9 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
         dev_.each(items, [=] PLIANT_KERNEL(index_t a) {
             if (a < v.sc->soft_active)
                 soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.scand, v.srec, v.srec_w, v.srec_p);
-            if (a < s.n_edges)
-                soft_edge_detect(a, s, v.X, mass, uc, un, v.P, v.scand, v.erec, v.erec_w, v.erec_p);
+            if (a < v.sc->soft_edges_active)
+                soft_edge_detect(v.eactive[a], s, v.X, mass, uc, un, v.P, v.scand, v.erec, v.erec_w,
+                                 v.erec_p);
         });
         dev_.serial([=] PLIANT_KERNEL() { soft_gather(v, s, first); });
         dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t a) {
