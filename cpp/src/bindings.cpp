@@ -202,7 +202,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<std::vector<double>> tool_grips, std::vector<double> tool_reach,
                std::vector<index_t> soft_nodes, std::vector<index_t> soft_label,
                std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
-               std::vector<double> soft_mu, double soft_skin, int threads) {
+               std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -234,6 +234,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.anp = anp;
                 in.stiffness_damping = stiffness_damping;
                 in.anp_stabilization = anp_stabilization;
+                in.smoothing = smoothing;
                 in.group_visco = std::move(group_visco);
                 in.soft_nodes = std::move(soft_nodes);
                 in.soft_label = std::move(soft_label);
@@ -271,10 +272,11 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a,
             "stiffness_damping"_a, "anp_stabilization"_a, "tool_grips"_a, "tool_reach"_a, "soft_nodes"_a,
             "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a, "soft_mu"_a, "soft_skin"_a,
-            "threads"_a)
+            "smoothing"_a, "threads"_a)
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
+        .def_prop_ro("n_edges", [](const E& e) { return e.model.n_edges; })
         .def_prop_ro("dt_critical", [](const E& e) { return e.model.dt_critical; })
         .def_prop_ro("dt_critical_element", [](const E& e) { return e.model.dt_critical_elem; })
         .def_prop_ro("bytes", [](const E& e) { return e.model.bytes(); })
@@ -431,6 +433,11 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
         .value("Polynomial", MaterialKind::Polynomial)
         .value("ArrudaBoyce", MaterialKind::ArrudaBoyce)
         .value("TransverselyIsotropic", MaterialKind::TransverselyIsotropic);
+    nb::enum_<StrainSmoothing>(m, "StrainSmoothing", nb::is_arithmetic(),
+                               "Where the strain of linear tetrahedra is constant.")
+        .value("Element", StrainSmoothing::Element, "per element: plain linear tetrahedra (T4)")
+        .value("Edge", StrainSmoothing::Edge,
+               "per edge domain: edge-based smoothed strain (ES-FEM-T4), far less stiff in bending");
     nb::enum_<CurveKind>(m, "CurveKind", nb::is_arithmetic(), "Load curve shapes.")
         .value("Constant", CurveKind::Constant)
         .value("Step", CurveKind::Step)

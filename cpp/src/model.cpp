@@ -21,6 +21,7 @@ Model<T>::Model(const ModelInput& in) {
     const NodeSums sums = build_elements(in);
     build_masses(in, sums);
     build_incidence(sums.count);
+    build_smoothing(in);
     build_loads(in, sums.mass);
     build_pressure(in);
     build_constraints(in);
@@ -168,6 +169,67 @@ void Model<T>::build_incidence(std::vector<index_t> count) {
             inc_index[fill[n]++] = aosoa(static_cast<index_t>(s / kLanes), s % kLanes, 3 * a, 12);
         }
     }
+}
+
+/// Edge smoothing domains (smoothing.hpp): every (group, edge) with its elements, weights
+/// (V_e/6)/V_k and each slot's six edges; numbered by group, then by node pair (locality).
+template <class T>
+void Model<T>::build_smoothing(const ModelInput& in) {
+    smoothing = in.smoothing;
+    if (smoothing == StrainSmoothing::Element) return;
+    if (visco_terms > 0)
+        throw std::invalid_argument("edge-smoothed strain and viscoelastic materials cannot be combined yet");
+    struct Inc {
+        index_t group, n0, n1, slot;
+        int local;
+    };
+    static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    const std::size_t S = static_cast<std::size_t>(n_blocks) * kLanes;
+    std::vector<Inc> inc;
+    inc.reserve(6 * static_cast<std::size_t>(n_elems));
+    for (std::size_t s = 0; s < S; ++s) {
+        if (elem_id[s] < 0) continue;
+        const index_t b = static_cast<index_t>(s / kLanes);
+        const int l = static_cast<int>(s % kLanes);
+        for (int j = 0; j < 6; ++j) {
+            const index_t p = elem_nodes[aosoa(b, l, kEdge[j][0], 4)],
+                          q = elem_nodes[aosoa(b, l, kEdge[j][1], 4)];
+            inc.push_back({block_group[b], std::min(p, q), std::max(p, q), static_cast<index_t>(s), j});
+        }
+    }
+    std::sort(inc.begin(), inc.end(), [](const Inc& a, const Inc& b) {
+        if (a.group != b.group) return a.group < b.group;
+        if (a.n0 != b.n0) return a.n0 < b.n0;
+        if (a.n1 != b.n1) return a.n1 < b.n1;
+        return a.slot < b.slot;
+    });
+    elem_edges.assign(6 * S, 0);
+    edge_slot.resize(inc.size());
+    edge_w.resize(inc.size());
+    edge_off.assign(1, 0);
+    group_edge_begin.assign(groups.size() + 1, 0);
+    for (std::size_t i = 0; i < inc.size();) {
+        std::size_t j = i;
+        double vk = 0.0;
+        for (; j < inc.size() && inc[j].group == inc[i].group && inc[j].n0 == inc[i].n0 &&
+               inc[j].n1 == inc[i].n1;
+             ++j)
+            vk += double(elem_vol[inc[j].slot]);
+        const index_t k = static_cast<index_t>(edge_off.size() - 1);
+        for (std::size_t r = i; r < j; ++r) {
+            const index_t s = inc[r].slot;
+            edge_slot[r] = s;
+            edge_w[r] = T(double(elem_vol[s]) / vk);  // (V_e/6) / Σ (V_e/6)
+            elem_edges[aosoa(s / kLanes, s % kLanes, inc[r].local, 6)] = k;
+        }
+        edge_group.push_back(inc[i].group);
+        group_edge_begin[static_cast<std::size_t>(inc[i].group) + 1] = k + 1;
+        edge_off.push_back(static_cast<index_t>(j));
+        i = j;
+    }
+    n_edges = static_cast<index_t>(edge_group.size());
+    for (std::size_t g = 1; g < group_edge_begin.size(); ++g)  // groups without elements
+        group_edge_begin[g] = std::max(group_edge_begin[g], group_edge_begin[g - 1]);
 }
 
 /// Load patterns (K, N, 3) → (K, 3, P), and gravity as one more pattern (m_a g).
@@ -397,7 +459,7 @@ std::size_t Model<T>::bytes() const {
            b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) + b(relax_inv_mass) + b(node_volume) +
            b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) + b(press_slot) +
            b(press_edges) + b(press_value) + b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) +
-           b(cons_offsets);
+           b(cons_offsets) + b(edge_off) + b(edge_slot) + b(edge_group) + b(elem_edges) + b(edge_w);
 }
 
 template struct Model<float>;

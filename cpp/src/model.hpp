@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "pliant/contact.hpp"
+#include "pliant/smoothing.hpp"
 #include "pliant/soft_contact.hpp"
 
 namespace pliant {
@@ -59,6 +60,7 @@ struct ModelInput {
     bool anp = false;                  // average nodal pressure (T4ANP)
     double stiffness_damping = 0.0;    // Rayleigh β [s] (tled.hpp: add_damping_forces)
     double anp_stabilization = 0.0;    // T4ANP: fraction γ of the element's own pressure
+    StrainSmoothing smoothing = StrainSmoothing::Element;  // per element, or edge-smoothed (ES-FEM-T4)
     // Contact between deformable surfaces (soft_contact.hpp): its surface nodes (engine nodes) with
     // their body labels, its triangles (3 surface-node indices each, outward), the pair table
     // (labels × labels, pair index or −1), μs and μk per pair, the Verlet skin [m].
@@ -87,11 +89,17 @@ struct Model {
     std::vector<index_t> pattern_curve;
     std::vector<index_t> pface_offsets, pface_index, press_nodes, press_slot;
     std::vector<T> press_edges, press_value;
-    bool anp = false;                           // average nodal pressure tetrahedra (T4ANP)
-    double stiffness_damping = 0.0;             // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
-    double anp_stabilization = 0.0;             // T4ANP: p = p̄ + γ (p(J_e) − p̄) (AveragedPressure)
-    int visco_terms = 0;                        // max Prony terms of any group: the State's q holds 6 each
-    std::vector<T> node_volume;                 // Σ V0 of the elements of each node [m³], (P,), T4ANP only
+    bool anp = false;                // average nodal pressure tetrahedra (T4ANP)
+    double stiffness_damping = 0.0;  // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
+    double anp_stabilization = 0.0;  // T4ANP: p = p̄ + γ (p(J_e) − p̄) (AveragedPressure)
+    int visco_terms = 0;             // max Prony terms of any group: the State's q holds 6 each
+    std::vector<T> node_volume;      // Σ V0 of the elements of each node [m³], (P,), T4ANP only
+    // Edge-smoothed strain (smoothing.hpp): per edge its elements (CSR, slots ascending) and weights,
+    // its group; per slot its six edges (AoSoA K=6); per group its first edge (G + 1 entries).
+    StrainSmoothing smoothing = StrainSmoothing::Element;
+    index_t n_edges = 0;
+    std::vector<index_t> edge_off, edge_slot, edge_group, elem_edges, group_edge_begin;
+    std::vector<T> edge_w;
     std::vector<index_t> cons_dof, cons_curve;  // sorted by node
     std::vector<T> cons_value;
     std::vector<index_t> cons_offsets;  // node n's constraints: [cons_offsets[n], [n+1])
@@ -144,6 +152,7 @@ private:
     NodeSums build_elements(const ModelInput& in);
     void build_masses(const ModelInput& in, const NodeSums& sums);
     void build_incidence(std::vector<index_t> count);
+    void build_smoothing(const ModelInput& in);
     void build_loads(const ModelInput& in, const std::vector<double>& mass);
     void build_pressure(const ModelInput& in);
     void build_constraints(const ModelInput& in);

@@ -85,6 +85,20 @@ PLIANT_HD Mat3<T> mul(const Mat3<T>& F, const Sym3<T>& S) {
     return P;
 }
 
+/// Product S·B of a symmetric and a general matrix.
+template <class T>
+PLIANT_HD Mat3<T> mul_sym_left(const Sym3<T>& S, const Mat3<T>& B) {
+    const T s[9] = {S.xx, S.xy, S.xz, S.xy, S.yy, S.yz, S.xz, S.yz, S.zz};
+    Mat3<T> R;
+    PLIANT_UNROLL
+    for (int r = 0; r < 3; ++r) {
+        PLIANT_UNROLL
+        for (int c = 0; c < 3; ++c)
+            R.a[3 * r + c] = s[3 * r] * B.a[c] + s[3 * r + 1] * B.a[3 + c] + s[3 * r + 2] * B.a[6 + c];
+    }
+    return R;
+}
+
 /// Symmetric part of a general matrix.
 template <class T>
 PLIANT_HD Sym3<T> sym(const Mat3<T>& A) {

@@ -71,9 +71,9 @@ template <class T, class Dev>
 struct ModelBuffers {
     DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, pcurve, co, cdof, ccurve,
         cnodes, cbits, pf_off, pf_idx, pnodes, pslot, snodes, sbits, slabel, stris, spair, svtri_off, svtri,
-        sedges, stri_edge;
-    DeviceBuffer<T, Dev> elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask, patterns,
-        cval, pedges, pvalue, node_vol;
+        sedges, stri_edge, edge_off, edge_slot, edge_group, elem_edges;
+    DeviceBuffer<T, Dev> edge_w, elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
+        patterns, cval, pedges, pvalue, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
     DeviceBuffer<double, Dev> tt, tv, X, grid, stri_h;
 
@@ -97,6 +97,8 @@ struct ModelBuffers {
         snodes = I(m.soft_nodes), sbits = I(m.soft_bits), slabel = I(m.soft_label), stris = I(m.soft_tris);
         spair = I(m.soft_pair), stri_h = D(m.soft_tri_h), svtri_off = I(m.soft_vtri_off);
         svtri = I(m.soft_vtri), sedges = I(m.soft_edges), stri_edge = I(m.soft_tri_edge);
+        edge_off = I(m.edge_off), edge_slot = I(m.edge_slot), edge_group = I(m.edge_group);
+        elem_edges = I(m.elem_edges), edge_w = R(m.edge_w);
     }
 };
 

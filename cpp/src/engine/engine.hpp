@@ -6,7 +6,8 @@
 //
 // A step (step_once): (1) step scalars: load-curve factors, tool poses, the step counter;
 // (2) element forces per material group (T4ANP: element pressures, nodal averages, then forces;
-// viscoelastic: the Prony state advances); (3) per node: gather, central difference update,
+// edge-smoothed strain: element gradients, edge stresses, then forces; viscoelastic: the Prony
+// state advances); (3) per node: gather, central difference update,
 // kinematic constraints; (4) contact with the rigid tools (and grasping) and the per-tool force sums;
 // (5) contact between deformable surfaces (soft_contact.hpp) and the per-pair force sums.
 // Stability checks every `check_every` steps (J ≤ 0 or NaN per element; non-finite or blown-up nodes).
@@ -55,6 +56,10 @@ struct DeviceView {
     int n_curves, n_factors, n_tools, visco_w;
     T anp_stab;  // T4ANP stabilization γ (AveragedPressure)
     ElementData<T> el;
+    bool smoothed;              // edge-smoothed strain (smoothing.hpp)
+    EdgeData<T> ed;             // its edge domains
+    const index_t* edge_group;  // edge → material group
+    T *H_elem, *P_edge;         // element gradients (AoSoA K=9), edge stresses [Pa] (9 per edge)
     const index_t* elem_id;
     const index_t* block_group;      // block → material group
     const MaterialParams<T>* mats;   // per group (scaled moduli: scale_materials)
@@ -93,7 +98,8 @@ enum class Variant { Plain, Visco, Anp };
 /// values (the copies of a batch, a model's element sets of one kind) cost a single launch.
 struct Span {
     index_t block_begin, block_end;
-    index_t group;  // the first group (its kind decides the element function)
+    index_t group;                 // the first group (its kind decides the element function)
+    index_t edge_begin, edge_end;  // its groups' edge domains (edge-smoothed strain)
 };
 
 /// Contact nodes per chunk: each chunk sums its per-tool forces, chunks are summed in order.
@@ -137,6 +143,9 @@ public:
     void step_once(const Phase& ph, double dt, double time_dt, bool relaxing, T* f_node_out, RunReport& rep);
     void step_scalars(double time_dt, bool fixed_row);
     void forces(const T* u, ViscoMode visco_mode, double dt);
+    void edge_stresses(const T* u);
+    template <class M, Variant V>
+    void launch_edge_stress(const Span& sp);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
     void contact_pass(const Phase& ph, bool relaxing);
     void soft_pass(const Phase& ph, bool relaxing);
@@ -176,7 +185,7 @@ private:
     ModelBuffers<T, Dev> mb_;
     DeviceBuffer<RigidTool, Dev> d_tools_;
     DeviceBuffer<double, Dev> d_keys_, d_grips_, cforce_, chunk_, hist_, fcon_, partial_, gat_;
-    DeviceBuffer<T, Dev> u_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_;
+    DeviceBuffer<T, Dev> u_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_, H_elem_, P_edge_;
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;

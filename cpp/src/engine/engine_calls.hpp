@@ -18,6 +18,9 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     J_ = DeviceBuffer<T, Dev>(dev_, S);
     elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);
     node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
+    const bool smoothed = m.smoothing == StrainSmoothing::Edge;
+    H_elem_ = DeviceBuffer<T, Dev>(dev_, smoothed ? 9 * S : 0);
+    P_edge_ = DeviceBuffer<T, Dev>(dev_, 9 * static_cast<std::size_t>(m.n_edges));
     cnext_ = DeviceBuffer<T, Dev>(dev_, m.curves.size());
     pf_ = DeviceBuffer<T, Dev>(dev_, m.pattern_curve.size());
     sc_ = DeviceBuffer<Scalars<T>, Dev>(dev_, 1);
@@ -50,11 +53,15 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
         const Group<T>& a = groups_[g];
         prony[g] = a.visco;
         const Group<T>* last = spans_.empty() ? nullptr : &groups_[spans_.back().group];
+        const index_t e0 = smoothed ? m.group_edge_begin[g] : 0,
+                      e1 = smoothed ? m.group_edge_begin[g + 1] : 0;
         if (last && a.material.kind == last->material.kind &&
-            (a.visco.terms() > 0) == (last->visco.terms() > 0))
+            (a.visco.terms() > 0) == (last->visco.terms() > 0)) {
             spans_.back().block_end = a.block_end;
-        else
-            spans_.push_back({groups_[g].block_begin, groups_[g].block_end, static_cast<index_t>(g)});
+            spans_.back().edge_end = e1;
+        } else {
+            spans_.push_back({groups_[g].block_begin, groups_[g].block_end, static_cast<index_t>(g), e0, e1});
+        }
     }
     d_prony_ = DeviceBuffer<Prony<T>, Dev>(dev_, ng);
     d_prony_.upload(prony.data(), ng);
@@ -110,6 +117,10 @@ void Engine<T, Dev>::refresh_view() {
     v.visco_w = 6 * m.visco_terms;
     v.anp_stab = T(m.anp_stabilization);
     v.el = {mb_.elem_nodes.data(), mb_.elem_grad.data(), mb_.elem_vol.data()};
+    v.smoothed = m.smoothing == StrainSmoothing::Edge;
+    v.ed = {mb_.edge_off.data(), mb_.edge_slot.data(), mb_.edge_w.data(), mb_.elem_edges.data()};
+    v.edge_group = mb_.edge_group.data();
+    v.H_elem = H_elem_.data(), v.P_edge = P_edge_.data();
     v.elem_id = mb_.elem_id.data();
     v.block_group = mb_.block_group.data();
     v.mats = d_mats_.data();
@@ -319,7 +330,7 @@ ElementResults<T> Engine<T, Dev>::measures(const State<T>& s) {
     DeviceBuffer<T, Dev> out(dev_, 20 * M);
     const T* u = v_.u[phase_.cur];
     dev_.region([&] {
-        if (m_.anp) {  // T4ANP: the stresses the forces see, with the averaged pressure
+        if (m_.anp || v_.smoothed) {  // the stresses the forces see: averaged pressure, edge stresses
             forces(u, ViscoMode::Stored, s.dt);
         }
         dispatch(

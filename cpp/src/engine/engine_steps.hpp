@@ -102,6 +102,13 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
             launch_visco_forces<M, static_cast<int>(ViscoMode::Advance)>(sp, u, visco_mode, dt);
         else
             launch_visco_forces<M, -1>(sp, u, visco_mode, dt);
+    } else if (v_.smoothed) {  // pass 3 of the edge-smoothed strain (smoothing.hpp)
+        const DeviceView<T> v = v_;
+        dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+            const M mat = make_material<M>(v.mats[v.block_group[b]]);
+            element_forces_smoothed<V == Variant::Anp>(b, l, mat, v.el, v.ed, v.P_edge, u, v.P, v.node_p,
+                                                       v.anp_stab, v.f_elem, v.J);
+        });
     } else {
         const DeviceView<T> v = v_;
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
@@ -128,8 +135,39 @@ void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
             v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.nodes.inc_index, v.elem_p, v.node_volume);
         });
     }
+    if (v_.smoothed) edge_stresses(u);
     dispatch([&]<class M, Variant V>(const Span& sp) { launch_forces<M, V>(sp, u, visco_mode, dt); });
     dev_.barrier();
+}
+
+/// Passes 1 and 2 of the edge-smoothed strain (smoothing.hpp): every element's displacement
+/// gradient, then every edge domain's smoothed stress, per material group.
+template <class T, class Dev>
+void Engine<T, Dev>::edge_stresses(const T* u) {
+    const DeviceView<T> v = v_;
+    dev_.blocks(0, m_.n_blocks,
+                [=] PLIANT_KERNEL(index_t b, int l) { element_gradient(b, l, v.el, u, v.P, v.H_elem); });
+    dev_.barrier();
+    dispatch([&]<class M, Variant V>(const Span& sp) { launch_edge_stress<M, V>(sp); });
+    dev_.barrier();
+}
+
+/// Edge stresses of a span's edge domains; under T4ANP the isochoric part only (p̄ = 0, γ = 0):
+/// each element adds its volumetric part (SmoothedStress).
+template <class T, class Dev>
+template <class M, Variant V>
+void Engine<T, Dev>::launch_edge_stress(const Span& sp) {
+    const DeviceView<T> v = v_;
+    const index_t k0 = sp.edge_begin;
+    dev_.each(sp.edge_end - sp.edge_begin, [=] PLIANT_KERNEL(index_t i) {
+        (void)v;  // captured before any `if constexpr` (nvcc)
+        const index_t k = k0 + i;
+        const M mat = make_material<M>(v.mats[v.edge_group[k]]);
+        if constexpr (V == Variant::Anp)
+            edge_stress(k, AveragedPressure<M, T>{mat, T(0), T(0)}, v.ed, v.H_elem, v.P_edge);
+        else
+            edge_stress(k, mat, v.ed, v.H_elem, v.P_edge);
+    });
 }
 
 /// Stiffness-proportional damping (β [s]): each element's viscous forces from its half-step
@@ -330,6 +368,14 @@ void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* o
             const ViscoMaterial<M, T> vm{
                 mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, ViscoMode::Stored};
             r = element_measures(b, l, vm, v.el, u, v.P);
+        } else if (v.smoothed) {
+            const Mat3<T> Pm = mean_edge_stress(b, l, v.ed.elem_edges, v.P_edge);
+            if constexpr (V == Variant::Anp) {
+                const T p = corner_pressure(b, l, v.el, v.node_p);
+                r = element_measures(b, l, SmoothedStress<M, T, true>{mat, Pm, p, v.anp_stab}, v.el, u, v.P);
+            } else {
+                r = element_measures(b, l, SmoothedStress<M, T, false>{mat, Pm, T(0), T(0)}, v.el, u, v.P);
+            }
         } else if constexpr (V == Variant::Anp) {
             const T p = corner_pressure(b, l, v.el, v.node_p);
             r = element_measures(b, l, AveragedPressure<M, T>{mat, p, v.anp_stab}, v.el, u, v.P);

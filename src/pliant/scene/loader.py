@@ -11,10 +11,11 @@ import numpy as np
 
 from .. import _core
 from .. import materials as mat
-from ..errors import PliantWarning
+from ..errors import InputError, PliantWarning
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from ..tled.model import BACKENDS
+from ..tled.smoothing import strain_smoothing
 from ..tled.solver import MAX_INCREMENTS
 from ..job import Scene
 from .bodies import load_bodies, set_contact
@@ -161,6 +162,7 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
             "stiffness_damping": "number",
             "nodal_pressure": "bool",
             "nodal_pressure_stabilization": "number",
+            "strain_smoothing": "str",
             "dtype": "str",
             "threads": "int",
             "static": "bool",
@@ -225,6 +227,10 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
             f"{gamma:g}: expected a fraction from 0 (plain T4ANP) to 1 (plain T4)",
         )
     scene.builder.nodal_pressure_stabilization = gamma
+    try:
+        scene.builder.strain_smoothing = strain_smoothing(solver.get("strain_smoothing", "element"))
+    except InputError as e:
+        raise ctx.error("solver.strain_smoothing", str(e)) from None
 
 
 def _materials(ctx: Ctx, tables: list, b: ModelBuilder, X, T, sets) -> None:

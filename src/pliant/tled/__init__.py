@@ -4,6 +4,7 @@ from .builder import ModelBuilder
 from .curves import Constant, LoadCurve, Ramp, SmoothRamp, Hilly, Step, Table
 from .model import Model, State
 from .report import ContactReport, PairHistory, RelaxInfo, RunInfo, ToolHistory
+from .smoothing import StrainSmoothing
 from .solver import Simulation, Solver
 
 __all__ = [
@@ -17,6 +18,7 @@ __all__ = [
     "ContactReport",
     "ToolHistory",
     "PairHistory",
+    "StrainSmoothing",
     "LoadCurve",
     "Constant",
     "Step",

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import InputError
 from .builder import ModelBuilder
+from .smoothing import strain_smoothing
 
 __all__ = ["Batch", "merge_builders"]
 
@@ -58,6 +59,7 @@ def _check_shared(builders: list[ModelBuilder]) -> None:
         "damping": lambda b: float(b.damping),
         "stiffness_damping": lambda b: float(b.stiffness_damping),
         "nodal_pressure (T4ANP)": lambda b: (bool(b.nodal_pressure), float(b.nodal_pressure_stabilization)),
+        "strain smoothing": lambda b: strain_smoothing(b.strain_smoothing),
         "gravity": lambda b: b._gravity,
         "tools": lambda b: [_tool_signature(t) for t in b.tools],
         "tool node restrictions": lambda b: [s is None for s in b.tool_nodes],
@@ -86,6 +88,7 @@ def merge_builders(builders: list[ModelBuilder]) -> tuple[ModelBuilder, np.ndarr
     out.damping, out.stiffness_damping = first.damping, first.stiffness_damping
     out.nodal_pressure, out._gravity = first.nodal_pressure, first._gravity
     out.nodal_pressure_stabilization = first.nodal_pressure_stabilization
+    out.strain_smoothing = first.strain_smoothing
     out.tools = list(first.tools)
     node_off = np.concatenate([[0], np.cumsum([b.n_nodes for b in builders])]).astype(np.int64)
     elem_off = np.concatenate([[0], np.cumsum([b.n_elements for b in builders])]).astype(np.int64)

@@ -18,6 +18,7 @@ from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
 from .curves import Constant, LoadCurve
+from .smoothing import strain_smoothing
 
 __all__ = ["ModelBuilder"]
 
@@ -75,6 +76,10 @@ class ModelBuilder:
         # T4ANP stabilization γ: the fraction of each element's own pressure mixed back into the
         # averaged one, so that element-level volume modes are resisted (docs/engine.md).
         self.nodal_pressure_stabilization = ANP_STABILIZATION
+        # Where the strain is constant (StrainSmoothing): per element (plain linear tets), or per
+        # edge domain, the edge-based smoothed tetrahedron (ES-FEM-T4), far less stiff in bending
+        # at about twice the element work (docs/engine.md, "Edge-smoothed strain").
+        self.strain_smoothing = _core.StrainSmoothing.Element
         self._cons: dict[tuple[int, int], tuple[float, LoadCurve]] = {}
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
@@ -402,6 +407,7 @@ class ModelBuilder:
             raise InputError(
                 f"stiffness_damping = {shown(self.stiffness_damping)}; expected a finite value >= 0 [s]"
             )
+        smoothing = strain_smoothing(self.strain_smoothing)
         owner = np.full(self.n_elements, -1, dtype=np.int64)
         for k, s in enumerate(self.sets):
             clash = s.elements[owner[s.elements] >= 0]
@@ -416,6 +422,13 @@ class ModelBuilder:
                 f"{self.source}: element {int(np.argmax(owner < 0))} has no material; "
                 "call set_material() for every element"
             )
+        if smoothing == _core.StrainSmoothing.Edge:
+            for s in self.sets:
+                if getattr(s.material, "prony", None):
+                    raise MaterialError(
+                        f"element set {shown(s.name)}: viscoelastic materials and edge-smoothed "
+                        "strain cannot be combined yet; use strain_smoothing = 'element'"
+                    )
         if self.nodal_pressure:
             for s in self.sets:
                 if getattr(s.material, "prony", None):

@@ -19,6 +19,7 @@ from ..checks import shown
 from ..contact.soft import engine_surface, no_surface
 from ..errors import InputError, MeshError, PliantWarning
 from .curves import Constant, LoadCurve
+from .smoothing import strain_smoothing
 
 __all__ = ["Model", "State"]
 
@@ -300,6 +301,7 @@ class Model:
                 tool_grips=[list(t.grips) for t in self.tools],
                 tool_reach=[float(t.reach) for t in self.tools],
                 **soft,
+                smoothing=strain_smoothing(builder.strain_smoothing),
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on

@@ -50,16 +50,17 @@ def cube_with_symmetry_bcs(material, stretch, cells=3, jitter=0.25, dtype="float
     return X, b.finalize(dtype), right
 
 
-def tip_loaded_cantilever(cells, material, P, L=1.0, H=0.1, nodal_pressure=False):
+def tip_loaded_cantilever(cells, material, P, L=1.0, H=0.1, nodal_pressure=False, smoothing="element"):
     """An L × H × H cantilever of (cells × n × n) cells, n = cells·H/L, clamped at x = 0, under a
     uniform transverse traction of resultant P [N] along −z on its tip face, ramped over 1 s
-    (float64): (model, tip node ids)."""
+    (float64; ``smoothing``: ModelBuilder.strain_smoothing): (model, tip node ids)."""
     n = max(1, round(cells * H / L))
     X, T = mesh.box_tets((L, H, H), (cells, n, n))
     b = ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(material, density=1000.0)
     b.nodal_pressure = nodal_pressure
+    b.strain_smoothing = smoothing
     b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
     tip = np.nonzero(X[:, 0] > L - 1e-9)[0]
     w = np.ones(tip.size)  # trapezoid-rule nodal weights: the resultant is exactly P
@@ -69,10 +70,10 @@ def tip_loaded_cantilever(cells, material, P, L=1.0, H=0.1, nodal_pressure=False
     return b.finalize("float64"), tip
 
 
-def cantilever_tip_deflection(n, material, nodal_pressure=False, L=1.0, H=0.1, P=1.0e-2):
+def cantilever_tip_deflection(n, material, nodal_pressure=False, L=1.0, H=0.1, P=1.0e-2, smoothing="element"):
     """Tip deflection [m] of an L × H × H cantilever (10n × n × n cells) clamped at x = 0 under a
     uniform shear traction of resultant P [N] on its tip face, quasi-static (float64)."""
-    model, tip = tip_loaded_cantilever(10 * n, material, P, L, H, nodal_pressure)
+    model, tip = tip_loaded_cantilever(10 * n, material, P, L, H, nodal_pressure, smoothing)
     sim = Simulation(model)
     sim.relax(tol=1e-9, max_steps=1_000_000)
     return -sim.displacements[tip, 2].mean()
@@ -346,7 +347,7 @@ def wave_arrival(constrained=True, cells=100, L=1.0, E=1e5, nu=0.3, rho=1000.0, 
     return float((L / 2) / (-intercept / slope)), float(slope)
 
 
-def bent_beam_tip(alpha, n=4, slenderness=20, nodal_pressure=False, increments=10):
+def bent_beam_tip(alpha, n=4, slenderness=20, nodal_pressure=False, increments=10, smoothing="element"):
     """A slender cantilever (L = 1 m, square section L/slenderness, 20n × n × n cells, clamped at
     x = 0; Neo-Hookean, E = 1 MPa, ν = 0) bent by a dead load P = α EI/L² along −z on its tip
     face, relaxed in ``increments`` load steps (float64): (tip deflection / L, tip shortening / L)
@@ -356,7 +357,7 @@ def bent_beam_tip(alpha, n=4, slenderness=20, nodal_pressure=False, increments=1
     L, E = 1.0, 1.0e6
     H = L / slenderness
     P = alpha * E * H**4 / 12 / L**2
-    model, tip = tip_loaded_cantilever(20 * n, NeoHookean(E=E, nu=0.0), P, L, H, nodal_pressure)
+    model, tip = tip_loaded_cantilever(20 * n, NeoHookean(E=E, nu=0.0), P, L, H, nodal_pressure, smoothing)
     sim = Simulation(model)
     sim.relax(at_time=1.0, tol=1e-8, increments=increments, max_steps=2_000_000)
     u = sim.displacements[tip]

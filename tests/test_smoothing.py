@@ -1,0 +1,154 @@
+"""Edge-smoothed strain (ES-FEM-T4, `strain_smoothing = "edge"`) against closed forms: the patch
+test, rigid rotation, a bar of two materials in series, and the cantilever against Timoshenko
+(its convergence under refinement, and with T4ANP at ν = 0.49); on every backend."""
+
+import math
+
+import numpy as np
+import pytest
+
+import pliant as pl
+from pliant.mesh.topology import boundary_faces
+from pliant.validate.models import cantilever_tip_deflection
+from pliant.validate.references import timoshenko_tip_deflection
+
+E, NU = 1.0e4, 0.3  # Pa, 1
+
+
+def _jittered_cube(backend, material, smoothing="edge", anp=False, dtype="float64"):
+    X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (4, 4, 4), jitter=0.3, seed=3)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(material, density=1000.0)
+    b.strain_smoothing = smoothing
+    b.nodal_pressure = anp
+    return b.finalize(dtype, backend=backend), X
+
+
+def _neo_hookean_cauchy(F, mu, K):
+    """σ = μ J^(−5/3) dev(F Fᵀ) + K (J − 1) I of the decoupled Neo-Hookean (closed form)."""
+    J = np.linalg.det(F)
+    b = F @ F.T
+    sig = mu * J ** (-5 / 3) * (b - np.trace(b) / 3 * np.eye(3)) + K * (J - 1) * np.eye(3)
+    return sig[[0, 1, 2, 0, 1, 0], [0, 1, 2, 1, 2, 2]]
+
+
+@pytest.mark.parametrize("anp", [False, True])
+def test_patch_test_of_a_homogeneous_deformation(backend, anp):
+    """u = A X on a jittered mesh: every interior node's internal force vanishes (the smoothed
+    gradient of a linear field is exact) and every element's stress is the closed form of F = I + A.
+    Tolerances: round-off of sums of O(100) terms of size σ·h² in float64 (1e-10 relative)."""
+    material = pl.NeoHookean(E=E, nu=NU)
+    model, X = _jittered_cube(backend, material, anp=anp)
+    A = np.array([[0.02, 0.01, -0.005], [0.003, -0.01, 0.012], [-0.008, 0.004, 0.015]])
+    s = model.state()
+    s.set_displacements(X @ A.T)
+    f = model.internal_forces(s)
+    inner = np.all((X > 1e-9) & (X < 0.1 - 1e-9), axis=1)
+    expected = _neo_hookean_cauchy(np.eye(3) + A, material.mu, material.K)
+    scale = np.abs(expected).max() * 0.025**2  # σ times a cell face [N]
+    assert np.abs(f[inner]).max() < 1e-10 * scale
+    assert np.abs(f[~inner]).max() > 1e-3 * scale  # the boundary carries the traction
+    sig = model.element_results(s)["cauchy"]
+    assert np.abs(sig - expected).max() < 1e-10 * np.abs(expected).max()
+
+
+def test_rigid_rotation_is_stress_free(backend):
+    """A rotation by 50° about a skew axis and a translation: no force, J = 1 (to round-off)."""
+    model, X = _jittered_cube(backend, pl.NeoHookean(E=E, nu=0.45))
+    k = np.array([1.0, 2.0, -0.5]) / math.sqrt(5.25)
+    a = math.radians(50.0)
+    Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    R = np.eye(3) + math.sin(a) * Kx + (1 - math.cos(a)) * Kx @ Kx
+    s = model.state()
+    s.set_displacements(X @ R.T - X + [0.3, -0.1, 0.2])
+    f = model.internal_forces(s)
+    assert np.abs(f).max() < 1e-12 * E * 0.025**2
+    assert np.abs(model.element_results(s)["J"] - 1).max() < 1e-12
+
+
+def test_two_materials_in_series_stretch_as_springs(backend):
+    """A bar of two halves (E and 4E, ν = 0, linear elasticity) pulled by a uniform traction σ on its
+    free end (on rollers at x = 0, y = 0, z = 0): the domains of the interface edges belong to one
+    material each, so the stretch is the series-spring closed form σ L/2 (1/E + 1/(4E)). Uniaxial
+    stress is exact for linear tets and for edge domains alike; 1e-8: the relaxation tolerance
+    (1e-10 relative residual, measured 2.5e-10 off) with margin."""
+    L, W, sigma = 0.1, 0.02, 10.0
+    X, T = pl.mesh.box_tets((L, W, W), (8, 2, 2))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    left = np.nonzero(X[T].mean(axis=1)[:, 0] < L / 2)[0]
+    right = np.setdiff1d(np.arange(len(T)), left)
+    b.set_material(pl.LinearElastic(E=E, nu=0.0), density=1000.0, elements=left, name="soft")
+    b.set_material(pl.LinearElastic(E=4 * E, nu=0.0), density=1000.0, elements=right, name="stiff")
+    b.strain_smoothing = "edge"
+    for d, axis in enumerate("xyz"):
+        b.fix(np.nonzero(X[:, d] < 1e-9)[0], axis)
+    faces, _ = boundary_faces(T)
+    b.add_pressure(faces[np.all(X[faces][:, :, 0] > L - 1e-9, axis=1)], -sigma, pl.Ramp(1.0))
+    model = b.finalize("float64", backend=backend)
+    sim = pl.Simulation(model)
+    sim.relax(at_time=1.0, tol=1e-10, max_steps=200_000)
+    end = np.nonzero(X[:, 0] > L - 1e-9)[0]
+    expected = sigma * (L / 2) * (1 / E + 1 / (4 * E))
+    assert sim.displacements[end, 0] == pytest.approx(np.full(end.size, expected), rel=1e-8)
+
+
+L, H, P = 1.0, 0.1, 1.0e-2  # the cantilever of tests/test_cantilever.py: m, m, N
+
+
+def test_cantilever_converges_to_timoshenko_far_faster_than_linear_tets():
+    """ν = 0, 1, 2 and 4 elements through the depth. Linear tets are 75.6 %, 45.0 %, 17.6 % off
+    (tests/test_cantilever.py); edge smoothing removes most of the shear locking."""
+    ref = timoshenko_tip_deflection(P, L, H, 1e6, 0.0)
+    le = pl.LinearElastic(E=1e6, nu=0.0)
+    d = [cantilever_tip_deflection(n, le, smoothing="edge") / ref for n in (1, 2, 4)]
+    print("deflection / Timoshenko", d)
+    assert abs(d[1] - 1) < 0.03
+    assert abs(d[2] - 1) < 0.015
+    assert abs(d[2] - 1) < abs(d[0] - 1) / 10
+
+
+def test_with_nodal_pressure_nearly_incompressible_bending():
+    """ν = 0.49, 4 elements through the depth: edges for the isochoric part, T4ANP's nodal pressure
+    for the volumetric part (selective ES/NS-FEM-T4)."""
+    nu = 0.49
+    ref = timoshenko_tip_deflection(P, L, H, 1e6, nu)
+    material = pl.NeoHookean(E=1e6, nu=nu)
+    es = cantilever_tip_deflection(4, material, nodal_pressure=True, smoothing="edge") / ref
+    anp = cantilever_tip_deflection(4, material, nodal_pressure=True) / ref
+    print("ES/NS", es, "T4ANP", anp)
+    assert abs(es - 1) < 0.05
+    assert abs(es - 1) < abs(anp - 1) / 2
+
+
+def test_same_bits_for_any_thread_count():
+    def run(threads):
+        X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (10, 2, 2), jitter=0.2)
+        b = pl.ModelBuilder()
+        b.add_mesh(X, T)
+        b.set_material(pl.NeoHookean(E=2e4, nu=0.45), density=1000.0)
+        b.strain_smoothing = "edge"
+        b.nodal_pressure = True
+        b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
+        b.set_gravity((0, 0, -9.81))
+        sim = pl.Simulation(b.finalize("float32", threads=threads), dt=1e-4)
+        sim.run(steps=300)
+        return sim.displacements
+
+    one, two = run(1), run(2)
+    assert np.abs(one).max() > 1e-5
+    assert np.array_equal(one, two)
+
+
+def test_bad_settings_are_refused_by_name():
+    X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (1, 1, 1))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.Viscoelastic(pl.NeoHookean(E=E, nu=NU), iso=[(0.3, 0.1)]), density=1000.0)
+    b.strain_smoothing = "edge"
+    with pytest.raises(pl.MaterialError, match="viscoelastic materials and edge-smoothed"):
+        b.finalize()
+    b.strain_smoothing = "faces"
+    with pytest.raises(pl.InputError, match="strain_smoothing = 'faces'; expected one of 'element', 'edge'"):
+        b.finalize()
