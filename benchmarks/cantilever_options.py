@@ -1,7 +1,7 @@
 """Bending accuracy of each element option: a cantilever (L/H = 10, Neo-Hookean, E = 1 MPa) under
 a small tip load, against Timoshenko (κ = 5/6), at 2, 4 and 8 elements through the depth, for
-ν = 0.3 and 0.49, with plain linear tets (T4) and the average nodal pressure tet (T4ANP), and the
-observed convergence rates (theory: 2). Prints a Markdown table (docs/engine.md); not a test
+ν = 0.3 and 0.49, with plain linear tets (T4), the average nodal pressure tet (T4ANP), edge-smoothed
+strain (ES) and both (ES + T4ANP), and the observed convergence rates (theory: 2). Prints a Markdown table (docs/engine.md); not a test
 (the 8-element runs take minutes).
 
     python benchmarks/cantilever_options.py                 # 2, 4, 8 elements
@@ -32,10 +32,13 @@ def main() -> None:
     print("|---|---|" + "---|" * len(args.levels) + "---|---|")
     for nu in args.nu:
         ref = timoshenko_tip_deflection(P, L, H, E, nu)
-        for name, anp in (("T4", False), ("T4ANP", True)):
+        options = (("T4", False, "element"), ("T4ANP", True, "element"), ("ES", False, "edge"))
+        for name, anp, smoothing in options + (("ES + T4ANP", True, "edge"),):
             t0 = time.perf_counter()
+            material = pl.NeoHookean(E=E, nu=nu)
             errors = [
-                abs(cantilever_tip_deflection(n, pl.NeoHookean(E=E, nu=nu), nodal_pressure=anp) - ref) / ref
+                abs(cantilever_tip_deflection(n, material, nodal_pressure=anp, smoothing=smoothing) - ref)
+                / ref
                 for n in args.levels
             ]
             rates = [

@@ -393,3 +393,20 @@ def test_command_options_out_of_range(tmp_path, args, words):
         args += ["-o", tmp_path / "d"]
     refused(cli(*args, cwd=tmp_path), *words)
     assert not (tmp_path / "d").exists()
+
+
+@pytest.mark.parametrize("value", ['"faces"', "1", "true"])
+def test_unknown_strain_smoothing_is_named(tmp_path, value):
+    p = scene(tmp_path, SCENE.replace("duration = 0.001", f"duration = 0.001\nstrain_smoothing = {value}"))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "solver.strain_smoothing")
+
+
+def test_edge_smoothing_runs_from_a_scene(tmp_path):
+    """`strain_smoothing = "edge"` in [solver] builds the edge domains and runs."""
+    from pliant.scene import load_scene
+
+    p = scene(tmp_path, SCENE.replace("duration = 0.001", 'duration = 0.001\nstrain_smoothing = "edge"'))
+    model = load_scene(p).builder.finalize()
+    assert model._engine.n_edges > model.n_elements  # ~1.2 edges per tet (here 6 × 20 cells)
+    r = cli("run", p, "-o", tmp_path / "o")
+    assert r.returncode == 0, r.stderr

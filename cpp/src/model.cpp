@@ -172,7 +172,8 @@ void Model<T>::build_incidence(std::vector<index_t> count) {
 }
 
 /// Edge smoothing domains (smoothing.hpp): every (group, edge) with its elements, weights
-/// (V_e/6)/V_k and each slot's six edges; numbered by group, then by node pair (locality).
+/// (V_e/6)/V_k and each slot's six edges; numbered by group, then by node pair (locality); each
+/// group's edges padded to whole blocks of kLanes (one material per block of the SIMD pass).
 template <class T>
 void Model<T>::build_smoothing(const ModelInput& in) {
     smoothing = in.smoothing;
@@ -223,10 +224,21 @@ void Model<T>::build_smoothing(const ModelInput& in) {
             elem_edges[aosoa(s / kLanes, s % kLanes, inc[r].local, 6)] = k;
         }
         edge_group.push_back(inc[i].group);
-        group_edge_begin[static_cast<std::size_t>(inc[i].group) + 1] = k + 1;
         edge_off.push_back(static_cast<index_t>(j));
+        if (j == inc.size() || inc[j].group != inc[i].group) {  // a group's edges fill whole blocks
+            while (edge_group.size() % kLanes) {
+                edge_group.push_back(inc[i].group);
+                edge_off.push_back(static_cast<index_t>(j));  // no elements: H̄ = 0, never gathered
+            }
+            group_edge_begin[static_cast<std::size_t>(inc[i].group) + 1] =
+                static_cast<index_t>(edge_group.size());
+        }
         i = j;
     }
+    if (edge_group.size() > static_cast<std::size_t>(INT32_MAX / 9))  // 9 k must fit an index_t
+        throw std::invalid_argument("too many edges for edge-smoothed strain (" +
+                                    std::to_string(edge_group.size()) + "; at most " +
+                                    std::to_string(INT32_MAX / 9) + ")");
     n_edges = static_cast<index_t>(edge_group.size());
     for (std::size_t g = 1; g < group_edge_begin.size(); ++g)  // groups without elements
         group_edge_begin[g] = std::max(group_edge_begin[g], group_edge_begin[g - 1]);

@@ -189,12 +189,12 @@ def bench_contact(steps: int = 2000, echo=print) -> list[dict]:
 
 
 def material_cases():
-    """Every material (and one viscoelastic and one T4ANP case) with soft-tissue constants, for
-    the per-material table: (name, material, T4ANP)."""
+    """Every material (and viscoelastic, T4ANP and edge-smoothed cases) with soft-tissue constants,
+    for the per-material table: (name, material, T4ANP, strain smoothing)."""
     from . import materials as m
 
     nh = m.NeoHookean(mu=3.0e3, K=5.0e4)
-    return [
+    cases = [
         ("NeoHookean", nh, False),
         ("NeoHookeanCoupled", m.NeoHookeanCoupled(E=8.8e3, nu=0.47), False),
         ("StVenantKirchhoff", m.StVenantKirchhoff(E=8.8e3, nu=0.47), False),
@@ -215,6 +215,11 @@ def material_cases():
         ),
         ("NeoHookean, T4ANP", nh, True),
     ]
+    smoothed = [
+        ("NeoHookean, edge-smoothed", nh, False, "edge"),
+        ("NeoHookean, edge-smoothed + T4ANP", nh, True, "edge"),
+    ]
+    return [(*c, "element") for c in cases] + smoothed
 
 
 def bench_materials(
@@ -230,7 +235,7 @@ def bench_materials(
     X, T = box_tets((0.12, 0.12, 0.04), cells, jitter=0.2, seed=0)
     base = np.nonzero(X[:, 2] < 1e-9)[0]
     rows, ref = [], None
-    for name, material, anp in material_cases():
+    for name, material, anp, smoothing in material_cases():
         b = ModelBuilder()
         b.add_mesh(X, T, source="material bench box")
         b.set_material(material, density=1000.0)
@@ -238,6 +243,7 @@ def bench_materials(
         b.set_gravity()
         b.damping = 10.0
         b.nodal_pressure = anp
+        b.strain_smoothing = smoothing
         model = b.finalize(dtype, threads=threads, backend=backend)
         wall, info = timed_run(_bench_solver(model, backend), steps)
         per_step = wall / steps

@@ -8,7 +8,8 @@
 // f_a = Σ_k V_k P̄_k ∇N̄_ka with ∇N̄_ka = Σ_{e∋k} w_ek ∇N_ea regroup, element by element, into
 // f_a = Σ_e V_e P̃_e ∇N_ea with P̃_e = (1/6) Σ_{k ∈ edges(e)} P̄_k: each element applies the mean of
 // its six edges' stresses through its own gradients (kernel 1's store), and the node pass is
-// unchanged. Three passes a step: element gradients H_e; edge stresses P̄_k; element forces.
+// unchanged. Passes a step: element gradients H_e; edge gradients H̄_k (a gather); edge stresses
+// P̄_k (SIMD across edges); element forces.
 //
 // With T4ANP the edges carry the isochoric stress only and each element adds the volumetric part
 // J p C⁻¹ of its own F with the averaged nodal pressure: the selective edge/node-smoothed tetrahedron
@@ -18,7 +19,8 @@
 // Data: edges are numbered group by group (an edge of two materials is two domains); edge k's
 // elements are edge_slot[edge_off[k] .. edge_off[k+1]) (element slots, ascending: a fixed summation
 // order) with weights edge_w; elem_edges AoSoA K=6 holds each slot's edges (local edges 01 02 03 12
-// 13 23); H_elem AoSoA K=9 the element gradients; P_edge (9 per edge, row-major) the edge stresses.
+// 13 23); H_elem the element gradients (9 per slot, slot-major); P_edge (9 per edge, row-major) the edge
+// stresses.
 #pragma once
 
 #include "tled.hpp"
@@ -36,30 +38,45 @@ struct EdgeData {
     const index_t* elem_edges;  // AoSoA K=6: the slot's six edges
 };
 
-/// Pass 1: the displacement gradient H_e [1] of element slot (b, l) into H_out (AoSoA K=9).
+/// Pass 1: the displacement gradient H_e [1] of element slot s = b·kLanes + l into H_out[9s .. 9s+8]
+/// (slot-major: each edge gathers its elements' nine values from one cache line or two).
 /// Inputs: element data, displacements u [m] SoA (3, P).
 template <class T>
 PLIANT_HD void element_gradient(index_t b, int l, const ElementData<T>& el, const T* u, index_t P, T* H_out) {
     const Mat3<T> H = displacement_gradient(b, l, el, u, P);
+    T* h = H_out + 9 * (static_cast<std::size_t>(b) * kLanes + l);
     PLIANT_UNROLL
-    for (int c = 0; c < 9; ++c) H_out[aosoa(b, l, c, 9)] = H.a[c];
+    for (int c = 0; c < 9; ++c) h[c] = H.a[c];
 }
 
-/// Pass 2: edge k's smoothed gradient H̄_k = Σ w_ek H_e and its first Piola–Kirchhoff stress
-/// P̄_k = P(I + H̄_k) [Pa] into P_out[9k .. 9k+8] (Nguyen-Thoi et al. 2009, CMAME 198:3479, eq. 20).
-/// Inputs: material (isochoric only under T4ANP), edge data, element gradients (AoSoA K=9).
-template <class T, class Material>
-PLIANT_HD void edge_stress(index_t k, const Material& mat, const EdgeData<T>& ed, const T* H_elem, T* P_out) {
-    Mat3<T> H = {{T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0)}};
+/// Pass 2a: edge k's smoothed gradient H̄_k = Σ w_ek H_e [1] into Hbar_out (AoSoA K=9 over edge
+/// blocks) (Nguyen-Thoi et al. 2009, CMAME 198:3479, eq. 20). Inputs: edge data, element
+/// gradients (9 per slot).
+template <class T>
+PLIANT_HD void edge_gradient(index_t k, const EdgeData<T>& ed, const T* H_elem, T* Hbar_out) {
+    T H[9] = {T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0)};
     for (index_t i = ed.off[k]; i < ed.off[k + 1]; ++i) {
-        const index_t s = ed.slot[i];
+        const T* h = H_elem + 9 * static_cast<std::size_t>(ed.slot[i]);
         const T w = ed.w[i];
         PLIANT_UNROLL
-        for (int c = 0; c < 9; ++c) H.a[c] += w * H_elem[aosoa(s / kLanes, s % kLanes, c, 9)];
+        for (int c = 0; c < 9; ++c) H[c] += w * h[c];
     }
-    const Mat3<T> Pk = mat.pk1(kinematics(H));
     PLIANT_UNROLL
-    for (int c = 0; c < 9; ++c) P_out[9 * k + c] = Pk.a[c];
+    for (int c = 0; c < 9; ++c) Hbar_out[aosoa(k / kLanes, k % kLanes, c, 9)] = H[c];
+}
+
+/// Pass 2b, one edge per lane of edge block b: the smoothed stress P̄_k = P(I + H̄_k) [Pa] into
+/// P_out[9k .. 9k+8] (row-major: pass 3 gathers an edge's nine values together). Inputs: material
+/// (isochoric only under T4ANP), smoothed gradients (AoSoA K=9).
+template <class T, class Material>
+PLIANT_HD void edge_stress(index_t b, int l, const Material& mat, const T* Hbar, T* P_out) {
+    Mat3<T> H;
+    PLIANT_UNROLL
+    for (int c = 0; c < 9; ++c) H.a[c] = Hbar[aosoa(b, l, c, 9)];
+    const Mat3<T> Pk = mat.pk1(kinematics(H));
+    T* p = P_out + 9 * (static_cast<std::size_t>(b) * kLanes + l);
+    PLIANT_UNROLL
+    for (int c = 0; c < 9; ++c) p[c] = Pk.a[c];
 }
 
 /// P̃_e = (1/6) Σ P̄_k [Pa] over the six edges of slot (b, l).
@@ -68,7 +85,7 @@ PLIANT_HD Mat3<T> mean_edge_stress(index_t b, int l, const index_t* elem_edges, 
     Mat3<T> Pm = {{T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0)}};
     PLIANT_UNROLL
     for (int j = 0; j < 6; ++j) {
-        const T* p = P_edge + 9 * static_cast<std::size_t>(elem_edges[aosoa(b, l, j, 6)]);
+        const T* p = P_edge + 9 * elem_edges[aosoa(b, l, j, 6)];  // 32-bit offsets: SIMD gathers
         PLIANT_UNROLL
         for (int c = 0; c < 9; ++c) Pm.a[c] += p[c];
     }

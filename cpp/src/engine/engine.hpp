@@ -59,7 +59,8 @@ struct DeviceView {
     bool smoothed;              // edge-smoothed strain (smoothing.hpp)
     EdgeData<T> ed;             // its edge domains
     const index_t* edge_group;  // edge → material group
-    T *H_elem, *P_edge;         // element gradients (AoSoA K=9), edge stresses [Pa] (9 per edge)
+    T *H_elem, *Hbar, *P_edge;  // element gradients (9 per slot), edge gradients (AoSoA K=9),
+                                // edge stresses [Pa] (9 per edge)
     const index_t* elem_id;
     const index_t* block_group;      // block → material group
     const MaterialParams<T>* mats;   // per group (scaled moduli: scale_materials)
@@ -185,7 +186,8 @@ private:
     ModelBuffers<T, Dev> mb_;
     DeviceBuffer<RigidTool, Dev> d_tools_;
     DeviceBuffer<double, Dev> d_keys_, d_grips_, cforce_, chunk_, hist_, fcon_, partial_, gat_;
-    DeviceBuffer<T, Dev> u_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_, H_elem_, P_edge_;
+    DeviceBuffer<T, Dev> u_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_, H_elem_, Hbar_,
+        P_edge_;
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;

@@ -20,6 +20,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
     const bool smoothed = m.smoothing == StrainSmoothing::Edge;
     H_elem_ = DeviceBuffer<T, Dev>(dev_, smoothed ? 9 * S : 0);
+    Hbar_ = DeviceBuffer<T, Dev>(dev_, 9 * static_cast<std::size_t>(m.n_edges));
     P_edge_ = DeviceBuffer<T, Dev>(dev_, 9 * static_cast<std::size_t>(m.n_edges));
     cnext_ = DeviceBuffer<T, Dev>(dev_, m.curves.size());
     pf_ = DeviceBuffer<T, Dev>(dev_, m.pattern_curve.size());
@@ -120,7 +121,7 @@ void Engine<T, Dev>::refresh_view() {
     v.smoothed = m.smoothing == StrainSmoothing::Edge;
     v.ed = {mb_.edge_off.data(), mb_.edge_slot.data(), mb_.edge_w.data(), mb_.elem_edges.data()};
     v.edge_group = mb_.edge_group.data();
-    v.H_elem = H_elem_.data(), v.P_edge = P_edge_.data();
+    v.H_elem = H_elem_.data(), v.Hbar = Hbar_.data(), v.P_edge = P_edge_.data();
     v.elem_id = mb_.elem_id.data();
     v.block_group = mb_.block_group.data();
     v.mats = d_mats_.data();

@@ -141,32 +141,31 @@ void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
 }
 
 /// Passes 1 and 2 of the edge-smoothed strain (smoothing.hpp): every element's displacement
-/// gradient, then every edge domain's smoothed stress, per material group.
+/// gradient, every edge domain's mean gradient, then its stress per material group.
 template <class T, class Dev>
 void Engine<T, Dev>::edge_stresses(const T* u) {
     const DeviceView<T> v = v_;
     dev_.blocks(0, m_.n_blocks,
                 [=] PLIANT_KERNEL(index_t b, int l) { element_gradient(b, l, v.el, u, v.P, v.H_elem); });
     dev_.barrier();
+    dev_.each(m_.n_edges, [=] PLIANT_KERNEL(index_t k) { edge_gradient(k, v.ed, v.H_elem, v.Hbar); });
     dispatch([&]<class M, Variant V>(const Span& sp) { launch_edge_stress<M, V>(sp); });
     dev_.barrier();
 }
 
-/// Edge stresses of a span's edge domains; under T4ANP the isochoric part only (p̄ = 0, γ = 0):
+/// Edge stresses of a span's edge blocks; under T4ANP the isochoric part only (p̄ = 0, γ = 0):
 /// each element adds its volumetric part (SmoothedStress).
 template <class T, class Dev>
 template <class M, Variant V>
 void Engine<T, Dev>::launch_edge_stress(const Span& sp) {
     const DeviceView<T> v = v_;
-    const index_t k0 = sp.edge_begin;
-    dev_.each(sp.edge_end - sp.edge_begin, [=] PLIANT_KERNEL(index_t i) {
+    dev_.blocks(sp.edge_begin / kLanes, sp.edge_end / kLanes, [=] PLIANT_KERNEL(index_t b, int l) {
         (void)v;  // captured before any `if constexpr` (nvcc)
-        const index_t k = k0 + i;
-        const M mat = make_material<M>(v.mats[v.edge_group[k]]);
+        const M mat = make_material<M>(v.mats[v.edge_group[b * kLanes]]);
         if constexpr (V == Variant::Anp)
-            edge_stress(k, AveragedPressure<M, T>{mat, T(0), T(0)}, v.ed, v.H_elem, v.P_edge);
+            edge_stress(b, l, AveragedPressure<M, T>{mat, T(0), T(0)}, v.Hbar, v.P_edge);
         else
-            edge_stress(k, mat, v.ed, v.H_elem, v.P_edge);
+            edge_stress(b, l, mat, v.Hbar, v.P_edge);
     });
 }
 

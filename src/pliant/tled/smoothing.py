@@ -12,7 +12,7 @@ StrainSmoothing = _core.StrainSmoothing
 __all__ = ["StrainSmoothing", "strain_smoothing"]
 
 
-def strain_smoothing(value) -> StrainSmoothing:
+def strain_smoothing(value) -> _core.StrainSmoothing:
     """A StrainSmoothing from itself or its name ('element', 'edge', any case); InputError names
     the value and the choices otherwise."""
     if isinstance(value, StrainSmoothing):

@@ -75,6 +75,8 @@ def _plots(out: Path, figures: dict) -> list[str]:
         c = figures["cantilever"]
         fig, ax = plt.subplots(figsize=(5, 4))
         ax.loglog(c["levels"], c["errors"], "o-", label="pliant, linear tets")
+        if "edge" in c:
+            ax.loglog(c["levels"], c["edge"], "s-", label="pliant, edge-smoothed (|error|)")
         e0 = c["errors"][-1]
         ax.loglog(c["levels"], [e0 * (c["levels"][-1] / n) ** 2 for n in c["levels"]], "--", label="O(h²)")
         ax.set_xticks(c["levels"], [str(n) for n in c["levels"]])
