@@ -1,8 +1,8 @@
 """Bending accuracy of each element option: a cantilever (L/H = 10, Neo-Hookean, E = 1 MPa) under
 a small tip load, against Timoshenko (κ = 5/6), at 2, 4 and 8 elements through the depth, for
 ν = 0.3 and 0.49, with plain linear tets (T4), the average nodal pressure tet (T4ANP), edge-smoothed
-strain (ES) and both (ES + T4ANP), and the observed convergence rates (theory: 2). Prints a Markdown table (docs/engine.md); not a test
-(the 8-element runs take minutes).
+strain (ES) and both (ES + T4ANP), and the observed convergence rates (theory: 2). Prints a
+Markdown table (docs/engine.md); not a test (the 8-element runs take minutes).
 
     python benchmarks/cantilever_options.py                 # 2, 4, 8 elements
     python benchmarks/cantilever_options.py --levels 2 4    # quicker
