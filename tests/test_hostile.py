@@ -410,3 +410,13 @@ def test_edge_smoothing_runs_from_a_scene(tmp_path):
     assert model._engine.n_edges > model.n_elements  # ~1.2 edges per tet (here 6 × 20 cells)
     r = cli("run", p, "-o", tmp_path / "o")
     assert r.returncode == 0, r.stderr
+
+
+def test_a_blade_in_a_viscoelastic_edge_smoothed_scene_is_refused_upfront(tmp_path):
+    """The Prony state of edge-smoothed strain lives on edges, which a cut changes: the scene is
+    refused when loaded, not at the first cut."""
+    text = (ROOT / "examples" / "cut_cantilever.toml").read_text()
+    text = text.replace("density = 1100.0", "density = 1100.0\nprony_iso = [[0.3, 0.1]]")
+    text = text.replace("damping = 5.0", 'damping = 5.0\nstrain_smoothing = "edge"')
+    p = scene(tmp_path, text)
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "solver.strain_smoothing", "cannot be cut yet")

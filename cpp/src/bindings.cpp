@@ -283,8 +283,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
         .def_prop_ro("threads", [](const E& e) { return e.threads; })
         .def("new_state",
              [](const E& e) {
-                 const std::size_t q = static_cast<std::size_t>(e.model.n_blocks) * kLanes * 6 *
-                                       static_cast<std::size_t>(e.model.visco_terms);
+                 const std::size_t q =
+                     e.model.visco_slots() * 6 * static_cast<std::size_t>(e.model.visco_terms);
                  return S{State<T>(e.model.n_pad, q, e.model.contact_nodes.size()), e.model.n_nodes};
              })
         .def("critical_steps",

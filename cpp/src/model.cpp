@@ -178,8 +178,6 @@ template <class T>
 void Model<T>::build_smoothing(const ModelInput& in) {
     smoothing = in.smoothing;
     if (smoothing == StrainSmoothing::Element) return;
-    if (visco_terms > 0)
-        throw std::invalid_argument("edge-smoothed strain and viscoelastic materials cannot be combined yet");
     struct Inc {
         index_t group, n0, n1, slot;
         int local;

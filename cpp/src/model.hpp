@@ -125,6 +125,12 @@ struct Model {
 
     explicit Model(const ModelInput& in);
 
+    /// Slots of the viscoelastic state (6 × visco_terms values each): element slots, or with
+    /// edge-smoothed strain the edge slots (the edges' stresses carry the viscosity).
+    std::size_t visco_slots() const {
+        return smoothing == StrainSmoothing::Edge ? static_cast<std::size_t>(n_edges)
+                                                  : static_cast<std::size_t>(n_blocks) * kLanes;
+    }
     ElementData<T> elements() const { return {elem_nodes.data(), elem_grad.data(), elem_vol.data()}; }
     /// Node data with the physical masses, or with the dynamic-relaxation masses if `relax`.
     NodeData<T> nodes(bool relax = false) const {
@@ -171,7 +177,7 @@ std::uint64_t new_version();
 template <class T>
 struct State {
     std::vector<T> u, u_prev;
-    std::vector<T> q;  // viscoelastic state: 6 × visco_terms per element slot, AoSoA (may be empty)
+    std::vector<T> q;  // viscoelastic state: 6 × visco_terms per element (or edge) slot, AoSoA (may be empty)
     // Grasping, per contact node (the model's contact-node order): the tool holding it (−1: none)
     // and its position in that tool's frame [m], (n_contact, 3).
     std::vector<index_t> grip_tool;

@@ -144,9 +144,9 @@ public:
     void step_once(const Phase& ph, double dt, double time_dt, bool relaxing, T* f_node_out, RunReport& rep);
     void step_scalars(double time_dt, bool fixed_row);
     void forces(const T* u, ViscoMode visco_mode, double dt);
-    void edge_stresses(const T* u);
-    template <class M, Variant V>
-    void launch_edge_stress(const Span& sp);
+    void edge_stresses(const T* u, ViscoMode visco_mode, double dt);
+    template <class M, Variant V, int kMode>
+    void launch_edge_stress(const Span& sp, ViscoMode visco_mode, double dt);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
     void contact_pass(const Phase& ph, bool relaxing);
     void soft_pass(const Phase& ph, bool relaxing);

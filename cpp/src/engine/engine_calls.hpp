@@ -13,7 +13,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     const std::size_t nt = m.tools.size(), nc = m.contact_nodes.size();
     for (auto& u : u_) u = DeviceBuffer<T, Dev>(dev_, P3);
     for (auto& f : f_node_) f = DeviceBuffer<T, Dev>(dev_, P3);
-    q_ = DeviceBuffer<T, Dev>(dev_, S * 6 * static_cast<std::size_t>(m.visco_terms));
+    q_ = DeviceBuffer<T, Dev>(dev_, m.visco_slots() * 6 * static_cast<std::size_t>(m.visco_terms));
     f_elem_ = DeviceBuffer<T, Dev>(dev_, 12 * S);
     J_ = DeviceBuffer<T, Dev>(dev_, S);
     elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);

@@ -97,18 +97,18 @@ void Engine<T, Dev>::launch_visco_forces(const Span& sp, const T* u, ViscoMode v
 template <class T, class Dev>
 template <class M, Variant V>
 void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
-    if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own: the hot path
-        if (visco_mode == ViscoMode::Advance)
-            launch_visco_forces<M, static_cast<int>(ViscoMode::Advance)>(sp, u, visco_mode, dt);
-        else
-            launch_visco_forces<M, -1>(sp, u, visco_mode, dt);
-    } else if (v_.smoothed) {  // pass 3 of the edge-smoothed strain (smoothing.hpp)
+    if (v_.smoothed) {  // pass 3 of the edge-smoothed strain (smoothing.hpp; viscosity is in the edges)
         const DeviceView<T> v = v_;
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
             const M mat = make_material<M>(v.mats[v.block_group[b]]);
             element_forces_smoothed<V == Variant::Anp>(b, l, mat, v.el, v.ed, v.P_edge, u, v.P, v.node_p,
                                                        v.anp_stab, v.f_elem, v.J);
         });
+    } else if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own: the hot path
+        if (visco_mode == ViscoMode::Advance)
+            launch_visco_forces<M, static_cast<int>(ViscoMode::Advance)>(sp, u, visco_mode, dt);
+        else
+            launch_visco_forces<M, -1>(sp, u, visco_mode, dt);
     } else {
         const DeviceView<T> v = v_;
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
@@ -135,7 +135,7 @@ void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
             v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.nodes.inc_index, v.elem_p, v.node_volume);
         });
     }
-    if (v_.smoothed) edge_stresses(u);
+    if (v_.smoothed) edge_stresses(u, visco_mode, dt);
     dispatch([&]<class M, Variant V>(const Span& sp) { launch_forces<M, V>(sp, u, visco_mode, dt); });
     dev_.barrier();
 }
@@ -143,29 +143,47 @@ void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
 /// Passes 1 and 2 of the edge-smoothed strain (smoothing.hpp): every element's displacement
 /// gradient, every edge domain's mean gradient, then its stress per material group.
 template <class T, class Dev>
-void Engine<T, Dev>::edge_stresses(const T* u) {
+void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
     dev_.blocks(0, m_.n_blocks,
                 [=] PLIANT_KERNEL(index_t b, int l) { element_gradient(b, l, v.el, u, v.P, v.H_elem); });
     dev_.barrier();
     dev_.each(m_.n_edges, [=] PLIANT_KERNEL(index_t k) { edge_gradient(k, v.ed, v.H_elem, v.Hbar); });
-    dispatch([&]<class M, Variant V>(const Span& sp) { launch_edge_stress<M, V>(sp); });
+    dispatch([&]<class M, Variant V>(const Span& sp) {
+        if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own, as for elements
+            if (visco_mode == ViscoMode::Advance)
+                launch_edge_stress<M, V, static_cast<int>(ViscoMode::Advance)>(sp, visco_mode, dt);
+            else
+                launch_edge_stress<M, V, -1>(sp, visco_mode, dt);
+        } else {
+            launch_edge_stress<M, V, -1>(sp, visco_mode, dt);
+        }
+    });
     dev_.barrier();
 }
 
 /// Edge stresses of a span's edge blocks; under T4ANP the isochoric part only (p̄ = 0, γ = 0):
-/// each element adds its volumetric part (SmoothedStress).
+/// each element adds its volumetric part (SmoothedStress). Viscoelastic groups keep their Prony
+/// state per edge (the state's slots are edge slots; kMode as in launch_visco_forces).
 template <class T, class Dev>
-template <class M, Variant V>
-void Engine<T, Dev>::launch_edge_stress(const Span& sp) {
+template <class M, Variant V, int kMode>
+void Engine<T, Dev>::launch_edge_stress(const Span& sp, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
+    const T tdt = T(dt);
     dev_.blocks(sp.edge_begin / kLanes, sp.edge_end / kLanes, [=] PLIANT_KERNEL(index_t b, int l) {
-        (void)v;  // captured before any `if constexpr` (nvcc)
-        const M mat = make_material<M>(v.mats[v.edge_group[b * kLanes]]);
-        if constexpr (V == Variant::Anp)
+        (void)v, (void)tdt, (void)visco_mode;  // captured before any `if constexpr` (nvcc)
+        const index_t g = v.edge_group[b * kLanes];
+        const M mat = make_material<M>(v.mats[g]);
+        if constexpr (V == Variant::Anp) {
             edge_stress(b, l, AveragedPressure<M, T>{mat, T(0), T(0)}, v.Hbar, v.P_edge);
-        else
+        } else if constexpr (V == Variant::Visco) {
+            const Prony<T> pr = v.prony[g];  // a copy: the state's stores cannot alias it
+            const ViscoMaterial<M, T, kMode> vm{mat,    pr,        tdt, v.q + aosoa(b, l, 0, v.visco_w),
+                                                kLanes, visco_mode};
+            edge_stress(b, l, vm, v.Hbar, v.P_edge);
+        } else {
             edge_stress(b, l, mat, v.Hbar, v.P_edge);
+        }
     });
 }
 
@@ -362,12 +380,7 @@ void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* o
         if (e < 0) return;
         const M mat = make_material<M>(v.mats[v.block_group[b]]);
         ElementMeasures<T> r;
-        if constexpr (V == Variant::Visco) {
-            const Prony<T>& pr = v.prony[v.block_group[b]];
-            const ViscoMaterial<M, T> vm{
-                mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, ViscoMode::Stored};
-            r = element_measures(b, l, vm, v.el, u, v.P);
-        } else if (v.smoothed) {
+        if (v.smoothed) {  // the edges' stresses (forces() ran: viscous edges used their state)
             const Mat3<T> Pm = mean_edge_stress(b, l, v.ed.elem_edges, v.P_edge);
             if constexpr (V == Variant::Anp) {
                 const T p = corner_pressure(b, l, v.el, v.node_p);
@@ -375,6 +388,11 @@ void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* o
             } else {
                 r = element_measures(b, l, SmoothedStress<M, T, false>{mat, Pm, T(0), T(0)}, v.el, u, v.P);
             }
+        } else if constexpr (V == Variant::Visco) {
+            const Prony<T>& pr = v.prony[v.block_group[b]];
+            const ViscoMaterial<M, T> vm{
+                mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, ViscoMode::Stored};
+            r = element_measures(b, l, vm, v.el, u, v.P);
         } else if constexpr (V == Variant::Anp) {
             const T p = corner_pressure(b, l, v.el, v.node_p);
             r = element_measures(b, l, AveragedPressure<M, T>{mat, p, v.anp_stab}, v.el, u, v.P);

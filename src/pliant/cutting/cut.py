@@ -80,6 +80,22 @@ def _carry_state(state, model, parent: np.ndarray):
     return s
 
 
+def check_cuttable(builder) -> None:
+    """InputError if a cut could not carry the model's state: a viscoelastic material with
+    edge-smoothed strain keeps its Prony state per edge, and a cut changes the edges."""
+    from ..tled.smoothing import StrainSmoothing, strain_smoothing
+
+    if strain_smoothing(builder.strain_smoothing) != StrainSmoothing.Edge:
+        return
+    for s in builder.sets:
+        if getattr(s.material, "prony", None):
+            raise InputError(
+                f"element set {s.name!r}: a viscoelastic material with edge-smoothed strain cannot be "
+                "cut yet (its state lives on the edges a cut changes); expected strain_smoothing = "
+                "'element' in a model that is cut"
+            )
+
+
 def cut(state, triangles, solver=None, faces=None) -> Cut:
     """Cut ``state.model`` along the surface ``triangles`` [m] (K, 3, 3), in the state's current
     (deformed) configuration: elements separate at the faces whose centroid-to-centroid segment
@@ -87,6 +103,7 @@ def cut(state, triangles, solver=None, faces=None) -> Cut:
     :class:`Cut` with the new model and state (and ``solver`` rebuilt over it, if given); the
     inputs are left as they were. ``faces``: the model's :func:`interior_faces`, if known."""
     model = state.model
+    check_cuttable(model._builder)
     try:
         tri = np.asarray(triangles, float).reshape(-1, 3, 3)
     except (TypeError, ValueError) as e:

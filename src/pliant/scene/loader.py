@@ -18,6 +18,7 @@ from ..tled.model import BACKENDS
 from ..tled.smoothing import strain_smoothing
 from ..tled.solver import MAX_INCREMENTS
 from ..job import Scene
+from ..cutting.cut import check_cuttable
 from .bodies import load_bodies, set_contact
 from .keys import apply_overrides
 from .schema import Ctx, SceneError, check_keys, vector
@@ -129,6 +130,11 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
         raise ctx.error(
             "tool", "a blade cuts while a dynamic run steps; a quasi-static solve has no motion to cut along"
         )
+    if scene.blades:
+        try:
+            check_cuttable(b)
+        except InputError as e:
+            raise ctx.error("solver.strain_smoothing", str(e)) from None
     return scene
 
 

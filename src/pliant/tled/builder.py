@@ -407,7 +407,7 @@ class ModelBuilder:
             raise InputError(
                 f"stiffness_damping = {shown(self.stiffness_damping)}; expected a finite value >= 0 [s]"
             )
-        smoothing = strain_smoothing(self.strain_smoothing)
+        strain_smoothing(self.strain_smoothing)  # InputError names a wrong value
         owner = np.full(self.n_elements, -1, dtype=np.int64)
         for k, s in enumerate(self.sets):
             clash = s.elements[owner[s.elements] >= 0]
@@ -422,13 +422,6 @@ class ModelBuilder:
                 f"{self.source}: element {int(np.argmax(owner < 0))} has no material; "
                 "call set_material() for every element"
             )
-        if smoothing == _core.StrainSmoothing.Edge:
-            for s in self.sets:
-                if getattr(s.material, "prony", None):
-                    raise MaterialError(
-                        f"element set {shown(s.name)}: viscoelastic materials and edge-smoothed "
-                        "strain cannot be combined yet; use strain_smoothing = 'element'"
-                    )
         if self.nodal_pressure:
             for s in self.sets:
                 if getattr(s.material, "prony", None):
