@@ -200,15 +200,16 @@ def test_cantilever_converges_to_timoshenko_far_faster_than_linear_tets():
 
 
 def test_with_nodal_pressure_nearly_incompressible_bending():
-    """ν = 0.49, 4 elements through the depth: edges for the isochoric part, T4ANP's nodal pressure
-    for the volumetric part (selective ES/NS-FEM-T4)."""
+    """ν = 0.49, 2 elements through the depth: edges for the isochoric part, T4ANP's nodal pressure
+    for the volumetric part (selective ES/NS-FEM-T4). Measured 11.0 % off Timoshenko, T4ANP 42.1 %
+    (docs/engine.md's table: 3.1 % and 17.0 % at 4); bound 15 %, and at most half T4ANP's error."""
     nu = 0.49
     ref = timoshenko_tip_deflection(P, L, H, 1e6, nu)
     material = pl.NeoHookean(E=1e6, nu=nu)
-    es = cantilever_tip_deflection(4, material, nodal_pressure=True, smoothing="edge") / ref
-    anp = cantilever_tip_deflection(4, material, nodal_pressure=True) / ref
+    es = cantilever_tip_deflection(2, material, nodal_pressure=True, smoothing="edge") / ref
+    anp = cantilever_tip_deflection(2, material, nodal_pressure=True) / ref
     print("ES/NS", es, "T4ANP", anp)
-    assert abs(es - 1) < 0.05
+    assert abs(es - 1) < 0.15
     assert abs(es - 1) < abs(anp - 1) / 2
 
 
