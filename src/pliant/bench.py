@@ -205,6 +205,11 @@ def material_cases():
         ("TransverselyIsotropic", m.TransverselyIsotropic(3.0e3, 5.0e4, 1.0e3, (1.0, 0.0, 0.0)), False),
         ("Viscoelastic(NeoHookean), 1 term", m.Viscoelastic(nh, iso=[(0.5, 0.1)]), False),
         (
+            "Viscoelastic(NeoHookean), 1+1 terms",
+            m.Viscoelastic(nh, iso=[(0.5, 0.1)], vol=[(0.2, 0.1)]),
+            False,
+        ),
+        (
             "Viscoelastic(NeoHookean), 4+4 terms",
             m.Viscoelastic(
                 nh,

@@ -334,6 +334,8 @@ struct Prony {
     int n_iso = 0, n_vol = 0;
     T alpha[kPronyMax] = {}, tau[kPronyMax] = {};
     PLIANT_HD int terms() const { return n_iso + n_vol; }  // 0: elastic
+    /// Where state slot t's (α, τ) sit: the isochoric terms' slots first, then the volumetric ones.
+    PLIANT_HD int term_index(int t) const { return t < n_iso ? t : kPronyMax / 2 + (t - n_iso); }
 };
 
 /// How a viscoelastic element treats its Prony state (ViscoMaterial::mode).
@@ -351,9 +353,10 @@ enum class ViscoMode : int {
 /// and S = S_e,iso + S_e,vol − Σ D_i. `mode` (ViscoMode): advance the state, use it, or the fully
 /// relaxed response D_i = α_i S_e (and store it).
 /// q: the element's 6·(n_iso + n_vol) state values, stride `stride` between components.
-/// kMode >= 0 fixes the mode at compile time (the ViscoMode of that value; `mode` is then unused):
-/// the CPU's lane loop then carries one mode's arithmetic, not every mode's behind masks.
-template <class M, class T, int kMode = -1>
+/// kMode >= 0 fixes the mode at compile time (the ViscoMode of that value; `mode` is then unused),
+/// and kTerms >= 0 the number of terms (pr.terms()): the CPU's lane loop then carries one mode's
+/// arithmetic and no per-term test, so it vectorizes (Engine::launch_visco_forces).
+template <class M, class T, int kMode = -1, int kTerms = -1>
 struct ViscoMaterial {
     const M& m;
     const Prony<T>& pr;
@@ -364,35 +367,34 @@ struct ViscoMaterial {
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
         const ViscoMode md = kMode >= 0 ? static_cast<ViscoMode>(kMode) : mode;
         const Sym3<T> Ci = inverse_cauchy_green(k);
-        const Sym3<T> Se[2] = {m.pk2_iso(k, Ci), scale(k.J * m.pressure(k), Ci)};
-        Sym3<T> S = axpby(T(1), Se[0], T(1), Se[1]);
-        // Fixed trip counts (every possible term, the absent ones skipped by a uniform test):
-        // fully unrolled, so that the CPU's lane loop vectorizes around them.
+        const Sym3<T> iso = m.pk2_iso(k, Ci), vol = scale(k.J * m.pressure(k), Ci);
+        Sym3<T> S = axpby(T(1), iso, T(1), vol);
+        // A fixed trip count (kTerms, or every possible term with the absent ones skipped by a
+        // uniform test), fully unrolled, so that the CPU's lane loop vectorizes around it.
+        constexpr int kN = kTerms >= 0 ? kTerms : kPronyMax;
         PLIANT_UNROLL
-        for (int part = 0; part < 2; ++part) {
+        for (int t = 0; t < kN; ++t) {
+            if (kTerms < 0 && t >= pr.terms()) continue;
+            const int i = pr.term_index(t);
+            const T w = t < pr.n_iso ? T(1) : T(0);  // its stress: isochoric (1) or volumetric (0)
+            const Sym3<T> se = axpby(w, iso, T(1) - w, vol);
+            const T e[6] = {se.xx, se.yy, se.zz, se.xy, se.yz, se.xz};
+            T* d = q + 6 * t * stride;
+            const T den = dt + pr.tau[i];
+            T D[6];
             PLIANT_UNROLL
-            for (int i = 0; i < kPronyMax / 2; ++i) {
-                if (i >= (part == 0 ? pr.n_iso : pr.n_vol)) continue;
-                const int slot = part == 0 ? i : pr.n_iso + i;
-                const int t = part * (kPronyMax / 2) + i;
-                T* d = q + 6 * slot * stride;
-                const T e[6] = {Se[part].xx, Se[part].yy, Se[part].zz, Se[part].xy, Se[part].yz, Se[part].xz};
-                const T den = dt + pr.tau[t];
-                T D[6];
-                PLIANT_UNROLL
-                for (int c = 0; c < 6; ++c) {
-                    if (md == ViscoMode::Relaxed || md == ViscoMode::RelaxedStore) {
-                        D[c] = pr.alpha[t] * e[c];
-                        if (md == ViscoMode::RelaxedStore) d[c * stride] = D[c];
-                    } else if (md == ViscoMode::Stored) {
-                        D[c] = d[c * stride];
-                    } else {
-                        D[c] = pr.tau[t] / den * d[c * stride] + dt * pr.alpha[t] / den * e[c];
-                        d[c * stride] = D[c];
-                    }
+            for (int c = 0; c < 6; ++c) {
+                if (md == ViscoMode::Relaxed || md == ViscoMode::RelaxedStore) {
+                    D[c] = pr.alpha[i] * e[c];
+                    if (md == ViscoMode::RelaxedStore) d[c * stride] = D[c];
+                } else if (md == ViscoMode::Stored) {
+                    D[c] = d[c * stride];
+                } else {
+                    D[c] = pr.tau[i] / den * d[c * stride] + dt * pr.alpha[i] / den * e[c];
+                    d[c * stride] = D[c];
                 }
-                S = axpby(T(1), S, T(-1), Sym3<T>{D[0], D[1], D[2], D[3], D[4], D[5]});
             }
+            S = axpby(T(1), S, T(-1), Sym3<T>{D[0], D[1], D[2], D[3], D[4], D[5]});
         }
         return S;
     }

@@ -54,6 +54,7 @@ class CudaDevice {
 public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda";
+    static constexpr bool kLaneLoops = false;  // lanes are threads: uniform branches cost nothing
 
     explicit CudaDevice(int device) {
         cuda_detail::check(cudaSetDevice(device), "cudaSetDevice");

@@ -25,6 +25,7 @@ class ThreadsDevice {
 public:
     static constexpr bool kSharesHost = true;  // model arrays are used in place, not copied
     static constexpr const char* kName = "cpu";
+    static constexpr bool kLaneLoops = true;  // lanes run in SIMD loops: uniform branches cost vectorization
 
     // threads: 1 .. thread_limit(), or <= 0 for OpenMP's default.
     explicit ThreadsDevice(int threads) : threads_(threads > 0 ? threads : omp_get_max_threads()) {

@@ -79,17 +79,40 @@ void Engine<T, Dev>::launch_pressure(const Span& sp, const T* u) {
     }
 }
 
-/// Viscoelastic element forces; kMode >= 0: the mode fixed at compile time (ViscoMaterial).
+/// Calls f.template operator()<kMode, kTerms>() with what a viscoelastic kernel of span sp fixes at
+/// compile time (ViscoMaterial): in a time step (Advance) the mode, and on devices whose lanes run
+/// in SIMD loops (Dev::kLaneLoops) the span's number of Prony terms when it is 1 or 2, the common
+/// cases, so that the loop carries no per-term test and vectorizes; -1 where decided at run time.
 template <class T, class Dev>
-template <class M, int kMode>
+template <class F>
+void Engine<T, Dev>::with_visco_kernel(const Span& sp, ViscoMode visco_mode, F&& f) {
+    constexpr int kAdvance = static_cast<int>(ViscoMode::Advance);
+    if (visco_mode != ViscoMode::Advance) return f.template operator()<-1, -1>();
+    if constexpr (Dev::kLaneLoops) {
+        const int terms = groups_[sp.group].visco.terms();  // the same for every group of the span
+        if (terms == 1) return f.template operator()<kAdvance, 1>();
+        if (terms == 2) return f.template operator()<kAdvance, 2>();
+    }
+    f.template operator()<kAdvance, -1>();
+}
+
+/// How a viscoelastic kernel holds its group's Prony series: with the term count known at compile
+/// time, a reference (a struct copy inside the CPU's lane loop stops its vectorization); otherwise
+/// a copy, which the state's stores cannot alias (the scalar loop then keeps it in registers).
+template <class T, int kTerms>
+using PronyArg = std::conditional_t<(kTerms >= 0), const Prony<T>&, Prony<T>>;
+
+/// Viscoelastic element forces; kMode, kTerms >= 0: fixed at compile time (ViscoMaterial).
+template <class T, class Dev>
+template <class M, int kMode, int kTerms>
 void Engine<T, Dev>::launch_visco_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
     const T tdt = T(dt);
     dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
         const M mat = make_material<M>(v.mats[v.block_group[b]]);
-        const Prony<T> pr = v.prony[v.block_group[b]];  // a copy: the state's stores cannot alias it
-        const ViscoMaterial<M, T, kMode> vm{mat,    pr,        tdt, v.q + aosoa(b, l, 0, v.visco_w),
-                                            kLanes, visco_mode};
+        const PronyArg<T, kTerms> pr = v.prony[v.block_group[b]];
+        const ViscoMaterial<M, T, kMode, kTerms> vm{mat,    pr,        tdt, v.q + aosoa(b, l, 0, v.visco_w),
+                                                    kLanes, visco_mode};
         element_forces(b, l, vm, v.el, u, v.P, v.f_elem, v.J);
     });
 }
@@ -104,11 +127,10 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
             element_forces_smoothed<V == Variant::Anp>(b, l, mat, v.el, v.ed, v.P_edge, u, v.P, v.node_p,
                                                        v.anp_stab, v.f_elem, v.J);
         });
-    } else if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own: the hot path
-        if (visco_mode == ViscoMode::Advance)
-            launch_visco_forces<M, static_cast<int>(ViscoMode::Advance)>(sp, u, visco_mode, dt);
-        else
-            launch_visco_forces<M, -1>(sp, u, visco_mode, dt);
+    } else if constexpr (V == Variant::Visco) {  // the time step's mode and terms compiled on their own
+        with_visco_kernel(sp, visco_mode, [&]<int kMode, int kTerms>() {
+            launch_visco_forces<M, kMode, kTerms>(sp, u, visco_mode, dt);
+        });
     } else {
         const DeviceView<T> v = v_;
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
@@ -150,13 +172,12 @@ void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) 
     dev_.barrier();
     dev_.each(m_.n_edges, [=] PLIANT_KERNEL(index_t k) { edge_gradient(k, v.ed, v.H_elem, v.Hbar); });
     dispatch([&]<class M, Variant V>(const Span& sp) {
-        if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own, as for elements
-            if (visco_mode == ViscoMode::Advance)
-                launch_edge_stress<M, V, static_cast<int>(ViscoMode::Advance)>(sp, visco_mode, dt);
-            else
-                launch_edge_stress<M, V, -1>(sp, visco_mode, dt);
+        if constexpr (V == Variant::Visco) {
+            with_visco_kernel(sp, visco_mode, [&]<int kMode, int kTerms>() {
+                launch_edge_stress<M, V, kMode, kTerms>(sp, visco_mode, dt);
+            });
         } else {
-            launch_edge_stress<M, V, -1>(sp, visco_mode, dt);
+            launch_edge_stress<M, V, -1, -1>(sp, visco_mode, dt);
         }
     });
     dev_.barrier();
@@ -164,9 +185,9 @@ void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) 
 
 /// Edge stresses of a span's edge blocks; under T4ANP the isochoric part only (p̄ = 0, γ = 0):
 /// each element adds its volumetric part (SmoothedStress). Viscoelastic groups keep their Prony
-/// state per edge (the state's slots are edge slots; kMode as in launch_visco_forces).
+/// state per edge (the state's slots are edge slots; kMode, kTerms as in launch_visco_forces).
 template <class T, class Dev>
-template <class M, Variant V, int kMode>
+template <class M, Variant V, int kMode, int kTerms>
 void Engine<T, Dev>::launch_edge_stress(const Span& sp, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
     const T tdt = T(dt);
@@ -177,9 +198,9 @@ void Engine<T, Dev>::launch_edge_stress(const Span& sp, ViscoMode visco_mode, do
         if constexpr (V == Variant::Anp) {
             edge_stress(b, l, AveragedPressure<M, T>{mat, T(0), T(0)}, v.Hbar, v.P_edge);
         } else if constexpr (V == Variant::Visco) {
-            const Prony<T> pr = v.prony[g];  // a copy: the state's stores cannot alias it
-            const ViscoMaterial<M, T, kMode> vm{mat,    pr,        tdt, v.q + aosoa(b, l, 0, v.visco_w),
-                                                kLanes, visco_mode};
+            const PronyArg<T, kTerms> pr = v.prony[g];
+            const ViscoMaterial<M, T, kMode, kTerms> vm{
+                mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, visco_mode};
             edge_stress(b, l, vm, v.Hbar, v.P_edge);
         } else {
             edge_stress(b, l, mat, v.Hbar, v.P_edge);
