@@ -1,4 +1,12 @@
+import os
+
 import pytest
+
+# Under pytest-xdist (the README's `-n auto`) each worker runs the engine on one thread: the workers
+# share the cores, and OpenMP threads that outnumber the cores spin against each other. Tests that
+# compare thread counts ask for theirs explicitly.
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 
 @pytest.fixture(params=["float32", "float64"])
@@ -8,12 +16,13 @@ def dtype(request):
 
 # --- backends: every test taking `backend` runs on each, and the summary counts them ----------------
 BACKENDS = ("cpu", "cuda-emulated", "cuda")
-_backend_of: dict[str, str] = {}
 
 
 @pytest.fixture(params=BACKENDS)
 def backend(request):
-    """A backend name; "cuda" is skipped, with the reason, where there is no device."""
+    """A backend name; "cuda" is skipped, with the reason, where there is no device. The name goes
+    into the test's report (user_properties: they reach the summary from xdist workers too)."""
+    request.node.user_properties.append(("backend", request.param))
     if request.param == "cuda":
         from pliant import _core
 
@@ -23,18 +32,11 @@ def backend(request):
     return request.param
 
 
-def pytest_collection_modifyitems(items):
-    for item in items:
-        cs = getattr(item, "callspec", None)
-        if cs is not None and "backend" in cs.params:
-            _backend_of[item.nodeid] = cs.params["backend"]
-
-
 def pytest_terminal_summary(terminalreporter):
-    counts = {b: {} for b in BACKENDS}
+    counts: dict[str, dict[str, int]] = {b: {} for b in BACKENDS}
     for outcome in ("passed", "failed", "skipped", "error"):
         for rep in terminalreporter.stats.get(outcome, []):
-            b = _backend_of.get(getattr(rep, "nodeid", ""))
+            b = dict(getattr(rep, "user_properties", ())).get("backend")
             if b and (outcome != "passed" or rep.when == "call"):
                 counts[b][outcome] = counts[b].get(outcome, 0) + 1
     if any(counts.values()):
