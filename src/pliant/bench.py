@@ -210,6 +210,11 @@ def material_cases():
             False,
         ),
         (
+            "Viscoelastic(NeoHookean), 2+2 terms",
+            m.Viscoelastic(nh, iso=[(0.2, 0.01), (0.2, 1.0)], vol=[(0.2, 0.01), (0.2, 1.0)]),
+            False,
+        ),
+        (
             "Viscoelastic(NeoHookean), 4+4 terms",
             m.Viscoelastic(
                 nh,

@@ -81,7 +81,7 @@ void Engine<T, Dev>::launch_pressure(const Span& sp, const T* u) {
 
 /// Calls f.template operator()<kMode, kTerms>() with what a viscoelastic kernel of span sp fixes at
 /// compile time (ViscoMaterial): in a time step (Advance) the mode, and on devices whose lanes run
-/// in SIMD loops (Dev::kLaneLoops) the span's number of Prony terms when it is 1 or 2, the common
+/// in SIMD loops (Dev::kLaneLoops) the span's number of Prony terms when it is 1 to 4, the common
 /// cases, so that the loop carries no per-term test and vectorizes; -1 where decided at run time.
 template <class T, class Dev>
 template <class F>
@@ -92,6 +92,8 @@ void Engine<T, Dev>::with_visco_kernel(const Span& sp, ViscoMode visco_mode, F&&
         const int terms = groups_[sp.group].visco.terms();  // the same for every group of the span
         if (terms == 1) return f.template operator()<kAdvance, 1>();
         if (terms == 2) return f.template operator()<kAdvance, 2>();
+        if (terms == 3) return f.template operator()<kAdvance, 3>();
+        if (terms == 4) return f.template operator()<kAdvance, 4>();
     }
     f.template operator()<kAdvance, -1>();
 }
