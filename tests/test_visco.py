@@ -17,9 +17,9 @@ def test_stress_relaxation_after_a_ramp_follows_the_prony_series(smoothing, spli
     the held deformation stays homogeneous and the nominal stress is P_e (1 − D/(α P_e)·α):
     D(t) = α P_e [1 − (τ/t_r)(e^(−(t−t_r)/τ) − e^(−t/τ))] for t > t_r (the Prony convolution of the
     ramp; NiftySim user guide App. A.2, eq. 9). P_e: the elastic (instantaneous) response. With
-    edge-smoothed strain the Prony state lives on the edges: the same closed form. The term split
-    in `split` equal ones (α/split each, the same series): 2 terms in all, which the CPU compiles in,
-    or 6, whose count it takes at run time."""
+    edge-smoothed strain the Prony state lives on the edges: the same closed form. Each term is
+    split into `split` equal ones (α/split each: the same series), 2 terms in all, which the CPU
+    compiles in, or 6, whose count it takes at run time."""
     alpha, tau, t_r, stretch, L = 0.4, 0.05, 0.002, 1.001, 0.01
     terms = [(alpha / split, tau)] * split
     material = pl.Viscoelastic(pl.NeoHookean(mu=MU, K=K), iso=terms, vol=terms)

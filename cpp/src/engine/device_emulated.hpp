@@ -23,8 +23,7 @@ class EmulatedDevice {
 public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda-emulated";
-    static constexpr bool kLaneLoops =
-        false;  // lanes are threads (as on CUDA): uniform branches cost nothing
+    static constexpr bool kLaneLoops = false;  // lanes are threads, as on CUDA
 
     EmulatedDevice() = default;
     EmulatedDevice(const EmulatedDevice&) = delete;
