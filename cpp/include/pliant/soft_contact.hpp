@@ -81,6 +81,13 @@ PLIANT_HD void soft_position(index_t i, const SoftSurface& s, const double* X, c
     for (int d = 0; d < 3; ++d) x[d] = X[3 * n + d] + double(u[d * P + n]);
 }
 
+/// Surface node i's position [m] from xs, the surface positions at u⁺ (3 per surface node, as
+/// soft_position computes them: kept by the soft-contact pass so that the narrow phase reads one
+/// contiguous triple per node instead of an index, X and three strided u).
+PLIANT_HD void soft_current(index_t i, const double* xs, double x[3]) {
+    for (int d = 0; d < 3; ++d) x[d] = xs[3 * i + d];
+}
+
 PLIANT_HD long long soft_cell(double x, double h) { return static_cast<long long>(std::floor(x / h)); }
 
 PLIANT_HD index_t soft_hash(long long i, long long j, long long k, index_t mask) {
@@ -249,13 +256,13 @@ PLIANT_HD int soft_closest(const double a[3], const double b[3], const double c[
     return set(va / den, vb / den, vc / den, 6);
 }
 
-/// Unit normal (out) of triangle t at u [m] (right hand: outward), and the interior angle [rad] at
-/// its vertex k; false for a degenerate triangle.
-template <class T>
-PLIANT_HD bool soft_face(index_t t, int k, const SoftSurface& s, const double* X, const T* u, index_t P,
-                         double n[3], double& angle) {
+/// Unit normal (out) of triangle t at the surface positions xs [m] (right hand: outward), and, if
+/// angle is given, the interior angle [rad] at its vertex k (an atan2: only a vertex's pseudo-normal
+/// needs it); false for a degenerate triangle.
+PLIANT_HD bool soft_face(index_t t, int k, const SoftSurface& s, const double* xs, double n[3],
+                         double* angle) {
     double v[3][3];
-    for (int j = 0; j < 3; ++j) soft_position(s.tri[3 * t + j], s, X, u, P, v[j]);
+    for (int j = 0; j < 3; ++j) soft_current(s.tri[3 * t + j], xs, v[j]);
     double e0[3], e1[3];
     for (int d = 0; d < 3; ++d) {
         e0[d] = v[(k + 1) % 3][d] - v[k][d];
@@ -267,22 +274,21 @@ PLIANT_HD bool soft_face(index_t t, int k, const SoftSurface& s, const double* X
     const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (!(len > 0.0)) return false;
     for (int d = 0; d < 3; ++d) n[d] /= len;
-    angle = std::atan2(len, e0[0] * e1[0] + e0[1] * e1[1] + e0[2] * e1[2]);
+    if (angle) *angle = std::atan2(len, e0[0] * e1[0] + e0[1] * e1[1] + e0[2] * e1[2]);
     return true;
 }
 
 /// Pseudo-normal (out, not normalized) of the feature of triangle t that a closest point lies on
-/// (soft_closest's numbering), at u [m]: the face's normal; for an edge, the sum of the normals of
-/// the triangles sharing it; for a vertex, the normals of its triangles weighted by their angles
-/// there (Bærentzen & Aanæs 2005, IEEE TVCG 11(3):243: x lies outside a closed surface if
-/// (x − c)·n > 0 for the pseudo-normal n at its closest point c).
-template <class T>
-PLIANT_HD void soft_pseudo_normal(index_t t, int feature, const SoftSurface& s, const double* X, const T* u,
-                                  index_t P, double n[3]) {
-    double f[3], angle;
+/// (soft_closest's numbering), at the surface positions xs [m]: the face's normal; for an edge, the sum of
+/// the normals of the triangles sharing it; for a vertex, the normals of its triangles weighted by their
+/// angles there (Bærentzen & Aanæs 2005, IEEE TVCG 11(3):243: x lies outside a closed surface if (x − c)·n >
+/// 0 for the pseudo-normal n at its closest point c).
+PLIANT_HD void soft_pseudo_normal(index_t t, int feature, const SoftSurface& s, const double* xs,
+                                  double n[3]) {
+    double f[3], angle = 1.0;  // an edge's faces weigh 1 each
     n[0] = n[1] = n[2] = 0.0;
     if (feature == 6) {
-        if (soft_face(t, 0, s, X, u, P, f, angle))
+        if (soft_face(t, 0, s, xs, f, nullptr))
             for (int d = 0; d < 3; ++d) n[d] = f[d];
         return;
     }
@@ -292,9 +298,8 @@ PLIANT_HD void soft_pseudo_normal(index_t t, int feature, const SoftSurface& s, 
         const index_t* r = s.tri + 3 * q;
         const int k = r[0] == a ? 0 : (r[1] == a ? 1 : 2);
         if (feature >= 3 && r[0] != b && r[1] != b && r[2] != b) continue;  // not on the edge
-        if (!soft_face(q, k, s, X, u, P, f, angle)) continue;
-        const double weight = feature >= 3 ? 1.0 : angle;
-        for (int d = 0; d < 3; ++d) n[d] += weight * f[d];
+        if (!soft_face(q, k, s, xs, f, feature < 3 ? &angle : nullptr)) continue;
+        for (int d = 0; d < 3; ++d) n[d] += angle * f[d];
     }
 }
 
@@ -306,17 +311,18 @@ PLIANT_HD void soft_pseudo_normal(index_t t, int feature, const SoftSurface& s, 
 /// λ = gap / (eᵀW_s e + Σ w_j² eᵀW_j e)) with Coulomb friction on the relative tangential motion
 /// over the step (stick if the impulse that removes it is within μs λ, else μk λ against it).
 /// Outputs rec_tri[i] (−1: no contact), rec_w (3 weights of c), rec_p (3). Inputs: reference X
-/// [m] AoS, mass [kg], u and u⁺ [m] SoA (3, P) (u⁺ after the tool contact).
+/// [m] AoS, mass [kg], u and u⁺ [m] SoA (3, P) (u⁺ after the tool contact), xs the surface
+/// positions at u⁺ [m] (soft_current).
 template <class T>
 PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, const T* mass, const T* u,
-                           const T* u_next, index_t P, const index_t* cand, index_t* rec_tri, double* rec_w,
-                           double* rec_p) {
+                           const T* u_next, index_t P, const double* xs, const index_t* cand,
+                           index_t* rec_tri, double* rec_w, double* rec_p) {
     rec_tri[i] = -1;
     const index_t* list = cand + static_cast<std::size_t>(i) * kSoftCandidates;
     if (list[0] < 0) return;
     double x0[3], x1[3];
     soft_position(i, s, X, u, P, x0);
-    soft_position(i, s, X, u_next, P, x1);
+    soft_current(i, xs, x1);
     // The closest candidate triangle of each body: body, triangle, squared distance, feature, weights.
     index_t body[kSoftCandidates], near[kSoftCandidates];
     double near_d2[kSoftCandidates], near_w[kSoftCandidates][3];
@@ -325,9 +331,9 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
         const index_t t = list[q];
         const index_t* v = s.tri + 3 * t;
         double a[3], b[3], c[3], w[3];
-        soft_position(v[0], s, X, u_next, P, a);
-        soft_position(v[1], s, X, u_next, P, b);
-        soft_position(v[2], s, X, u_next, P, c);
+        soft_current(v[0], xs, a);
+        soft_current(v[1], xs, b);
+        soft_current(v[2], xs, c);
         const int feature = soft_closest(a, b, c, x1, w);
         if (feature < 0) continue;
         double d2 = 0.0;
@@ -354,8 +360,8 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
         const double gap = std::sqrt(near_d2[k]);
         if (!(-gap > best_d || (-gap == best_d && t < best))) continue;
         double pn[3], y[3][3], e[3], side = 0.0;
-        soft_pseudo_normal(t, near_f[k], s, X, u_next, P, pn);
-        for (int j = 0; j < 3; ++j) soft_position(s.tri[3 * t + j], s, X, u_next, P, y[j]);
+        soft_pseudo_normal(t, near_f[k], s, xs, pn);
+        for (int j = 0; j < 3; ++j) soft_current(s.tri[3 * t + j], xs, y[j]);
         for (int d = 0; d < 3; ++d) {
             const double c = near_w[k][0] * y[0][d] + near_w[k][1] * y[1][d] + near_w[k][2] * y[2][d];
             e[d] = (c - x1[d]) / gap;  // from the node to c: out of the body if the node is inside
@@ -459,10 +465,11 @@ PLIANT_HD bool soft_segments(const double a[3], const double b[3], const double 
 /// apart than kSoftBehind × the edges' length — the closest to it. The position impulse p [kg·m]
 /// on e's closest point puts the edges back in touch along n = ±(b − a) × (d − c), on the side
 /// they came from: e's nodes get w p (w = 1 − s, s), f's nodes −w p (1 − t, t), so momentum is
-/// conserved; frictionless. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3).
+/// conserved; frictionless. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3). Inputs: reference
+/// X [m] AoS, mass [kg], u [m] SoA (3, P), xs the surface positions at u⁺ [m] (soft_current).
 template <class T>
 PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X, const T* mass, const T* u,
-                                const T* u_next, index_t P, const index_t* cand, index_t* erec,
+                                index_t P, const double* xs, const index_t* cand, index_t* erec,
                                 double* erec_w, double* erec_p) {
     erec[e] = -1;
     const index_t ea = s.edge[2 * e], eb = s.edge[2 * e + 1];
@@ -472,8 +479,8 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
     double a0[3], b0[3], a1[3], b1[3];
     soft_position(ea, s, X, u, P, a0);
     soft_position(eb, s, X, u, P, b0);
-    soft_position(ea, s, X, u_next, P, a1);
-    soft_position(eb, s, X, u_next, P, b1);
+    soft_current(ea, xs, a1);
+    soft_current(eb, xs, b1);
     index_t best = -1;
     double best_gap = INFINITY, best_s = 0.0, best_t = 0.0, best_n[3] = {0.0, 0.0, 0.0};
     for (int l = 0; l < 2; ++l)
@@ -486,8 +493,8 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
                 double c0[3], d0[3], c1[3], d1[3], n0[3], n1[3], sp, tp;
                 soft_position(fc, s, X, u, P, c0);
                 soft_position(fd, s, X, u, P, d0);
-                soft_position(fc, s, X, u_next, P, c1);
-                soft_position(fd, s, X, u_next, P, d1);
+                soft_current(fc, xs, c1);
+                soft_current(fd, xs, d1);
                 const double v0 = soft_edge_volume(a0, b0, c0, d0, n0);
                 const double v1 = soft_edge_volume(a1, b1, c1, d1, n1);
                 // Round-off: a volume below 1e-9 of |ab × cd| × the edges' length is no side.

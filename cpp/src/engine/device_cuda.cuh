@@ -33,6 +33,12 @@ __global__ void each_kernel(index_t n, F f) {
 }
 
 template <class F>
+__global__ void each_counted_kernel(index_t n, const index_t* count, F f) {
+    const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n && i < *count) f(static_cast<index_t>(i));
+}
+
+template <class F>
 __global__ void blocks_kernel(index_t b0, index_t b1, F f) {
     const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
     const index_t b = b0 + static_cast<index_t>(i / kLanes);
@@ -97,6 +103,20 @@ public:
         if (dry_ || n <= 0) return;
         cuda_detail::each_kernel<<<cuda_detail::grid_for(n), cuda_detail::kThreads, 0, stream_>>>(n, f);
         cuda_detail::check(cudaPeekAtLastError(), "launch");
+    }
+    /// f(i) for i in [0, *count), a count an earlier kernel wrote: a graph's launch has a fixed
+    /// size, so n_max threads start and each tests its index against the count.
+    template <class F>
+    void each_counted(index_t n_max, const index_t* count, const F& f) {
+        if (dry_ || n_max <= 0) return;
+        cuda_detail::each_counted_kernel<<<cuda_detail::grid_for(n_max), cuda_detail::kThreads, 0, stream_>>>(
+            n_max, count, f);
+        cuda_detail::check(cudaPeekAtLastError(), "launch");
+    }
+    /// body's launches, always: the flag lives on the device, and the kernels test it themselves.
+    template <class V, class F>
+    void when(const V* /*flag*/, F&& body) {
+        body();
     }
     template <class F>
     void blocks(index_t b0, index_t b1, const F& f) {

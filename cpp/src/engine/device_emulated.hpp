@@ -55,6 +55,19 @@ public:
             for (index_t i = 0; i < n; ++i) f(i);
         });
     }
+    /// CUDA's each_counted: the count is read when the launch runs (replays included).
+    template <class F>
+    void each_counted(index_t n_max, const index_t* count, const F& f) {
+        launch_or_record([n_max, count, f] {
+            const index_t n = *count < n_max ? *count : n_max;
+            for (index_t i = 0; i < n; ++i) f(i);
+        });
+    }
+    /// As on CUDA: body's launches always run (their kernels test the flag).
+    template <class V, class F>
+    void when(const V* /*flag*/, F&& body) {
+        body();
+    }
     template <class F>
     void blocks(index_t b0, index_t b1, const F& f) {
         launch_or_record([b0, b1, f] {

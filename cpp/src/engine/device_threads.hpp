@@ -62,6 +62,19 @@ public:
 #pragma omp for schedule(static)
         for (index_t i = 0; i < n; ++i) f(i);
     }
+    /// f(i) for i in [0, min(*count, n_max)): a count an earlier launch wrote before its wait. Every
+    /// thread reads it then, so all split the same range; no thread walks the slots past it.
+    template <class F>
+    void each_counted(index_t n_max, const index_t* count, const F& f) {
+        each(*count < n_max ? *count : n_max, f);
+    }
+    /// body()'s launches if *flag, a value an earlier launch wrote before its wait: every thread reads
+    /// it once, before body's first launch (body may change it only after that launch's wait), so all
+    /// take the same path. The kernels test the flag too: CUDA launches them whatever it holds.
+    template <class V, class F>
+    void when(const V* flag, F&& body) {
+        if (*flag) body();
+    }
     /// f(b, l) for the element slots of blocks [b0, b1): blocks across threads, lanes in SIMD. No
     /// wait at the end (a group's blocks are independent of the next group's): call barrier().
     template <class F>

@@ -47,6 +47,8 @@ struct Scalars {
     double soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m]
     index_t soft_active, soft_touched;  // soft contact: nodes with candidates; nodes of a sweep's contacts
     index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
+    index_t soft_items;                 // soft contact: the larger of soft_active and soft_edges_active
+    index_t soft_redo;                  // soft contact: soft_items if the last sweep moved a node, else 0
 };
 
 /// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
@@ -88,6 +90,7 @@ struct DeviceView {
     // (triangle, weights, impulse), contacts per node, impulse sums and forces [N] (3 per node).
     SoftSurface soft;
     double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare, *erec_w, *erec_p;
+    double* sx;  // the surface positions at u⁺ [m] (3 per node: soft_current), kept through the pass
     index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *sactive, *stouched, *erec, *eactive;
 };
 
@@ -194,7 +197,7 @@ private:
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
     DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, erec_w_,
-        erec_p_, d_soft_mu_;
+        erec_p_, d_soft_mu_, sx_;
     DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, sactive_, stouched_, erec_,
         eactive_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;

@@ -24,6 +24,7 @@ PLIANT_HD void soft_activate(const DeviceView<T>& v, const SoftSurface& s) {
             v.scand[static_cast<std::size_t>(s.edge[2 * e + 1]) * kSoftCandidates] >= 0)
             v.eactive[ne++] = e;
     sc.soft_edges_active = ne;
+    sc.soft_items = n > ne ? n : ne;
     sc.soft_rebuild = 0;
 }
 
@@ -98,15 +99,19 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
             row[3 * pr + d] += sign * p / g1;
         }
     }
+    // A sweep after one that moved nothing would find what it found: nothing (soft_pass skips it).
+    sc.soft_redo = sc.soft_touched > 0 ? sc.soft_items : 0;
 }
 
-/// The soft-contact pass of a step: (1) skin test, a rebuild of the candidate lists if a surface
-/// node moved more than skin/2 since the last one (or the run just started), and the list of the
-/// nodes that have candidates; (2) per such node, its contact and impulse (soft_detect); (3) one
-/// thread adds the impulses into the nodes, in node order, each averaged over the contacts sharing
-/// its nodes, and into the step's per-pair forces; (4) per node touched, the correction W p applied
-/// to u⁺ and its force p/γ1 kept for reports; (2)–(4) repeated kSoftSweeps times, kSoftRelaxSweeps in a
-/// relaxation (Jacobi sweeps on the corrected positions).
+/// The soft-contact pass of a step: (1) skin test (and the surface positions sx), a rebuild of the
+/// candidate lists if a surface node moved more than skin/2 since the last one (or the run just
+/// started), and the list of the nodes that have candidates; (2) per such node, its contact and
+/// impulse (soft_detect); (3) one thread adds the impulses into the nodes, in node order, each
+/// averaged over the contacts sharing its nodes, and into the step's per-pair forces; (4) per node
+/// touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports; (2)–(4)
+/// repeated kSoftSweeps times, kSoftRelaxSweeps in a relaxation (Jacobi sweeps on the corrected
+/// positions), (2) skipped after a sweep that touched nothing. Launch sizes come from the counts
+/// the kernels wrote (each_counted, when): the CPU walks only those items.
 template <class T, class Dev>
 void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     const DeviceView<T> v = v_;
@@ -121,6 +126,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
         for (index_t i = c * kSoftChunk; i < end; ++i) {
             double x[3];
             soft_position(i, s, v.X, un, v.P, x);
+            for (int d = 0; d < 3; ++d) v.sx[3 * i + d] = x[d];
             const double* b = v.sb + 3 * i;
             const double d2 =
                 (x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) + (x[2] - b[2]) * (x[2] - b[2]);
@@ -136,26 +142,28 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
         if (sc.soft_rebuild)
             sc.soft_rmax = soft_grid(s, v.X, un, v.P, v.shead, v.scursor, v.sbucket, v.stc, v.str, v.scell);
     });
-    dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
-        if (v.sc->soft_rebuild)
-            soft_candidates(i, s, v.X, un, v.P, v.sc->soft_rmax, v.shead, v.scell, v.stc, v.str, v.scand,
-                            v.sb);
+    dev_.when(&v.sc->soft_rebuild, [&] {  // on the CPU, steps without a rebuild skip both launches
+        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
+            if (v.sc->soft_rebuild)
+                soft_candidates(i, s, v.X, un, v.P, v.sc->soft_rmax, v.shead, v.scell, v.stc, v.str, v.scand,
+                                v.sb);
+        });
+        dev_.serial([=] PLIANT_KERNEL() { soft_activate(v, s); });
     });
-    dev_.serial([=] PLIANT_KERNEL() { soft_activate(v, s); });
     const int sweeps = relaxing ? kSoftRelaxSweeps : kSoftSweeps;
     for (int sweep = 0; sweep < sweeps; ++sweep) {
         const bool first = sweep == 0;
         const index_t items = s.n_nodes > s.n_edges ? s.n_nodes : s.n_edges;
-        dev_.each(items, [=] PLIANT_KERNEL(index_t a) {
+        dev_.each_counted(items, first ? &v.sc->soft_items : &v.sc->soft_redo, [=] PLIANT_KERNEL(index_t a) {
             if (a < v.sc->soft_active)
-                soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.scand, v.srec, v.srec_w, v.srec_p);
+                soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.sx, v.scand, v.srec, v.srec_w,
+                            v.srec_p);
             if (a < v.sc->soft_edges_active)
-                soft_edge_detect(v.eactive[a], s, v.X, mass, uc, un, v.P, v.scand, v.erec, v.erec_w,
+                soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.erec, v.erec_w,
                                  v.erec_p);
         });
         dev_.serial([=] PLIANT_KERNEL() { soft_gather(v, s, first); });
-        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t a) {
-            if (a >= v.sc->soft_touched) return;
+        dev_.each_counted(s.n_nodes, &v.sc->soft_touched, [=] PLIANT_KERNEL(index_t a) {
             const index_t i = v.stouched[a];
             double W[3];
             soft_inverse_mass(i, s, mass, W);
@@ -164,6 +172,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
             for (int d = 0; d < 3; ++d) {
                 const double p = v.sacc[3 * i + d];
                 un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
+                v.sx[3 * i + d] = v.X[3 * n + d] + double(un[d * v.P + n]);  // as soft_position
                 v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
                 v.sacc[3 * i + d] = 0.0;
             }
