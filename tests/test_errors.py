@@ -41,6 +41,20 @@ def test_degenerate_element_is_reported_by_id():
     assert err.value.element == 1 and "element 1" in str(err.value)
 
 
+def test_element_whose_nodes_coincide_is_degenerate():
+    """Four nodes at one point: no edge to measure flatness by (the relative volume was 0/0 and
+    slipped through); refused by id like any flat element."""
+    X, T = _tet()
+    X = np.vstack([X, [[2.0, 2.0, 2.0]] * 4])
+    T = np.vstack([T, [[4, 5, 6, 7]]])
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(mu=1e3, K=1e4), density=1000)
+    with pytest.raises(pl.DegenerateElementError) as err:
+        b.finalize()
+    assert err.value.element == 1 and "element 1" in str(err.value)
+
+
 @pytest.mark.parametrize(
     "kwargs, text",
     [

@@ -156,6 +156,34 @@ def test_malformed_xml(tmp_path):
     assert r.exit_code == 2 and "XML" in r.output
 
 
+@pytest.mark.parametrize(
+    "sub, says",
+    [
+        ("<SubMesh>789 2000</SubMesh>", "SubMesh[1]"),  # past the 1,578 elements
+        ("<SubMesh>1578 789</SubMesh>", "SubMesh[1]"),  # reversed
+        ("<SubMesh>a b</SubMesh>", "two integers"),
+        ("<SubMesh>700 1578</SubMesh>", "overlaps SubMesh[0]"),
+    ],
+)
+def test_submesh_ranges_are_checked(tmp_path, sub, says):
+    """ball_ball.xml's <SubMesh> element ranges: a malformed one is an error naming it (exit 2);
+    one that cuts through a connected ball runs with a warning (bodies come from connectivity)."""
+    p = tmp_path / "bad.xml"
+    p.write_text(BALLS.read_text().replace("<SubMesh>789 1578</SubMesh>", sub))
+    r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2 and says in r.output, r.output
+
+
+def test_submesh_that_splits_a_body_warns(tmp_path):
+    xml = BALLS.read_text()
+    assert "<SubMesh>0 789</SubMesh>" in xml and "<SubMesh>789 1578</SubMesh>" in xml
+    assert not any("SubMesh" in w for w in load_niftysim(BALLS).warnings)  # one range per ball
+    p = tmp_path / "split.xml"
+    p.write_text(xml.replace("<SubMesh>0 789</SubMesh>", "<SubMesh>0 700</SubMesh>"))
+    (w,) = [w for w in load_niftysim(p).warnings if "SubMesh" in w]
+    assert "SubMesh[0] (elements 0 to 699)" in w
+
+
 def _poly345(tr):
     return tr**3 * (10 - 15 * tr + 6 * tr**2)  # NiftySim user guide v2.4, eq. 1
 

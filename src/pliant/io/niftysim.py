@@ -202,6 +202,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     b = ModelBuilder()
     with _named(f, "Elements"):
         b.add_mesh(X, T, source=f)
+    _submeshes(root, T, len(X), f, warnings)
     b.damping = damping
     b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
     b.nodal_pressure_stabilization = 0.0  # NiftySim's T4ANP: the plain average
@@ -287,6 +288,42 @@ def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
         )
 
     return X, T, etype
+
+
+def _submeshes(root, T: np.ndarray, n_nodes: int, f: str, warnings: list[str]) -> None:
+    """<SubMesh>start end</SubMesh>: element ranges [start, end) naming the meshes of a model (as
+    ball_ball.xml's two balls). Checked (integers, 0 <= start < end <= element count, no overlap);
+    pliant takes the bodies from the mesh's connectivity (body_labels), so a range that cuts
+    through a connected body leaves a warning."""
+    M, ranges = len(T), []
+    for k, sm in enumerate(root.findall("SubMesh")):
+        key = f"SubMesh[{k}]"
+        words = (sm.text or "").split()
+        if len(words) != 2 or not all(_parses(w, np.int64) for w in words):
+            raise NiftySimError(
+                f"<SubMesh> = {(sm.text or '').strip()[:40]!r}: expected two integers, start end", f, key
+            )
+        a, e = int(words[0]), int(words[1])
+        if not 0 <= a < e <= M:
+            raise NiftySimError(
+                f"<SubMesh> = {a} {e}: expected 0 <= start < end <= {M} (the element count)", f, key
+            )
+        for b0, b1, other in ranges:
+            if a < b1 and b0 < e:
+                raise NiftySimError(f"<SubMesh> = {a} {e} overlaps {other} ({b0} {b1})", f, key)
+        ranges.append((a, e, key))
+    if ranges:
+        from ..contact.soft import body_labels
+
+        labels = body_labels(T, n_nodes)
+        whole = np.bincount(labels)
+        for a, e, key in ranges:
+            part = np.bincount(labels[a:e], minlength=whole.size)
+            if np.any((part > 0) & (part < whole)):
+                warnings.append(
+                    f"{f}: {key} (elements {a} to {e - 1}) holds part of a body connected beyond it; "
+                    "pliant's bodies are the mesh's connected parts"
+                )
 
 
 def _system_params(root, f: str, unsupported, warnings: list[str]):

@@ -450,7 +450,8 @@ class ModelBuilder:
             )
         edges = X[T32[:, [1, 2, 3, 2, 3, 3]]] - X[T32[:, [0, 0, 0, 1, 1, 2]]]
         lmax = np.sqrt((edges**2).sum(-1)).max(axis=1)
-        rel = vol / np.maximum(lmax, np.finfo(float).tiny) ** 3
+        cube = lmax**3  # an element whose four nodes coincide has no edge: 0, flagged below
+        rel = np.divide(vol, cube, out=np.zeros_like(vol), where=cube > 0)
         degenerate = np.nonzero(np.abs(rel) < 1e-8)[0]
         if degenerate.size:
             e = int(degenerate[0])
