@@ -108,3 +108,19 @@ def test_version_comes_from_pyproject():
     want = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]["version"]
     r = runner.invoke(app, ["--version"])
     assert r.exit_code == 0 and r.output.strip() == f"pliant {want}"
+
+
+def test_more_frames_than_steps_warns_and_writes_one_per_step(tmp_path):
+    """frames = 10⁸ (a typo's worth) on a run of a few dozen steps: one frame per step, said in a
+    warning and in summary.json, not a silent gigabyte."""
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        "[mesh]\nprimitive = 'box'\nsize = [0.02, 0.01, 0.01]\ncells = [2, 1, 1]\n"
+        "[[material]]\ntype = 'neo-hookean'\nE = 1e4\nnu = 0.3\ndensity = 1000.0\n"
+        "[solver]\nduration = 1e-3\n[output]\nframes = 100000000\n"
+    )
+    r = runner.invoke(app, ["run", str(scene), "-o", str(tmp_path / "o"), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["frames"] == summary["steps"] + 1 < 1000
+    assert any("a frame every step" in w for w in summary["warnings"]), summary["warnings"]

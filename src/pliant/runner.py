@@ -177,6 +177,13 @@ def run_scene(
             writer.write(state)
         else:
             every = _frame_steps(scene, solver.dt, total)
+            if not (scene.output_every or scene.output_interval) and scene.frames > total:
+                text = (
+                    f"{scene.source}: frames = {scene.frames:,} but the run has {total:,} steps: "
+                    f"a frame every step ({total + 1:,} frames)"
+                )
+                summary["warnings"].append(text)
+                warnings.warn(PliantWarning(text), stacklevel=2)
             cols = (
                 TextColumn("t = {task.fields[t]:.4g} s"),
                 BarColumn(),
