@@ -239,6 +239,13 @@ def test_bad_soft_contact_settings_name_themselves():
     b.set_soft_contact(self_contact=[7])
     with pytest.raises(InputError, match="self_contact body 7"):
         b.finalize()
+    # The two 1 cm cubes (the second 2 cm further on each axis) span 3 cm per axis, 3√3 cm = 0.052 m
+    # across: a 1 m skin (a millimetre typed in metres) is refused.
+    b.set_soft_contact(skin=1.0)
+    with pytest.raises(InputError, match=r"skin = 1(\.0)? m is larger than the contact surfaces \(0\.052 m"):
+        b.finalize()
+    b.set_soft_contact(skin=0.001)
+    b.finalize()
 
 
 def test_a_mesh_of_thousands_of_loose_elements_is_refused_not_allocated():

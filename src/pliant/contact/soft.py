@@ -187,6 +187,13 @@ def engine_surface(
     skin = contact.skin if contact.skin is not None else SKIN_FRACTION * float(np.median(edges))
     if not (math.isfinite(skin) and skin > 0):
         raise InputError("soft contact: the bodies have no surface to touch")
+    across = float(np.linalg.norm(np.ptp(X[nodes], axis=0)))
+    if skin > across:  # every node would list the 32 nearest triangles of everything: slow, and a units slip
+        raise InputError(
+            f"soft contact skin = {shown(skin)} m is larger than the contact surfaces ({across:.3g} m "
+            f"across); expected a fraction of an element (default {SKIN_FRACTION} × the median "
+            f"surface edge: {SKIN_FRACTION * float(np.median(edges)):.3g} m)"
+        )
     return dict(
         soft_nodes=[int(n) for n in node_rank[nodes]],
         soft_label=[int(b) for b in node_body[nodes]],
