@@ -26,6 +26,7 @@ from .guard import one_line
 
 app = typer.Typer(
     add_completion=False,
+    rich_markup_mode=None,  # help text as written: units such as [m] are no markup
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     help="pliant: soft-body simulation by nonlinear FEM (TLED) on tetrahedra.",

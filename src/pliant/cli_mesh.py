@@ -17,6 +17,7 @@ from .guard import one_line
 
 mesh_app = typer.Typer(
     no_args_is_help=True,
+    rich_markup_mode=None,  # help text as written: units such as [m] are no markup
     add_completion=False,
     help="Mesh pipeline: simplify, subdivide, repair, check, tetrahedralize, quality.",
 )

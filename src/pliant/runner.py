@@ -177,7 +177,7 @@ def run_scene(
             writer.write(state)
         else:
             every = _frame_steps(scene, solver.dt, total)
-            if not (scene.output_every or scene.output_interval) and scene.frames > total:
+            if scene.meta.get("frames_given") and scene.frames > total:
                 text = (
                     f"{scene.source}: frames = {scene.frames:,} but the run has {total:,} steps: "
                     f"a frame every step ({total + 1:,} frames)"

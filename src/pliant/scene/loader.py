@@ -461,4 +461,5 @@ def _output(ctx: Ctx, data: dict, scene: Scene) -> None:
     scene.output_every = out.get("every")
     scene.output_interval = out.get("interval")
     scene.frames = int(out.get("frames", 20))
+    scene.meta["frames_given"] = "frames" in out  # the runner says so if there are fewer steps
     scene.png = bool(out.get("png", True))
