@@ -295,7 +295,8 @@ def _submeshes(root, T: np.ndarray, n_nodes: int, f: str, warnings: list[str]) -
     ball_ball.xml's two balls). Checked (integers, 0 <= start < end <= element count, no overlap);
     pliant takes the bodies from the mesh's connectivity (body_labels), so a range that cuts
     through a connected body leaves a warning."""
-    M, ranges = len(T), []
+    M = len(T)
+    ranges: list[tuple[int, int, str]] = []
     for k, sm in enumerate(root.findall("SubMesh")):
         key = f"SubMesh[{k}]"
         words = (sm.text or "").split()
