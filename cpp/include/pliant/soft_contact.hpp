@@ -465,7 +465,8 @@ PLIANT_HD bool soft_segments(const double a[3], const double b[3], const double 
 /// apart than kSoftBehind × the edges' length — the closest to it. The position impulse p [kg·m]
 /// on e's closest point puts the edges back in touch along n = ±(b − a) × (d − c), on the side
 /// they came from: e's nodes get w p (w = 1 − s, s), f's nodes −w p (1 − t, t), so momentum is
-/// conserved; frictionless. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3). Inputs: reference
+/// conserved; with Coulomb friction on the relative tangential motion of the two closest points
+/// over the step, as soft_detect's. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3). Inputs: reference
 /// X [m] AoS, mass [kg], u [m] SoA (3, P), xs the surface positions at u⁺ [m] (soft_current).
 template <class T>
 PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X, const T* mass, const T* u,
@@ -523,19 +524,53 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
                 for (int d = 0; d < 3; ++d) best_n[d] = nn[d];
             }
     if (best < 0) return;
-    // Effective inverse mass along n: Σ w² nᵀ W n over the four nodes.
+    // Effective inverse mass along a direction q: Σ w_j² qᵀ W_j q over the four nodes.
     const index_t nodes[4] = {ea, eb, s.edge[2 * best], s.edge[2 * best + 1]};
     const double w[4] = {1.0 - best_s, best_s, 1.0 - best_t, best_t};
-    double k = 0.0;
-    for (int j = 0; j < 4; ++j) {
-        double W[3];
-        soft_inverse_mass(nodes[j], s, mass, W);
-        for (int d = 0; d < 3; ++d) k += w[j] * w[j] * best_n[d] * best_n[d] * W[d];
-    }
+    double W[4][3];
+    for (int j = 0; j < 4; ++j) soft_inverse_mass(nodes[j], s, mass, W[j]);
+    auto inverse_mass = [&](const double q[3]) {
+        double r = 0.0;
+        for (int j = 0; j < 4; ++j)
+            for (int d = 0; d < 3; ++d) r += w[j] * w[j] * q[d] * q[d] * W[j][d];
+        return r;
+    };
+    const double k = inverse_mass(best_n);
     if (!(k > 0.0)) return;
+    const double lambda = best_gap / k;
+    double p[3];
+    for (int d = 0; d < 3; ++d) p[d] = -lambda * best_n[d];  // e moves against n
+    // Coulomb friction as soft_detect's, on the motion over the step of e's closest point relative
+    // to f's: what stops it if that takes at most μs λ, else μk λ against it.
+    double x0[4][3], x1[4][3], rel[3], dot = 0.0;
+    for (int j = 0; j < 4; ++j) {
+        soft_position(nodes[j], s, X, u, P, x0[j]);
+        soft_current(nodes[j], xs, x1[j]);
+    }
+    for (int d = 0; d < 3; ++d) {
+        rel[d] = 0.0;
+        for (int j = 0; j < 4; ++j) rel[d] += (j < 2 ? w[j] : -w[j]) * (x1[j][d] - x0[j][d]);
+        dot += rel[d] * best_n[d];
+    }
+    double tan[3], mag2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+        tan[d] = rel[d] - dot * best_n[d];
+        mag2 += tan[d] * tan[d];
+    }
+    const double mag = std::sqrt(mag2);
+    const index_t pr = s.pair[static_cast<std::size_t>(s.label[ea]) * s.labels + s.label[nodes[2]]];
+    if (mag > 0.0 && pr >= 0) {
+        const double t[3] = {tan[0] / mag, tan[1] / mag, tan[2] / mag};
+        const double kt = inverse_mass(t);
+        if (kt > 0.0) {
+            const double stick = mag / kt;
+            const double lt = stick <= s.mu[2 * pr] * lambda ? stick : s.mu[2 * pr + 1] * lambda;
+            for (int d = 0; d < 3; ++d) p[d] -= lt * t[d];
+        }
+    }
     erec[e] = best;
     erec_w[2 * e] = best_s, erec_w[2 * e + 1] = best_t;
-    for (int d = 0; d < 3; ++d) erec_p[3 * e + d] = -best_gap / k * best_n[d];  // e moves against n
+    for (int d = 0; d < 3; ++d) erec_p[3 * e + d] = p[d];
 }
 
 }  // namespace pliant
