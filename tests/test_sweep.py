@@ -258,6 +258,16 @@ def _ishigami_free(params, run_dir):
         ),
         ('base = "base.toml"\n[[parameter]]\nkey = "solver.damping"\n', "takes explicit values"),
         ('base = "base.toml"\nparameter = 3\n', "parameter"),
+        (  # a [set] value the base refuses: every run would fail alike
+            'base = "base.toml"\n[set]\n"solver.duration" = -0.2\n[[parameter]]\nkey = "solver.damping"'
+            "\nvalues = [1.0]\n",
+            "[set]: the base file with the [set] values does not load",
+        ),
+        (  # a range whose low end the base refuses (E = 0)
+            'base = "base.toml"\n[design]\ntype = "lhs"\nsamples = 4\n[[parameter]]\n'
+            'key = "material.rubber.E"\nrange = [0.0, 1.0e6]\n',
+            "at their first choice or low end does not load",
+        ),
     ],
 )
 def test_bad_sweep_files_exit_2_naming_the_key(tmp_path, text, culprit):

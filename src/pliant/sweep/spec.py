@@ -244,6 +244,29 @@ def _check_key_paths(ctx: Ctx, spec: SweepSpec) -> None:
                 where[key],
                 ctx.line_of(where[key].split(".")[0]),
             ) from None
+    _check_values(ctx, spec)
+
+
+def _check_values(ctx: Ctx, spec: SweepSpec) -> None:
+    """The base file loads with the [set] values, then with every parameter at its first choice or
+    the low end of its range (a value the base file refuses would fail every run, or the runs near
+    that end, each with the base file's line: named here once, in the sweep file)."""
+    from ..errors import InputError
+    from ..job import load_job
+
+    first = {p.key: p.choices[0] if p.choices else p.bounds[0] for p in spec.parameters}
+    for settings, key, what in (
+        (spec.fixed, "set", "the [set] values"),
+        ({**spec.fixed, **first}, "parameter", "the parameters at their first choice or low end"),
+    ):
+        if not settings:
+            continue
+        try:
+            load_job(spec.base, spec.ignore, settings)
+        except InputError as e:
+            raise SceneError(
+                f"the base file with {what} does not load: {e}", ctx.file, key, ctx.line_of(key)
+            ) from None
 
 
 def _run_count(design: Design, params: list[Parameter]) -> int:
