@@ -29,24 +29,19 @@ def test_inverted_element_is_reported_by_id():
     assert err.value.element == 7 and "element 7" in str(err.value)
 
 
-def test_degenerate_element_is_reported_by_id():
+@pytest.mark.parametrize(
+    "extra_nodes, tet",
+    [
+        ([[1, 1, 0]], [1, 2, 4, 0]),  # four coplanar points
+        # Four nodes at one point: no edge to measure flatness by (the relative volume was 0/0 and
+        # slipped through).
+        ([[2.0, 2.0, 2.0]] * 4, [4, 5, 6, 7]),
+    ],
+)
+def test_degenerate_element_is_reported_by_id(extra_nodes, tet):
     X, T = _tet()
-    X = np.vstack([X, [[1, 1, 0]]])
-    T = np.vstack([T, [[1, 2, 4, 0]]])  # four coplanar points
-    b = pl.ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(pl.NeoHookean(mu=1e3, K=1e4), density=1000)
-    with pytest.raises(pl.DegenerateElementError) as err:
-        b.finalize()
-    assert err.value.element == 1 and "element 1" in str(err.value)
-
-
-def test_element_whose_nodes_coincide_is_degenerate():
-    """Four nodes at one point: no edge to measure flatness by (the relative volume was 0/0 and
-    slipped through); refused by id like any flat element."""
-    X, T = _tet()
-    X = np.vstack([X, [[2.0, 2.0, 2.0]] * 4])
-    T = np.vstack([T, [[4, 5, 6, 7]]])
+    X = np.vstack([X, extra_nodes])
+    T = np.vstack([T, [tet]])
     b = pl.ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(pl.NeoHookean(mu=1e3, K=1e4), density=1000)

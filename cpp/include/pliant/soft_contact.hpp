@@ -303,6 +303,30 @@ PLIANT_HD void soft_pseudo_normal(index_t t, int feature, const SoftSurface& s, 
     }
 }
 
+/// Coulomb friction of a contact in displacement form (as the tools', contact.hpp): rel [m] the
+/// relative motion over the step of the two sides' contact points, n the unit normal, λ [kg·m]
+/// the normal impulse, mu (μs, μk), inverse_mass(q) [1/kg] the contact's effective inverse mass
+/// along a unit vector q. The tangential impulse that stops the tangential motion if it is at most
+/// μs λ (stick), else μk λ (slip), against that motion, is taken from p [kg·m] (the first side's).
+template <class InverseMass>
+PLIANT_HD void soft_friction(const double rel[3], const double n[3], double lambda, const double* mu,
+                             const InverseMass& inverse_mass, double p[3]) {
+    double dot = 0.0, tan[3], mag2 = 0.0;
+    for (int d = 0; d < 3; ++d) dot += rel[d] * n[d];
+    for (int d = 0; d < 3; ++d) {
+        tan[d] = rel[d] - dot * n[d];
+        mag2 += tan[d] * tan[d];
+    }
+    const double mag = std::sqrt(mag2);
+    if (!(mag > 0.0)) return;
+    const double t[3] = {tan[0] / mag, tan[1] / mag, tan[2] / mag};
+    const double kt = inverse_mass(t);
+    if (!(kt > 0.0)) return;
+    const double stick = mag / kt;
+    const double lt = stick <= mu[0] * lambda ? stick : mu[1] * lambda;
+    for (int d = 0; d < 3; ++d) p[d] -= lt * t[d];
+}
+
 /// Narrow phase and response of surface node i (the slave). For each body among its candidates,
 /// the closest point c on that body's candidate triangles to x⁺; the node is inside the body if
 /// (x⁺ − c)·n < 0 for the pseudo-normal n there (soft_pseudo_normal) and it lies at most
@@ -394,7 +418,7 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
     if (!(kn > 0.0)) return;  // every node of the contact held: the constraints carry it
     const double lambda = -best_d / kn;
     // Relative motion over the step: the slave's minus the triangle point's.
-    double rel[3], dot = 0.0;
+    double rel[3];
     for (int d = 0; d < 3; ++d) {
         rel[d] = x1[d] - x0[d];
         for (int k = 0; k < 3; ++k) {
@@ -402,26 +426,11 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
             const index_t nj = s.node[j];
             rel[d] -= best_w[k] * (double(u_next[d * P + nj]) - double(u[d * P + nj]));
         }
-        dot += rel[d] * best_n[d];
-    }
-    double tan[3], mag2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-        tan[d] = rel[d] - dot * best_n[d];
-        mag2 += tan[d] * tan[d];
     }
     double p[3];
     for (int d = 0; d < 3; ++d) p[d] = lambda * best_n[d];
     const index_t pr = s.pair[static_cast<std::size_t>(s.label[i]) * s.labels + s.label[s.tri[3 * best]]];
-    const double mag = std::sqrt(mag2);
-    if (mag > 0.0) {
-        const double e[3] = {tan[0] / mag, tan[1] / mag, tan[2] / mag};
-        const double kt = inverse_mass(e);
-        if (kt > 0.0) {
-            const double stick = mag / kt;
-            const double lt = stick <= s.mu[2 * pr] * lambda ? stick : s.mu[2 * pr + 1] * lambda;
-            for (int d = 0; d < 3; ++d) p[d] -= lt * e[d];
-        }
-    }
+    soft_friction(rel, best_n, lambda, s.mu + 2 * pr, inverse_mass, p);
     rec_tri[i] = best;
     for (int d = 0; d < 3; ++d) {
         rec_w[3 * i + d] = best_w[d];
@@ -540,9 +549,8 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
     const double lambda = best_gap / k;
     double p[3];
     for (int d = 0; d < 3; ++d) p[d] = -lambda * best_n[d];  // e moves against n
-    // Coulomb friction as soft_detect's, on the motion over the step of e's closest point relative
-    // to f's: what stops it if that takes at most μs λ, else μk λ against it.
-    double x0[4][3], x1[4][3], rel[3], dot = 0.0;
+    // Friction on the motion over the step of e's closest point relative to f's.
+    double x0[4][3], x1[4][3], rel[3];
     for (int j = 0; j < 4; ++j) {
         soft_position(nodes[j], s, X, u, P, x0[j]);
         soft_current(nodes[j], xs, x1[j]);
@@ -550,24 +558,9 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
     for (int d = 0; d < 3; ++d) {
         rel[d] = 0.0;
         for (int j = 0; j < 4; ++j) rel[d] += (j < 2 ? w[j] : -w[j]) * (x1[j][d] - x0[j][d]);
-        dot += rel[d] * best_n[d];
     }
-    double tan[3], mag2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-        tan[d] = rel[d] - dot * best_n[d];
-        mag2 += tan[d] * tan[d];
-    }
-    const double mag = std::sqrt(mag2);
     const index_t pr = s.pair[static_cast<std::size_t>(s.label[ea]) * s.labels + s.label[nodes[2]]];
-    if (mag > 0.0 && pr >= 0) {
-        const double t[3] = {tan[0] / mag, tan[1] / mag, tan[2] / mag};
-        const double kt = inverse_mass(t);
-        if (kt > 0.0) {
-            const double stick = mag / kt;
-            const double lt = stick <= s.mu[2 * pr] * lambda ? stick : s.mu[2 * pr + 1] * lambda;
-            for (int d = 0; d < 3; ++d) p[d] -= lt * t[d];
-        }
-    }
+    if (pr >= 0) soft_friction(rel, best_n, lambda, s.mu + 2 * pr, inverse_mass, p);
     erec[e] = best;
     erec_w[2 * e] = best_s, erec_w[2 * e + 1] = best_t;
     for (int d = 0; d < 3; ++d) erec_p[3 * e + d] = p[d];
