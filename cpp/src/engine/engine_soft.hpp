@@ -124,9 +124,8 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
         double m = 0.0;
         const index_t end = (c + 1) * kSoftChunk < s.n_nodes ? (c + 1) * kSoftChunk : s.n_nodes;
         for (index_t i = c * kSoftChunk; i < end; ++i) {
-            double x[3];
+            double* x = v.sx + 3 * i;  // kept for the narrow phase (soft_current)
             soft_position(i, s, v.X, un, v.P, x);
-            for (int d = 0; d < 3; ++d) v.sx[3 * i + d] = x[d];
             const double* b = v.sb + 3 * i;
             const double d2 =
                 (x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) + (x[2] - b[2]) * (x[2] - b[2]);
@@ -172,10 +171,10 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
             for (int d = 0; d < 3; ++d) {
                 const double p = v.sacc[3 * i + d];
                 un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
-                v.sx[3 * i + d] = v.X[3 * n + d] + double(un[d * v.P + n]);  // as soft_position
                 v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
                 v.sacc[3 * i + d] = 0.0;
             }
+            soft_position(i, s, v.X, un, v.P, v.sx + 3 * i);
             v.sshare[i] = 0.0;
         });
     }

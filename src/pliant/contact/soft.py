@@ -184,7 +184,8 @@ def engine_surface(
     index = np.full(X.shape[0], -1, np.int64)
     index[nodes] = np.arange(nodes.size)
     edges = np.linalg.norm(X[faces] - X[np.roll(faces, 1, axis=1)], axis=-1)
-    skin = contact.skin if contact.skin is not None else SKIN_FRACTION * float(np.median(edges))
+    median_edge = float(np.median(edges))
+    skin = contact.skin if contact.skin is not None else SKIN_FRACTION * median_edge
     if not (math.isfinite(skin) and skin > 0):
         raise InputError("soft contact: the bodies have no surface to touch")
     across = float(np.linalg.norm(np.ptp(X[nodes], axis=0)))
@@ -192,7 +193,7 @@ def engine_surface(
         raise InputError(
             f"soft contact skin = {shown(skin)} m is larger than the contact surfaces ({across:.3g} m "
             f"across); expected a fraction of an element (default {SKIN_FRACTION} × the median "
-            f"surface edge: {SKIN_FRACTION * float(np.median(edges)):.3g} m)"
+            f"surface edge: {SKIN_FRACTION * median_edge:.3g} m)"
         )
     return dict(
         soft_nodes=[int(n) for n in node_rank[nodes]],

@@ -248,25 +248,27 @@ def _check_key_paths(ctx: Ctx, spec: SweepSpec) -> None:
 
 
 def _check_values(ctx: Ctx, spec: SweepSpec) -> None:
-    """The base file loads with the [set] values, then with every parameter at its first choice or
-    the low end of its range (a value the base file refuses would fail every run, or the runs near
-    that end, each with the base file's line: named here once, in the sweep file)."""
+    """The base file loads with the [set] values and every parameter at its first choice or the
+    low end of its range (a value the base file refuses would fail every run, or the runs near
+    that end, each with the base file's line: named here once, in the sweep file). If it does not,
+    a second load with the [set] values alone tells which of the two to name."""
     from ..errors import InputError
     from ..job import load_job
 
     first = {p.key: p.choices[0] if p.choices else p.bounds[0] for p in spec.parameters}
-    for settings, key, what in (
-        (spec.fixed, "set", "the [set] values"),
-        ({**spec.fixed, **first}, "parameter", "the parameters at their first choice or low end"),
-    ):
-        if not settings:
-            continue
+    if not (spec.fixed or first):
+        return
+    try:
+        load_job(spec.base, spec.ignore, {**spec.fixed, **first})
+        return
+    except InputError as e:
+        key, what, error = "parameter", "the parameters at their first choice or low end", e
+    if spec.fixed:
         try:
-            load_job(spec.base, spec.ignore, settings)
+            load_job(spec.base, spec.ignore, spec.fixed)
         except InputError as e:
-            raise SceneError(
-                f"the base file with {what} does not load: {e}", ctx.file, key, ctx.line_of(key)
-            ) from None
+            key, what, error = "set", "the [set] values", e
+    raise SceneError(f"the base file with {what} does not load: {error}", ctx.file, key, ctx.line_of(key))
 
 
 def _run_count(design: Design, params: list[Parameter]) -> int:
