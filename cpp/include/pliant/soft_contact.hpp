@@ -15,8 +15,8 @@
 // Laursen 2000, CMAME 187:621, §3: mass-weighted kinematic contact). Friction: Coulomb in
 // displacement form as for the tools (contact.hpp), on the relative tangential motion over the step.
 // Contacts sharing a node are averaged (each impulse divided by the largest number of contacts
-// any of its four nodes takes part in: Macklin et al. 2014, ACM TOG 33(4):153, §4.2), which keeps
-// the Jacobi update from closing a gap twice; what is left is closed at the next steps.
+// any of its four nodes takes part in, at least one: Macklin et al. 2014, ACM TOG 33(4):153, §4.2), which
+// keeps the Jacobi update from closing a gap twice; what is left is closed at the next steps.
 //
 // Broad phase: a Verlet list. Every surface node keeps up to kSoftCandidates triangles whose bounding
 // sphere lies within `skin` of it, found through a hashed uniform grid of triangle centroids; the
@@ -278,6 +278,22 @@ PLIANT_HD bool soft_face(index_t t, int k, const SoftSurface& s, const double* x
     return true;
 }
 
+/// Sum (out, not normalized) of the normals at the surface positions xs [m] of surface node a's
+/// triangles: those that also hold node b if b >= 0 (an edge's pseudo-normal: its two faces', each
+/// weighing 1), else all of them, each weighted by its angle at a (a vertex's pseudo-normal).
+PLIANT_HD void soft_node_normal(index_t a, index_t b, const SoftSurface& s, const double* xs, double n[3]) {
+    double f[3], angle = 1.0;
+    n[0] = n[1] = n[2] = 0.0;
+    for (index_t j = s.vtri_off[a]; j < s.vtri_off[a + 1]; ++j) {
+        const index_t q = s.vtri[j];
+        const index_t* r = s.tri + 3 * q;
+        const int k = r[0] == a ? 0 : (r[1] == a ? 1 : 2);
+        if (b >= 0 && r[0] != b && r[1] != b && r[2] != b) continue;  // not on the edge
+        if (!soft_face(q, k, s, xs, f, b < 0 ? &angle : nullptr)) continue;
+        for (int d = 0; d < 3; ++d) n[d] += angle * f[d];
+    }
+}
+
 /// Pseudo-normal (out, not normalized) of the feature of triangle t that a closest point lies on
 /// (soft_closest's numbering), at the surface positions xs [m]: the face's normal; for an edge, the sum of
 /// the normals of the triangles sharing it; for a vertex, the normals of its triangles weighted by their
@@ -285,22 +301,15 @@ PLIANT_HD bool soft_face(index_t t, int k, const SoftSurface& s, const double* x
 /// 0 for the pseudo-normal n at its closest point c).
 PLIANT_HD void soft_pseudo_normal(index_t t, int feature, const SoftSurface& s, const double* xs,
                                   double n[3]) {
-    double f[3], angle = 1.0;  // an edge's faces weigh 1 each
-    n[0] = n[1] = n[2] = 0.0;
     if (feature == 6) {
+        n[0] = n[1] = n[2] = 0.0;
+        double f[3];
         if (soft_face(t, 0, s, xs, f, nullptr))
             for (int d = 0; d < 3; ++d) n[d] = f[d];
         return;
     }
     const index_t a = s.tri[3 * t + feature % 3], b = s.tri[3 * t + (feature % 3 + 1) % 3];
-    for (index_t j = s.vtri_off[a]; j < s.vtri_off[a + 1]; ++j) {
-        const index_t q = s.vtri[j];
-        const index_t* r = s.tri + 3 * q;
-        const int k = r[0] == a ? 0 : (r[1] == a ? 1 : 2);
-        if (feature >= 3 && r[0] != b && r[1] != b && r[2] != b) continue;  // not on the edge
-        if (!soft_face(q, k, s, xs, f, feature < 3 ? &angle : nullptr)) continue;
-        for (int d = 0; d < 3; ++d) n[d] += angle * f[d];
-    }
+    soft_node_normal(a, feature >= 3 ? b : -1, s, xs, n);
 }
 
 /// Coulomb friction of a contact in displacement form (as the tools', contact.hpp): rel [m] the
@@ -450,6 +459,38 @@ PLIANT_HD double soft_edge_volume(const double a[3], const double b[3], const do
     return n[0] * (c[0] - a[0]) + n[1] * (c[1] - a[1]) + n[2] * (c[2] - a[2]);
 }
 
+/// How far [m] a stored displacement of surface nodes q[0..4) may lie from the value a correction
+/// gave it: 4 units in the last place of the largest component (T = float: a contact closed at the
+/// last step starts this one this far from touching, on either side, not at 0).
+template <class T>
+PLIANT_HD double soft_rounding(const index_t q[4], const SoftSurface& s, const T* u, index_t P) {
+    double m = 0.0;
+    for (int j = 0; j < 4; ++j)
+        for (int d = 0; d < 3; ++d) {
+            const double a = std::fabs(double(u[d * P + s.node[q[j]]]));
+            m = a > m ? a : m;
+        }
+    return 4.0 * (sizeof(T) == 4 ? 1.1920928955078125e-7 : 2.220446049250313e-16) * m;
+}
+
+/// The side (+1, −1; 0: none told) of sharp edge q[0]q[1] that sharp edge q[2]q[3] of another body
+/// belongs on, for two edges touching: the sign of n·(o_e − o_f), n = (b − a) × (d − c) (area = |n|),
+/// o_e, o_f the edges' unit outward pseudo-normals at the surface positions xs [m] (each on the side
+/// the other's outside faces), if beyond ±0.5 of its range ±2 (not two edges meeting side-on).
+PLIANT_HD double soft_edge_side(const double n[3], double area, const index_t q[4], const SoftSurface& s,
+                                const double* xs) {
+    double oe[3], of[3];
+    soft_node_normal(q[0], q[1], s, xs, oe);
+    soft_node_normal(q[2], q[3], s, xs, of);
+    const double le = std::sqrt(oe[0] * oe[0] + oe[1] * oe[1] + oe[2] * oe[2]);
+    const double lf = std::sqrt(of[0] * of[0] + of[1] * of[1] + of[2] * of[2]);
+    if (!(le > 0.0 && lf > 0.0)) return 0.0;
+    double k = 0.0;
+    for (int d = 0; d < 3; ++d) k += n[d] * (oe[d] / le - of[d] / lf);
+    k /= area;
+    return k > 0.5 ? 1.0 : (k < -0.5 ? -1.0 : 0.0);
+}
+
 /// Closest points of segments ab and cd: parameters s, t in [0, 1] (out); false if parallel.
 PLIANT_HD bool soft_segments(const double a[3], const double b[3], const double c[3], const double d[3],
                              double& s, double& t) {
@@ -468,15 +509,17 @@ PLIANT_HD bool soft_segments(const double a[3], const double b[3], const double 
 /// Edge–edge test of sharp edge e (nodes a, b) and response, after the node-to-triangle one: among
 /// the sharp edges of its end nodes' candidate triangles of other bodies (not its own: the
 /// coincident staircases of a cut, whose edges lie in each other's planes, made resting pieces
-/// jitter), an
-/// edge f (c, d) that crossed it during the step — the sign of soft_edge_volume changed between u
-/// and u⁺ (each beyond round-off) with the closest points inside both edges at u⁺ and no further
-/// apart than kSoftBehind × the edges' length — the closest to it. The position impulse p [kg·m]
-/// on e's closest point puts the edges back in touch along n = ±(b − a) × (d − c), on the side
-/// they came from: e's nodes get w p (w = 1 − s, s), f's nodes −w p (1 − t, t), so momentum is
-/// conserved; with Coulomb friction on the relative tangential motion of the two closest points
-/// over the step, as soft_detect's. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3). Inputs: reference
-/// X [m] AoS, mass [kg], u [m] SoA (3, P), xs the surface positions at u⁺ [m] (soft_current).
+/// jitter), an edge f (c, d) that crossed it during the step — the sign of soft_edge_volume at u⁺
+/// is, beyond round-off, the other side than the one f came from — with the closest points inside
+/// both edges at u⁺ and no further apart than kSoftBehind × the edges' length, the closest to it.
+/// The side f came from is the sign of soft_edge_volume at u, or, for edges touching at u (a contact
+/// closed at the last step leaves them so, within soft_rounding), soft_edge_side's: Provot's test
+/// alone let touching edges pass through each other. The position impulse p [kg·m] on e's closest
+/// point puts the edges back in touch along n = ±(b − a) × (d − c), on the side they came from:
+/// e's nodes get w p (w = 1 − s, s), f's nodes −w p (1 − t, t), so momentum is conserved; with
+/// Coulomb friction on the relative tangential motion of the two closest points over the step, as
+/// soft_detect's. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3). Inputs: reference X [m] AoS,
+/// mass [kg], u [m] SoA (3, P), xs the surface positions at u⁺ [m] (soft_current).
 template <class T>
 PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X, const T* mass, const T* u,
                                 index_t P, const double* xs, const index_t* cand, index_t* erec,
@@ -515,11 +558,21 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
                               (d1[2] - c1[2]) * (d1[2] - c1[2]));
                 const double area = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
                 const double eps = 1e-9 * area * len;
-                if (!(area > 0.0) || !((v0 > eps && v1 < -eps) || (v0 < -eps && v1 > eps))) continue;
+                if (!(area > 0.0) || !(v1 > eps || v1 < -eps)) continue;
+                // The side f came from (+1: the +n side of e): v0's, or where the edges touched at
+                // the start (as a contact closed at the last step leaves them), their outward normals'.
+                // Within 1e-3 of the edges' length a start closer than round-off and the rounding of
+                // the stored displacements counts as touching.
+                double sign = v0 > 0.0 ? 1.0 : -1.0;
+                if (!(std::fabs(v0) > 1e-3 * area * len)) {
+                    const index_t q[4] = {ea, eb, fc, fd};
+                    const double touch = eps + area * soft_rounding(q, s, u, P);
+                    sign = v0 > touch ? 1.0 : (v0 < -touch ? -1.0 : soft_edge_side(n1, area, q, s, xs));
+                }
+                if (!(sign * v1 < -eps)) continue;  // on f's side still, or no side to tell
                 if (!soft_segments(a1, b1, c1, d1, sp, tp) || sp <= 0.0 || sp >= 1.0 || tp <= 0.0 ||
                     tp >= 1.0)
                     continue;
-                const double sign = v0 > 0.0 ? 1.0 : -1.0;  // f was on the +n side of e
                 double gap = 0.0, nn[3];
                 for (int d = 0; d < 3; ++d) {
                     nn[d] = sign * n1[d] / area;

@@ -19,13 +19,25 @@ PLIANT_HD void soft_activate(const DeviceView<T>& v, const SoftSurface& s) {
         if (v.scand[static_cast<std::size_t>(i) * kSoftCandidates] >= 0) v.sactive[n++] = i;
     sc.soft_active = n;
     index_t ne = 0;
-    for (index_t e = 0; e < s.n_edges; ++e)
+    for (index_t e = 0; e < s.n_edges; ++e) {
+        v.erec[e] = -1;  // inactive edges hold no contact (soft_edge_partner reads the other side's)
         if (v.scand[static_cast<std::size_t>(s.edge[2 * e]) * kSoftCandidates] >= 0 ||
             v.scand[static_cast<std::size_t>(s.edge[2 * e + 1]) * kSoftCandidates] >= 0)
             v.eactive[ne++] = e;
+    }
     sc.soft_edges_active = ne;
     sc.soft_items = n > ne ? n : ne;
     sc.soft_rebuild = 0;
+}
+
+/// The sharp edge that edge e's contact of the sweep is with, or −1: none, or the same two edges found
+/// from the other one's side too (erec[f] == e) and f < e, so counted at f. Both sides' impulses
+/// are equal and opposite; applying both closed the gap twice (their shares, weights summing to one
+/// per node, did not average them).
+template <class T>
+PLIANT_HD index_t soft_edge_partner(const DeviceView<T>& v, index_t e) {
+    const index_t f = v.erec[e];
+    return f >= 0 && f < e && v.erec[f] == e ? -1 : f;
 }
 
 /// Adds weight w to surface node n's share of the sweep's contacts (sshare: 1 for each contact it
@@ -38,7 +50,8 @@ PLIANT_HD void soft_count(const DeviceView<T>& v, index_t n, double w) {
 }
 
 /// Step (3) of soft_pass, one thread: the contacts' impulses, averaged over the contacts sharing a
-/// node (Macklin et al. 2014 §4.2: each impulse divided by the largest share among its nodes, the
+/// node (Macklin et al. 2014 §4.2: each impulse divided by the largest share among its nodes, or by
+/// one if that is less (a lone edge contact's weights are below one), the
 /// shares counted by barycentric weight, so that a node at the corner of a triangle others hit
 /// counts about once, not once per triangle), into sacc (3 per surface node) in node order, and the
 /// force each pair's first body received from its second, p/γ1 [N], into the step's history row.
@@ -54,7 +67,7 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
             if (v.srec_w[3 * i + k] > 0.0) soft_count(v, s.tri[3 * t + k], v.srec_w[3 * i + k]);
     }
     for (index_t q = 0; q < sc.soft_edges_active; ++q) {  // edge–edge contacts: four nodes, weighted
-        const index_t e = v.eactive[q], f = v.erec[e];
+        const index_t e = v.eactive[q], f = soft_edge_partner(v, e);
         if (f < 0) continue;
         const index_t nodes[4] = {s.edge[2 * e], s.edge[2 * e + 1], s.edge[2 * f], s.edge[2 * f + 1]};
         const double w[4] = {1.0 - v.erec_w[2 * e], v.erec_w[2 * e], 1.0 - v.erec_w[2 * e + 1],
@@ -83,12 +96,12 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
         }
     }
     for (index_t q = 0; q < sc.soft_edges_active; ++q) {
-        const index_t e = v.eactive[q], f = v.erec[e];
+        const index_t e = v.eactive[q], f = soft_edge_partner(v, e);
         if (f < 0) continue;
         const index_t nodes[4] = {s.edge[2 * e], s.edge[2 * e + 1], s.edge[2 * f], s.edge[2 * f + 1]};
         const double w[4] = {1.0 - v.erec_w[2 * e], v.erec_w[2 * e], -(1.0 - v.erec_w[2 * e + 1]),
                              -v.erec_w[2 * e + 1]};
-        double share = 0.0;
+        double share = 1.0;  // never below one: a lone contact (weights < 1) gets its whole impulse
         for (int j = 0; j < 4; ++j) share = v.sshare[nodes[j]] > share ? v.sshare[nodes[j]] : share;
         const index_t la = s.label[nodes[0]], lb = s.label[nodes[2]];
         const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
