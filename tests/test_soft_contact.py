@@ -325,6 +325,24 @@ def test_a_stiff_cut_column_rests_on_its_jagged_cut(friction):
     assert np.abs(sim.displacements[upper, :2].mean(axis=0)).max() < 2e-4
 
 
+def diamond_bars(lift: float):
+    """The bars of crossed_bars_model: node arrays A (along x) and B (along y, lift [m] above A,
+    edge to edge), their tets T (either's), and the indices of A's top edge nodes and B's bottom
+    edge nodes (into A and B)."""
+
+    def turn(X, axis, angle):
+        K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]], float)
+        return X @ (np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K).T
+
+    L, a = 0.08, 0.01
+    X, T = box_tets((L, a, a), (9, 1, 1))
+    A = turn(X - (L / 2, a / 2, a / 2), (1, 0, 0), np.pi / 4)
+    B = turn(A, (0, 0, 1), np.pi / 2) + (0, 0, np.sqrt(2) * a + lift)
+    top = np.nonzero(np.isclose(A[:, 2], A[:, 2].max()))[0]
+    bottom = np.nonzero(np.isclose(B[:, 2], B[:, 2].min()))[0]
+    return A, B, T, top, bottom
+
+
 def crossed_bars_model(contact: bool, friction=0.0, drag=0.0, backend="cpu", gap=0.002, held=True):
     """Two 8 × 1 × 1 cm bars of square section turned 45° about their axes (diamonds), A along x
     with its ends held, B along y above it (edge to edge gap [m] apart), its ends pushed down 6 mm
@@ -336,14 +354,8 @@ def crossed_bars_model(contact: bool, friction=0.0, drag=0.0, backend="cpu", gap
     the node indices of A's top edge and B's bottom edge."""
     from pliant.tled import Table
 
-    def turn(X, axis, angle):
-        K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]], float)
-        return X @ (np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K).T
-
-    L, a = 0.08, 0.01
-    X, T = box_tets((L, a, a), (9, 1, 1))
-    A = turn(X - (L / 2, a / 2, a / 2), (1, 0, 0), np.pi / 4)
-    B = turn(A, (0, 0, 1), np.pi / 2) + (0, 0, np.sqrt(2) * a + gap)
+    A, B, T, top, bottom = diamond_bars(gap)
+    L = 0.08
     b = pl.ModelBuilder()
     b.add_mesh(A, T)
     b.add_mesh(B, T)
@@ -361,9 +373,29 @@ def crossed_bars_model(contact: bool, friction=0.0, drag=0.0, backend="cpu", gap
         b.damping = 20.0
     if contact:
         b.set_soft_contact(friction=friction)
-    top = np.nonzero(np.isclose(A[:, 2], A[:, 2].max()))[0]
-    bottom = np.nonzero(np.isclose(B[:, 2], B[:, 2].min()))[0] + len(A)
-    return b.finalize("float64", backend=backend), top, bottom
+    return b.finalize("float64", backend=backend), top, bottom + len(A)
+
+
+def joined_bars_model(self_contact: bool, backend="cpu", lift=0.02):
+    """diamond_bars with B lift [m] above A, joined into one body by one tet from a triangle of A's
+    end cap to B's nearest node; free flight, undamped. Returns the model and the node indices of
+    A's top edge and B's bottom edge."""
+    from pliant.mesh.topology import boundary_faces
+
+    A, B, T, top, bottom = diamond_bars(lift)
+    faces, _ = boundary_faces(T)
+    cap = faces[np.all(A[faces, 0] < A[:, 0].min() + 1e-9, axis=1)][0]
+    needle = np.array([*cap, len(A) + np.argmin(np.linalg.norm(B - A[cap].mean(0), axis=1))])
+    X = np.vstack([A, B])
+    e = X[needle]
+    if np.linalg.det(np.stack([e[1] - e[0], e[2] - e[0], e[3] - e[0]])) < 0:
+        needle[[1, 2]] = needle[[2, 1]]  # positive orientation
+    b = pl.ModelBuilder()
+    b.add_mesh(X, np.vstack([T, T + len(A), needle]))
+    b.set_material(pl.NeoHookean(E=1e5, nu=0.3), density=1000.0)
+    b.damping = 0.0
+    b.set_soft_contact(self_contact=self_contact)
+    return b.finalize("float64", backend=backend), top, bottom + len(A)
 
 
 def crossed_bars(contact: bool):
@@ -417,6 +449,28 @@ def test_a_lone_edge_contact_closes_its_gap_exactly(backend):
     assert abs(crossing_gap(sim, top, bottom)) < 1e-15
     m = model.mass
     np.testing.assert_allclose(m @ sim.state.velocities, 0.0, atol=1e-12 * m.sum() * v)
+
+
+def test_a_body_s_own_crossing_edges_are_put_back_in_touch(backend):
+    """Self contact of edges: the crossed bars joined into one body (joined_bars_model), B 2 cm
+    above A in the reference and displaced to 0.1 mm above it (edges far apart in the reference
+    and brought together, as a fold brings them), closing 0.15 mm in the first step: with self
+    contact the crossed edges are put back in touch, gap 0; without it they cross by 0.05 mm."""
+    for self_contact, after in ((True, 0.0), (False, -5e-5)):
+        model, top, bottom = joined_bars_model(self_contact, backend=backend)
+        assert set(model.bodies.tolist()) == {0}
+        sim = pl.Simulation(model)
+        n = model.n_nodes // 2
+        u = np.zeros((model.n_nodes, 3))
+        u[n:, 2] = -(0.02 - 1e-4)
+        v = 1.5e-4 / (2 * sim.dt)
+        vel = np.zeros((model.n_nodes, 3))
+        vel[:n, 2], vel[n:, 2] = v, -v
+        sim.state.set_displacements(u, velocities=vel, dt=sim.dt)
+        sim.run(steps=1)
+        # 1e-12 m: round-off of the positions, and the joining tet's force in the first step (its
+        # stretch is 2 cm on a 5 cm tet: about 1e-14 m of motion in one step at this Δt).
+        assert crossing_gap(sim, top, bottom) == pytest.approx(after, abs=1e-12)
 
 
 @pytest.mark.parametrize("mu", [0.0, 0.3])

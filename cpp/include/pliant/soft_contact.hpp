@@ -152,15 +152,75 @@ PLIANT_HD bool soft_adjacent(index_t i, index_t t, const SoftSurface& s) {
     return false;
 }
 
+/// Closest point of triangle (a, b, c) to x (Ericson 2005, Real-Time Collision Detection, §5.1.5,
+/// by Voronoi regions): its barycentric weights w (out) and the feature it lies on, returned: k
+/// (0–2) vertex k, 3 + k the edge from vertex k to vertex k + 1 (mod 3), 6 the face's inside.
+PLIANT_HD int soft_closest(const double a[3], const double b[3], const double c[3], const double x[3],
+                           double w[3]) {
+    double ab[3], ac[3], ap[3], bp[3], cp[3];
+    for (int d = 0; d < 3; ++d) {
+        ab[d] = b[d] - a[d], ac[d] = c[d] - a[d];
+        ap[d] = x[d] - a[d], bp[d] = x[d] - b[d], cp[d] = x[d] - c[d];
+    }
+    auto dot = [](const double* p, const double* q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; };
+    auto set = [&](double w0, double w1, double w2, int feature) {
+        w[0] = w0, w[1] = w1, w[2] = w2;
+        return feature;
+    };
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return set(1.0, 0.0, 0.0, 0);
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return set(0.0, 1.0, 0.0, 1);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        const double v = d1 / (d1 - d3);
+        return set(1.0 - v, v, 0.0, 3);
+    }
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return set(0.0, 0.0, 1.0, 2);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        const double v = d2 / (d2 - d6);
+        return set(1.0 - v, 0.0, v, 5);
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+        const double v = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return set(0.0, 1.0 - v, v, 4);
+    }
+    const double den = va + vb + vc;
+    if (!(den > 0.0)) return -1;  // degenerate triangle
+    return set(va / den, vb / den, vc / den, 6);
+}
+
+/// Whether surface node i lay within a mean edge of triangle t in the reference configuration X
+/// [m] (a cut's two sides coincide there): the self contact of edges is for surfaces that
+/// deformation brought together (soft_edge_detect).
+PLIANT_HD bool soft_near_reference(index_t i, index_t t, const SoftSurface& s, const double* X) {
+    double v[3][3], x[3], w[3] = {1.0, 0.0, 0.0};  // a degenerate triangle: its first node
+    for (int d = 0; d < 3; ++d) {
+        x[d] = X[3 * s.node[i] + d];
+        for (int k = 0; k < 3; ++k) v[k][d] = X[3 * s.node[s.tri[3 * t + k]] + d];
+    }
+    soft_closest(v[0], v[1], v[2], x, w);
+    double d2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+        const double g = x[d] - (w[0] * v[0][d] + w[1] * v[1][d] + w[2] * v[2][d]);
+        d2 += g * g;
+    }
+    return d2 < s.tri_h[t] * s.tri_h[t];
+}
+
 /// Candidate triangles of surface node i (cand: kSoftCandidates entries, nearest first by the
 /// distance from the node to the triangle's bounding sphere, ties by triangle; −1 pads): those
 /// within `skin` [m], of a body the node's body may touch, not incident to the node nor, in its own
-/// body, to its neighbours (soft_adjacent). xb (3 per
-/// node) records where the node was, for the rebuild test.
+/// body, to its neighbours (soft_adjacent). near[i]: bit q set if candidate q is of the node's own
+/// body and was near it in the reference configuration (soft_near_reference). xb (3 per node)
+/// records where the node was, for the rebuild test.
 template <class T>
 PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X, const T* u, index_t P,
                                double rmax, const index_t* head, const index_t* cell_tris, const double* tc,
-                               const double* tr, index_t* cand, double* xb) {
+                               const double* tr, index_t* cand, index_t* near, double* xb) {
     double x[3];
     soft_position(i, s, X, u, P, x);
     for (int d = 0; d < 3; ++d) xb[3 * i + d] = x[d];
@@ -206,6 +266,10 @@ PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X,
                 }
     }
     for (int q = n; q < kSoftCandidates; ++q) out[q] = -1;
+    unsigned mask = 0;
+    for (int q = 0; q < n; ++q)
+        if (s.label[s.tri[3 * out[q]]] == s.label[i] && soft_near_reference(i, out[q], s, X)) mask |= 1u << q;
+    near[i] = static_cast<index_t>(mask);
 }
 
 /// Free-DOF inverse mass of surface node i [1/kg] per DOF.
@@ -213,47 +277,6 @@ template <class T>
 PLIANT_HD void soft_inverse_mass(index_t i, const SoftSurface& s, const T* mass, double W[3]) {
     const double m = double(mass[s.node[i]]);
     for (int d = 0; d < 3; ++d) W[d] = ((s.bits[i] >> d) & 1) && m > 0.0 ? 1.0 / m : 0.0;
-}
-
-/// Closest point of triangle (a, b, c) to x (Ericson 2005, Real-Time Collision Detection, §5.1.5,
-/// by Voronoi regions): its barycentric weights w (out) and the feature it lies on, returned: k
-/// (0–2) vertex k, 3 + k the edge from vertex k to vertex k + 1 (mod 3), 6 the face's inside.
-PLIANT_HD int soft_closest(const double a[3], const double b[3], const double c[3], const double x[3],
-                           double w[3]) {
-    double ab[3], ac[3], ap[3], bp[3], cp[3];
-    for (int d = 0; d < 3; ++d) {
-        ab[d] = b[d] - a[d], ac[d] = c[d] - a[d];
-        ap[d] = x[d] - a[d], bp[d] = x[d] - b[d], cp[d] = x[d] - c[d];
-    }
-    auto dot = [](const double* p, const double* q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; };
-    auto set = [&](double w0, double w1, double w2, int feature) {
-        w[0] = w0, w[1] = w1, w[2] = w2;
-        return feature;
-    };
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) return set(1.0, 0.0, 0.0, 0);
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0.0 && d4 <= d3) return set(0.0, 1.0, 0.0, 1);
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-        const double v = d1 / (d1 - d3);
-        return set(1.0 - v, v, 0.0, 3);
-    }
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0.0 && d5 <= d6) return set(0.0, 0.0, 1.0, 2);
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-        const double v = d2 / (d2 - d6);
-        return set(1.0 - v, 0.0, v, 5);
-    }
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
-        const double v = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return set(0.0, 1.0 - v, v, 4);
-    }
-    const double den = va + vb + vc;
-    if (!(den > 0.0)) return -1;  // degenerate triangle
-    return set(va / den, vb / den, vc / den, 6);
 }
 
 /// Unit normal (out) of triangle t at the surface positions xs [m] (right hand: outward), and, if
@@ -506,24 +529,58 @@ PLIANT_HD bool soft_segments(const double a[3], const double b[3], const double 
     return true;
 }
 
+/// Whether segments ab and cd (surface nodes) lie within reach [m] of each other in the reference
+/// configuration X [m]: their closest points, clamped to the segments (Ericson 2005, Real-Time
+/// Collision Detection, §5.1.9).
+PLIANT_HD bool soft_edges_near(index_t a, index_t b, index_t c, index_t d, const SoftSurface& s,
+                               const double* X, double reach) {
+    double d1[3], d2[3], r[3];
+    for (int k = 0; k < 3; ++k) {
+        d1[k] = X[3 * s.node[b] + k] - X[3 * s.node[a] + k];
+        d2[k] = X[3 * s.node[d] + k] - X[3 * s.node[c] + k];
+        r[k] = X[3 * s.node[a] + k] - X[3 * s.node[c] + k];
+    }
+    const double A = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2],
+                 E = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2];
+    const double F = d2[0] * r[0] + d2[1] * r[1] + d2[2] * r[2],
+                 C = d1[0] * r[0] + d1[1] * r[1] + d1[2] * r[2];
+    const double B = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2], den = A * E - B * B;
+    if (!(A > 0.0 && E > 0.0)) return true;  // a degenerate edge: no contact of its own
+    auto clamp = [](double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); };
+    double sp = den > 1e-12 * A * E ? clamp((B * F - C * E) / den) : 0.0;
+    double tp = (B * sp + F) / E;
+    if (tp < 0.0) {
+        tp = 0.0, sp = clamp(-C / A);
+    } else if (tp > 1.0) {
+        tp = 1.0, sp = clamp((B - C) / A);
+    }
+    double dist2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double g = r[k] + sp * d1[k] - tp * d2[k];
+        dist2 += g * g;
+    }
+    return dist2 < reach * reach;
+}
+
 /// Edge–edge test of sharp edge e (nodes a, b) and response, after the node-to-triangle one: among
-/// the sharp edges of its end nodes' candidate triangles of other bodies (not its own: the
-/// coincident staircases of a cut, whose edges lie in each other's planes, made resting pieces
-/// jitter), an edge f (c, d) that crossed it during the step — the sign of soft_edge_volume at u⁺
-/// is, beyond round-off, the other side than the one f came from — with the closest points inside
-/// both edges at u⁺ and no further apart than kSoftBehind × the edges' length, the closest to it.
-/// The side f came from is the sign of soft_edge_volume at u, or, for edges touching at u (a contact
-/// closed at the last step leaves them so, within soft_rounding), soft_edge_side's: Provot's test
-/// alone let touching edges pass through each other. The position impulse p [kg·m] on e's closest
-/// point puts the edges back in touch along n = ±(b − a) × (d − c), on the side they came from:
-/// e's nodes get w p (w = 1 − s, s), f's nodes −w p (1 − t, t), so momentum is conserved; with
-/// Coulomb friction on the relative tangential motion of the two closest points over the step, as
-/// soft_detect's. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3). Inputs: reference X [m] AoS,
-/// mass [kg], u [m] SoA (3, P), xs the surface positions at u⁺ [m] (soft_current).
+/// the sharp edges of its end nodes' candidate triangles (of its own body, in self contact, only
+/// those that were not together in the reference configuration: near, soft_near_reference, and
+/// soft_edges_near; a cut's coincident staircases, whose edges lie in each other's planes, made
+/// resting pieces jitter), an edge f (c, d) that crossed it during the step — the sign of soft_edge_volume at
+/// u⁺ is, beyond round-off, the other side than the one f came from — with the closest points inside both
+/// edges at u⁺ and no further apart than kSoftBehind × the edges' length, the closest to it. The side f came
+/// from is the sign of soft_edge_volume at u, or, for edges touching at u (a contact closed at the last step
+/// leaves them so, within soft_rounding), soft_edge_side's: Provot's test alone let touching edges pass
+/// through each other. The position impulse p [kg·m] on e's closest point puts the edges back in touch along
+/// n = ±(b − a) × (d − c), on the side they came from: e's nodes get w p (w = 1 − s, s), f's nodes −w p (1 −
+/// t, t), so momentum is conserved; with Coulomb friction on the relative tangential motion of the two
+/// closest points over the step, as soft_detect's. Outputs erec[e] (f or −1), erec_w (s, t), erec_p (3).
+/// Inputs: reference X [m] AoS, mass [kg], u [m] SoA (3, P), xs the surface positions at u⁺ [m]
+/// (soft_current), cand and near (soft_candidates).
 template <class T>
 PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X, const T* mass, const T* u,
-                                index_t P, const double* xs, const index_t* cand, index_t* erec,
-                                double* erec_w, double* erec_p) {
+                                index_t P, const double* xs, const index_t* cand, const index_t* near,
+                                index_t* erec, double* erec_w, double* erec_p) {
     erec[e] = -1;
     const index_t ea = s.edge[2 * e], eb = s.edge[2 * e + 1];
     const index_t* lists[2] = {cand + static_cast<std::size_t>(ea) * kSoftCandidates,
@@ -536,13 +593,19 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
     soft_current(eb, xs, b1);
     index_t best = -1;
     double best_gap = INFINITY, best_s = 0.0, best_t = 0.0, best_n[3] = {0.0, 0.0, 0.0};
+    double reach = 0.0;  // self contact: a quarter of e's reference length (soft_edges_near)
+    for (int d = 0; d < 3; ++d) {
+        const double g = X[3 * s.node[eb] + d] - X[3 * s.node[ea] + d];
+        reach += g * g;
+    }
+    reach = kSoftBehind * std::sqrt(reach);
     for (int l = 0; l < 2; ++l)
-        for (int q = 0; q < kSoftCandidates && lists[l][q] >= 0; ++q)
+        for (int q = 0; q < kSoftCandidates && lists[l][q] >= 0; ++q) {
+            if ((static_cast<unsigned>(near[l == 0 ? ea : eb]) >> q) & 1u) continue;  // soft_near_reference
             for (int k = 0; k < 3; ++k) {
                 const index_t f = s.tri_edge[3 * lists[l][q] + k];
                 if (f < 0 || f == e) continue;
                 const index_t fc = s.edge[2 * f], fd = s.edge[2 * f + 1];
-                if (s.label[fc] == s.label[ea]) continue;  // between bodies only (see below)
                 double c0[3], d0[3], c1[3], d1[3], n0[3], n1[3], sp, tp;
                 soft_position(fc, s, X, u, P, c0);
                 soft_position(fd, s, X, u, P, d0);
@@ -570,6 +633,8 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
                     sign = v0 > touch ? 1.0 : (v0 < -touch ? -1.0 : soft_edge_side(n1, area, q, s, xs));
                 }
                 if (!(sign * v1 < -eps)) continue;  // on f's side still, or no side to tell
+                if (s.label[fc] == s.label[ea] && soft_edges_near(ea, eb, fc, fd, s, X, reach))
+                    continue;  // self contact: edges that were together in the reference configuration
                 if (!soft_segments(a1, b1, c1, d1, sp, tp) || sp <= 0.0 || sp >= 1.0 || tp <= 0.0 ||
                     tp >= 1.0)
                     continue;
@@ -585,6 +650,7 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
                 best = f, best_gap = gap, best_s = sp, best_t = tp;
                 for (int d = 0; d < 3; ++d) best_n[d] = nn[d];
             }
+        }
     if (best < 0) return;
     // Effective inverse mass along a direction q: Σ w_j² qᵀ W_j q over the four nodes.
     const index_t nodes[4] = {ea, eb, s.edge[2 * best], s.edge[2 * best + 1]};

@@ -91,7 +91,7 @@ struct DeviceView {
     SoftSurface soft;
     double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare, *erec_w, *erec_p;
     double* sx;  // the surface positions at u⁺ [m] (3 per node: soft_current), kept through the pass
-    index_t *shead, *scursor, *sbucket, *scell, *scand, *srec, *sactive, *stouched, *erec, *eactive;
+    index_t *shead, *scursor, *sbucket, *scell, *scand, *snear, *srec, *sactive, *stouched, *erec, *eactive;
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -198,8 +198,8 @@ private:
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
     DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, erec_w_,
         erec_p_, d_soft_mu_, sx_;
-    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, srec_, sactive_, stouched_, erec_,
-        eactive_;
+    DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, snear_, srec_, sactive_, stouched_,
+        erec_, eactive_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceView<T> v_{};

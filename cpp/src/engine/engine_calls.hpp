@@ -91,6 +91,7 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     sbucket_ = DeviceBuffer<index_t, Dev>(dev_, nst);
     scell_ = DeviceBuffer<index_t, Dev>(dev_, nst);
     scand_ = DeviceBuffer<index_t, Dev>(dev_, ns * kSoftCandidates);
+    snear_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     srec_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     sshare_ = DeviceBuffer<double, Dev>(dev_, ns);
     const std::size_t ne = m_.soft_edges.size() / 2;
@@ -161,7 +162,8 @@ void Engine<T, Dev>::refresh_view() {
     v.sb = sb_.data(), v.sx = sx_.data(), v.smove = smove_.data(), v.stc = stc_.data(), v.str = str_.data();
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();
     v.shead = shead_.data(), v.scursor = scursor_.data(), v.sbucket = sbucket_.data();
-    v.scell = scell_.data(), v.scand = scand_.data(), v.srec = srec_.data(), v.sshare = sshare_.data();
+    v.scell = scell_.data(), v.scand = scand_.data(), v.snear = snear_.data(), v.srec = srec_.data(),
+    v.sshare = sshare_.data();
     v.erec = erec_.data(), v.erec_w = erec_w_.data(), v.erec_p = erec_p_.data();
     v.sactive = sactive_.data(), v.stouched = stouched_.data(), v.eactive = eactive_.data();
 }

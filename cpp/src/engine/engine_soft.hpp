@@ -158,7 +158,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
         dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
             if (v.sc->soft_rebuild)
                 soft_candidates(i, s, v.X, un, v.P, v.sc->soft_rmax, v.shead, v.scell, v.stc, v.str, v.scand,
-                                v.sb);
+                                v.snear, v.sb);
         });
         dev_.serial([=] PLIANT_KERNEL() { soft_activate(v, s); });
     });
@@ -171,8 +171,8 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
                 soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.sx, v.scand, v.srec, v.srec_w,
                             v.srec_p);
             if (a < v.sc->soft_edges_active)
-                soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.erec, v.erec_w,
-                                 v.erec_p);
+                soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.snear, v.erec,
+                                 v.erec_w, v.erec_p);
         });
         dev_.serial([=] PLIANT_KERNEL() { soft_gather(v, s, first); });
         dev_.each_counted(s.n_nodes, &v.sc->soft_touched, [=] PLIANT_KERNEL(index_t a) {
