@@ -142,9 +142,12 @@ def test_load_curves_drive_prescribed_displacements():
         assert u[2, 2] == pytest.approx(0.004 * np.clip((t - 0.01) / 0.03, 0, 1), abs=1e-15)
 
 
-def test_inverted_element_during_run_is_named():
+@pytest.mark.parametrize("anp", [None, 0.0, "shear"])
+def test_inverted_element_during_run_is_named(anp):
     """Driving one node through the opposite face inverts the elements around it: the run stops
-    with J ≤ 0 naming an element that contains that node, and the time."""
+    with J ≤ 0 naming an element that contains that node, and the time; with plain T4ANP (anp =
+    0.0), whose elements resist their own volume change by shear alone, the message says to try
+    the "shear" stabilization."""
     X, T = pl.mesh.box_tets((0.1, 0.1, 0.1), (2, 2, 2))
     b = pl.ModelBuilder()
     b.add_mesh(X, T)
@@ -152,6 +155,8 @@ def test_inverted_element_during_run_is_named():
     centre = int(np.argmin(np.linalg.norm(X - 0.05, axis=1)))
     b.fix(np.nonzero(np.any((X < 1e-9) | (X > 0.1 - 1e-9), axis=1))[0])
     b.prescribe([centre], (0.0, 0.0, -0.09), curve=pl.Ramp(0.01))
+    if anp is not None:
+        b.nodal_pressure, b.nodal_pressure_stabilization = True, anp
     model = b.finalize("float64")
     sim = pl.Simulation(model, check_every=1)
     with pytest.raises(pl.InstabilityError) as err:
@@ -159,6 +164,7 @@ def test_inverted_element_during_run_is_named():
     e = err.value
     assert e.quantity == "J" and e.value <= 0 and centre in T[e.element]
     assert 0 < e.time <= 0.02 and f"element {e.element}" in str(e)
+    assert ('nodal_pressure_stabilization = "shear"' in str(e)) == (anp == 0.0)
 
 
 def test_float32_rigid_offset_at_rest_stays_put():

@@ -199,10 +199,11 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<std::vector<double>> tool_grids, std::vector<index_t> press_nodes,
                std::vector<double> press_value, std::vector<index_t> press_curve, bool anp,
                std::vector<double> group_visco, double stiffness_damping, double anp_stabilization,
-               std::vector<std::vector<double>> tool_grips, std::vector<double> tool_reach,
-               std::vector<index_t> soft_nodes, std::vector<index_t> soft_label,
-               std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
-               std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads) {
+               bool anp_shear_stabilization, std::vector<std::vector<double>> tool_grips,
+               std::vector<double> tool_reach, std::vector<index_t> soft_nodes,
+               std::vector<index_t> soft_label, std::vector<index_t> soft_tris,
+               std::vector<index_t> soft_pair, index_t soft_labels, std::vector<double> soft_mu,
+               double soft_skin, StrainSmoothing smoothing, int threads) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -234,6 +235,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.anp = anp;
                 in.stiffness_damping = stiffness_damping;
                 in.anp_stabilization = anp_stabilization;
+                in.anp_shear = anp_shear_stabilization;
                 in.smoothing = smoothing;
                 in.group_visco = std::move(group_visco);
                 in.soft_nodes = std::move(soft_nodes);
@@ -270,9 +272,9 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a,
             "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a,
             "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a,
-            "stiffness_damping"_a, "anp_stabilization"_a, "tool_grips"_a, "tool_reach"_a, "soft_nodes"_a,
-            "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a, "soft_mu"_a, "soft_skin"_a,
-            "smoothing"_a, "threads"_a)
+            "stiffness_damping"_a, "anp_stabilization"_a, "anp_shear_stabilization"_a, "tool_grips"_a,
+            "tool_reach"_a, "soft_nodes"_a, "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a,
+            "soft_mu"_a, "soft_skin"_a, "smoothing"_a, "threads"_a)
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })

@@ -129,6 +129,7 @@ void Model<T>::build_masses(const ModelInput& in, const NodeSums& sums) {
     if (!(in.anp_stabilization >= 0.0 && in.anp_stabilization <= 1.0))
         throw std::invalid_argument("the T4ANP stabilization must be between 0 and 1");
     anp_stabilization = in.anp_stabilization;
+    anp_shear = in.anp_shear;
     if (anp && visco_terms > 0)
         throw std::invalid_argument(
             "average nodal pressure (T4ANP) and viscoelastic materials "

@@ -60,6 +60,7 @@ struct ModelInput {
     bool anp = false;                  // average nodal pressure (T4ANP)
     double stiffness_damping = 0.0;    // Rayleigh β [s] (tled.hpp: add_damping_forces)
     double anp_stabilization = 0.0;    // T4ANP: fraction γ of the element's own pressure
+    bool anp_shear = false;            // T4ANP: γ = μ/K of each group's material (anp_shear_gamma)
     StrainSmoothing smoothing = StrainSmoothing::Element;  // per element, or edge-smoothed (ES-FEM-T4)
     // Contact between deformable surfaces (soft_contact.hpp): its surface nodes (engine nodes) with
     // their body labels, its triangles (3 surface-node indices each, outward), the pair table
@@ -92,6 +93,7 @@ struct Model {
     bool anp = false;                // average nodal pressure tetrahedra (T4ANP)
     double stiffness_damping = 0.0;  // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
     double anp_stabilization = 0.0;  // T4ANP: p = p̄ + γ (p(J_e) − p̄) (AveragedPressure)
+    bool anp_shear = false;          // T4ANP: γ = μ/K of each group's material instead (anp_shear_gamma)
     int visco_terms = 0;             // max Prony terms of any group: the State's q holds 6 each
     std::vector<T> node_volume;      // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     // Edge-smoothed strain (smoothing.hpp): per edge its elements (CSR, slots ascending) and weights,

@@ -315,6 +315,19 @@ struct LinearElastic {
 /// pressure, a stabilization in the manner of Puso & Solberg (2006, IJNME 67:841, eq. 33: the
 /// nodal strain plus α times the element's deviation from it).
 template <class M, class T>
+struct AveragedPressure;
+
+/// The T4ANP stabilization γ = μ/K (at most 1) of decoupled material m at small strain: an element's
+/// volume change apart from its nodes' average then meets a stiffness of about μ whatever K (p(J_e) −
+/// p̄ ≈ K (J_e − J̄)), which keeps it from collapsing without bringing back the locking that K
+/// causes (docs/engine.md, "Volume modes and the stabilization").
+template <class M>
+PLIANT_HD auto anp_shear_gamma(const M& m) {
+    const auto g = m.shear_modulus() / m.K;
+    return g < decltype(g)(1) ? g : decltype(g)(1);
+}
+
+template <class M, class T>
 struct AveragedPressure {
     const M& m;
     T p;     // p̄ [Pa]

@@ -56,7 +56,7 @@ template <class T>
 struct DeviceView {
     index_t n_nodes, P, slots, n_contact, chunks;
     int n_curves, n_factors, n_tools, visco_w;
-    T anp_stab;  // T4ANP stabilization γ (AveragedPressure)
+    const T* anp_gamma;  // T4ANP stabilization γ per group (AveragedPressure)
     ElementData<T> el;
     bool smoothed;              // edge-smoothed strain (smoothing.hpp)
     EdgeData<T> ed;             // its edge domains
@@ -202,6 +202,7 @@ private:
         erec_, eactive_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
+    DeviceBuffer<T, Dev> anp_gamma_;
     DeviceView<T> v_{};
     Phase phase_;
     const State<T>* resident_ = nullptr;  // the state whose values the device holds

@@ -65,6 +65,13 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     }
     d_prony_ = DeviceBuffer<Prony<T>, Dev>(dev_, ng);
     d_prony_.upload(prony.data(), ng);
+    std::vector<T> gamma(ng, T(m.anp_stabilization));  // T4ANP stabilization per group
+    for (std::size_t g = 0; g < ng && m.anp_shear; ++g)
+        with_material(groups_[g].material, [&](const auto& mat) {
+            if constexpr (std::decay_t<decltype(mat)>::decoupled) gamma[g] = anp_shear_gamma(mat);
+        });
+    anp_gamma_ = DeviceBuffer<T, Dev>(dev_, ng);
+    anp_gamma_.upload(gamma.data(), ng);
     d_mats_ = DeviceBuffer<MaterialParams<T>, Dev>(dev_, ng);
     upload_materials();
     ensure_history(1);
@@ -117,7 +124,7 @@ void Engine<T, Dev>::refresh_view() {
     v.n_factors = static_cast<int>(m.pattern_curve.size());
     v.n_tools = static_cast<int>(tools_.size());
     v.visco_w = 6 * m.visco_terms;
-    v.anp_stab = T(m.anp_stabilization);
+    v.anp_gamma = anp_gamma_.data();
     v.el = {mb_.elem_nodes.data(), mb_.elem_grad.data(), mb_.elem_vol.data()};
     v.smoothed = m.smoothing == StrainSmoothing::Edge;
     v.ed = {mb_.edge_off.data(), mb_.edge_slot.data(), mb_.edge_w.data(), mb_.elem_edges.data()};

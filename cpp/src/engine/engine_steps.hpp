@@ -127,7 +127,7 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
             const M mat = make_material<M>(v.mats[v.block_group[b]]);
             element_forces_smoothed<V == Variant::Anp>(b, l, mat, v.el, v.ed, v.P_edge, u, v.P, v.node_p,
-                                                       v.anp_stab, v.f_elem, v.J);
+                                                       v.anp_gamma[v.block_group[b]], v.f_elem, v.J);
         });
     } else if constexpr (V == Variant::Visco) {  // the time step's mode and terms compiled on their own
         with_visco_kernel(sp, visco_mode, [&]<int kMode, int kTerms>() {
@@ -139,7 +139,8 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
             (void)v, (void)u;  // captured before any `if constexpr` (nvcc)
             const M mat = make_material<M>(v.mats[v.block_group[b]]);
             if constexpr (V == Variant::Anp) {
-                element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.anp_stab, v.f_elem, v.J);
+                element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.anp_gamma[v.block_group[b]], v.f_elem,
+                                   v.J);
             } else {
                 element_forces(b, l, mat, v.el, u, v.P, v.f_elem, v.J);
             }
@@ -407,7 +408,9 @@ void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* o
             const Mat3<T> Pm = mean_edge_stress(b, l, v.ed.elem_edges, v.P_edge);
             if constexpr (V == Variant::Anp) {
                 const T p = corner_pressure(b, l, v.el, v.node_p);
-                r = element_measures(b, l, SmoothedStress<M, T, true>{mat, Pm, p, v.anp_stab}, v.el, u, v.P);
+                r = element_measures(b, l,
+                                     SmoothedStress<M, T, true>{mat, Pm, p, v.anp_gamma[v.block_group[b]]},
+                                     v.el, u, v.P);
             } else {
                 r = element_measures(b, l, SmoothedStress<M, T, false>{mat, Pm, T(0), T(0)}, v.el, u, v.P);
             }
@@ -418,7 +421,8 @@ void Engine<T, Dev>::launch_measures(const Span& sp, const T* u, double dt, T* o
             r = element_measures(b, l, vm, v.el, u, v.P);
         } else if constexpr (V == Variant::Anp) {
             const T p = corner_pressure(b, l, v.el, v.node_p);
-            r = element_measures(b, l, AveragedPressure<M, T>{mat, p, v.anp_stab}, v.el, u, v.P);
+            r = element_measures(b, l, AveragedPressure<M, T>{mat, p, v.anp_gamma[v.block_group[b]]}, v.el, u,
+                                 v.P);
         } else {
             r = element_measures(b, l, mat, v.el, u, v.P);
         }

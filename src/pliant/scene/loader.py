@@ -15,6 +15,7 @@ from ..errors import InputError, PliantWarning
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from ..tled.model import BACKENDS
+from ..tled.anp import anp_stabilization
 from ..tled.smoothing import strain_smoothing
 from ..tled.solver import MAX_INCREMENTS
 from ..job import Scene
@@ -167,7 +168,7 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
             "duration": "number",
             "stiffness_damping": "number",
             "nodal_pressure": "bool",
-            "nodal_pressure_stabilization": "number",
+            "nodal_pressure_stabilization": "number|str",
             "strain_smoothing": "str",
             "dtype": "str",
             "threads": "int",
@@ -226,12 +227,11 @@ def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:
         raise ctx.error("solver.stiffness_damping", "expected stiffness_damping >= 0 [s]")
     scene.builder.stiffness_damping = beta
     scene.builder.nodal_pressure = bool(solver.get("nodal_pressure", False))
-    gamma = float(solver.get("nodal_pressure_stabilization", scene.builder.nodal_pressure_stabilization))
-    if not 0.0 <= gamma <= 1.0:
-        raise ctx.error(
-            "solver.nodal_pressure_stabilization",
-            f"{gamma:g}: expected a fraction from 0 (plain T4ANP) to 1 (plain T4)",
-        )
+    gamma = solver.get("nodal_pressure_stabilization", scene.builder.nodal_pressure_stabilization)
+    try:
+        anp_stabilization(gamma)
+    except InputError as e:
+        raise ctx.error("solver.nodal_pressure_stabilization", str(e)) from None
     scene.builder.nodal_pressure_stabilization = gamma
     try:
         scene.builder.strain_smoothing = strain_smoothing(solver.get("strain_smoothing", "element"))

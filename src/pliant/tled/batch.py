@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import InputError
 from .builder import ModelBuilder
+from .anp import anp_stabilization
 from .smoothing import strain_smoothing
 
 __all__ = ["Batch", "merge_builders"]
@@ -58,7 +59,10 @@ def _check_shared(builders: list[ModelBuilder]) -> None:
     shared = {
         "damping": lambda b: float(b.damping),
         "stiffness_damping": lambda b: float(b.stiffness_damping),
-        "nodal_pressure (T4ANP)": lambda b: (bool(b.nodal_pressure), float(b.nodal_pressure_stabilization)),
+        "nodal_pressure (T4ANP)": lambda b: (
+            bool(b.nodal_pressure),
+            anp_stabilization(b.nodal_pressure_stabilization),
+        ),
         "strain smoothing": lambda b: strain_smoothing(b.strain_smoothing),
         "gravity": lambda b: b._gravity,
         "tools": lambda b: [_tool_signature(t) for t in b.tools],

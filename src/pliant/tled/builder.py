@@ -18,13 +18,12 @@ from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
 from .curves import Constant, LoadCurve
+from .anp import ANP_STABILIZATION, anp_stabilization
 from .smoothing import strain_smoothing
 
 __all__ = ["ModelBuilder"]
 
 _DOFS = {"x": 0, "y": 1, "z": 2}
-# Default T4ANP stabilization γ (docs/engine.md, "T4ANP"): measured on a thick-walled sphere.
-ANP_STABILIZATION = 0.0
 
 
 def _dofs(dofs) -> list[int]:
@@ -73,8 +72,9 @@ class ModelBuilder:
         # element is the mean of its nodes' volume-averaged pressures, which much reduces the
         # volumetric locking of linear tets in nearly incompressible tissue. Decoupled materials.
         self.nodal_pressure = False
-        # T4ANP stabilization γ: the fraction of each element's own pressure mixed back into the
-        # averaged one, so that element-level volume modes are resisted (docs/engine.md).
+        # T4ANP stabilization: "shear" (γ = μ/K of each material) or a fraction γ of each element's
+        # own pressure mixed back into the averaged one, so that element-level volume modes are
+        # resisted (docs/engine.md); 0 is plain T4ANP (NiftySim's).
         self.nodal_pressure_stabilization = ANP_STABILIZATION
         # Where the strain is constant (StrainSmoothing): per element (plain linear tets), or per
         # edge domain, the edge-based smoothed tetrahedron (ES-FEM-T4), far less stiff in bending
@@ -396,12 +396,7 @@ class ModelBuilder:
         a = float(self.damping)
         if not math.isfinite(a) or a < 0:
             raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")
-        gamma = float(self.nodal_pressure_stabilization)
-        if not 0.0 <= gamma <= 1.0:
-            raise InputError(
-                f"nodal_pressure_stabilization = {shown(self.nodal_pressure_stabilization)}; "
-                "expected a fraction from 0 (plain T4ANP) to 1 (plain T4)"
-            )
+        anp_stabilization(self.nodal_pressure_stabilization)  # InputError names a wrong value
         beta = float(self.stiffness_damping)
         if not math.isfinite(beta) or beta < 0:
             raise InputError(

@@ -19,6 +19,7 @@ from ..checks import shown
 from ..contact.soft import engine_surface, no_surface
 from ..errors import InputError, MeshError, PliantWarning
 from .curves import Constant, LoadCurve
+from .anp import anp_stabilization
 from .smoothing import strain_smoothing
 
 __all__ = ["Model", "State"]
@@ -259,6 +260,7 @@ class Model:
             p for k in np.nonzero(keep)[0] for p in (*self.sets[k].material.params, *([0.0] * n_par))[:n_par]
         ]
         Engine = _core.EngineF32 if dtype == np.float32 else _core.EngineF64
+        gamma, shear = anp_stabilization(builder.nodal_pressure_stabilization)
         try:
             self._engine = Engine(
                 X=np.ascontiguousarray(X[node_order]),
@@ -297,7 +299,8 @@ class Model:
                 anp=bool(builder.nodal_pressure),
                 group_visco=visco,
                 stiffness_damping=self.stiffness_damping,
-                anp_stabilization=float(builder.nodal_pressure_stabilization),
+                anp_stabilization=gamma,
+                anp_shear_stabilization=shear,
                 tool_grips=[list(t.grips) for t in self.tools],
                 tool_reach=[float(t.reach) for t in self.tools],
                 **soft,

@@ -17,6 +17,7 @@ import numpy as np
 from .._core import RunStatus
 from ..checks import finite_number, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
+from .anp import anp_stabilization
 from .model import Model, State
 from .report import ContactReport, PairHistory, RelaxInfo, RunInfo, ToolHistory, tool_force
 
@@ -211,9 +212,16 @@ class Solver:
             )
         if status == RunStatus.Inverted:
             e = m.user_element(rep["where"])
+            b = m._builder
+            # T4ANP without stabilization resists an element's own volume change by shear alone.
+            hint = (
+                '; with nodal_pressure, try nodal_pressure_stabilization = "shear"'
+                if b.nodal_pressure and anp_stabilization(b.nodal_pressure_stabilization) == (0.0, False)
+                else ""
+            )
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: element {e} inverted (J = {v:.3g} <= 0); reduce dt "
-                f"(now {self.dt:.3g} s), the loads, or refine/soften around it",
+                f"(now {self.dt:.3g} s), the loads, or refine/soften around it{hint}",
                 t,
                 "J",
                 v,
