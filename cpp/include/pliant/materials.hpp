@@ -307,16 +307,6 @@ struct LinearElastic {
     }
 };
 
-/// A decoupled material whose pressure is replaced by the element's average of the nodal pressures
-/// (the average nodal pressure tetrahedron, T4ANP: Bonet & Burton 1998, Commun. Numer. Meth. Eng.
-/// 14:437; Joldes, Wittek & Miller 2009, Commun. Numer. Meth. Eng. 25:827): S = S_iso + J p C⁻¹,
-/// p = p̄ + γ (p(J_e) − p̄). γ = 0 is plain T4ANP, whose averaging leaves element-level volume
-/// modes (a checkerboard of J) unresisted; γ > 0 mixes back that fraction of the element's own
-/// pressure, a stabilization in the manner of Puso & Solberg (2006, IJNME 67:841, eq. 33: the
-/// nodal strain plus α times the element's deviation from it).
-template <class M, class T>
-struct AveragedPressure;
-
 /// The T4ANP stabilization γ = μ/K (at most 1) of decoupled material m at small strain: an element's
 /// volume change apart from its nodes' average then meets a stiffness of about μ whatever K (p(J_e) −
 /// p̄ ≈ K (J_e − J̄)), which keeps it from collapsing without bringing back the locking that K
@@ -327,6 +317,13 @@ PLIANT_HD auto anp_shear_gamma(const M& m) {
     return g < decltype(g)(1) ? g : decltype(g)(1);
 }
 
+/// A decoupled material whose pressure is replaced by the element's average of the nodal pressures
+/// (the average nodal pressure tetrahedron, T4ANP: Bonet & Burton 1998, Commun. Numer. Meth. Eng.
+/// 14:437; Joldes, Wittek & Miller 2009, Commun. Numer. Meth. Eng. 25:827): S = S_iso + J p C⁻¹,
+/// p = p̄ + γ (p(J_e) − p̄). γ = 0 is plain T4ANP, whose averaging leaves element-level volume
+/// modes (a checkerboard of J) unresisted; γ > 0 mixes back that fraction of the element's own
+/// pressure, a stabilization in the manner of Puso & Solberg (2006, IJNME 67:841, eq. 33: the
+/// nodal strain plus α times the element's deviation from it).
 template <class M, class T>
 struct AveragedPressure {
     const M& m;

@@ -496,10 +496,11 @@ PLIANT_HD double soft_rounding(const index_t q[4], const SoftSurface& s, const T
     return 4.0 * (sizeof(T) == 4 ? 1.1920928955078125e-7 : 2.220446049250313e-16) * m;
 }
 
-/// The side (+1, −1; 0: none told) of sharp edge q[0]q[1] that sharp edge q[2]q[3] of another body
-/// belongs on, for two edges touching: the sign of n·(o_e − o_f), n = (b − a) × (d − c) (area = |n|),
-/// o_e, o_f the edges' unit outward pseudo-normals at the surface positions xs [m] (each on the side
-/// the other's outside faces), if beyond ±0.5 of its range ±2 (not two edges meeting side-on).
+/// The side (+1, −1; 0: none told) of sharp edge q[0]q[1] that sharp edge q[2]q[3] (of another body,
+/// or of its own in self contact) belongs on, for two edges touching: the sign of n·(o_e − o_f), n = (b − a)
+/// × (d − c) (area = |n|), o_e, o_f the edges' unit outward pseudo-normals at the surface positions xs [m]
+/// (each on the side the other's outside faces), if beyond ±0.5 of its range ±2 (not two edges meeting
+/// side-on).
 PLIANT_HD double soft_edge_side(const double n[3], double area, const index_t q[4], const SoftSurface& s,
                                 const double* xs) {
     double oe[3], of[3];
