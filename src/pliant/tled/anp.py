@@ -5,6 +5,7 @@ accept, and its default (docs/engine.md, "Volume modes and the stabilization")."
 from __future__ import annotations
 
 import math
+import numbers
 
 from ..checks import shown
 from ..errors import InputError
@@ -25,7 +26,7 @@ def anp_stabilization(value) -> tuple[float, bool]:
     group's material at small strain. InputError for anything else."""
     if isinstance(value, str) and value == "shear":
         return 0.0, True
-    gamma = float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else math.nan
+    gamma = float(value) if isinstance(value, numbers.Real) and not isinstance(value, bool) else math.nan
     if not 0.0 <= gamma <= 1.0:
         raise InputError(
             f'nodal_pressure_stabilization = {shown(value)}; expected "shear" (γ = μ/K of each '
