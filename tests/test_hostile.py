@@ -74,6 +74,16 @@ def test_thread_counts_out_of_range_are_refused_in_scenes(tmp_path, value):
     assert not (tmp_path / "o").exists()  # a refused run leaves no folder behind
 
 
+@pytest.mark.parametrize("value", ['"shearing"', "-0.1", "1.5", "true"])
+def test_bad_nodal_pressure_stabilization_is_refused_by_key(tmp_path, value):
+    """ "shear" or a fraction 0–1 (docs/scenes.md); anything else names the key and its line."""
+    solver = "duration = 0.001\nnodal_pressure = true\nnodal_pressure_stabilization = "
+    p = scene(tmp_path, SCENE.replace("duration = 0.001", solver + value))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "solver.nodal_pressure_stabilization")
+    ok = scene(tmp_path, SCENE.replace("duration = 0.001", solver + '"shear"'), name="ok.toml")
+    assert cli("run", ok, "-o", tmp_path / "ok").returncode == 0
+
+
 @pytest.mark.parametrize("value", ["100000", "0", "-1"])
 def test_thread_counts_out_of_range_are_refused_on_the_command_line(tmp_path, value):
     refused(cli("run", scene(tmp_path), "-o", tmp_path / "o", "--threads", value), "threads", value)
