@@ -355,12 +355,11 @@ def crossed_bars_model(contact: bool, friction=0.0, drag=0.0, backend="cpu", gap
     from pliant.tled import Table
 
     A, B, T, top, bottom = diamond_bars(gap)
-    L = 0.08
     b = pl.ModelBuilder()
     b.add_mesh(A, T)
     b.add_mesh(B, T)
     b.set_material(pl.NeoHookean(E=1e5, nu=0.3), density=1000.0)
-    ends = np.nonzero(np.abs(B[:, 1]) > L / 2 - 1e-9)[0] + len(A)
+    ends = np.nonzero(np.abs(B[:, 1]) > B[:, 1].max() - 1e-9)[0] + len(A)
     if not held:
         b.damping = 0.0
     elif drag:
@@ -369,7 +368,7 @@ def crossed_bars_model(contact: bool, friction=0.0, drag=0.0, backend="cpu", gap
     else:
         b.prescribe(ends, (0.0, 0.0, -0.006), curve=Table([0.0, 0.1], [0.0, 1.0]))
     if held:
-        b.fix(np.nonzero(np.abs(A[:, 0]) > L / 2 - 1e-9)[0])
+        b.fix(np.nonzero(np.abs(A[:, 0]) > A[:, 0].max() - 1e-9)[0])
         b.damping = 20.0
     if contact:
         b.set_soft_contact(friction=friction)

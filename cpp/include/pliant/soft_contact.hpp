@@ -530,11 +530,11 @@ PLIANT_HD bool soft_segments(const double a[3], const double b[3], const double 
     return true;
 }
 
-/// Whether segments ab and cd (surface nodes) lie within reach [m] of each other in the reference
-/// configuration X [m]: their closest points, clamped to the segments (Ericson 2005, Real-Time
-/// Collision Detection, §5.1.9).
+/// Whether segments ab and cd (surface nodes) lie within kSoftBehind × |ab| of each other in the
+/// reference configuration X [m]: their closest points, clamped to the segments (Ericson 2005,
+/// Real-Time Collision Detection, §5.1.9).
 PLIANT_HD bool soft_edges_near(index_t a, index_t b, index_t c, index_t d, const SoftSurface& s,
-                               const double* X, double reach) {
+                               const double* X) {
     double d1[3], d2[3], r[3];
     for (int k = 0; k < 3; ++k) {
         d1[k] = X[3 * s.node[b] + k] - X[3 * s.node[a] + k];
@@ -560,7 +560,7 @@ PLIANT_HD bool soft_edges_near(index_t a, index_t b, index_t c, index_t d, const
         const double g = r[k] + sp * d1[k] - tp * d2[k];
         dist2 += g * g;
     }
-    return dist2 < reach * reach;
+    return dist2 < kSoftBehind * kSoftBehind * A;
 }
 
 /// Edge–edge test of sharp edge e (nodes a, b) and response, after the node-to-triangle one: among
@@ -594,12 +594,6 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
     soft_current(eb, xs, b1);
     index_t best = -1;
     double best_gap = INFINITY, best_s = 0.0, best_t = 0.0, best_n[3] = {0.0, 0.0, 0.0};
-    double reach = 0.0;  // self contact: a quarter of e's reference length (soft_edges_near)
-    for (int d = 0; d < 3; ++d) {
-        const double g = X[3 * s.node[eb] + d] - X[3 * s.node[ea] + d];
-        reach += g * g;
-    }
-    reach = kSoftBehind * std::sqrt(reach);
     for (int l = 0; l < 2; ++l)
         for (int q = 0; q < kSoftCandidates && lists[l][q] >= 0; ++q) {
             if ((static_cast<unsigned>(near[l == 0 ? ea : eb]) >> q) & 1u) continue;  // soft_near_reference
@@ -634,7 +628,7 @@ PLIANT_HD void soft_edge_detect(index_t e, const SoftSurface& s, const double* X
                     sign = v0 > touch ? 1.0 : (v0 < -touch ? -1.0 : soft_edge_side(n1, area, q, s, xs));
                 }
                 if (!(sign * v1 < -eps)) continue;  // on f's side still, or no side to tell
-                if (s.label[fc] == s.label[ea] && soft_edges_near(ea, eb, fc, fd, s, X, reach))
+                if (s.label[fc] == s.label[ea] && soft_edges_near(ea, eb, fc, fd, s, X))
                     continue;  // self contact: edges that were together in the reference configuration
                 if (!soft_segments(a1, b1, c1, d1, sp, tp) || sp <= 0.0 || sp >= 1.0 || tp <= 0.0 ||
                     tp >= 1.0)

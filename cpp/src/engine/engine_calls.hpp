@@ -66,10 +66,11 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     d_prony_ = DeviceBuffer<Prony<T>, Dev>(dev_, ng);
     d_prony_.upload(prony.data(), ng);
     std::vector<T> gamma(ng, T(m.anp_stabilization));  // T4ANP stabilization per group
-    for (std::size_t g = 0; g < ng && m.anp_shear; ++g)
-        with_material(groups_[g].material, [&](const auto& mat) {
-            if constexpr (std::decay_t<decltype(mat)>::decoupled) gamma[g] = anp_shear_gamma(mat);
-        });
+    if (m.anp_shear)
+        for (std::size_t g = 0; g < ng; ++g)
+            with_material(groups_[g].material, [&](const auto& mat) {
+                if constexpr (std::decay_t<decltype(mat)>::decoupled) gamma[g] = anp_shear_gamma(mat);
+            });
     anp_gamma_ = DeviceBuffer<T, Dev>(dev_, ng);
     anp_gamma_.upload(gamma.data(), ng);
     d_mats_ = DeviceBuffer<MaterialParams<T>, Dev>(dev_, ng);
