@@ -1,4 +1,5 @@
-"""NiftySim model import (XML, T4 and T4ANP elements): nodes, elements, element sets with their
+"""NiftySim model import (XML, T4 and T4ANP elements): nodes and elements (listed, or from an
+<MSHMesh> / <VTKMesh> file: niftysim_geometry.py), element sets with their
 materials, Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
 analytical rigid contacts (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and
 motions), closed ContactSurfaces (fixed or moving, with SlvNodes), SubModels (merged into one model, with
@@ -40,6 +41,8 @@ _KNOWN_TOP = {
     "ContactCylinder",
     "ContactUSProbe",
     "ContactSurface",
+    "MSHMesh",
+    "VTKMesh",
 }
 _SYSTEM = {
     "TimeStep",
@@ -253,11 +256,23 @@ def _flatten(root, f: str):
 
 
 def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
-    """<Nodes> (N, 3) and <Elements> (M, 4) with their counts checked; the element type."""
+    """<Nodes> (N, 3) and <Elements> (M, 4) with their counts checked, or the mesh of an <MSHMesh>
+    or <VTKMesh> file (niftysim_geometry.py); the element type."""
+    from .niftysim_geometry import MESH_FILE_TAGS, mesh_file
+
     nodes_el = root.find("Nodes")
     elems_el = root.find("Elements")
+    files = [el for el in root if el.tag in MESH_FILE_TAGS]
+    if files:
+        if len(files) > 1 or nodes_el is not None or elems_el is not None:
+            raise NiftySimError(
+                "more than one mesh: expected one of <MSHMesh>, <VTKMesh> or <Nodes> with <Elements>",
+                f,
+                files[-1].tag,
+            )
+        return mesh_file(files[0], f)
     if nodes_el is None or elems_el is None:
-        raise NiftySimError("missing <Nodes> or <Elements>", f)
+        raise NiftySimError("missing <Nodes> or <Elements> (or a <MSHMesh> or <VTKMesh> file)", f)
     if nodes_el.get("DOF", "3") != "3":
         raise NiftySimError(f"<Nodes DOF={nodes_el.get('DOF')!r}>: only 3 DOF per node", f, "Nodes")
     X = _numbers(nodes_el, f, "Nodes")
@@ -436,8 +451,8 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
     if ctype == "Pressure":
         _pressure(c, b, T, shapes, f, key, unsupported)
         return
-    if c.get("SpecType", "NODES") != "NODES":
-        unsupported(f"Constraint SpecType={c.get('SpecType')}", "only node lists")
+    if c.get("SpecType", "NODES") not in ("NODES", "NORMAL"):
+        unsupported(f"Constraint SpecType={c.get('SpecType')}", "pliant imports NODES and NORMAL")
         return
     if ctype not in ("Fix", "Disp", "Force", "Gravity"):
         unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity and Pressure")
@@ -465,10 +480,9 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
             )
         b.set_gravity(g * d / np.linalg.norm(d), curve)
         return
-    nodes_el = c.find("Nodes")
-    if nodes_el is None:
-        raise NiftySimError("<Constraint> without <Nodes>", f, key)
-    ids = _numbers(nodes_el, f, f"{key}/Nodes", np.int64)
+    from .niftysim_geometry import constraint_nodes
+
+    ids = constraint_nodes(c, b.nodes, T, f, key)
     if ctype == "Fix":
         b.fix(ids, dofs)
         return
@@ -598,16 +612,9 @@ def _pressure(c, b: ModelBuilder, T: np.ndarray, shapes: dict, f: str, key: str,
     spec = c.get("SpecType", "NODES")
     orient = True
     if spec == "NORMAL":
-        nrm = c.find("Normal")
-        if nrm is None:
-            raise NiftySimError('SpecType="NORMAL" needs <Normal>', f, key)
-        n = _numbers(nrm, f, f"{key}/Normal")
-        try:
-            angle = float(nrm.get("ToleranceAngle", "0"))
-        except ValueError:
-            raise NiftySimError("<Normal ToleranceAngle>: expected degrees", f, key) from None
-        if n.size != 3 or not np.linalg.norm(n) > 0:
-            raise NiftySimError("<Normal>: expected a non-zero vector", f, f"{key}/Normal")
+        from .niftysim_geometry import normal_spec
+
+        n, angle = normal_spec(c, f, key)
         faces = facets_facing(b.nodes, B, n, angle)
     elif c.get("NumFaces") == "all":
         faces = B

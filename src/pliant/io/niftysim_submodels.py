@@ -1,11 +1,13 @@
-"""NiftySim <SubModel>s (user guide v2.4 §3.7): several models, each with its mesh, element sets
-and constraints, assembled into one, as NiftySim does it (tledModel::LoadFromXML with
-tledSubModelManager): the model's mesh is the sub-models' meshes one after the other, their
-element sets offset to the merged element numbering and their constraints' nodes (and pressure
-faces) mapped to the merged node numbering, appended after the model's own element sets and
-constraints (which refer to the merged mesh). With <SubModelNodeMergerDistance> d, each node of a
-later sub-mesh is the first node already in the mesh closer than d [m], if there is one (meshes
-assembled from blocks share their interface nodes). A sub-model's <SystemParams> is ignored.
+"""NiftySim <SubModel>s (user guide v2.4 §3.7): several models, each with its mesh (listed, or an
+<MSHMesh> / <VTKMesh> file with its transforms), element sets and constraints, assembled into one,
+as NiftySim does it (tledModel::LoadFromXML with tledSubModelManager): the model's mesh is the
+sub-models' meshes one after the other, their element sets offset to the merged element numbering
+and their constraints' nodes (and pressure faces) mapped to the merged node numbering, appended
+after the model's own element sets and constraints (which refer to the merged mesh); constraint
+nodes chosen by normal, "all" or a start index are resolved on the sub-model's own mesh. With
+<SubModelNodeMergerDistance> d, each node of a later sub-mesh is the first node already in the
+mesh closer than d [m], if there is one (meshes assembled from blocks share their interface
+nodes). A sub-model's <SystemParams> is ignored.
 
 The result is an ordinary <Model> element: the importer reads it as it reads any model, with its
 checks and messages (the sub-models named in them by their index)."""
@@ -17,10 +19,11 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from .niftysim import NiftySimError, _mesh, _numbers, element_set, facets_facing
+from .niftysim_geometry import MESH_FILE_TAGS, constraint_nodes, normal_spec, uses_node_shorthand
 
 __all__ = ["flatten_submodels"]
 
-_SUB_CHILDREN = {"Nodes", "Elements", "ElementSet", "Constraint", "SystemParams"}
+_SUB_CHILDREN = {"Nodes", "Elements", *MESH_FILE_TAGS, "ElementSet", "Constraint", "SystemParams"}
 
 
 def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
@@ -32,7 +35,7 @@ def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
     d = _merge_distance(root, f)
     flat = ET.Element("Model", root.attrib)
     for child in root:
-        if child.tag not in ("SubModel", "SubModelNodeMergerDistance", "Nodes", "Elements"):
+        if child.tag not in ("SubModel", "SubModelNodeMergerDistance", "Nodes", "Elements", *MESH_FILE_TAGS):
             flat.append(child)  # the model's own sets and constraints come first (NiftySim appends)
     X_all = np.zeros((0, 3))
     T_all: list[np.ndarray] = []
@@ -153,7 +156,14 @@ def _mapped_constraint(c: ET.Element, node_map, X, T, f: str, key: str) -> ET.El
             out.attrib.pop("FaceType", None)
         return out
     nodes = c.find("Nodes")
-    if nodes is not None:
+    if uses_node_shorthand(c):  # chosen on the sub-model's own mesh, as NiftySim resolves it
+        ids = constraint_nodes(c, X, T, f, key)
+        for child in [e for e in out if e.tag in ("Normal", "RestrictTo")]:
+            out.remove(child)
+        out.set("SpecType", "NODES")
+        out.set("NumNodes", str(ids.size))
+        ET.SubElement(out, "Nodes").text = mapped(ids, "Nodes")
+    elif nodes is not None:
         ne = ET.SubElement(out, "Nodes", dict(nodes.attrib))
         ne.text = mapped(_numbers(nodes, f, f"{key}/Nodes", np.int64), "Nodes")
     return out
@@ -168,16 +178,7 @@ def _local_faces(c, X, T, f, key):
         B, _ = boundary_faces(T)
         if c.get("NumFaces") == "all":
             return B
-        nrm = c.find("Normal")
-        if nrm is None:
-            return None
-        v = _numbers(nrm, f, f"{key}/Normal", float)
-        if v.size != 3 or not np.linalg.norm(v) > 0:
-            return None
-        try:
-            angle = float(nrm.get("ToleranceAngle", "0"))
-        except ValueError:
-            return None
+        v, angle = normal_spec(c, f, key)
         return facets_facing(X, B, v, angle)
     fe = c.find("Faces")
     if fe is None:
