@@ -257,3 +257,34 @@ def test_bad_mesh_files_and_node_specs_exit_2_naming_them(tmp_path, mesh, constr
         load_niftysim(p)
     r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "o")])
     assert r.exit_code == 2 and says in r.output and "Traceback" not in r.output
+
+
+def test_gravity_acts_on_its_listed_nodes_as_niftysim_s(tmp_path):
+    """NiftySim's two_cubes_sheet.xml pulls two cubes towards each other with a Gravity
+    constraint in each sub-model, its nodes given by a start index: each cube falls its own way
+    (u_n = g Δt² n(n + 1)/2 from rest under central differences, no damping), not both one way."""
+    X, T = box_tets((0.02, 0.02, 0.02), (2, 2, 2))
+    n = len(X)
+
+    def sub(move, direction):
+        return (
+            f'<SubModel>{_inline(X + move, T)}<ElementSet Size="all">{MATERIAL}0</ElementSet>'
+            f'<Constraint Type="Gravity" LoadShape="STEP" NumNodes="{n}"><Nodes>0</Nodes>'
+            f"<AccelerationMagnitude>0.3</AccelerationMagnitude>"
+            f"<AccelerationDirection>{direction}</AccelerationDirection></Constraint></SubModel>"
+        )
+
+    p = tmp_path / "cubes.xml"
+    p.write_text(
+        f'<?xml version="1.0"?><Model>{sub([0, 0, 0.05], "0 0 -1")}{sub([0, 0, -0.05], "0 0 2")}'
+        f"{SYSTEM.replace('<DampingCoeff>20', '<DampingCoeff>0')}</Model>"
+    )
+    sc = load_niftysim(p)
+    sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
+    sim.run(steps=100)
+    fall = 0.3 * sc.dt**2 * 100 * 101 / 2
+    assert np.allclose(sim.displacements[:n], [0, 0, -fall], rtol=1e-12, atol=1e-18)
+    assert np.allclose(sim.displacements[n:], [0, 0, fall], rtol=1e-12, atol=1e-18)
+    p.write_text(p.read_text().replace(f'NumNodes="{n}"><Nodes>0</Nodes>', "><Nodes></Nodes>", 1))
+    with pytest.raises(NiftySimError, match="lists no node"):
+        load_niftysim(p)

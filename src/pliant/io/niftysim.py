@@ -478,11 +478,12 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
             raise NiftySimError(
                 f"<AccelerationDirection> {d.tolist()}: expected 3 finite numbers, not all zero", f, key
             )
-        b.set_gravity(g * d / np.linalg.norm(d), curve)
-        return
     from .niftysim_geometry import constraint_nodes
 
     ids = constraint_nodes(c, b.nodes, T, f, key)
+    if ctype == "Gravity":  # on its listed nodes only (tledGravityConstraint); several add up
+        b.add_gravity(g * d / np.linalg.norm(d), ids, curve)
+        return
     if ctype == "Fix":
         b.fix(ids, dofs)
         return

@@ -156,6 +156,8 @@ def constraint_nodes(c, X: np.ndarray, T: np.ndarray, f: str, key: str) -> np.nd
     if nodes_el is None:
         raise NiftySimError('<Constraint> without <Nodes> (nor NumNodes="all" or SpecType="NORMAL")', f, key)
     ids = _numbers(nodes_el, f, f"{key}/Nodes", np.int64)
+    if ids.size == 0:
+        raise NiftySimError("<Nodes> lists no node", f, f"{key}/Nodes")
     if num is None:
         return ids
     count = int(_scalar(num, f, f"{key} NumNodes", int, 0, False))

@@ -84,6 +84,7 @@ class ModelBuilder:
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
+        self._node_gravity: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []  # add_gravity
         self.tools: list = []  # rigid tools (pliant.contact)
         self.tool_nodes: list = []  # per tool: node ids it is restricted to, or None (all)
         self.soft_contact = None  # contact between deformable bodies (pliant.contact.SoftContact)
@@ -280,6 +281,17 @@ class ModelBuilder:
             raise InputError(f"gravity = {shown(g)}; expected 3 finite components [m/s^2]")
         self._gravity = (gv, curve or Constant())
 
+    def add_gravity(self, g, nodes, curve: LoadCurve | None = None):
+        """Body acceleration g [m/s²] on ``nodes`` only (user ids): m_a·g on each, m_a its lumped
+        mass, scaled by ``curve``; it adds to set_gravity's and to other add_gravity calls (as
+        NiftySim's Gravity constraints, each on its listed nodes, add up). Nodes a cut copies
+        (pliant.cutting) keep it."""
+        ids = np.unique(self._node_ids(nodes, "add_gravity nodes"))
+        gv = np.asarray(g, dtype=float).ravel()
+        if gv.shape != (3,) or not np.all(np.isfinite(gv)):
+            raise InputError(f"add_gravity: g = {shown(g)}; expected 3 finite components [m/s^2]")
+        self._node_gravity.append((ids, gv, curve or Constant()))
+
     def add_tool(self, tool, nodes=None):
         """Add a rigid tool (pliant.contact.Plane, Sphere, Capsule, Cylinder, Box, MeshTool): the
         surface nodes of the body (their free DOFs) are kept out of it, with friction.
@@ -330,6 +342,7 @@ class ModelBuilder:
         itself after a cut)."""
         b = copy.copy(self)
         b.sets, b._forces, b._pressures = list(self.sets), list(self._forces), list(self._pressures)
+        b._node_gravity = list(self._node_gravity)
         b._cons, b.tools, b.tool_nodes = dict(self._cons), list(self.tools), list(self.tool_nodes)
         return b
 
@@ -337,8 +350,8 @@ class ModelBuilder:
         """A builder of the same model after node splitting (pliant.cutting): ``tets`` (M, 4) the
         elements over the old nodes and the new ones, ``parent`` (K,) the node each new node
         (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints and
-        node-set memberships; point forces stay on the parent (their total is unchanged); each
-        pressure face moves to the copies its element now uses."""
+        node-set memberships (tools' and add_gravity's nodes); point forces stay on the parent
+        (their total is unchanged); each pressure face moves to the copies its element now uses."""
         parent = np.asarray(parent, np.int64)
         tets = np.asarray(tets, np.int64)
         b = self.snapshot()
@@ -357,6 +370,10 @@ class ModelBuilder:
         b.tool_nodes = [
             None if s is None else np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]]))
             for s in self.tool_nodes
+        ]
+        b._node_gravity = [
+            (np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]])), g, c)
+            for s, g, c in self._node_gravity
         ]
         if self._pressures:
             from ..cutting.split import LOCAL_FACES

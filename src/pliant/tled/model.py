@@ -25,6 +25,14 @@ from .smoothing import strain_smoothing
 __all__ = ["Model", "State"]
 
 
+def _lumped_mass(X: np.ndarray, T: np.ndarray, density: np.ndarray) -> np.ndarray:
+    """Lumped nodal masses [kg] (N,): a quarter of each element's ρ V0 to each of its nodes
+    (X (N, 3) [m], T (M, 4), density (M,) [kg/m³]); V0 = det[X1 − X0, X2 − X0, X3 − X0] / 6."""
+    e = X[T[:, 1:]] - X[T[:, :1]]
+    v0 = np.einsum("ij,ij->i", e[:, 0], np.cross(e[:, 1], e[:, 2])) / 6.0
+    return np.bincount(T.ravel(), np.repeat(density * v0 / 4.0, 4), minlength=len(X))
+
+
 def _morton_order(points: np.ndarray) -> np.ndarray:
     """Permutation sorting points (n, 3) along a 3-D Morton (Z-order) curve, 10 bits per axis."""
     lo, hi = points.min(axis=0), points.max(axis=0)
@@ -193,6 +201,11 @@ class Model:
             k = cid(c)
             R = pattern_of.setdefault(k, np.zeros((N, 3)))
             np.add.at(R, node_rank[ids], f)
+        if builder._node_gravity:  # add_gravity: m_a g on its nodes, m_a = Σ ρ V0 / 4 as the engine's
+            m_a = _lumped_mass(X, T, np.array([s.density for s in self.sets])[owner])
+            for ids, g, c in builder._node_gravity:
+                R = pattern_of.setdefault(cid(c), np.zeros((N, 3)))
+                np.add.at(R, node_rank[ids], m_a[ids, None] * g)
         pattern_curve = sorted(pattern_of)
         press_F = (
             np.concatenate([F for F, _, _ in builder._pressures])
