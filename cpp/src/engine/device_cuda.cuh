@@ -113,6 +113,17 @@ public:
             n_max, count, f);
         cuda_detail::check(cudaPeekAtLastError(), "launch");
     }
+    /// each(n, f), then g() on one thread: two launches (the CPU's version saves a wait).
+    template <class F, class G>
+    void each_then(index_t n, const F& f, const G& g) {
+        each(n, f);
+        serial(g);
+    }
+    template <class F, class G>
+    void each_counted_then(index_t n_max, const index_t* count, const F& f, const G& g) {
+        each_counted(n_max, count, f);
+        serial(g);
+    }
     /// body's launches, always: the flag lives on the device, and the kernels test it themselves.
     template <class V, class F>
     void when(const V* /*flag*/, F&& body) {

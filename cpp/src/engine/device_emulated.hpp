@@ -63,6 +63,17 @@ public:
             for (index_t i = 0; i < n; ++i) f(i);
         });
     }
+    /// As on CUDA: each, then serial.
+    template <class F, class G>
+    void each_then(index_t n, const F& f, const G& g) {
+        each(n, f);
+        serial(g);
+    }
+    template <class F, class G>
+    void each_counted_then(index_t n_max, const index_t* count, const F& f, const G& g) {
+        each_counted(n_max, count, f);
+        serial(g);
+    }
     /// As on CUDA: body's launches always run (their kernels test the flag).
     template <class V, class F>
     void when(const V* /*flag*/, F&& body) {

@@ -133,27 +133,30 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     const T* uc = v.u[ph.cur];
     T* un = v.u[ph.next];
     const index_t chunks = (s.n_nodes + kSoftChunk - 1) / kSoftChunk;
-    dev_.each(chunks, [=] PLIANT_KERNEL(index_t c) {
-        double m = 0.0;
-        const index_t end = (c + 1) * kSoftChunk < s.n_nodes ? (c + 1) * kSoftChunk : s.n_nodes;
-        for (index_t i = c * kSoftChunk; i < end; ++i) {
-            double* x = v.sx + 3 * i;  // kept for the narrow phase (soft_current)
-            soft_position(i, s, v.X, un, v.P, x);
-            const double* b = v.sb + 3 * i;
-            const double d2 =
-                (x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) + (x[2] - b[2]) * (x[2] - b[2]);
-            if (!(d2 <= m)) m = d2;  // NaN: rebuild (the check reports the node)
-            for (int d = 0; d < 3; ++d) v.sforce[3 * i + d] = 0.0;
-        }
-        v.smove[c] = m;
-    });
-    dev_.serial([=] PLIANT_KERNEL() {
-        Scalars<T>& sc = *v.sc;
-        for (index_t c = 0; c < chunks && !sc.soft_rebuild; ++c)
-            if (!(v.smove[c] <= 0.25 * s.skin * s.skin)) sc.soft_rebuild = 1;
-        if (sc.soft_rebuild)
-            sc.soft_rmax = soft_grid(s, v.X, un, v.P, v.shead, v.scursor, v.sbucket, v.stc, v.str, v.scell);
-    });
+    dev_.each_then(
+        chunks,
+        [=] PLIANT_KERNEL(index_t c) {
+            double m = 0.0;
+            const index_t end = (c + 1) * kSoftChunk < s.n_nodes ? (c + 1) * kSoftChunk : s.n_nodes;
+            for (index_t i = c * kSoftChunk; i < end; ++i) {
+                double* x = v.sx + 3 * i;  // kept for the narrow phase (soft_current)
+                soft_position(i, s, v.X, un, v.P, x);
+                const double* b = v.sb + 3 * i;
+                const double d2 = (x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) +
+                                  (x[2] - b[2]) * (x[2] - b[2]);
+                if (!(d2 <= m)) m = d2;  // NaN: rebuild (the check reports the node)
+                for (int d = 0; d < 3; ++d) v.sforce[3 * i + d] = 0.0;
+            }
+            v.smove[c] = m;
+        },
+        [=] PLIANT_KERNEL() {
+            Scalars<T>& sc = *v.sc;
+            for (index_t c = 0; c < chunks && !sc.soft_rebuild; ++c)
+                if (!(v.smove[c] <= 0.25 * s.skin * s.skin)) sc.soft_rebuild = 1;
+            if (sc.soft_rebuild)
+                sc.soft_rmax =
+                    soft_grid(s, v.X, un, v.P, v.shead, v.scursor, v.sbucket, v.stc, v.str, v.scell);
+        });
     dev_.when(&v.sc->soft_rebuild, [&] {  // on the CPU, steps without a rebuild skip both launches
         dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
             if (v.sc->soft_rebuild)
@@ -166,15 +169,17 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     for (int sweep = 0; sweep < sweeps; ++sweep) {
         const bool first = sweep == 0;
         const index_t items = s.n_nodes > s.n_edges ? s.n_nodes : s.n_edges;
-        dev_.each_counted(items, first ? &v.sc->soft_items : &v.sc->soft_redo, [=] PLIANT_KERNEL(index_t a) {
-            if (a < v.sc->soft_active)
-                soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.sx, v.scand, v.srec, v.srec_w,
-                            v.srec_p);
-            if (a < v.sc->soft_edges_active)
-                soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.snear, v.erec,
-                                 v.erec_w, v.erec_p);
-        });
-        dev_.serial([=] PLIANT_KERNEL() { soft_gather(v, s, first); });
+        dev_.each_counted_then(
+            items, first ? &v.sc->soft_items : &v.sc->soft_redo,
+            [=] PLIANT_KERNEL(index_t a) {
+                if (a < v.sc->soft_active)
+                    soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.sx, v.scand, v.srec, v.srec_w,
+                                v.srec_p);
+                if (a < v.sc->soft_edges_active)
+                    soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.snear, v.erec,
+                                     v.erec_w, v.erec_p);
+            },
+            [=] PLIANT_KERNEL() { soft_gather(v, s, first); });
         dev_.each_counted(s.n_nodes, &v.sc->soft_touched, [=] PLIANT_KERNEL(index_t a) {
             const index_t i = v.stouched[a];
             double W[3];
