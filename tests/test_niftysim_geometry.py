@@ -243,6 +243,7 @@ def test_submodel_mesh_files_and_normal_constraints_resolve_on_their_own_mesh(tm
             "no boundary node",
         ),
         (None, '<Constraint Type="Fix" NumNodes="3"><Nodes>1 2</Nodes></Constraint>', "NumNodes=3"),
+        (None, '<Constraint Type="Fix" NumNodes="999999999"><Nodes>0</Nodes></Constraint>', "past the mesh"),
     ],
 )
 def test_bad_mesh_files_and_node_specs_exit_2_naming_them(tmp_path, mesh, constraint, says):

@@ -40,6 +40,8 @@ def mesh_file(el, f: str) -> tuple[np.ndarray, np.ndarray, str]:
         raise NiftySimError(f"<{key}> names no mesh file", f, key)
     here = Path(f).parent / name
     path = here if here.is_file() or Path(name).is_absolute() else Path(name)
+    if path.exists() and not path.is_file():
+        raise NiftySimError(f"<{key}> mesh file {name!r}: {path} is not a regular file", f, key)
     if not path.is_file():
         raise NiftySimError(
             f"<{key}> mesh file {name!r}: not found beside the model ({here}) nor in the working folder",
@@ -162,6 +164,10 @@ def constraint_nodes(c, X: np.ndarray, T: np.ndarray, f: str, key: str) -> np.nd
         return ids
     count = int(_scalar(num, f, f"{key} NumNodes", int, 0, False))
     if ids.size == 1 and count > 1:  # NiftySim: one index = the first of NumNodes consecutive nodes
+        if not 0 <= ids[0] <= len(X) - count:
+            raise NiftySimError(
+                f"NumNodes={count} from node {ids[0]}: past the mesh's {len(X)} nodes", f, f"{key}/Nodes"
+            )
         return ids[0] + np.arange(count)
     if ids.size != count:
         raise NiftySimError(f"NumNodes={count} but {ids.size} nodes listed", f, key)
