@@ -128,8 +128,11 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path, etyp
             "LoadShape=SINE",
         ),
         (
-            dict(extra_constraint='<Constraint Type="Traction" NumFaces="all" LoadShape="RAMP"/>'),
-            "Constraint Type=Traction",
+            dict(
+                extra_constraint='<Constraint DOF="0" LoadShape="RAMP" NumNodes="1" Type="Disp">'
+                '<Nodes>0</Nodes><Magnitudes Type="FILE">u.txt</Magnitudes></Constraint>'
+            ),
+            "Magnitudes Type=FILE",
         ),
         (dict(extra_constraint="<ContactSurface><Friction/></ContactSurface>"), "ContactSurface/Friction"),
         (

@@ -197,13 +197,13 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<int> tool_kind, std::vector<double> tool_params, std::vector<double> tool_mu,
                std::vector<std::vector<double>> tool_keys, std::vector<index_t> tool_grid_dims,
                std::vector<std::vector<double>> tool_grids, std::vector<index_t> press_nodes,
-               std::vector<double> press_value, std::vector<index_t> press_curve, bool anp,
-               std::vector<double> group_visco, double stiffness_damping, double anp_stabilization,
-               bool anp_shear_stabilization, std::vector<std::vector<double>> tool_grips,
-               std::vector<double> tool_reach, std::vector<index_t> soft_nodes,
-               std::vector<index_t> soft_label, std::vector<index_t> soft_tris,
-               std::vector<index_t> soft_pair, index_t soft_labels, std::vector<double> soft_mu,
-               double soft_skin, StrainSmoothing smoothing, int threads) {
+               std::vector<double> press_value, std::vector<index_t> press_curve,
+               std::vector<double> press_traction, bool anp, std::vector<double> group_visco,
+               double stiffness_damping, double anp_stabilization, bool anp_shear_stabilization,
+               std::vector<std::vector<double>> tool_grips, std::vector<double> tool_reach,
+               std::vector<index_t> soft_nodes, std::vector<index_t> soft_label,
+               std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
+               std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -232,6 +232,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.press_nodes = std::move(press_nodes);
                 in.press_value = std::move(press_value);
                 in.press_curve = std::move(press_curve);
+                in.press_traction = std::move(press_traction);
                 in.anp = anp;
                 in.stiffness_damping = stiffness_damping;
                 in.anp_stabilization = anp_stabilization;
@@ -271,7 +272,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "curve_kind"_a, "curve_t0"_a, "curve_t1"_a, "curve_table_begin"_a, "curve_table_count"_a,
             "table_t"_a, "table_v"_a, "gravity"_a, "gravity_curve"_a, "contact_nodes"_a, "contact_masks"_a,
             "tool_kind"_a, "tool_params"_a, "tool_mu"_a, "tool_keys"_a, "tool_grid_dims"_a, "tool_grids"_a,
-            "press_nodes"_a, "press_value"_a, "press_curve"_a, "anp"_a, "group_visco"_a,
+            "press_nodes"_a, "press_value"_a, "press_curve"_a, "press_traction"_a, "anp"_a, "group_visco"_a,
             "stiffness_damping"_a, "anp_stabilization"_a, "anp_shear_stabilization"_a, "tool_grips"_a,
             "tool_reach"_a, "soft_nodes"_a, "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a,
             "soft_mu"_a, "soft_skin"_a, "smoothing"_a, "threads"_a)

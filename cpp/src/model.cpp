@@ -266,8 +266,8 @@ void Model<T>::build_loads(const ModelInput& in, const std::vector<double>& mass
     n_load_patterns = static_cast<int>(pattern_curve.size());
 }
 
-/// Follower pressure: one pattern-factor slot per distinct curve, reference edges, node → face
-/// CSR in face order (a fixed summation order).
+/// Follower pressure and surface traction: one pattern-factor slot per distinct curve, reference
+/// edges, node → face CSR in face order (a fixed summation order).
 template <class T>
 void Model<T>::build_pressure(const ModelInput& in) {
     const index_t nf = static_cast<index_t>(in.press_value.size());
@@ -275,6 +275,9 @@ void Model<T>::build_pressure(const ModelInput& in) {
     press_value.resize(nf);
     press_slot.resize(nf);
     press_edges.resize(6 * static_cast<std::size_t>(nf));
+    press_traction.assign(3 * static_cast<std::size_t>(nf), T(0));
+    if (in.press_traction.size() == 3 * static_cast<std::size_t>(nf))
+        for (std::size_t k = 0; k < press_traction.size(); ++k) press_traction[k] = T(in.press_traction[k]);
     pface_offsets.assign(static_cast<std::size_t>(n_nodes) + 1, 0);
     for (index_t f = 0; f < nf; ++f) {
         press_value[f] = T(in.press_value[f]);
@@ -469,8 +472,9 @@ std::size_t Model<T>::bytes() const {
     return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) + b(inc_offsets) +
            b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) + b(relax_inv_mass) + b(node_volume) +
            b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) + b(press_slot) +
-           b(press_edges) + b(press_value) + b(load_patterns) + b(cons_dof) + b(cons_value) + b(cons_curve) +
-           b(cons_offsets) + b(edge_off) + b(edge_slot) + b(edge_group) + b(elem_edges) + b(edge_w);
+           b(press_edges) + b(press_value) + b(press_traction) + b(load_patterns) + b(cons_dof) +
+           b(cons_value) + b(cons_curve) + b(cons_offsets) + b(edge_off) + b(edge_slot) + b(edge_group) +
+           b(elem_edges) + b(edge_w);
 }
 
 template struct Model<float>;

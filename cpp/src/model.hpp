@@ -51,16 +51,18 @@ struct ModelInput {
     std::vector<index_t> contact_masks;  // per contact node: bit k set if tool k (< kMaskedTools)
                                          // may touch it
     std::vector<RigidTool> tools;
-    std::vector<double> tool_keys;     // 8 per keyframe: t, position (3), quaternion (4)
-    std::vector<double> tool_grid;     // signed-distance grids [m]
-    std::vector<double> tool_grips;    // grasping tools' close/open times [s] (RigidTool::grip_begin)
-    std::vector<index_t> press_nodes;  // follower-pressure triangles, 3 nodes each
-    std::vector<double> press_value;   // [Pa] per triangle (positive: against its normal)
-    std::vector<index_t> press_curve;  // curve per triangle
-    bool anp = false;                  // average nodal pressure (T4ANP)
-    double stiffness_damping = 0.0;    // Rayleigh β [s] (tled.hpp: add_damping_forces)
-    double anp_stabilization = 0.0;    // T4ANP: fraction γ of the element's own pressure
-    bool anp_shear = false;            // T4ANP: γ = μ/K of each group's material (anp_shear_gamma)
+    std::vector<double> tool_keys;       // 8 per keyframe: t, position (3), quaternion (4)
+    std::vector<double> tool_grid;       // signed-distance grids [m]
+    std::vector<double> tool_grips;      // grasping tools' close/open times [s] (RigidTool::grip_begin)
+    std::vector<index_t> press_nodes;    // follower-pressure triangles, 3 nodes each
+    std::vector<double> press_value;     // [Pa] per triangle (positive: against its normal)
+    std::vector<index_t> press_curve;    // curve per triangle
+    std::vector<double> press_traction;  // traction t [Pa] per triangle (3 each; empty: none), on its
+                                         // current area: |a| t / 3 per node (pressure_force)
+    bool anp = false;                    // average nodal pressure (T4ANP)
+    double stiffness_damping = 0.0;      // Rayleigh β [s] (tled.hpp: add_damping_forces)
+    double anp_stabilization = 0.0;      // T4ANP: fraction γ of the element's own pressure
+    bool anp_shear = false;              // T4ANP: γ = μ/K of each group's material (anp_shear_gamma)
     StrainSmoothing smoothing = StrainSmoothing::Element;  // per element, or edge-smoothed (ES-FEM-T4)
     // Contact between deformable surfaces (soft_contact.hpp): its surface nodes (engine nodes) with
     // their body labels, its triangles (3 surface-node indices each, outward), the pair table
@@ -89,7 +91,7 @@ struct Model {
     int n_load_patterns = 0;       // K; pattern_curve also holds the pressure slots
     std::vector<index_t> pattern_curve;
     std::vector<index_t> pface_offsets, pface_index, press_nodes, press_slot;
-    std::vector<T> press_edges, press_value;
+    std::vector<T> press_edges, press_value, press_traction;
     bool anp = false;                // average nodal pressure tetrahedra (T4ANP)
     double stiffness_damping = 0.0;  // Rayleigh β [s]: viscous stress β C0 : Ė in dynamic steps
     double anp_stabilization = 0.0;  // T4ANP: p = p̄ + γ (p(J_e) − p̄) (AveragedPressure)
@@ -139,7 +141,7 @@ struct Model {
         return {inc_offsets.data(),   inc_index.data(),   relax ? relax_inv_mass.data() : inv_mass.data(),
                 load_patterns.data(), n_load_patterns,    pface_offsets.data(),
                 pface_index.data(),   press_nodes.data(), press_edges.data(),
-                press_value.data(),   press_slot.data()};
+                press_value.data(),   press_slot.data(),  press_traction.data()};
     }
     /// Curve factors at time t [s], one per curve.
     void curve_factors(double t, T* out) const {

@@ -244,12 +244,15 @@ struct NodeData {
     const T* press_edges;
     const T* press_value;
     const index_t* press_slot;
+    const T* press_traction;  // traction t [Pa] per face (3 each; zero: none), on the current area
 };
 
-/// External force [N] of follower pressure on node n: Σ over its faces −(p s / 6)(x1 − x0) × (x2 − x0),
-/// each triangle's current area vector shared equally by its 3 nodes (Bonet & Wood, Nonlinear
-/// Continuum Mechanics for FEA, 2nd ed., §8.4, follower pressure; NiftySim's
-/// tledPressureConstraint). Positive p pushes against the face normal (x1 − x0) × (x2 − x0).
+/// External force [N] of follower pressure and surface traction on node n: Σ over its faces
+/// s (−p n + |n| t) / 6, n = (x1 − x0) × (x2 − x0) the current area vector times 2, each
+/// triangle's load shared equally by its 3 nodes (Bonet & Wood, Nonlinear Continuum Mechanics for
+/// FEA, 2nd ed., §8.4, follower pressure; NiftySim's tledPressureConstraint and
+/// tledTractionConstraint, the traction on the current area). Positive p pushes against the face
+/// normal n; t [Pa] acts along itself.
 /// Inputs: node data, pattern factors s (slot per face), u [m] SoA (3, P). Output: out [N] (3).
 template <class T>
 PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors, const T* u, index_t P,
@@ -270,12 +273,20 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
         out[0] -= s * (e1[1] * e2[2] - e1[2] * e2[1]);
         out[1] -= s * (e1[2] * e2[0] - e1[0] * e2[2]);
         out[2] -= s * (e1[0] * e2[1] - e1[1] * e2[0]);
+        const T* t = nd.press_traction + 3 * f;
+        if (t[0] != T(0) || t[1] != T(0) || t[2] != T(0)) {  // a traction face: |n| t s / 6
+            const T n0 = e1[1] * e2[2] - e1[2] * e2[1], n1 = e1[2] * e2[0] - e1[0] * e2[2],
+                    n2 = e1[0] * e2[1] - e1[1] * e2[0];
+            const T st = factors[nd.press_slot[f]] / T(6) * std::sqrt(n0 * n0 + n1 * n1 + n2 * n2);
+            PLIANT_UNROLL
+            for (int d = 0; d < 3; ++d) out[d] += st * t[d];
+        }
     }
 }
 
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
 /// bitwise reproducible), then u⁺ = u + (γ2 − 1)(u − u⁻) + γ1 M⁻¹(r − f) (central differences),
-/// r = load patterns + follower pressure at u.
+/// r = load patterns + follower pressure and surface traction at u.
 /// Inputs: node data, element forces, load-pattern factors, u and u⁻ [m] SoA (3, P).
 /// Outputs: u_out [m]; f_node_out [N] (internal force per node, may be null).
 template <class T>

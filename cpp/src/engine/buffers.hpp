@@ -73,7 +73,7 @@ struct ModelBuffers {
         cnodes, cbits, pf_off, pf_idx, pnodes, pslot, snodes, sbits, slabel, stris, spair, svtri_off, svtri,
         sedges, stri_edge, edge_off, edge_slot, edge_group, elem_edges;
     DeviceBuffer<T, Dev> edge_w, elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
-        patterns, cval, pedges, pvalue, node_vol;
+        patterns, cval, pedges, pvalue, ptraction, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
     DeviceBuffer<double, Dev> tt, tv, X, grid, stri_h;
 
@@ -91,7 +91,7 @@ struct ModelBuffers {
         elem_grad = R(m.elem_grad), elem_vol = R(m.elem_vol), mass = R(m.mass), inv_mass = R(m.inv_mass);
         relax_mass = R(m.relax_mass), relax_inv_mass = R(m.relax_inv_mass), free_mask = R(m.free_mask);
         patterns = R(m.load_patterns), cval = R(m.cons_value), pedges = R(m.press_edges);
-        pvalue = R(m.press_value), node_vol = R(m.node_volume);
+        pvalue = R(m.press_value), ptraction = R(m.press_traction), node_vol = R(m.node_volume);
         curves = DeviceBuffer<LoadCurve, Dev>::mirror(d, m.curves);
         tt = D(m.table_t), tv = D(m.table_v), X = D(m.X), grid = D(m.tool_grid);
         snodes = I(m.soft_nodes), sbits = I(m.soft_bits), slabel = I(m.soft_label), stris = I(m.soft_tris);

@@ -137,7 +137,7 @@ void Engine<T, Dev>::refresh_view() {
     v.prony = d_prony_.data();
     v.nodes = {mb_.inc_off.data(), mb_.inc_idx.data(), mb_.inv_mass.data(), mb_.patterns.data(),
                m.n_load_patterns,  mb_.pf_off.data(),  mb_.pf_idx.data(),   mb_.pnodes.data(),
-               mb_.pedges.data(),  mb_.pvalue.data(),  mb_.pslot.data()};
+               mb_.pedges.data(),  mb_.pvalue.data(),  mb_.pslot.data(),    mb_.ptraction.data()};
     v.relax_nodes = v.nodes;
     v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
     v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();

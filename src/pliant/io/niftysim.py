@@ -448,14 +448,18 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
 def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupported) -> None:
     """One <Constraint>: Pressure, Fix, Disp, Force or Gravity."""
     ctype = c.get("Type")
-    if ctype == "Pressure":
-        _pressure(c, b, T, shapes, f, key, unsupported)
+    if ctype in ("Pressure", "Traction"):
+        from .niftysim_geometry import surface_load
+
+        surface_load(c, b, T, shapes, f, key, unsupported)
         return
     if c.get("SpecType", "NODES") not in ("NODES", "NORMAL"):
         unsupported(f"Constraint SpecType={c.get('SpecType')}", "pliant imports NODES and NORMAL")
         return
     if ctype not in ("Fix", "Disp", "Force", "Gravity"):
-        unsupported(f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity and Pressure")
+        unsupported(
+            f"Constraint Type={ctype}", "pliant imports Fix, Disp, Force, Gravity, Pressure and Traction"
+        )
         return
     dof = c.get("DOF", "all")
     dofs = "xyz" if dof == "all" else {"0": "x", "1": "y", "2": "z"}.get(dof)
@@ -491,16 +495,16 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
     if mag is None:
         raise NiftySimError(f"{ctype} needs <Magnitudes>", f, key)
     mtype = mag.get("Type", "UNIFORM")
+    if mtype not in ("UNIFORM", "DIFFORM"):
+        unsupported(f"Magnitudes Type={mtype}", "pliant imports UNIFORM and DIFFORM")
+        return
     vals = _numbers(mag, f, f"{key}/Magnitudes")
     if mtype == "UNIFORM" and vals.size == 1:
         v = np.full(ids.size, vals[0])
     elif mtype == "DIFFORM" and vals.size == ids.size:
         v = vals
-    elif mtype in ("UNIFORM", "DIFFORM"):
-        raise NiftySimError(f"Magnitudes {mtype}: {vals.size} values for {ids.size} nodes", f, key)
     else:
-        unsupported(f"Magnitudes Type={mtype}", "pliant imports UNIFORM and DIFFORM")
-        return
+        raise NiftySimError(f"Magnitudes {mtype}: {vals.size} values for {ids.size} nodes", f, key)
     ndof = len(dofs)
     if ctype == "Disp":
         b.prescribe(ids, np.repeat(v[:, None], ndof, axis=1), dofs, curve)
@@ -590,54 +594,6 @@ def _rigid_contacts(root, b: ModelBuilder, total: float, f: str, unsupported, wa
                 b.add_tool(tool, nodes=nodes)
             except InputError as e:
                 raise NiftySimError(str(e), f, key) from None
-
-
-def _pressure(c, b: ModelBuilder, T: np.ndarray, shapes: dict, f: str, key: str, unsupported):
-    """<Constraint Type="Pressure"> (user guide v2.4 §3.5): a follower pressure (the current facet
-    normals, tledPressureConstraint) of <Magnitude> on <Faces> (NumFaces triangles, their winding
-    kept: positive pushes against (x1 − x0) × (x2 − x0)), on the whole surface (NumFaces="all") or
-    on the boundary facets within ToleranceAngle degrees of a <Normal> (SpecType="NORMAL")."""
-    from ..mesh.topology import boundary_faces
-
-    shape = c.get("LoadShape")
-    if shape not in shapes:
-        unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and RAMPHOLD")
-        return
-    mag = c.find("Magnitude")
-    if mag is None:
-        raise NiftySimError("Pressure needs <Magnitude> (one value [Pa])", f, key)
-    p = _numbers(mag, f, f"{key}/Magnitude")
-    if p.size != 1:
-        raise NiftySimError(f"<Magnitude>: expected one value, got {p.size}", f, f"{key}/Magnitude")
-    B, _ = boundary_faces(T)
-    spec = c.get("SpecType", "NODES")
-    orient = True
-    if spec == "NORMAL":
-        from .niftysim_geometry import normal_spec
-
-        n, angle = normal_spec(c, f, key)
-        faces = facets_facing(b.nodes, B, n, angle)
-    elif c.get("NumFaces") == "all":
-        faces = B
-    else:
-        if c.get("FaceType", "Tri") != "Tri":
-            raise NiftySimError(f"FaceType={c.get('FaceType')!r}: T4 meshes have Tri faces", f, key)
-        fe = c.find("Faces")
-        if fe is None:
-            raise NiftySimError('Pressure needs <Faces>, NumFaces="all" or SpecType="NORMAL"', f, key)
-        faces = _numbers(fe, f, f"{key}/Faces", np.int64)
-        if faces.size % 3:
-            raise NiftySimError(f"<Faces>: {faces.size} indices, not a multiple of 3", f, key)
-        faces = faces.reshape(-1, 3)
-        if "NumFaces" in c.attrib and c.get("NumFaces").isdigit() and int(c.get("NumFaces")) != len(faces):
-            raise NiftySimError(f"NumFaces={c.get('NumFaces')} but {len(faces)} faces listed", f, key)
-        orient = False
-    if len(faces) == 0:
-        raise NiftySimError("Pressure: no faces selected", f, key)
-    try:
-        b.add_pressure(faces, float(p[0]), shapes[shape](), orient=orient)
-    except InputError as e:
-        raise NiftySimError(str(e), f, key) from None
 
 
 def _rigid_surfaces(root, b: ModelBuilder, path: Path, total: float, f: str, unsupported) -> None:

@@ -4,7 +4,8 @@ and Translation (user guide v2.4 §3.3; tledMesh, tledBasicMeshFileReader, tledM
 nodes of a constraint chosen other than by a full list (§3.5.2; tledModel::GetConstraintInd):
 SpecType="NORMAL" (the vertices of the boundary facets within ToleranceAngle of a <Normal>, kept
 where they lie inside every <RestrictTo> box and sphere), NumNodes="all", and NumNodes="n" with one
-listed index (n consecutive nodes from it)."""
+listed index (n consecutive nodes from it); and the surface loads (§3.5.4), Pressure and
+Traction, on listed faces, the whole surface or the facets facing a normal."""
 
 from __future__ import annotations
 
@@ -13,10 +14,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import InputError, MeshError
 from .niftysim import NiftySimError, _numbers, _scalar, facets_facing
 
-__all__ = ["MESH_FILE_TAGS", "constraint_nodes", "mesh_file", "normal_spec", "uses_node_shorthand"]
+__all__ = [
+    "MESH_FILE_TAGS",
+    "constraint_nodes",
+    "mesh_file",
+    "normal_spec",
+    "surface_faces",
+    "surface_load",
+    "uses_node_shorthand",
+]
 
 # Elements given by a file instead of <Nodes> and <Elements>.
 MESH_FILE_TAGS = ("MSHMesh", "VTKMesh")
@@ -196,3 +205,76 @@ def _restricted(ids: np.ndarray, c, X: np.ndarray, f: str, key: str) -> np.ndarr
                 where,
             )
     return ids
+
+
+def surface_faces(c, X: np.ndarray, T: np.ndarray, f: str, key: str) -> tuple[np.ndarray, bool]:
+    """The triangles (F, 3) of a Pressure or Traction constraint: the boundary facets within
+    ToleranceAngle of <Normal> (SpecType="NORMAL"), the whole boundary (NumFaces="all"), or the
+    listed <Faces> (NumFaces checked, FaceType Tri); and whether they are boundary facets with
+    the mesh's outward winding (False: as listed)."""
+    from ..mesh.topology import boundary_faces
+
+    ctype = c.get("Type")
+    if c.get("SpecType", "NODES") == "NORMAL":
+        n, angle = normal_spec(c, f, key)
+        faces, orient = facets_facing(X, boundary_faces(T)[0], n, angle), True
+    elif c.get("NumFaces") == "all":
+        faces, orient = boundary_faces(T)[0], True
+    else:
+        if c.get("FaceType", "Tri") != "Tri":
+            raise NiftySimError(f"FaceType={c.get('FaceType')!r}: T4 meshes have Tri faces", f, key)
+        fe = c.find("Faces")
+        if fe is None:
+            raise NiftySimError(f'{ctype} needs <Faces>, NumFaces="all" or SpecType="NORMAL"', f, key)
+        faces = _numbers(fe, f, f"{key}/Faces", np.int64)
+        if faces.size % 3:
+            raise NiftySimError(f"<Faces>: {faces.size} indices, not a multiple of 3", f, key)
+        faces, orient = faces.reshape(-1, 3), False
+        num = c.get("NumFaces")
+        if num is not None and num.isdigit() and int(num) != len(faces):
+            raise NiftySimError(f"NumFaces={num} but {len(faces)} faces listed", f, key)
+    if len(faces) == 0:
+        raise NiftySimError(f"{ctype}: no faces selected", f, key)
+    return faces, orient
+
+
+def surface_load(c, b, T: np.ndarray, shapes: dict, f: str, key: str, unsupported) -> None:
+    """<Constraint Type="Pressure"> (a follower pressure, tledPressureConstraint: one <Magnitude>
+    [Pa], positive against the facet normal (x1 − x0) × (x2 − x0)) or Type="Traction"
+    (tledTractionConstraint: <Magnitudes Type="UNIFORM"> tx ty tz, or DIFFORM, three per facet
+    [Pa], on each facet's current area) on surface_faces. NiftySim applies a traction against its
+    vector (the force on a facet is −|a| t; its unit test testTractionConstraint checks that sum),
+    so pliant adds the traction −t."""
+    shape = c.get("LoadShape")
+    if shape not in shapes:
+        unsupported(f"LoadShape={shape}", "pliant imports RAMP, STEP, POLY345, HILLY and RAMPHOLD")
+        return
+    pressure = c.get("Type") == "Pressure"
+    tag = "Magnitude" if pressure else "Magnitudes"
+    mag = c.find(tag)
+    if mag is None:
+        what = "one value [Pa]" if pressure else 'Type="UNIFORM" tx ty tz, or DIFFORM per face [Pa]'
+        raise NiftySimError(f"{c.get('Type')} needs <{tag}> ({what})", f, key)
+    mtype = mag.get("Type", "UNIFORM")
+    if not pressure and mtype not in ("UNIFORM", "DIFFORM"):
+        unsupported(f"Magnitudes Type={mtype}", "pliant imports UNIFORM and DIFFORM")
+        return
+    v = _numbers(mag, f, f"{key}/{tag}")
+    faces, orient = surface_faces(c, b.nodes, T, f, key)
+    try:
+        if pressure:
+            if v.size != 1:
+                raise NiftySimError(f"<Magnitude>: expected one value, got {v.size}", f, f"{key}/{tag}")
+            b.add_pressure(faces, float(v[0]), shapes[shape](), orient=orient)
+            return
+        want = 3 if mtype == "UNIFORM" else 3 * len(faces)
+        if v.size != want:
+            raise NiftySimError(
+                f"<Magnitudes Type={mtype}>: {v.size} values; expected {want} (tx ty tz"
+                + (")" if mtype == "UNIFORM" else f" for each of the {len(faces)} faces)"),
+                f,
+                f"{key}/{tag}",
+            )
+        b.add_traction(faces, -v.reshape(-1, 3) if mtype == "DIFFORM" else -v, shapes[shape]())
+    except InputError as e:
+        raise NiftySimError(str(e), f, key) from None

@@ -18,8 +18,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from .niftysim import NiftySimError, _mesh, _numbers, element_set, facets_facing
-from .niftysim_geometry import MESH_FILE_TAGS, constraint_nodes, normal_spec, uses_node_shorthand
+from .niftysim import NiftySimError, _mesh, _numbers, element_set
+from .niftysim_geometry import MESH_FILE_TAGS, constraint_nodes, surface_faces, uses_node_shorthand
 
 __all__ = ["flatten_submodels"]
 
@@ -131,9 +131,9 @@ def _offset_set(es: ET.Element, M: int, first: int, f: str, key: str) -> ET.Elem
 
 
 def _mapped_constraint(c: ET.Element, node_map, X, T, f: str, key: str) -> ET.Element:
-    """A sub-model's constraint with its nodes (or pressure faces) in the merged numbering; a
-    pressure on the sub-model's whole surface or on its facets facing a normal becomes the list of
-    those facets, chosen on the sub-model's own surface (as NiftySim resolves it)."""
+    """A sub-model's constraint with its nodes (or pressure / traction faces) in the merged
+    numbering; faces on the sub-model's whole surface or facing a normal become the list of those
+    facets, chosen on the sub-model's own surface (as NiftySim resolves it)."""
     out = ET.Element("Constraint", dict(c.attrib))
     for child in c:
         if child.tag in ("Nodes", "Faces"):
@@ -146,14 +146,15 @@ def _mapped_constraint(c: ET.Element, node_map, X, T, f: str, key: str) -> ET.El
             raise NiftySimError(f"<{what}>: node index out of range 0..{n - 1} of its sub-model", f, key)
         return " ".join(str(int(v)) for v in node_map[ids])
 
-    if c.get("Type") == "Pressure":
-        faces = _local_faces(c, X, T, f, key)
-        if faces is not None:
-            fe = ET.SubElement(out, "Faces")
-            fe.text = mapped(faces.ravel(), "Faces")
-            out.set("NumFaces", str(len(faces)))
-            out.set("SpecType", "FACES")
-            out.attrib.pop("FaceType", None)
+    if c.get("Type") in ("Pressure", "Traction"):
+        faces, _ = surface_faces(c, X, T, f, key)  # on the sub-model's own surface
+        for child in [e for e in out if e.tag in ("Normal", "RestrictTo")]:
+            out.remove(child)
+        fe = ET.SubElement(out, "Faces")
+        fe.text = mapped(faces.ravel(), "Faces")
+        out.set("NumFaces", str(len(faces)))
+        out.set("SpecType", "FACES")
+        out.attrib.pop("FaceType", None)
         return out
     nodes = c.find("Nodes")
     if uses_node_shorthand(c):  # chosen on the sub-model's own mesh, as NiftySim resolves it
@@ -167,23 +168,3 @@ def _mapped_constraint(c: ET.Element, node_map, X, T, f: str, key: str) -> ET.El
         ne = ET.SubElement(out, "Nodes", dict(nodes.attrib))
         ne.text = mapped(_numbers(nodes, f, f"{key}/Nodes", np.int64), "Nodes")
     return out
-
-
-def _local_faces(c, X, T, f, key):
-    """The pressure facets of a sub-model's constraint in its own numbering, or None to keep it
-    as it is (the importer then reports what is wrong with it)."""
-    from ..mesh.topology import boundary_faces
-
-    if c.get("SpecType") == "NORMAL" or c.get("NumFaces") == "all":
-        B, _ = boundary_faces(T)
-        if c.get("NumFaces") == "all":
-            return B
-        v, angle = normal_spec(c, f, key)
-        return facets_facing(X, B, v, angle)
-    fe = c.find("Faces")
-    if fe is None:
-        return None
-    faces = _numbers(fe, f, f"{key}/Faces", np.int64)
-    if faces.size % 3:
-        raise NiftySimError(f"<Faces>: {faces.size} indices, not a multiple of 3", f, key)
-    return faces.reshape(-1, 3)

@@ -361,6 +361,7 @@ def _loads(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) -> None:
                 "total_force": "list",
                 "g": "list",
                 "value": "number",
+                "traction": "list",
                 "curve": "str|table",
                 "name": "str",
             },
@@ -393,10 +394,15 @@ def _tools(ctx: Ctx, tables: list, b: ModelBuilder, X, T, base: Path, scene: Sce
 
 
 def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -> None:
-    """One [[load]] table: gravity, force or pressure."""
+    """One [[load]] table: gravity (on every node, or on the selected ones), force, pressure or
+    traction."""
     curve = make_curve(ctx, ld.get("curve"), f"{p}.curve", scene.duration)
     if ld["type"] == "gravity":
-        b.set_gravity(vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g"), curve)
+        g = vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g")
+        if "nodes" in ld:
+            b.add_gravity(g, select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T), curve)
+        else:
+            b.set_gravity(g, curve)
     elif ld["type"] == "force":
         if "nodes" not in ld or (("force" in ld) == ("total_force" in ld)):
             raise ctx.error(
@@ -410,11 +416,12 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
         else:
             f = np.array(vector(ctx, ld["total_force"], f"{p}.total_force")) / ids.size
         b.add_force(ids, f, curve)
-    elif ld["type"] == "pressure":
-        if "nodes" not in ld or "value" not in ld:
+    elif ld["type"] in ("pressure", "traction"):
+        what = "value' [Pa]" if ld["type"] == "pressure" else "traction' [tx, ty, tz] [Pa]"
+        if "nodes" not in ld or ("value" if ld["type"] == "pressure" else "traction") not in ld:
             raise ctx.error(
                 p,
-                "a 'pressure' load needs 'value' [Pa] and 'nodes' (the boundary "
+                f"a '{ld['type']}' load needs '{what} and 'nodes' (the boundary "
                 "triangles whose three nodes are all selected)",
             )
         ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
@@ -425,10 +432,14 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
                 f"{p}.nodes",
                 f"the {ids.size} selected nodes hold no whole boundary triangle: select a surface patch",
             )
-        b.add_pressure(faces, float(ld["value"]), curve)
+        if ld["type"] == "pressure":
+            b.add_pressure(faces, float(ld["value"]), curve)
+        else:
+            b.add_traction(faces, vector(ctx, ld["traction"], f"{p}.traction"), curve)
     else:
         raise ctx.error(
-            f"{p}.type", f"unknown load {ld['type']!r}; expected 'force', 'pressure' or 'gravity'"
+            f"{p}.type",
+            f"unknown load {ld['type']!r}; expected 'force', 'pressure', 'traction' or 'gravity'",
         )
 
 

@@ -83,6 +83,7 @@ class ModelBuilder:
         self._cons: dict[tuple[int, int], tuple[float, LoadCurve]] = {}
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
+        self._tractions: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []  # add_traction
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
         self._node_gravity: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []  # add_gravity
         self.tools: list = []  # rigid tools (pliant.contact)
@@ -274,6 +275,27 @@ class ModelBuilder:
             F = np.array(out, np.int64)
         self._pressures.append((F, p, curve or Constant()))
 
+    def add_traction(self, faces, traction, curve: LoadCurve | None = None):
+        """Surface traction t [Pa] on triangles ``faces`` (F, 3) (user node ids), scaled by
+        ``curve``: each step, A t / 3 on each node of a triangle of current area A (force per
+        current area, in the fixed direction t; NiftySim's Traction). ``traction``: (3,) for
+        every face or (F, 3)."""
+        F = np.asarray(faces)
+        if F.ndim != 2 or F.shape[1] != 3 or F.shape[0] == 0 or not np.issubdtype(F.dtype, np.integer):
+            raise InputError(f"add_traction: faces shape {F.shape}; expected (F, 3) node ids")
+        F = self._node_ids(F.ravel(), "add_traction faces").reshape(-1, 3)
+        try:
+            t = np.asarray(traction, dtype=float)
+            t = np.broadcast_to(t, F.shape).copy() if t.ndim == 1 else t
+        except (TypeError, ValueError):
+            t = np.zeros((0, 0))
+        if t.shape != F.shape or not np.all(np.isfinite(t)):
+            raise InputError(
+                f"add_traction: traction of shape {t.shape} or not finite; expected finite (3,) or "
+                f"({F.shape[0]}, 3) [Pa]"
+            )
+        self._tractions.append((F, t, curve or Constant()))
+
     def set_gravity(self, g=(0.0, 0.0, -9.81), curve: LoadCurve | None = None):
         """Body acceleration g [m/s²] applied to every node as m_a·g, scaled by ``curve``."""
         gv = np.asarray(g, dtype=float).ravel()
@@ -342,7 +364,7 @@ class ModelBuilder:
         itself after a cut)."""
         b = copy.copy(self)
         b.sets, b._forces, b._pressures = list(self.sets), list(self._forces), list(self._pressures)
-        b._node_gravity = list(self._node_gravity)
+        b._node_gravity, b._tractions = list(self._node_gravity), list(self._tractions)
         b._cons, b.tools, b.tool_nodes = dict(self._cons), list(self.tools), list(self.tool_nodes)
         return b
 
@@ -351,7 +373,8 @@ class ModelBuilder:
         elements over the old nodes and the new ones, ``parent`` (K,) the node each new node
         (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints and
         node-set memberships (tools' and add_gravity's nodes); point forces stay on the parent
-        (their total is unchanged); each pressure face moves to the copies its element now uses."""
+        (their total is unchanged); each pressure or traction face moves to the copies its element
+        now uses."""
         parent = np.asarray(parent, np.int64)
         tets = np.asarray(tets, np.int64)
         b = self.snapshot()
@@ -375,7 +398,7 @@ class ModelBuilder:
             (np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]])), g, c)
             for s, g, c in self._node_gravity
         ]
-        if self._pressures:
+        if self._pressures or self._tractions:
             from ..cutting.split import LOCAL_FACES
 
             owner = {  # face → its element (a boundary face has one)
@@ -383,18 +406,23 @@ class ModelBuilder:
                 for e, t in enumerate(self.tets.tolist())
                 for f in np.asarray(t)[LOCAL_FACES].tolist()
             }
-            b._pressures = []
-            for F, p, curve in self._pressures:
-                moved = []
-                for f in F.tolist():
-                    e = owner.get(tuple(sorted(f)))
-                    if e is None:  # not a face of the mesh (orient=False): keep it
-                        moved.append(f)
-                        continue
-                    local = [int(np.nonzero(self.tets[e] == n)[0][0]) for n in f]  # same winding
-                    moved.append([int(tets[e, j]) for j in local])
-                b._pressures.append((np.array(moved, np.int64), p, curve))
+            b._pressures = [(self._moved_faces(F, tets, owner), p, c) for F, p, c in self._pressures]
+            b._tractions = [(self._moved_faces(F, tets, owner), t, c) for F, t, c in self._tractions]
         return b
+
+    def _moved_faces(self, F: np.ndarray, tets: np.ndarray, owner: dict) -> np.ndarray:
+        """Loaded faces F (K, 3) after a split: each boundary face (``owner``: sorted face → its
+        element) on the nodes its element ``tets`` now uses, in the same winding; a face that is
+        no element's is kept."""
+        moved = []
+        for f in F.tolist():
+            e = owner.get(tuple(sorted(f)))
+            if e is None:  # not a face of the mesh (orient=False): keep it
+                moved.append(f)
+                continue
+            local = [int(np.nonzero(self.tets[e] == n)[0][0]) for n in f]  # same winding
+            moved.append([int(tets[e, j]) for j in local])
+        return np.array(moved, np.int64).reshape(-1, 3)
 
     # --- finalize ---------------------------------------------------------------------------
     def finalize(self, dtype="float32", threads: int | None = None, backend: str = "cpu", device: int = 0):

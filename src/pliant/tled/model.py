@@ -207,13 +207,14 @@ class Model:
                 R = pattern_of.setdefault(cid(c), np.zeros((N, 3)))
                 np.add.at(R, node_rank[ids], m_a[ids, None] * g)
         pattern_curve = sorted(pattern_of)
-        press_F = (
-            np.concatenate([F for F, _, _ in builder._pressures])
-            if builder._pressures
-            else np.zeros((0, 3), np.int64)
-        )
-        press_p = np.concatenate([p for _, p, _ in builder._pressures]) if builder._pressures else np.zeros(0)
-        press_c = [cid(c) for F, _, c in builder._pressures for _ in range(len(F))]
+        # Loaded faces: follower pressures (p, no traction), then tractions (t, no pressure).
+        loaded = [(F, p, np.zeros((len(F), 3)), c) for F, p, c in builder._pressures] + [
+            (F, np.zeros(len(F)), t, c) for F, t, c in builder._tractions
+        ]
+        press_F = np.concatenate([F for F, *_ in loaded]) if loaded else np.zeros((0, 3), np.int64)
+        press_p = np.concatenate([p for _, p, _, _ in loaded]) if loaded else np.zeros(0)
+        press_t = np.concatenate([t for _, _, t, _ in loaded]) if loaded else np.zeros((0, 3))
+        press_c = [cid(c) for F, _, _, c in loaded for _ in range(len(F))]
         patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve else np.zeros((0, N, 3))
         cons = sorted(builder._cons.items())
         self._cons_user = [(n, d) for (n, d), _ in cons]
@@ -309,6 +310,7 @@ class Model:
                 press_nodes=[int(v) for v in node_rank[press_F].ravel()],
                 press_value=press_p.tolist(),
                 press_curve=press_c,
+                press_traction=press_t.ravel().tolist(),
                 anp=bool(builder.nodal_pressure),
                 group_visco=visco,
                 stiffness_damping=self.stiffness_damping,
