@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "graphs.hpp"
+#include "in_order.hpp"
 #include "pliant/config.hpp"
 
 namespace pliant {
@@ -56,7 +57,7 @@ struct ExecDeleter {
 
 }  // namespace cuda_detail
 
-class CudaDevice {
+class CudaDevice : public InOrderThen<CudaDevice> {
 public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda";
@@ -112,17 +113,6 @@ public:
         cuda_detail::each_counted_kernel<<<cuda_detail::grid_for(n_max), cuda_detail::kThreads, 0, stream_>>>(
             n_max, count, f);
         cuda_detail::check(cudaPeekAtLastError(), "launch");
-    }
-    /// each(n, f), then g() on one thread: two launches (the CPU's version saves a wait).
-    template <class F, class G>
-    void each_then(index_t n, const F& f, const G& g) {
-        each(n, f);
-        serial(g);
-    }
-    template <class F, class G>
-    void each_counted_then(index_t n_max, const index_t* count, const F& f, const G& g) {
-        each_counted(n_max, count, f);
-        serial(g);
     }
     /// body's launches, always: the flag lives on the device, and the kernels test it themselves.
     template <class V, class F>

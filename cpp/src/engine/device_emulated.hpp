@@ -15,11 +15,12 @@
 #include <vector>
 
 #include "graphs.hpp"
+#include "in_order.hpp"
 #include "pliant/config.hpp"
 
 namespace pliant {
 
-class EmulatedDevice {
+class EmulatedDevice : public InOrderThen<EmulatedDevice> {
 public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda-emulated";
@@ -62,17 +63,6 @@ public:
             const index_t n = *count < n_max ? *count : n_max;
             for (index_t i = 0; i < n; ++i) f(i);
         });
-    }
-    /// As on CUDA: each, then serial.
-    template <class F, class G>
-    void each_then(index_t n, const F& f, const G& g) {
-        each(n, f);
-        serial(g);
-    }
-    template <class F, class G>
-    void each_counted_then(index_t n_max, const index_t* count, const F& f, const G& g) {
-        each_counted(n_max, count, f);
-        serial(g);
     }
     /// As on CUDA: body's launches always run (their kernels test the flag).
     template <class V, class F>
