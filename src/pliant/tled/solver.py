@@ -90,7 +90,8 @@ class Solver:
             raise TimeStepError(
                 f"dt = {dt:.4g} s exceeds the critical time step {model.dt_critical:.4g} s "
                 f"(element {model.dt_critical_element}: smallest altitude / dilatational wave speed); "
-                f"use dt <= {model.dt_critical:.4g} s, or allow_unstable=True to force it"
+                f"use dt <= {model.dt_critical:.4g} s, or force it with allow_unstable=True "
+                "(pliant run --allow-unstable)"
             )
         self.dt = dt
         self.damping = model.damping if damping is None else float(damping)
