@@ -3,6 +3,7 @@ makes the command exit 1 naming it."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 from typer.testing import CliRunner
@@ -29,6 +30,13 @@ def test_quick_validation_passes_and_reports(tmp_path):
     assert f"{len(data['rows'])} of {len(data['rows'])} checks passed" in report
     for png in ("uniaxial.png", "cantilever.png"):
         assert (tmp_path / png).stat().st_size > 5000 and f"]({png})" in report
+    peers = {p["peer"].split()[0]: p for p in data["peers"]}
+    assert peers["pliant"]["ran"] and 0.4 < peers["pliant"]["ratio"] < 1.0  # locked linear tets
+    if importlib.util.find_spec("mujoco") is not None:  # the test extras install it
+        assert peers["mujoco"]["ran"] and "peers: MuJoCo flex, same mesh" in {r["case"] for r in data["rows"]}
+        assert f"| {peers['mujoco']['peer']} | {peers['mujoco']['ratio']:.4f} |" in report
+    else:
+        assert not peers["mujoco"]["ran"] and "not installed" in peers["mujoco"]["note"]
 
 
 def test_a_failing_check_exits_1_naming_it(tmp_path, monkeypatch):
