@@ -13,8 +13,11 @@ from pliant.cli import app
 from pliant.validate import Check
 
 
-def test_quick_validation_passes_and_reports(tmp_path):
-    r = CliRunner().invoke(app, ["validate", "--quick", "-o", str(tmp_path)])
+def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # nothing but the report lands in the working folder
+    r = CliRunner().invoke(app, ["validate", "--quick", "-o", str(tmp_path / "out")])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no MUJOCO_LOG.TXT
+    tmp_path = tmp_path / "out"
     assert r.exit_code == 0, r.output
     data = json.loads((tmp_path / "results.json").read_text())
     assert data["rows"] and all(row["passed"] for row in data["rows"])

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import importlib.util
-import os
 import time
 
 import numpy as np
@@ -66,20 +65,17 @@ def _pliant(X, T, root, tip, settle: float) -> tuple[float, float]:
 
 
 @contextlib.contextmanager
-def _quiet_c_output():
-    """MuJoCo's compiler prints warnings from C (a flex without equality constraints): keep them
-    out of the report's console."""
-    saved = [os.dup(1), os.dup(2)]
-    with open(os.devnull, "w") as null:
-        os.dup2(null.fileno(), 1)
-        os.dup2(null.fileno(), 2)
-        try:
-            yield
-        finally:
-            os.dup2(saved[0], 1)
-            os.dup2(saved[1], 2)
-            for fd in saved:
-                os.close(fd)
+def _mujoco_warnings(said: list[str]):
+    """MuJoCo's warnings (its compiler's, for a flex without equality constraints) into ``said``:
+    without a handler MuJoCo prints them and appends them to MUJOCO_LOG.TXT in the working folder."""
+    import mujoco
+
+    before = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(said.append)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(before)
 
 
 def _mujoco(X, T, root, tip, settle: float) -> tuple[float, float, str]:
@@ -101,7 +97,8 @@ def _mujoco(X, T, root, tip, settle: float) -> tuple[float, float, str]:
     </flexcomp>
   </worldbody>
 </mujoco>"""
-    with _quiet_c_output():
+    said: list[str] = []
+    with _mujoco_warnings(said):
         m = mujoco.MjModel.from_xml_string(xml)
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
