@@ -1,6 +1,7 @@
-"""Command line: info, demo (smoke test of the embedded default), bench, and exit code 2."""
+"""Command line: info, demo (smoke test of the embedded default), bench, run --set, and exit code 2."""
 
 import json
+from pathlib import Path
 
 import meshio
 import numpy as np
@@ -124,3 +125,25 @@ def test_more_frames_than_steps_warns_and_writes_one_per_step(tmp_path):
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert summary["frames"] == summary["steps"] + 1 < 1000
     assert any("a frame every step" in w for w in summary["warnings"]), summary["warnings"]
+
+
+def test_run_set_overrides_scene_keys_and_niftysim_paths(tmp_path):
+    """`pliant run --set KEY=VALUE`: a scene key and a NiftySim element path are set before loading
+    (the run ends at the duration set: steps × Δt); a malformed item or an unknown key exits 2
+    naming it."""
+    root = Path(__file__).resolve().parents[1]
+    cases = [
+        (root / "examples" / "cantilever.toml", ["solver.duration=0.002", "solver.dt=1e-5"], 0.002, 200),
+        (root / "tests" / "data" / "niftysim_ball_ball.xml", ["SystemParams.TimeStep=5e-5"], 1.0, 20000),
+    ]
+    for k, (path, sets, duration, steps) in enumerate(cases):
+        out = tmp_path / f"o{k}"
+        args = ["run", str(path), "-o", str(out), "--no-progress"]
+        r = runner.invoke(app, args + [a for s in sets for a in ("--set", s)])
+        assert r.exit_code == 0, r.output
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["steps"] == steps and abs(summary["simulated_time"] - duration) < 1e-12
+    scene = str(root / "examples" / "cantilever.toml")
+    for item, says in [("solver.duration", "expected KEY=VALUE"), ("solver.durationx=1", "durationx")]:
+        r = runner.invoke(app, ["run", scene, "-o", str(tmp_path / "bad"), "--set", item])
+        assert r.exit_code == 2 and says in r.output and "Traceback" not in r.output

@@ -92,12 +92,19 @@ def run(
     allow_unstable: bool = typer.Option(False, help="Accept a Δt above the critical step."),
     progress: bool = typer.Option(True, help="Show a progress bar."),
     backend: Optional[str] = typer.Option(None, help="cpu, cuda or cuda-emulated (default: the scene's)."),
+    set_: Optional[list[str]] = typer.Option(
+        None,
+        "--set",
+        help="KEY=VALUE set before loading, repeatable: a scene key (solver.dt=1e-4, "
+        "material.liver.E=3000) or a NiftySim element path (SystemParams.TimeStep=1e-4).",
+    ),
 ):
     """Run a scene or a NiftySim model; write result.pvd, frames, summary.json and result.png."""
+    from .job import parse_overrides
     from .runner import run_scene
 
     try:
-        sc = load_any(scene, ignore)  # its warnings are printed once the model is built
+        sc = load_any(scene, ignore, parse_overrides(set_))  # its warnings print once the model is built
         summary = run_scene(
             sc,
             out,

@@ -6,9 +6,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .errors import InputError
 from .tled import ModelBuilder
 
-__all__ = ["Scene", "load_job"]
+__all__ = ["Scene", "load_job", "parse_overrides"]
 
 
 @dataclass
@@ -52,3 +53,21 @@ def load_job(path, ignore=None, overrides: dict | None = None) -> Scene:
     from .scene import load_scene
 
     return load_scene(path, overrides)
+
+
+def parse_overrides(items) -> dict:
+    """``KEY=VALUE`` strings (the command line's ``--set``) as overrides for :func:`load_job`:
+    the value read as a TOML value (``1e-4``, ``[0, 0, -9.81]``, ``true``, ``"text"``), a bare
+    word as a string. InputError naming the item if it has no ``=`` or no key."""
+    from .scene.loader import tomllib
+
+    out: dict = {}
+    for item in items or ():
+        key, sep, text = str(item).partition("=")
+        if not sep or not key.strip() or not text.strip():
+            raise InputError(f"--set {item!r}: expected KEY=VALUE (e.g. solver.dt=1e-4)")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = text.strip()
+    return out
