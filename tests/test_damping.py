@@ -77,7 +77,8 @@ def test_first_bending_mode_decays_at_beta_omega_squared_over_two():
 
 def test_stable_step_shrinks_with_beta():
     """Δt_cr = (2/ω_max)(√(1 + ξ²) − ξ), ξ = β ω_max/2 (Belytschko, Liu & Moran 2000, eq. 6.3.18):
-    the model says so, a run at 0.9 Δt_cr stays bounded, and a step 3 Δt_cr (stable without β)
+    the model says so, a run at the default 0.8 Δt_cr stays bounded (0.9 Δt_cr is 1.8 % above the
+    exact damped limit the solver computes, and refused), and a step 3 Δt_cr (stable without β)
     blows up with it."""
     beta = 5e-4
     plain = ringing_cantilever()[0]
@@ -86,7 +87,7 @@ def test_stable_step_shrinks_with_beta():
     xi = beta / dt0
     assert model.dt_critical == pytest.approx(dt0 * (math.sqrt(1 + xi * xi) - xi), rel=1e-12)
     assert model.dt_critical < 0.1 * dt0
-    stable = pl.Simulation(model, dt=0.9 * model.dt_critical)
+    stable = pl.Simulation(model, dt=0.8 * model.dt_critical)
     stable.run(steps=4000)
     assert np.abs(stable.displacements).max() < 1e-3
     undamped = pl.Simulation(plain, dt=3 * model.dt_critical)

@@ -1,5 +1,6 @@
 """Explicit dynamics: energy behaviour, damping decay, stable time step, thread determinism."""
 
+import re
 import numpy as np
 import pytest
 
@@ -37,11 +38,10 @@ def test_mass_proportional_damping_decay_rate():
     assert abs(rate - alpha) <= 0.02 * alpha, rate
 
 
-def test_critical_time_step_against_largest_eigenfrequency():
-    """The stable step of central differences is 2/ω_max, ω_max² the largest eigenvalue of
-    M⁻¹K. K is built here by finite differences of the internal forces (an independent route).
-    The estimate h_min/c_d must be conservative and not wastefully so."""
-    X, model = _free_block(cells=(3, 2, 2))
+def _exact_step(model) -> float:
+    """2/ω_max, ω_max² the largest eigenvalue of M⁻¹K over all DOFs of an unconstrained model, K
+    built here by finite differences of the internal forces column by column (a dense, independent
+    route: the solver's own check uses Lanczos)."""
     s = model.state()
     n = model.n_nodes
     h = 1e-7
@@ -56,8 +56,16 @@ def test_critical_time_step_against_largest_eigenfrequency():
         Kmat[:, j] = (fp - fm) / (2 * h)
     m = np.repeat(model.mass, 3)
     A = Kmat / np.sqrt(m)[:, None] / np.sqrt(m)[None, :]
-    w_max = np.sqrt(np.linalg.eigvalsh(0.5 * (A + A.T)).max())
-    dt_exact = 2.0 / w_max
+    return 2.0 / np.sqrt(np.linalg.eigvalsh(0.5 * (A + A.T)).max())
+
+
+def test_critical_time_step_against_largest_eigenfrequency():
+    """The stable step of central differences is 2/ω_max, ω_max² the largest eigenvalue of
+    M⁻¹K. On this jittered block the element estimate h_min/c_d is conservative and not
+    wastefully so (it is not a bound: tests/test_stable_step.py has a regular box where it is 6 %
+    above the exact step)."""
+    X, model = _free_block(cells=(3, 2, 2))
+    dt_exact = _exact_step(model)
     assert model.dt_critical <= dt_exact
     assert model.dt_critical >= 0.3 * dt_exact
 
@@ -74,12 +82,20 @@ def test_unstable_step_blows_up_and_is_reported():
     assert err.value.element is not None or err.value.node is not None
 
 
-def test_dt_above_critical_is_refused():
-    X, model = _free_block()
+def test_dt_above_the_stable_step_is_refused():
+    """A step above the element estimate but below the mesh's own stable step runs; one above 0.99
+    of the stable step (the exact 2/ω_max, here by the dense route) is refused, naming both."""
+    X, model = _free_block(cells=(3, 2, 2))
+    dt_exact = _exact_step(model)
+    ok = min(0.98 * dt_exact, 1.5 * model.dt_critical)
+    assert ok > model.dt_critical  # the case: an estimate below the truth
+    pl.Solver(model, dt=ok)
     with pytest.raises(pl.TimeStepError) as err:
-        pl.Solver(model, dt=1.5 * model.dt_critical)
+        pl.Solver(model, dt=1.005 * dt_exact)
     msg = str(err.value)
-    assert f"{1.5 * model.dt_critical:.4g}" in msg and f"{model.dt_critical:.4g}" in msg
+    limit = float(re.search(r"stable time step ([0-9.e+-]+) s", msg).group(1))
+    assert f"{1.005 * dt_exact:.4g}" in msg
+    assert abs(limit / (0.99 * dt_exact) - 1) < 2e-3  # Lanczos to 1e-3, printed to 4 digits
 
 
 @pytest.mark.parametrize("dtype, extras", [("float32", False), ("float64", False), ("float32", True)])
@@ -185,3 +201,50 @@ def test_float32_rigid_offset_at_rest_stays_put():
     # float32 holds 1 m to 6e-8 m: the body stays where it is, undeformed.
     assert np.abs(u - [1.0, -1.0, 1.0]).max() < 1e-6
     assert np.abs(model.element_results(sim.state)["cauchy"]).max() < 1.0  # Pa, vs E = 3e4
+
+
+def _assembled_step(X, T, fixed, E, nu, rho) -> float:
+    """2/ω_max of linear elasticity on tets (X, T) with nodes ``fixed`` held: K assembled here from
+    each tet's gradients (K_ab = V [λ g_a g_bᵀ + μ g_b g_aᵀ + μ (g_a·g_b) I]), lumped M = ρV/4."""
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    n = len(X)
+    K, m = np.zeros((3 * n, 3 * n)), np.zeros(n)
+    for t in T:
+        A = np.c_[np.ones(4), X[t]]
+        g = np.linalg.inv(A)[1:, :].T  # (4, 3): ∇N_a
+        V = abs(np.linalg.det(A)) / 6
+        m[t] += rho * V / 4
+        for a in range(4):
+            for b in range(4):
+                block = (
+                    lam * np.outer(g[a], g[b]) + mu * np.outer(g[b], g[a]) + mu * (g[a] @ g[b]) * np.eye(3)
+                )
+                K[3 * t[a] : 3 * t[a] + 3, 3 * t[b] : 3 * t[b] + 3] += V * block
+    free = np.setdiff1d(np.arange(3 * n), (3 * fixed[:, None] + np.arange(3)).ravel())
+    s = 1 / np.sqrt(np.repeat(m, 3)[free])
+    return 2 / np.sqrt(np.linalg.eigvalsh(K[np.ix_(free, free)] * s[:, None] * s[None, :]).max())
+
+
+def test_a_step_under_the_estimate_that_is_unstable_is_refused():
+    """On a regular box with a fixed base the element estimate h_min/c_d is 6 % above the exact
+    limit: a step of 0.99 of the estimate was accepted and went unstable. The solver now refuses
+    it, naming the stable step (0.99 of the assembled 2/ω_max, to Lanczos' 1e-3), and runs at 0.98
+    of the exact limit for 20,000 steps; forced, the refused step blows up."""
+    E, nu, rho = 1e5, 0.3, 1000.0
+    X, T = pl.mesh.box_tets((0.03, 0.03, 0.03), (3, 3, 3))
+    fixed = np.nonzero(X[:, 2] < 1e-9)[0]
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.LinearElastic(E=E, nu=nu), density=rho)
+    b.fix(fixed)
+    b.set_gravity((1.0, 0.0, -9.81))
+    model = b.finalize("float64")
+    exact = _assembled_step(X, T, fixed, E, nu, rho)
+    assert model.dt_critical > 1.05 * exact  # the estimate is above the truth here
+    with pytest.raises(pl.TimeStepError, match="stable time step"):
+        pl.Solver(model, dt=0.99 * model.dt_critical)
+    sim = pl.Simulation(model, dt=0.98 * exact)
+    sim.run(steps=20000)
+    assert np.abs(sim.displacements).max() < 1e-3  # the static sag is 3.5e-5 m
+    with pytest.raises(pl.InstabilityError):
+        pl.Simulation(model, dt=0.99 * model.dt_critical, allow_unstable=True).run(steps=20000)

@@ -147,7 +147,7 @@ def test_millimetre_warning(tmp_path):
 def test_time_step_above_critical_exits_2(tmp_path):
     text = TENSION.replace("static = true", "static = false\ndt = 1.0")
     r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
-    assert r.exit_code == 2 and "exceeds the critical time step" in r.output
+    assert r.exit_code == 2 and "exceeds the stable time step" in r.output
 
 
 def test_interrupt_keeps_frames_and_summary(tmp_path, monkeypatch):
