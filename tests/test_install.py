@@ -28,7 +28,8 @@ PLIANT = Path(sys.executable).with_name("pliant")
 INDIRECT = {
     "networkx": "trimesh: hole filling, body splitting and winding repair (issue 11's traceback)",
 }
-# Modules imported only where installed (behind importlib.util.find_spec): declared in an extra.
+# Modules imported only where installed (behind importlib.util.find_spec), each the distribution of
+# the same name, declared in an extra.
 OPTIONAL = {"mujoco": "pliant validate's peer (pliant/validate/peers.py); the test extras install it"}
 
 
@@ -61,19 +62,19 @@ def test_every_imported_module_is_a_declared_dependency():
     missing = {}
     # tomli is declared for Python < 3.11 only, where tomllib does not exist.
     for mod in sorted(
-        (_imported_modules() | set(INDIRECT)) - ({"tomli"} if sys.version_info >= (3, 11) else set())
+        (_imported_modules() | set(INDIRECT))
+        - set(OPTIONAL)
+        - ({"tomli"} if sys.version_info >= (3, 11) else set())
     ):
         owners = {d.lower().replace("_", "-") for d in dists.get(mod, [])}
         assert owners, f"module {mod!r} is imported but no installed distribution provides it"
         if not owners & declared:
             missing[mod] = sorted(owners)
-    optional = {m: owners for m, owners in missing.items() if m in OPTIONAL}
-    missing = {m: owners for m, owners in missing.items() if m not in OPTIONAL}
     assert not missing, f"imported but not declared in pyproject.toml: {missing}"
+    # Optional modules (installed or not here): each is the distribution of that name in an extra.
     extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
     in_extras = {re.split(r"[ ;<>=!~\[]", r, maxsplit=1)[0].lower() for e in extras.values() for r in e}
-    for mod, owners in optional.items():
-        assert set(owners) & in_extras, f"optional module {mod!r} is in no extra of pyproject.toml"
+    assert set(OPTIONAL) <= _imported_modules() and set(OPTIONAL) <= in_extras, (OPTIONAL, in_extras)
 
 
 def _commands(group: typer.Typer) -> list[list[str]]:

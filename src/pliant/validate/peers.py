@@ -120,6 +120,20 @@ def _mujoco(X, T, root, tip, settle: float) -> tuple[float, float, str]:
     return float(-(d.flexvert_xpos[tip, 2] - x0[tip, 2]).mean()), settle / wall, mujoco.__version__
 
 
+def _mujoco_missing() -> str:
+    """Why MuJoCo cannot run here ("" if it can): not installed, or a partial install (mujoco 4
+    ships in three distributions that share the package folder)."""
+    if importlib.util.find_spec("mujoco") is None:
+        return "not installed (pip install mujoco)"
+    try:
+        import mujoco
+    except Exception as e:  # a broken install must not stop the report
+        return f"installed but not importable ({type(e).__name__})"
+    if not all(hasattr(mujoco, a) for a in ("MjModel", "set_mju_user_warning", "mj_step")):
+        return "installed but incomplete (no MjModel: reinstall mujoco)"
+    return ""
+
+
 def run_peers(quick: bool) -> tuple[list[Check], list[dict]]:
     """Checks (pliant against the closed form and MuJoCo on the same mesh, where MuJoCo is
     installed) and the peers table: per simulator its tip deflection over the closed form and its
@@ -132,7 +146,8 @@ def run_peers(quick: bool) -> tuple[list[Check], list[dict]]:
         {"peer": "pliant", "ran": True, "ratio": ours / ref, "speed": speed, "note": "cpu, float64, 1 thread"}
     ]
     rows: list[Check] = []
-    if importlib.util.find_spec("mujoco") is not None:
+    why = _mujoco_missing()
+    if not why:
         theirs, their_speed, version = _mujoco(X, T, root, tip, settle)
         table.append(
             {
@@ -157,7 +172,7 @@ def run_peers(quick: bool) -> tuple[list[Check], list[dict]]:
             )
         )
     else:
-        table.append({"peer": "mujoco", "ran": False, "note": "not installed (pip install mujoco)"})
+        table.append({"peer": "mujoco", "ran": False, "note": why})
     there = importlib.util.find_spec("newton") is not None
     table.append(
         {
