@@ -269,15 +269,15 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
             e1[d] = nd.press_edges[6 * f + d] + (u[d * P + b] - ua);
             e2[d] = nd.press_edges[6 * f + 3 + d] + (u[d * P + c] - ua);
         }
+        const T n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                        e1[0] * e2[1] - e1[1] * e2[0]};
         const T s = nd.press_value[f] * factors[nd.press_slot[f]] / T(6);
-        out[0] -= s * (e1[1] * e2[2] - e1[2] * e2[1]);
-        out[1] -= s * (e1[2] * e2[0] - e1[0] * e2[2]);
-        out[2] -= s * (e1[0] * e2[1] - e1[1] * e2[0]);
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) out[d] -= s * n[d];
         const T* t = nd.press_traction + 3 * f;
         if (t[0] != T(0) || t[1] != T(0) || t[2] != T(0)) {  // a traction face: |n| t s / 6
-            const T n0 = e1[1] * e2[2] - e1[2] * e2[1], n1 = e1[2] * e2[0] - e1[0] * e2[2],
-                    n2 = e1[0] * e2[1] - e1[1] * e2[0];
-            const T st = factors[nd.press_slot[f]] / T(6) * std::sqrt(n0 * n0 + n1 * n1 + n2 * n2);
+            const T st =
+                factors[nd.press_slot[f]] / T(6) * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             PLIANT_UNROLL
             for (int d = 0; d < 3; ++d) out[d] += st * t[d];
         }
