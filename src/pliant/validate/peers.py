@@ -36,32 +36,26 @@ def uniform_load_tip(length=L, depth=H) -> float:
     return q * length**4 / (8 * E * inertia) + q * length**2 / (2 * (5 / 6) * shear * area)
 
 
-def _lumped_mass(X, T) -> np.ndarray:
-    """ρ V0 / 4 of each element on each of its nodes [kg] (pliant's lumped mass)."""
-    e = X[T[:, 1:]] - X[T[:, :1]]
-    v0 = np.einsum("ij,ij->i", e[:, 0], np.cross(e[:, 1], e[:, 2])) / 6.0
-    return np.bincount(T.ravel(), np.repeat(RHO * v0 / 4.0, 4), minlength=len(X))
-
-
 def _beam(cells: int):
     X, T = box_tets((L, H, H), (4 * cells, cells, cells))
     return X, T, np.nonzero(X[:, 0] < 1e-9)[0], np.nonzero(X[:, 0] > L - 1e-9)[0]
 
 
-def _pliant(X, T, root, tip, settle: float) -> tuple[float, float]:
-    """pliant: tip deflection [m] after ``settle`` s of damped dynamics, and simulated seconds per
-    wall second over them."""
+def _pliant(X, T, root, tip, settle: float) -> tuple[float, float, np.ndarray]:
+    """pliant: tip deflection [m] after ``settle`` s of damped dynamics, simulated seconds per wall
+    second over them, and its lumped nodal masses [kg] (for the peer)."""
     b = ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(LinearElastic(E=E, nu=NU), density=RHO)
     b.fix(root)
     b.set_gravity((0.0, 0.0, -G))
     b.damping = DAMPING
-    sim = Simulation(b.finalize("float64", threads=1), dt=DT)  # one thread, as MuJoCo's step
+    model = b.finalize("float64", threads=1)  # one thread, as MuJoCo's step
+    sim = Simulation(model, dt=DT)
     wall = time.perf_counter()
     sim.run(until=settle)
     wall = time.perf_counter() - wall
-    return float(-sim.displacements[tip, 2].mean()), settle / wall
+    return float(-sim.displacements[tip, 2].mean()), settle / wall, model.mass
 
 
 @contextlib.contextmanager
@@ -78,7 +72,7 @@ def _mujoco_warnings(said: list[str]):
         mujoco.set_mju_user_warning(before)
 
 
-def _mujoco(X, T, root, tip, settle: float) -> tuple[float, float, str]:
+def _mujoco(X, T, root, tip, mass, settle: float) -> tuple[float, float, str]:
     """MuJoCo flex on the same nodes and tets, with the same nodal masses: tip deflection [m],
     simulated seconds per wall second, and its version."""
     import mujoco
@@ -105,9 +99,8 @@ def _mujoco(X, T, root, tip, settle: float) -> tuple[float, float, str]:
     x0 = d.flexvert_xpos.copy()
     if x0.shape != X.shape or not np.allclose(x0, X):
         raise RuntimeError("MuJoCo's flex vertices are not the mesh's nodes in order")
-    # pliant's lumped masses (ρ V0 / 4 per corner) on the flex's vertex bodies, and damping c·m per
-    # DOF: the same load and damping (the flexcomp spreads its mass evenly: 3 % more sag).
-    mass = _lumped_mass(X, T)
+    # pliant's lumped masses ``mass`` (ρ V0 / 4 per corner) on the flex's vertex bodies, and damping
+    # c·m per DOF: the same load and damping (the flexcomp spreads its mass evenly: 3 % more sag).
     body = m.flex_vertbodyid[: len(X)]
     free = body > 0  # pinned vertices are the world's
     m.body_mass[body[free]] = mass[free]
@@ -141,14 +134,14 @@ def run_peers(quick: bool) -> tuple[list[Check], list[dict]]:
     cells, settle = (2, 0.06) if quick else (3, 0.12)  # settled to 6e-7 and 2e-10 (1.5× as long)
     X, T, root, tip = _beam(cells)
     ref = uniform_load_tip()
-    ours, speed = _pliant(X, T, root, tip, settle)
+    ours, speed, mass = _pliant(X, T, root, tip, settle)
     table = [
         {"peer": "pliant", "ran": True, "ratio": ours / ref, "speed": speed, "note": "cpu, float64, 1 thread"}
     ]
     rows: list[Check] = []
     why = _mujoco_missing()
     if not why:
-        theirs, their_speed, version = _mujoco(X, T, root, tip, settle)
+        theirs, their_speed, version = _mujoco(X, T, root, tip, mass, settle)
         table.append(
             {
                 "peer": f"mujoco {version}",
