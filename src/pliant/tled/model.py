@@ -330,6 +330,7 @@ class Model:
         self._backend, self._device = "cpu", 0  # the default backend of its solvers
         self._solver = None  # weak reference: the last solver that ran
         self.dt_critical = _damped_critical_step(float(self._engine.dt_critical), self.stiffness_damping)
+        self._stable_step: float | None = None  # 2/ω_max with β, when a solver first needs it
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])

@@ -60,16 +60,18 @@ def _stable_limit(model, dt: float) -> float:
     slivers (their nodes carry their neighbours' mass)."""
     if dt <= EXACT_CHECK_FRACTION * model.dt_critical:
         return model.dt_critical
-    from ..cutting.stability import stable_step
+    if model._stable_step is None:  # once per model: every solver of it asks the same
+        from ..cutting.stability import stable_step
 
-    exact = model
-    # float32 force differences are too noisy for Lanczos (ω_max 6.7x too high on ball_ball): a
-    # float64 copy of the model gives the step.
-    if model.dtype != np.float64:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the model's own warnings were given when it was built
-            exact = model._builder.finalize("float64", threads=model.threads)
-    limit = EXACT_MARGIN * stable_step(exact, exact.state())
+        exact = model
+        # float32 force differences are too noisy for Lanczos (ω_max 6.7x too high on ball_ball): a
+        # float64 copy of the model gives the step.
+        if model.dtype != np.float64:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the model's own warnings were given when it was built
+                exact = model._builder.finalize("float64", threads=model.threads)
+        model._stable_step = stable_step(exact, exact.state())
+    limit = EXACT_MARGIN * model._stable_step
     if dt > limit:
         raise TimeStepError(
             f"dt = {dt:.4g} s exceeds the stable time step {limit:.4g} s of this mesh (0.99 of 2/ω_max, "
