@@ -417,11 +417,11 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
             f = np.array(vector(ctx, ld["total_force"], f"{p}.total_force")) / ids.size
         b.add_force(ids, f, curve)
     elif ld["type"] in ("pressure", "traction"):
-        what = "value' [Pa]" if ld["type"] == "pressure" else "traction' [tx, ty, tz] [Pa]"
-        if "nodes" not in ld or ("value" if ld["type"] == "pressure" else "traction") not in ld:
+        key, unit = ("value", "[Pa]") if ld["type"] == "pressure" else ("traction", "[tx, ty, tz] [Pa]")
+        if "nodes" not in ld or key not in ld:
             raise ctx.error(
                 p,
-                f"a '{ld['type']}' load needs '{what} and 'nodes' (the boundary "
+                f"a '{ld['type']}' load needs '{key}' {unit} and 'nodes' (the boundary "
                 "triangles whose three nodes are all selected)",
             )
         ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
