@@ -221,13 +221,18 @@ def sweep(
 def validate(
     out: Path = typer.Option(Path("pliant-validation"), "-o", "--out", help="Output folder."),
     quick: bool = typer.Option(False, "--quick", help="The CI subset (under two minutes)."),
+    niftysim: Optional[str] = typer.Option(
+        None,
+        "--niftysim",
+        help="A NiftySim executable: run the cross-check models with it (else its stored results).",
+    ),
 ):
-    """Verify pliant against closed forms: OUT/report.md, results.json and plots; exit 1 if a
-    check fails."""
+    """Verify pliant against closed forms, NiftySim's results and peers: OUT/report.md,
+    results.json and plots; exit 1 if a check fails."""
     from .validate import run_validation
 
     try:
-        rows = run_validation(out, quick=quick, echo=console.print)
+        rows = run_validation(out, quick=quick, echo=console.print, niftysim=niftysim)
     except InputError as e:
         _fail(e, 2)
     failed = [r for r in rows if not r.passed]
