@@ -220,7 +220,7 @@ def deviation(xml: Path, u_file: Path, dtype: str = "float64", backend: str = "c
 
 def run_cross_checks(niftysim: str | Path | None = None) -> tuple[list[Check], list[dict]]:
     """One check per case against NiftySim's stored results, or against a fresh run of the
-    ``niftysim`` executable; and the table (case, material, largest |u|, deviation, source)."""
+    ``niftysim`` executable; and the table (case, material, largest ‖u‖, deviation)."""
     rows: list[Check] = []
     table: list[dict] = []
     source = f"NiftySim run now ({niftysim})" if niftysim else "NiftySim's results stored with pliant"
