@@ -1,5 +1,5 @@
-"""NiftySim cross-checks (pliant.validate.niftysim_cross): every NiftySim material, imported and run by
-pliant, against the displacements NiftySim itself computed for the same model (stored in the
+"""NiftySim cross-checks (pliant.validate.niftysim_cross): every NiftySim material and load, imported and
+run by pliant, against the displacements NiftySim itself computed for the same model (stored in the
 package's data/niftysim with their provenance), on each backend and precision; the stored models
 are the ones the module writes; a NiftySim executable given by the user is driven the same way."""
 
@@ -16,14 +16,15 @@ from pliant.validate import niftysim_cross as nc
 
 
 @pytest.mark.parametrize("case", sorted(nc.CROSS_CASES))
-def test_each_material_moves_as_in_niftysim(case, backend, dtype):
-    """The tolerance (nc.TOLERANCE, 5e-3 of the largest displacement) is NiftySim's float32
-    arithmetic and its explicit Newmark on T4ANP (measured 2.6e-4 to 3.2e-3 here, float64); the
-    convention slips it is there to catch are 1e-2 and larger (TI's fibre stiffness as NiftySim's
-    guide writes it, not as its code computes it: 6.6e-2)."""
+def test_each_material_and_load_moves_as_in_niftysim(case, backend, dtype):
+    """The tolerances (nc.TOLERANCE 1e-3 of the largest displacement, 5e-3 on T4ANP) are NiftySim's
+    float32 round-off (measured up to 1.6e-4 at these models' step, 7e-3 at others) and its explicit
+    Newmark on T4ANP (3.2e-3); the convention slips they are there to catch are 1e-2 and larger (TI's
+    fibre stiffness as NiftySim's guide writes it, not as its code computes it: 6.5e-2)."""
+    etype = nc.CROSS_CASES[case][0]
     dev, umax = nc.deviation(nc.DATA / f"{case}.xml", nc.DATA / f"{case}_U.txt", dtype, backend)
-    assert 0.015 < umax < 0.03  # the top moved 16 mm down and 8 mm sideways: a large-strain case
-    assert dev <= nc.TOLERANCE, f"{case} on {backend}, {dtype}: {dev:.2e}"
+    assert umax > 5e-3  # every case moves the top by millimetres: 5 to 43 mm
+    assert dev <= (nc.TOLERANCE_T4ANP if etype == "T4ANP" else nc.TOLERANCE), f"{case}: {dev:.2e}"
 
 
 @pytest.mark.parametrize("case", sorted(nc.CROSS_CASES))
