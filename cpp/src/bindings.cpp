@@ -129,14 +129,24 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);
                  return to_numpy(gather_nodes(s.s.u_prev, s.n_nodes, P), {size_t(s.n_nodes), 3});
              })
+        .def("get_du",  // the last step's increment before rounding (State::du; save/restore)
+             [](const S& s) {
+                 const index_t P = static_cast<index_t>(s.s.u.size() / 3);
+                 return to_numpy(gather_nodes(s.s.du, s.n_nodes, P), {size_t(s.n_nodes), 3});
+             })
         .def("set_u",
              [](S& s, In<double> a) {
                  scatter_nodes(a, s.s.u, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
-                 s.s.touch();
+                 reset_increment(s.s);
              })
         .def("set_u_prev",
              [](S& s, In<double> a) {
                  scatter_nodes(a, s.s.u_prev, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
+                 reset_increment(s.s);
+             })
+        .def("set_du",
+             [](S& s, In<double> a) {
+                 scatter_nodes(a, s.s.du, s.n_nodes, static_cast<index_t>(s.s.u.size() / 3));
                  s.s.touch();
              })
         .def("get_q",

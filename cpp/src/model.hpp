@@ -181,6 +181,10 @@ std::uint64_t new_version();
 template <class T>
 struct State {
     std::vector<T> u, u_prev;
+    // The last step's increment u − u⁻ as the update computed it, before u was rounded to T: the next
+    // step's velocity where it still reproduces u (node_update), so that the rounding of u does not
+    // enter the velocity. Set to u − u⁻ whenever u or u⁻ is set from outside.
+    std::vector<T> du;
     std::vector<T> q;  // viscoelastic state: 6 × visco_terms per element (or edge) slot, AoSoA (may be empty)
     // Grasping, per contact node (the model's contact-node order): the tool holding it (−1: none)
     // and its position in that tool's frame [m], (n_contact, 3).
@@ -192,11 +196,19 @@ struct State {
     explicit State(index_t n_pad, std::size_t q_size = 0, std::size_t n_contact = 0)
         : u(3 * static_cast<std::size_t>(n_pad), T(0)),
           u_prev(u),
+          du(u),
           q(q_size, T(0)),
           grip_tool(n_contact, -1),
           grip_at(3 * n_contact, 0.0) {}
     void touch() { version = new_version(); }
 };
+
+/// u or u⁻ set from outside: the increment is u − u⁻ again.
+template <class T>
+void reset_increment(State<T>& s) {
+    for (std::size_t i = 0; i < s.u.size(); ++i) s.du[i] = s.u[i] - s.u_prev[i];
+    s.touch();
+}
 
 /// Central differences assume equal steps: when Δt changes from s.dt to dt, rescale u⁻ so that the
 /// velocity (u − u⁻)/Δt is kept. Returns whether anything changed.
@@ -204,7 +216,10 @@ template <class T>
 bool keep_velocity(State<T>& s, double dt) {
     if (s.dt <= 0.0 || s.dt == dt) return false;
     const T r = T(dt / s.dt);
-    for (std::size_t i = 0; i < s.u.size(); ++i) s.u_prev[i] = s.u[i] - r * (s.u[i] - s.u_prev[i]);
+    for (std::size_t i = 0; i < s.u.size(); ++i) {
+        s.u_prev[i] = s.u[i] - r * (s.u[i] - s.u_prev[i]);
+        s.du[i] = r * s.du[i];
+    }
     return true;
 }
 

@@ -286,13 +286,18 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
 
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
 /// bitwise reproducible), then u⁺ = u + (γ2 − 1)(u − u⁻) + γ1 M⁻¹(r − f) (central differences),
-/// r = load patterns + follower pressure and surface traction at u.
-/// Inputs: node data, element forces, load-pattern factors, u and u⁻ [m] SoA (3, P).
-/// Outputs: u_out [m]; f_node_out [N] (internal force per node, may be null).
+/// r = load patterns + follower pressure and surface traction at u. The velocity term takes du, the
+/// last update's increment before u was rounded, where u⁻ + du still rounds to u (nothing changed u
+/// since: no constraint or contact), else u − u⁻: the rounding of u (half a unit in its last place)
+/// does not enter the velocity and grow with every step (increment form of the recurrence: docs/
+/// engine.md, "Precision of float32 runs with small steps").
+/// Inputs: node data, element forces, load-pattern factors, u, u⁻ and du [m] SoA (3, P).
+/// Outputs: u_out [m], du_out [m] (the increment u_out − u before rounding); f_node_out [N]
+/// (internal force per node, may be null).
 template <class T>
 PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, const T* pattern_factors,
-                           const Integrator<T>& it, const T* u, const T* u_prev, index_t P, T* u_out,
-                           T* f_node_out) {
+                           const Integrator<T>& it, const T* u, const T* u_prev, const T* du, index_t P,
+                           T* u_out, T* du_out, T* f_node_out) {
     T f[3] = {T(0), T(0), T(0)};
     const index_t end = nd.inc_offsets[n + 1];
     for (index_t k = nd.inc_offsets[n]; k < end; ++k) {
@@ -309,7 +314,10 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
         const index_t i = d * P + n;
         T r = rp[d];
         for (int k = 0; k < nd.n_patterns; ++k) r += pattern_factors[k] * nd.load_patterns[k * 3 * P + i];
-        u_out[i] = u[i] + (it.c * (u[i] - u_prev[i]) + w * (r - f[d]));
+        const T v = u_prev[i] + du[i] == u[i] ? du[i] : u[i] - u_prev[i];
+        const T inc = it.c * v + w * (r - f[d]);
+        u_out[i] = u[i] + inc;
+        du_out[i] = inc;
         if (f_node_out) f_node_out[i] = f[d];
     }
 }

@@ -74,7 +74,7 @@ struct DeviceView {
     const double *tt, *tv, *X, *grid;
     const RigidTool* tools;
     const double *keys, *grips;  // keyframes, grasping tools' close/open times
-    T *u[3], *q, *f_elem, *J, *elem_p, *node_p, *f_node[2], *cnext, *pf;
+    T *u[3], *du[3], *q, *f_elem, *J, *elem_p, *node_p, *f_node[2], *cnext, *pf;
     Scalars<T>* sc;
     Pose *pose0, *pose1;
     double *cforce, *chunk, *hist, *fcon, *partial;
@@ -191,8 +191,8 @@ private:
     ModelBuffers<T, Dev> mb_;
     DeviceBuffer<RigidTool, Dev> d_tools_;
     DeviceBuffer<double, Dev> d_keys_, d_grips_, cforce_, chunk_, hist_, fcon_, partial_, gat_;
-    DeviceBuffer<T, Dev> u_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_, H_elem_, Hbar_,
-        P_edge_;
+    DeviceBuffer<T, Dev> u_[3], du_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_, H_elem_,
+        Hbar_, P_edge_;
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;

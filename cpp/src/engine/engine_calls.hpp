@@ -12,6 +12,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     const std::size_t P3 = 3 * static_cast<std::size_t>(m.n_pad);
     const std::size_t nt = m.tools.size(), nc = m.contact_nodes.size();
     for (auto& u : u_) u = DeviceBuffer<T, Dev>(dev_, P3);
+    for (auto& d : du_) d = DeviceBuffer<T, Dev>(dev_, P3);
     for (auto& f : f_node_) f = DeviceBuffer<T, Dev>(dev_, P3);
     q_ = DeviceBuffer<T, Dev>(dev_, m.visco_slots() * 6 * static_cast<std::size_t>(m.visco_terms));
     f_elem_ = DeviceBuffer<T, Dev>(dev_, 12 * S);
@@ -146,7 +147,7 @@ void Engine<T, Dev>::refresh_view() {
     v.pattern_curve = mb_.pcurve.data(), v.cnodes = mb_.cnodes.data(), v.cbits = mb_.cbits.data();
     v.curves = mb_.curves.data(), v.tt = mb_.tt.data(), v.tv = mb_.tv.data(), v.X = mb_.X.data();
     v.grid = mb_.grid.data(), v.tools = d_tools_.data(), v.keys = d_keys_.data(), v.grips = d_grips_.data();
-    for (int k = 0; k < 3; ++k) v.u[k] = u_[k].data();
+    for (int k = 0; k < 3; ++k) v.u[k] = u_[k].data(), v.du[k] = du_[k].data();
     v.q = q_.data(), v.f_elem = f_elem_.data(), v.J = J_.data();
     v.elem_p = elem_p_.data(), v.node_p = node_p_.data();
     v.f_node[0] = f_node_[0].data(), v.f_node[1] = f_node_[1].data();
@@ -182,6 +183,7 @@ void Engine<T, Dev>::load(const State<T>& s) {
     if (resident_ == &s && resident_version_ == s.version) return;
     u_[phase_.cur].upload(s.u.data(), s.u.size());
     u_[phase_.prev].upload(s.u_prev.data(), s.u_prev.size());
+    du_[phase_.cur].upload(s.du.data(), s.du.size());
     q_.upload(s.q.data(), s.q.size());
     gtool_.upload(s.grip_tool.data(), s.grip_tool.size());
     gat_.upload(s.grip_at.data(), s.grip_at.size());
@@ -194,6 +196,7 @@ template <class T, class Dev>
 void Engine<T, Dev>::store(State<T>& s) {
     u_[phase_.cur].download(s.u.data(), s.u.size());
     u_[phase_.prev].download(s.u_prev.data(), s.u_prev.size());
+    du_[phase_.cur].download(s.du.data(), s.du.size());
     q_.download(s.q.data(), s.q.size());
     gtool_.download(s.grip_tool.data(), s.grip_tool.size());
     gat_.download(s.grip_at.data(), s.grip_at.size());
@@ -280,7 +283,8 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
                                 int check_every, double blowup) {
     load(s);
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // start at rest
-    ensure_history(1);                                        // relax keeps the last step's tool forces
+    fill(v_.du[phase_.cur], T(0), du_[0].size());
+    ensure_history(1);  // relax keeps the last step's tool forces
     set_scalars(t_eval, dt, 0.0);
     RunReport rep;
     long done = 0;
@@ -324,6 +328,7 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
     if (m_.visco_terms > 0)  // the viscous state of the equilibrium: fully relaxed, stored
         dev_.region([&] { forces(v_.u[phase_.cur], ViscoMode::RelaxedStore, dt); });
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // equilibrium: at rest
+    fill(v_.du[phase_.cur], T(0), du_[0].size());
     rep.damping = dev_.read(&v_.sc->alpha);
     store(s);
     s.t = t_eval;

@@ -242,7 +242,8 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     const T* up = v.u[ph.prev];
     T* un = v.u[ph.next];
     dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
-        node_update(n, nd, v.f_elem, v.pf, v.sc->it, uc, up, v.P, un, f_node_out);
+        node_update(n, nd, v.f_elem, v.pf, v.sc->it, uc, up, v.du[ph.cur], v.P, un, v.du[ph.next],
+                    f_node_out);
         for (index_t i = v.co[n]; i < v.co[n + 1]; ++i)
             apply_constraint(i, v.cdof, v.cval, v.ccurve, v.cnext, un);
     });

@@ -581,8 +581,8 @@ class State:
         self._s.assign(other._s)
 
     def save(self, path):
-        """Save to a .npz file (u, u⁻ in user order, t, Δt, step count, the model's fingerprint),
-        atomically. ``.npz`` is appended to a name without it."""
+        """Save to a .npz file (u, u⁻ and the last increment in user order, t, Δt, step count, the
+        model's fingerprint), atomically. ``.npz`` is appended to a name without it."""
         from ..io.files import atomic_write, check_output_file
 
         path = Path(path)
@@ -590,9 +590,11 @@ class State:
             path = path.with_name(path.name + ".npz")
         check_output_file(path, "state file")
         u_prev = self.model.to_user_nodes(np.asarray(self._s.get_u_prev(), dtype=float))
+        du = self.model.to_user_nodes(np.asarray(self._s.get_du(), dtype=float))
         data = dict(
             u=self.displacements,
             u_prev=u_prev,
+            du=du,  # the last increment before rounding: the same bits after a restore
             t=self.time,
             dt=self.dt,
             step=self.steps,
@@ -657,6 +659,9 @@ class State:
                 )
             except (TypeError, ValueError) as e:
                 raise InputError(f"{path}: {e}") from None
+        du = self.model.to_engine_nodes(self._check(data["du"], f"{path}: du")) if "du" in data else None
         self._s.set_u(u)
-        self._s.set_u_prev(u_prev)
+        self._s.set_u_prev(u_prev)  # and the increment u − u⁻ (files saved before it was kept)
+        if du is not None:
+            self._s.set_du(du)
         self._s.t, self._s.dt, self._s.step = t, dt, step
