@@ -284,13 +284,19 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
     }
 }
 
+/// The last step's increment of one DOF [m]: du, the increment the update computed before u was
+/// rounded, where u⁻ + du still rounds to u (nothing moved the DOF since), else u − u⁻ (a constraint,
+/// a contact or the user set it). The velocity of central differences is this over Δt.
+template <class T>
+PLIANT_HD T last_increment(T u, T u_prev, T du) {
+    return u_prev + du == u ? du : u - u_prev;
+}
+
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
 /// bitwise reproducible), then u⁺ = u + (γ2 − 1)(u − u⁻) + γ1 M⁻¹(r − f) (central differences),
-/// r = load patterns + follower pressure and surface traction at u. The velocity term takes du, the
-/// last update's increment before u was rounded, where u⁻ + du still rounds to u (nothing changed u
-/// since: no constraint or contact), else u − u⁻: the rounding of u (half a unit in its last place)
-/// does not enter the velocity and grow with every step (increment form of the recurrence: docs/
-/// engine.md, "Precision of float32 runs with small steps").
+/// r = load patterns + follower pressure and surface traction at u. The velocity term is
+/// last_increment's: the rounding of u (half a unit in its last place) does not enter the velocity
+/// and grow with every step (docs/engine.md, "Precision of float32 runs with small steps").
 /// Inputs: node data, element forces, load-pattern factors, u, u⁻ and du [m] SoA (3, P).
 /// Outputs: u_out [m], du_out [m] (the increment u_out − u before rounding); f_node_out [N]
 /// (internal force per node, may be null).
@@ -314,8 +320,7 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
         const index_t i = d * P + n;
         T r = rp[d];
         for (int k = 0; k < nd.n_patterns; ++k) r += pattern_factors[k] * nd.load_patterns[k * 3 * P + i];
-        const T v = u_prev[i] + du[i] == u[i] ? du[i] : u[i] - u_prev[i];
-        const T inc = it.c * v + w * (r - f[d]);
+        const T inc = it.c * last_increment(u[i], u_prev[i], du[i]) + w * (r - f[d]);
         u_out[i] = u[i] + inc;
         du_out[i] = inc;
         if (f_node_out) f_node_out[i] = f[d];
