@@ -5,11 +5,12 @@ fixed, Δt = 0.5 ms over 0.5 s, damping 20 1/s, ρ = 1000 kg/m³: one per materi
 NH, AB, PY, TI, NHV, TIV, and NH on T4ANP elements; the fibre of TI and TIV along (1, 1, 1)/√3), its
 top moved 0.1 H sideways (x) and 0.2 H down (z) along POLY345; and one per load on NH (``LOADS``:
 nodal force on nodes chosen by normal, gravity, pressure on listed facets, traction on facets
-chosen by normal). The package's data/niftysim folder holds each model (CASE.xml, written by
-``model_xml``) and what NiftySim's CPU solver wrote for it (CASE_U.txt, its U.txt: one row per DOF,
-one column per output frame), with their provenance in data/README.md. pliant imports the same
-file, runs it to each frame's time and compares every node's displacement. Given a NiftySim
-executable (``pliant validate --niftysim PATH``) the models are run by it afresh.
+chosen by normal; the force on HILLY and the squeeze on RAMPHOLD too). The package's data/niftysim
+folder holds each model (CASE.xml, written by ``model_xml``) and what NiftySim's CPU solver wrote
+for it (CASE_U.txt, its U.txt: one row per DOF, one column per output frame), with their provenance
+in data/README.md. pliant imports the same file, runs it to each frame's time and compares every
+node's displacement. Given a NiftySim executable (``pliant validate --niftysim PATH``) the models
+are run by it afresh.
 
 Timing (NiftySim's tledSimulator::MainLoop and tledSolutionWriter::SaveSolution): NiftySim performs
 NumSteps + 1 steps and writes frame k (k = 1, 2, …) after k·Freq + 1 of them, so frame k is at
@@ -56,51 +57,53 @@ LE = f"{9 * KAPPA * MU / (3 * KAPPA + MU):.10g} {(3 * KAPPA - 2 * MU) / (6 * KAP
 # chosen by their normal (20 mN each in x, POLY345), gravity (RAMP, along (2, 0, 1)/√5), a follower
 # pressure on the listed facets (200 Pa, RAMP), a traction on the facets chosen by normal (RAMP).
 LOADS = {
-    "squeeze": """  <Constraint Type="Disp" DOF="0" LoadShape="POLY345" NumNodes="{n_top}">
+    "squeeze": """  <Constraint Type="Disp" DOF="0" LoadShape="{shape}" NumNodes="{n_top}">
     <Nodes>{top}</Nodes>
     <Magnitudes Type="UNIFORM">{shear:.10g}</Magnitudes>
   </Constraint>
-  <Constraint Type="Disp" DOF="2" LoadShape="POLY345" NumNodes="{n_top}">
+  <Constraint Type="Disp" DOF="2" LoadShape="{shape}" NumNodes="{n_top}">
     <Nodes>{top}</Nodes>
     <Magnitudes Type="UNIFORM">{squeeze:.10g}</Magnitudes>
   </Constraint>
 """,
-    "force": """  <Constraint Type="Force" DOF="0" LoadShape="POLY345" SpecType="NORMAL">
+    "force": """  <Constraint Type="Force" DOF="0" LoadShape="{shape}" SpecType="NORMAL">
     <Normal ToleranceAngle="5">0 0 1</Normal>
     <Magnitudes Type="UNIFORM">0.02</Magnitudes>
   </Constraint>
 """,
-    "gravity": """  <Constraint Type="Gravity" LoadShape="RAMP" NumNodes="all">
+    "gravity": """  <Constraint Type="Gravity" LoadShape="{shape}" NumNodes="all">
     <AccelerationMagnitude>9.81</AccelerationMagnitude>
     <AccelerationDirection>2 0 1</AccelerationDirection>
   </Constraint>
 """,
-    "pressure": """  <Constraint Type="Pressure" LoadShape="RAMP" FaceType="Tri" NumFaces="{n_faces}">
+    "pressure": """  <Constraint Type="Pressure" LoadShape="{shape}" FaceType="Tri" NumFaces="{n_faces}">
     <Faces>{faces}</Faces>
     <Magnitude>200</Magnitude>
   </Constraint>
 """,
-    "traction": """  <Constraint Type="Traction" LoadShape="RAMP" SpecType="NORMAL">
+    "traction": """  <Constraint Type="Traction" LoadShape="{shape}" SpecType="NORMAL">
     <Normal ToleranceAngle="5">0 0 1</Normal>
     <Magnitudes Type="UNIFORM">100 0 50</Magnitudes>
   </Constraint>
 """,
 }
 
-# case → (element type, material type, elastic parameters in NiftySim's order, visco, load)
-CROSS_CASES: dict[str, tuple[str, str, str, str, str]] = {
-    "LE": ("T4", "LE", LE, "", "squeeze"),
-    "NH": ("T4", "NH", NH, "", "squeeze"),
-    "NH_T4ANP": ("T4ANP", "NH", NH, "", "squeeze"),
-    "AB": ("T4", "AB", f"{MU:g} 1.3 {KAPPA:g}", "", "squeeze"),
-    "PY": ("T4", "PY", f"400 100 80 40 60 {KAPPA:g}", "", "squeeze"),
-    "TI": ("T4", "TI", f"{MU:g} {KAPPA:g} 3000 {FIBRE}", "", "squeeze"),
-    "NHV": ("T4", "NHV", NH, PRONY, "squeeze"),
-    "TIV": ("T4", "TIV", f"{MU:g} {KAPPA:g} 3000 {FIBRE}", PRONY, "squeeze"),
-    "force": ("T4", "NH", NH, "", "force"),
-    "gravity": ("T4", "NH", NH, "", "gravity"),
-    "pressure": ("T4", "NH", NH, "", "pressure"),
-    "traction": ("T4", "NH", NH, "", "traction"),
+# case → (element type, material type, elastic parameters in NiftySim's order, visco, (load, shape))
+CROSS_CASES: dict[str, tuple[str, str, str, str, tuple[str, str]]] = {
+    "LE": ("T4", "LE", LE, "", ("squeeze", "POLY345")),
+    "NH": ("T4", "NH", NH, "", ("squeeze", "POLY345")),
+    "NH_T4ANP": ("T4ANP", "NH", NH, "", ("squeeze", "POLY345")),
+    "AB": ("T4", "AB", f"{MU:g} 1.3 {KAPPA:g}", "", ("squeeze", "POLY345")),
+    "PY": ("T4", "PY", f"400 100 80 40 60 {KAPPA:g}", "", ("squeeze", "POLY345")),
+    "TI": ("T4", "TI", f"{MU:g} {KAPPA:g} 3000 {FIBRE}", "", ("squeeze", "POLY345")),
+    "NHV": ("T4", "NHV", NH, PRONY, ("squeeze", "POLY345")),
+    "TIV": ("T4", "TIV", f"{MU:g} {KAPPA:g} 3000 {FIBRE}", PRONY, ("squeeze", "POLY345")),
+    "force": ("T4", "NH", NH, "", ("force", "POLY345")),
+    "gravity": ("T4", "NH", NH, "", ("gravity", "RAMP")),
+    "pressure": ("T4", "NH", NH, "", ("pressure", "RAMP")),
+    "traction": ("T4", "NH", NH, "", ("traction", "RAMP")),
+    "force_HILLY": ("T4", "NH", NH, "", ("force", "HILLY")),
+    "squeeze_RAMPHOLD": ("T4", "NH", NH, "", ("squeeze", "RAMPHOLD")),
 }
 
 # Largest nodal deviation from NiftySim over the largest displacement, any frame. NiftySim computes
@@ -157,7 +160,7 @@ def _top_faces(T: np.ndarray, top: np.ndarray) -> np.ndarray:
 
 def model_xml(case: str) -> str:
     """The NiftySim model of a cross-check case (see the module's docstring)."""
-    etype, mtype, params, visco, load = CROSS_CASES[case]
+    etype, mtype, params, visco, (load, shape) = CROSS_CASES[case]
     X, T = box_tets(SIZE, CELLS)
     h = SIZE[2]
     base, top = np.nonzero(X[:, 2] < 1e-12)[0], np.nonzero(X[:, 2] > h - 1e-12)[0]
@@ -176,6 +179,7 @@ def model_xml(case: str) -> str:
         n_base=len(base),
         base=_ids(base),
         load=LOADS[load].format(
+            shape=shape,
             n_top=len(top),
             top=_ids(top),
             shear=SHEAR * h,
@@ -268,7 +272,7 @@ def run_cross_checks(niftysim: str | Path | None = None) -> tuple[list[Check], l
     rows: list[Check] = []
     table: list[dict] = []
     source = f"NiftySim run now ({niftysim})" if niftysim else "NiftySim's results stored with pliant"
-    for case, (etype, mtype, _, _, load) in CROSS_CASES.items():
+    for case, (etype, mtype, _, _, (load, shape)) in CROSS_CASES.items():
         xml = DATA / f"{case}.xml"
         u_file = run_niftysim(niftysim, xml) if niftysim else DATA / f"{case}_U.txt"
         dev, umax = deviation(xml, u_file)
@@ -277,7 +281,7 @@ def run_cross_checks(niftysim: str | Path | None = None) -> tuple[list[Check], l
         rows.append(
             Check(
                 f"NiftySim cross-check: {case}",
-                f"largest nodal ‖u − u_NiftySim‖ / largest ‖u‖, {mtype} on {etype}, {load}",
+                f"largest nodal ‖u − u_NiftySim‖ / largest ‖u‖, {mtype} on {etype}, {load} ({shape})",
                 dev,
                 TOLERANCE_T4ANP if etype == "T4ANP" else TOLERANCE,
                 "",
@@ -291,7 +295,7 @@ def run_cross_checks(niftysim: str | Path | None = None) -> tuple[list[Check], l
                 "case": case,
                 "material": mtype,
                 "elements": etype,
-                "load": load,
+                "load": f"{load} ({shape})",
                 "u_max": umax,
                 "deviation": dev,
             }
