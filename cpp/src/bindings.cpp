@@ -129,18 +129,10 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);
                  return to_numpy(gather_nodes(s.s.u_prev, s.n_nodes, P), {size_t(s.n_nodes), 3});
              })
-        .def("get_du",  // the last step's increment before rounding (State::du; save/restore)
+        .def("get_du",  // the last step's increment before rounding (State::du: velocity × Δt)
              [](const S& s) {
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);
                  return to_numpy(gather_nodes(s.s.du, s.n_nodes, P), {size_t(s.n_nodes), 3});
-             })
-        .def("get_increment",  // the last step's increment as the next step uses it (velocity × Δt)
-             [](const S& s) {
-                 std::vector<T> inc(s.s.u.size());
-                 for (std::size_t i = 0; i < inc.size(); ++i)
-                     inc[i] = last_increment(s.s.u[i], s.s.u_prev[i], s.s.du[i]);
-                 const index_t P = static_cast<index_t>(s.s.u.size() / 3);
-                 return to_numpy(gather_nodes(inc, s.n_nodes, P), {size_t(s.n_nodes), 3});
              })
         .def("set_u",
              [](S& s, In<double> a) {

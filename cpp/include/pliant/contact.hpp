@@ -304,13 +304,14 @@ PLIANT_HD index_t try_grasp(index_t i, const index_t* node_bits, const RigidTool
 /// that opens lets its nodes go; a tool that closes during the step grasps (try_grasp).
 /// Inputs: contact node i → node nodes[i], its bits, reference X [m] (3 per node, AoS,
 /// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt and their
-/// grip bits (closed). Outputs: u⁺ corrected, force_out, tool_out; grip_tool, grip_at updated.
+/// grip bits (closed). Outputs: u⁺ corrected and its increment du⁺ = u⁺ − u where corrected (the next
+/// step's velocity, node_update), force_out, tool_out; grip_tool, grip_at updated.
 template <class T>
 PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits, const double* X,
                             const T* mass, const T* u, index_t P, const RigidTool* tools, int n_tools,
                             const Pose* pose0, const Pose* pose1, const index_t* closed, const double* grid,
-                            double g1, T* u_next, double* force_out, index_t* tool_out, index_t* grip_tool,
-                            double* grip_at) {
+                            double g1, T* u_next, T* du_next, double* force_out, index_t* tool_out,
+                            index_t* grip_tool, double* grip_at) {
     const index_t n = nodes[i];
     double x0[3], x1[3], xs[3];
     for (int d = 0; d < 3; ++d) {
@@ -335,7 +336,9 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node
     for (int d = 0; d < 3; ++d) {
         const bool free = (node_bits[i] >> d) & 1;
         force_out[3 * i + d] = free ? m_over_g1 * (x1[d] - xs[d]) : 0.0;
-        if (free) u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
+        if (!free) continue;
+        u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
+        du_next[d * P + n] = u_next[d * P + n] - u[d * P + n];
     }
 }
 

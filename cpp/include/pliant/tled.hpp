@@ -284,26 +284,19 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
     }
 }
 
-/// The last step's increment of one DOF [m]: du, the increment the update computed before u was
-/// rounded, where u⁻ + du still rounds to u (nothing moved the DOF since), else u − u⁻ (a constraint,
-/// a contact or the user set it). The velocity of central differences is this over Δt.
-template <class T>
-PLIANT_HD T last_increment(T u, T u_prev, T du) {
-    return u_prev + du == u ? du : u - u_prev;
-}
-
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
-/// bitwise reproducible), then u⁺ = u + (γ2 − 1)(u − u⁻) + γ1 M⁻¹(r − f) (central differences),
-/// r = load patterns + follower pressure and surface traction at u. The velocity term is
-/// last_increment's: the rounding of u (half a unit in its last place) does not enter the velocity
-/// and grow with every step (docs/engine.md, "Precision of float32 runs with small steps").
-/// Inputs: node data, element forces, load-pattern factors, u, u⁻ and du [m] SoA (3, P).
-/// Outputs: u_out [m], du_out [m] (the increment u_out − u before rounding); f_node_out [N]
-/// (internal force per node, may be null).
+/// bitwise reproducible), then u⁺ = u + du⁺, du⁺ = (γ2 − 1) du + γ1 M⁻¹(r − f) (central differences:
+/// u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻ with du = u − u⁻), r = load patterns + follower pressure and
+/// surface traction at u. du is the last step's increment as computed, before u was rounded to T (and
+/// u⁺ − u where a constraint or contact set u⁺ since: apply_constraint, contact_node, soft_pass), so
+/// the rounding of u (half a unit in its last place) does not enter the velocity and grow with every
+/// step (docs/engine.md, "Precision of float32 runs with small steps").
+/// Inputs: node data, element forces, load-pattern factors, u and du [m] SoA (3, P).
+/// Outputs: u_out and du_out [m]; f_node_out [N] (internal force per node, may be null).
 template <class T>
 PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, const T* pattern_factors,
-                           const Integrator<T>& it, const T* u, const T* u_prev, const T* du, index_t P,
-                           T* u_out, T* du_out, T* f_node_out) {
+                           const Integrator<T>& it, const T* u, const T* du, index_t P, T* u_out, T* du_out,
+                           T* f_node_out) {
     T f[3] = {T(0), T(0), T(0)};
     const index_t end = nd.inc_offsets[n + 1];
     for (index_t k = nd.inc_offsets[n]; k < end; ++k) {
@@ -320,19 +313,21 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
         const index_t i = d * P + n;
         T r = rp[d];
         for (int k = 0; k < nd.n_patterns; ++k) r += pattern_factors[k] * nd.load_patterns[k * 3 * P + i];
-        const T inc = it.c * last_increment(u[i], u_prev[i], du[i]) + w * (r - f[d]);
+        const T inc = it.c * du[i] + w * (r - f[d]);
         u_out[i] = u[i] + inc;
         du_out[i] = inc;
         if (f_node_out) f_node_out[i] = f[d];
     }
 }
 
-/// Kinematic constraint i: u[dof_i] = value_i · curve factor (fixed nodes have value 0).
-/// dof is d*P + n in the SoA node layout.
+/// Kinematic constraint i: u⁺[dof_i] = value_i · curve factor (fixed nodes have value 0), and its
+/// increment du⁺ = u⁺ − u. dof is d*P + n in the SoA node layout.
 template <class T>
 PLIANT_HD void apply_constraint(index_t i, const index_t* dof, const T* value, const index_t* curve,
-                                const T* curve_factors, T* u_out) {
-    u_out[dof[i]] = value[i] * curve_factors[curve[i]];
+                                const T* curve_factors, const T* u, T* u_out, T* du_out) {
+    const index_t k = dof[i];
+    u_out[k] = value[i] * curve_factors[curve[i]];
+    du_out[k] = u_out[k] - u[k];
 }
 
 /// Stress and strain measures of one element, for output (not on the stepping path).

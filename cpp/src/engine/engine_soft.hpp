@@ -132,6 +132,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     const T* mass = relaxing ? v.relax_mass : v.mass;
     const T* uc = v.u[ph.cur];
     T* un = v.u[ph.next];
+    T* dun = v.du[ph.next];  // the increment of what the contact moves (node_update)
     const index_t chunks = (s.n_nodes + kSoftChunk - 1) / kSoftChunk;
     dev_.each_then(
         chunks,
@@ -189,6 +190,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
             for (int d = 0; d < 3; ++d) {
                 const double p = v.sacc[3 * i + d];
                 un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
+                dun[d * v.P + n] = un[d * v.P + n] - uc[d * v.P + n];
                 v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
                 v.sacc[3 * i + d] = 0.0;
             }

@@ -239,13 +239,13 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     const DeviceView<T> v = v_;
     const NodeData<T> nd = relaxing ? v.relax_nodes : v.nodes;
     const T* uc = v.u[ph.cur];
-    const T* up = v.u[ph.prev];
+    const T* duc = v.du[ph.cur];
     T* un = v.u[ph.next];
+    T* dun = v.du[ph.next];
     dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
-        node_update(n, nd, v.f_elem, v.pf, v.sc->it, uc, up, v.du[ph.cur], v.P, un, v.du[ph.next],
-                    f_node_out);
+        node_update(n, nd, v.f_elem, v.pf, v.sc->it, uc, duc, v.P, un, dun, f_node_out);
         for (index_t i = v.co[n]; i < v.co[n + 1]; ++i)
-            apply_constraint(i, v.cdof, v.cval, v.ccurve, v.cnext, un);
+            apply_constraint(i, v.cdof, v.cval, v.ccurve, v.cnext, uc, un, dun);
     });
 }
 
@@ -258,6 +258,7 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
     const T* mass = relaxing ? v.relax_mass : v.mass;
     const T* uc = v.u[ph.cur];
     T* un = v.u[ph.next];
+    T* dun = v.du[ph.next];
     dev_.each(v.chunks, [=] PLIANT_KERNEL(index_t c) {
         const int w = 6 * v.n_tools;
         double* h = v.chunk + static_cast<std::size_t>(c) * w;
@@ -266,7 +267,7 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
         const double g1 = double(v.sc->it.g1);
         for (index_t i = c * kContactChunk; i < end; ++i) {
             contact_node(i, v.cnodes, v.cbits, v.X, mass, uc, v.P, v.tools, v.n_tools, v.pose0, v.pose1,
-                         v.closed, v.grid, g1, un, v.cforce, v.ctool, v.gtool, v.gat);
+                         v.closed, v.grid, g1, un, dun, v.cforce, v.ctool, v.gtool, v.gat);
             add_tool_reaction(i, v.cnodes, v.X, un, v.P, v.pose1, v.cforce, v.ctool, h);
         }
     });

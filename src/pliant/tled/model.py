@@ -540,8 +540,8 @@ class State:
     def velocities(self) -> np.ndarray:
         if self._s.dt <= 0:
             return np.zeros((self.model.n_nodes, 3))
-        # The increment the next step uses (the engine's last_increment: free of the rounding of u).
-        return self.model.to_user_nodes(np.asarray(self._s.get_increment(), dtype=float)) / self._s.dt
+        # The increment the next step uses (State::du: free of the rounding of u).
+        return self.model.to_user_nodes(np.asarray(self._s.get_du(), dtype=float)) / self._s.dt
 
     def _check(self, a, name) -> np.ndarray:
         """A finite (N, 3) array in user order, or InputError saying what is wrong with it."""
