@@ -210,8 +210,8 @@ void reset_increment(State<T>& s) {
     s.touch();
 }
 
-/// Central differences assume equal steps: when Δt changes from s.dt to dt, rescale u⁻ so that the
-/// velocity (u − u⁻)/Δt is kept. Returns whether anything changed.
+/// Central differences assume equal steps: when Δt changes from s.dt to dt, rescale u⁻ and the
+/// increment du so that the velocity (u − u⁻)/Δt = du/Δt is kept. Returns whether anything changed.
 template <class T>
 bool keep_velocity(State<T>& s, double dt) {
     if (s.dt <= 0.0 || s.dt == dt) return false;

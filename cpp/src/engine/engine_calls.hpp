@@ -283,8 +283,8 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
                                 int check_every, double blowup) {
     load(s);
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // start at rest
-    fill(v_.du[phase_.cur], T(0), du_[0].size());
-    ensure_history(1);  // relax keeps the last step's tool forces
+    fill(v_.du[phase_.cur], T(0), du_[0].size());             // (no increment)
+    ensure_history(1);                                        // relax keeps the last step's tool forces
     set_scalars(t_eval, dt, 0.0);
     RunReport rep;
     long done = 0;
@@ -328,7 +328,7 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
     if (m_.visco_terms > 0)  // the viscous state of the equilibrium: fully relaxed, stored
         dev_.region([&] { forces(v_.u[phase_.cur], ViscoMode::RelaxedStore, dt); });
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // equilibrium: at rest
-    fill(v_.du[phase_.cur], T(0), du_[0].size());
+    fill(v_.du[phase_.cur], T(0), du_[0].size());             // (no increment)
     rep.damping = dev_.read(&v_.sc->alpha);
     store(s);
     s.t = t_eval;
