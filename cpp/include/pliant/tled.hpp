@@ -93,25 +93,25 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
 
 /// Stiffness-proportional (Rayleigh β) damping as a viscous stress, added to the element forces:
 /// S_d = β (λ0 tr(Ė) I + 2μ0 Ė), Ė = sym(Fᵀ Ḟ), Ḟ = ∇X v with the half-step velocity
-/// v = (u − u⁻)/Δt, and f_a += V0 · F S_d ∇X N_a. At small strain this is C = βK with the
-/// material's small-strain moduli (μ0 = shear_modulus(), λ0 = dilatational_modulus() − 2μ0);
-/// rigid motion has Ė = 0 and is not damped (Belytschko, Liu & Moran 2000, §6.2.2 and Box 6.1;
+/// v = du/Δt (du = u − u⁻ before rounding: node_update), and f_a += V0 · F S_d ∇X N_a. At small strain this
+/// is C = βK with the material's small-strain moduli (μ0 = shear_modulus(), λ0 = dilatational_modulus() −
+/// 2μ0); rigid motion has Ė = 0 and is not damped (Belytschko, Liu & Moran 2000, §6.2.2 and Box 6.1;
 /// Abaqus/Explicit's β damping stress σ_d = β D^el : ε̇). Central differences with it are stable
 /// for Δt ≤ (2/ω_max)(√(1 + ξ²) − ξ), ξ = β ω_max / 2 (Belytschko et al. 2000, eq. 6.3.18).
-/// Inputs: material, element data, u and u⁻ [m] SoA (3, P), β/Δt [1]. Output: f_inout [N] (+=).
+/// Inputs: material, element data, u and du [m] SoA (3, P), β/Δt [1]. Output: f_inout [N] (+=).
 template <class T, class Material>
 PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
-                                  const T* u_prev, index_t P, T beta_over_dt, T* f_inout) {
+                                  const T* du, index_t P, T beta_over_dt, T* f_inout) {
     const Mat3<T> H = displacement_gradient(b, l, el, u, P);
-    const Mat3<T> Hp = displacement_gradient(b, l, el, u_prev, P);
-    Mat3<T> FtFdot;  // Fᵀ Ḟ Δt, Ḟ Δt = H − H⁻, F = I + H
+    const Mat3<T> Hd = displacement_gradient(b, l, el, du, P);  // Ḟ Δt
+    Mat3<T> FtFdot;                                             // Fᵀ Ḟ Δt, F = I + H
     PLIANT_UNROLL
     for (int i = 0; i < 3; ++i) {
         PLIANT_UNROLL
         for (int j = 0; j < 3; ++j) {
-            T s = H.a[3 * i + j] - Hp.a[3 * i + j];
+            T s = Hd.a[3 * i + j];
             PLIANT_UNROLL
-            for (int k = 0; k < 3; ++k) s += H.a[3 * k + i] * (H.a[3 * k + j] - Hp.a[3 * k + j]);
+            for (int k = 0; k < 3; ++k) s += H.a[3 * k + i] * Hd.a[3 * k + j];
             FtFdot.a[3 * i + j] = s;
         }
     }

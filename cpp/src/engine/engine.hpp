@@ -169,7 +169,7 @@ public:
     void launch_measures(const Span& sp, const T* u, double dt, T* out);
     void damping(const Phase& ph, double dt);
     template <class M, Variant V>
-    void launch_damping(const Span& sp, const T* u, const T* u_prev, T beta_over_dt);
+    void launch_damping(const Span& sp, const T* u, const T* du, T beta_over_dt);
 
 private:
     template <class Visitor>

@@ -212,23 +212,23 @@ void Engine<T, Dev>::launch_edge_stress(const Span& sp, ViscoMode visco_mode, do
 }
 
 /// Stiffness-proportional damping (β [s]): each element's viscous forces from its half-step
-/// velocity (u − u⁻)/Δt, added to its element forces (tled.hpp: add_damping_forces).
+/// velocity du/Δt, added to its element forces (tled.hpp: add_damping_forces).
 template <class T, class Dev>
 void Engine<T, Dev>::damping(const Phase& ph, double dt) {
     const T* u = v_.u[ph.cur];
-    const T* u_prev = v_.u[ph.prev];
+    const T* du = v_.du[ph.cur];
     const T beta_over_dt = T(m_.stiffness_damping / dt);
-    dispatch([&]<class M, Variant V>(const Span& sp) { launch_damping<M, V>(sp, u, u_prev, beta_over_dt); });
+    dispatch([&]<class M, Variant V>(const Span& sp) { launch_damping<M, V>(sp, u, du, beta_over_dt); });
     dev_.barrier();
 }
 
 template <class T, class Dev>
 template <class M, Variant V>
-void Engine<T, Dev>::launch_damping(const Span& sp, const T* u, const T* u_prev, T beta_over_dt) {
+void Engine<T, Dev>::launch_damping(const Span& sp, const T* u, const T* du, T beta_over_dt) {
     const DeviceView<T> v = v_;
     dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
         const M mat = make_material<M>(v.mats[v.block_group[b]]);
-        add_damping_forces(b, l, mat, v.el, u, u_prev, v.P, beta_over_dt, v.f_elem);
+        add_damping_forces(b, l, mat, v.el, u, du, v.P, beta_over_dt, v.f_elem);
     });
 }
 
