@@ -18,7 +18,6 @@ t = (k·Freq + 1) Δt."""
 
 from __future__ import annotations
 
-import re
 import shutil
 import subprocess
 import tempfile
@@ -28,6 +27,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..mesh import box_tets
+from ..mesh.topology import boundary_faces
 from ..tled import Simulation
 from .cases import Check
 
@@ -150,21 +150,14 @@ def _ids(ix) -> str:
     return " ".join(str(int(i)) for i in np.ravel(ix))
 
 
-def _top_faces(T: np.ndarray, top: np.ndarray) -> np.ndarray:
-    """The boundary facets (3 nodes, outward by the right hand) with every node on the top."""
-    faces = np.concatenate([T[:, [1, 2, 3]], T[:, [0, 3, 2]], T[:, [0, 1, 3]], T[:, [0, 2, 1]]])
-    _, inverse, count = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True, return_counts=True)
-    boundary = faces[count[inverse.ravel()] == 1]
-    return boundary[np.isin(boundary, top).all(axis=1)]
-
-
 def model_xml(case: str) -> str:
     """The NiftySim model of a cross-check case (see the module's docstring)."""
     etype, mtype, params, visco, (load, shape) = CROSS_CASES[case]
     X, T = box_tets(SIZE, CELLS)
     h = SIZE[2]
     base, top = np.nonzero(X[:, 2] < 1e-12)[0], np.nonzero(X[:, 2] > h - 1e-12)[0]
-    faces = _top_faces(T, top)
+    faces = boundary_faces(T)[0]
+    faces = faces[np.isin(faces, top).all(axis=1)]  # the top's facets, outward
     return _MODEL.format(
         case=case,
         n_nodes=len(X),
@@ -193,13 +186,6 @@ def model_xml(case: str) -> str:
         rho=RHO,
         freq=FREQ,
     )
-
-
-def _output_freq(xml: Path) -> int:
-    m = re.search(r'<Output\s+Freq="(\d+)"', xml.read_text())
-    if not m:
-        raise InputError(f"{xml}: no <Output Freq=...>: a cross-check model writes frames")
-    return int(m.group(1))
 
 
 def read_u(path: Path, n_nodes: int) -> np.ndarray:
@@ -231,17 +217,15 @@ def run_niftysim(binary: str | Path, xml: Path, timeout: float = 600.0) -> Path:
         done = subprocess.run(
             [exe, "-x", "model.xml"], cwd=work, capture_output=True, text=True, timeout=timeout
         )
-        if done.returncode != 0 or not (work / "U.txt").is_file():
-            said = (done.stdout + done.stderr).strip().splitlines()[-1:] or ["no output"]
-            raise InputError(
-                f"--niftysim {binary}: wrote no U.txt for {xml.name} (exit {done.returncode}: {said[0]})"
-            )
     except (OSError, subprocess.TimeoutExpired) as e:
         shutil.rmtree(work, ignore_errors=True)
         raise InputError(f"--niftysim {binary}: could not run it on {xml.name} ({e})") from None
-    except InputError:
+    if done.returncode != 0 or not (work / "U.txt").is_file():
         shutil.rmtree(work, ignore_errors=True)
-        raise
+        said = (done.stdout + done.stderr).strip().splitlines()[-1:] or ["no output"]
+        raise InputError(
+            f"--niftysim {binary}: wrote no U.txt for {xml.name} (exit {done.returncode}: {said[0]})"
+        )
     return work / "U.txt"
 
 
@@ -252,9 +236,9 @@ def deviation(xml: Path, u_file: Path, dtype: str = "float64", backend: str = "c
     from ..io.niftysim import load_niftysim
 
     job = load_niftysim(xml)
-    if job.dt is None:
-        raise InputError(f"{xml}: no <TimeStep>: a cross-check model runs at NiftySim's step")
-    dt, freq = job.dt, _output_freq(xml)
+    if job.dt is None or job.output_every is None:
+        raise InputError(f"{xml}: a cross-check model needs <TimeStep> and <Output Freq>")
+    dt, freq = job.dt, job.output_every
     model = job.builder.finalize(dtype, backend=backend)
     U = read_u(u_file, model.n_nodes)
     sim = Simulation(model, dt=dt)
