@@ -92,6 +92,23 @@ def test_bench_json(tmp_path):
     assert all(row["element_steps_per_second"] > 0 for row in rows)
 
 
+def test_bench_on_a_device_without_kernel_timings(tmp_path):
+    """The emulated GPU's launches are not timed one by one (nor are the GPU's, inside graphs):
+    the kernel shares are null in the JSON and "-" in the table, not a made-up 0 %."""
+    f = tmp_path / "b.json"
+    r = runner.invoke(
+        app,
+        ["bench", "--backend", "cuda-emulated", "--sizes", "600", "--large-steps", "5", "--json", str(f)],
+    )
+    assert r.exit_code == 0, r.output
+    (row,) = json.loads(f.read_text())["rows"]
+    assert row["backend"] == "cuda-emulated" and row["element_seconds"] is None
+    assert row["threads"] >= 1 and row["element_steps_per_second"] > 0
+    row_line = next(ln for ln in r.output.splitlines() if ln.startswith("│") and "600" in ln)
+    cells = [c.strip() for c in row_line.split("│")[1:-1]]
+    assert cells[5] == "-"  # kernel 1 %
+
+
 def test_bad_option_exits_2():
     r = runner.invoke(app, ["bench", "--sizes", "abc"])
     assert r.exit_code == 2

@@ -361,9 +361,9 @@ def bench(
             f"{r.tets:,}",
             f"{r.nodes:,}",
             f"{r.steps:,}",
-            str(r.threads),
+            "GPU" if r.threads is None else str(r.threads),
             f"{r.seconds_per_8000:.3f}",
-            f"{100 * r.element_seconds / r.seconds:.0f}",
+            _percent(None if r.element_seconds is None else r.element_seconds / r.seconds),
             f"{r.element_steps_per_second / 1e6:,.1f}",
             f"{r.bytes_per_tet:.0f}",
             f(r.speedup_vs_study_gpu),
@@ -385,10 +385,12 @@ def bench(
                 if "skipped" in r
                 else console.print(
                     f"  {r['case']}: {r['tets']:,} tets, {r['contact_nodes']:,} contact nodes, "
-                    f"{r['steps']} steps in {r['seconds']:.2f} s; contact {100 * r['contact_share']:.1f} %, "
-                    f"kernel 1 {100 * r['element_share']:.0f} %, kernel 2 {100 * r['node_share']:.0f} %"
+                    f"{r['steps']} steps in {r['seconds']:.2f} s; "
+                    f"contact {_percent(r['contact_share'], 1)} %, "
+                    f"kernel 1 {_percent(r['element_share'])} %, kernel 2 {_percent(r['node_share'])} %"
                 )
-            )
+            ),
+            backend=backend,
         )
         if json_out:
             from .io.files import atomic_write_text
@@ -398,15 +400,21 @@ def bench(
             atomic_write_text(json_out, json.dumps(data, indent=2), "benchmark JSON")
 
 
+def _percent(share, digits=0):
+    """A share of the step as a percentage; "-" where it was not measured (on the GPU)."""
+    return "-" if share is None else f"{100 * share:.{digits}f}"
+
+
 def _bench_batch(copies, steps, threads, dtype, json_out, backend):
     from .bench import bench_batch
 
     if copies < 1:
         _fail(InputError(f"--batch {copies}: expected at least 1 body"), 2)
     r = bench_batch(copies, steps=steps, threads=threads, dtype=dtype, backend=backend)
+    where = "GPU" if r["threads"] is None else f"{r['threads']} threads"
     console.print(
         f"{r['copies']} bodies of {r['tets']:,} tets, {r['steps']:,} steps, {backend}, "
-        f"{r['threads']} threads: one by one {r['one_by_one_s']:.3f} s, as one batch "
+        f"{where}: one by one {r['one_by_one_s']:.3f} s, as one batch "
         f"{r['batch_s']:.3f} s ({r['gain']:.2f}x; "
         f"{r['batch_element_steps_per_second'] / 1e6:,.1f} M element-steps/s)"
     )
@@ -434,7 +442,7 @@ def _bench_materials(steps, threads, dtype, json_out, backend):
             r["material"],
             f"{r['ms_per_step']:.3f}",
             f"{r['relative']:.2f}",
-            f"{100 * r['element_share']:.0f}",
+            _percent(r["element_share"]),
         )
     console.print(table)
     if json_out:

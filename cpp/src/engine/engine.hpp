@@ -110,6 +110,11 @@ struct Span {
 constexpr index_t kContactChunk = 512;
 /// Nodes per chunk of the relaxation's residual sums (fixed: the same bits for any thread count).
 constexpr index_t kMeasureChunk = 1024;
+/// Steps per replayed launch sequence (a CUDA graph) between two checks: a multiple of 6, the
+/// period of the buffer rotation (3) and of relax's force-buffer toggle (2), so that one captured
+/// graph serves every unit of a run. Longer runs between checks launch it repeatedly instead of
+/// capturing (and instantiating) a graph of check_every steps for each rotation phase.
+constexpr long kGraphSteps = 48;
 
 template <class T, class Dev>
 class Engine final : public Backend<T> {
