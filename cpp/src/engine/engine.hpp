@@ -44,6 +44,7 @@ struct Scalars {
     index_t where;
     double value;
     int soft_rebuild;  // soft contact: rebuild the candidate lists this step (set at each run's start)
+    int soft_moved;  // soft contact: smallest surface node beyond skin/2 of its last rebuild (INT_MAX: none)
     double soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m]
     index_t soft_active, soft_touched;  // soft contact: nodes with candidates; nodes of a sweep's contacts
     index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
@@ -89,7 +90,7 @@ struct DeviceView {
     // radius; triangles by bucket), candidates (kSoftCandidates per node), each node's contact
     // (triangle, weights, impulse), contacts per node, impulse sums and forces [N] (3 per node).
     SoftSurface soft;
-    double *sb, *smove, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare, *erec_w, *erec_p;
+    double *sb, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare, *erec_w, *erec_p;
     double* sx;  // the surface positions at u⁺ [m] (3 per node: soft_current), kept through the pass
     index_t *shead, *scursor, *sbucket, *scell, *scand, *snear, *srec, *sactive, *stouched, *erec, *eactive;
 };
@@ -201,8 +202,8 @@ private:
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
-    DeviceBuffer<double, Dev> sb_, smove_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, erec_w_,
-        erec_p_, d_soft_mu_, sx_;
+    DeviceBuffer<double, Dev> sb_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, erec_w_, erec_p_,
+        d_soft_mu_, sx_;
     DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, snear_, srec_, sactive_, stouched_,
         erec_, eactive_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;

@@ -88,7 +88,6 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     const std::size_t H = ns ? static_cast<std::size_t>(m_.soft_hash_mask) + 1 : 0;
     sb_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
     sx_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
-    smove_ = DeviceBuffer<double, Dev>(dev_, (ns + kSoftChunk - 1) / kSoftChunk);
     stc_ = DeviceBuffer<double, Dev>(dev_, 3 * nst);
     str_ = DeviceBuffer<double, Dev>(dev_, nst);
     srec_w_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
@@ -168,7 +167,7 @@ void Engine<T, Dev>::refresh_view() {
     sf.n_edges = static_cast<index_t>(m.soft_edges.size() / 2);
     sf.edge = mb_.sedges.data(), sf.tri_edge = mb_.stri_edge.data();
     sf.mu = d_soft_mu_.data(), sf.skin = m.soft_skin, sf.cell = m.soft_cell;
-    v.sb = sb_.data(), v.sx = sx_.data(), v.smove = smove_.data(), v.stc = stc_.data(), v.str = str_.data();
+    v.sb = sb_.data(), v.sx = sx_.data(), v.stc = stc_.data(), v.str = str_.data();
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();
     v.shead = shead_.data(), v.scursor = scursor_.data(), v.sbucket = sbucket_.data();
     v.scell = scell_.data(), v.scand = scand_.data(), v.snear = snear_.data(), v.srec = srec_.data(),
@@ -212,6 +211,7 @@ void Engine<T, Dev>::set_scalars(double t0, double dt, double alpha) {
     s.it = central_difference<T>(dt, alpha);
     s.alpha = alpha;
     s.soft_rebuild = 1;  // the state may have changed since the last run: new candidate lists
+    s.soft_moved = INT_MAX;
     sc_.upload(&s, 1);
 }
 

@@ -4,9 +4,6 @@
 
 namespace pliant {
 
-/// Surface nodes per chunk of the skin test (a chunk's largest move is one number).
-constexpr index_t kSoftChunk = 128;
-
 /// After a rebuild, one thread: the surface nodes with candidates, in order (sactive; their count
 /// in the scalars), and the sharp edges with an end node that has some (eactive). Only they are
 /// checked until the next rebuild.
@@ -116,11 +113,11 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
     sc.soft_redo = sc.soft_touched > 0 ? sc.soft_items : 0;
 }
 
-/// The soft-contact pass of a step: (1) skin test (and the surface positions sx), a rebuild of the
-/// candidate lists if a surface node moved more than skin/2 since the last one (or the run just
-/// started), and the list of the nodes that have candidates; (2) per such node, its contact and
-/// impulse (soft_detect); (3) one thread adds the impulses into the nodes, in node order, each
-/// averaged over the contacts sharing its nodes, and into the step's per-pair forces; (4) per node
+/// The soft-contact pass of a step: (1) skin test, one thread per surface node (and the surface
+/// positions sx), a rebuild of the candidate lists if a surface node moved more than skin/2 since
+/// the last one (or the run just started), and the list of the nodes that have candidates; (2) per such node,
+/// its contact and impulse (soft_detect); (3) one thread adds the impulses into the nodes, in node order,
+/// each averaged over the contacts sharing its nodes, and into the step's per-pair forces; (4) per node
 /// touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports; (2)–(4)
 /// repeated kSoftSweeps times, kSoftRelaxSweeps in a relaxation (Jacobi sweeps on the corrected
 /// positions), (2) skipped after a sweep that touched nothing. Launch sizes come from the counts
@@ -133,27 +130,23 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     const T* uc = v.u[ph.cur];
     T* un = v.u[ph.next];
     T* dun = v.du[ph.next];  // the increment of what the contact moves (node_update)
-    const index_t chunks = (s.n_nodes + kSoftChunk - 1) / kSoftChunk;
     dev_.each_then(
-        chunks,
-        [=] PLIANT_KERNEL(index_t c) {
-            double m = 0.0;
-            const index_t end = (c + 1) * kSoftChunk < s.n_nodes ? (c + 1) * kSoftChunk : s.n_nodes;
-            for (index_t i = c * kSoftChunk; i < end; ++i) {
-                double* x = v.sx + 3 * i;  // kept for the narrow phase (soft_current)
-                soft_position(i, s, v.X, un, v.P, x);
-                const double* b = v.sb + 3 * i;
-                const double d2 = (x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) +
-                                  (x[2] - b[2]) * (x[2] - b[2]);
-                if (!(d2 <= m)) m = d2;  // NaN: rebuild (the check reports the node)
-                for (int d = 0; d < 3; ++d) v.sforce[3 * i + d] = 0.0;
-            }
-            v.smove[c] = m;
+        s.n_nodes,
+        [=] PLIANT_KERNEL(index_t i) {
+            double* x = v.sx + 3 * i;  // kept for the narrow phase (soft_current)
+            soft_position(i, s, v.X, un, v.P, x);
+            const double* b = v.sb + 3 * i;
+            const double d2 =
+                (x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) + (x[2] - b[2]) * (x[2] - b[2]);
+            // The smallest node that left its skin (NaN too: rebuild; the check reports it). A
+            // minimum is the same whatever order the nodes run in.
+            if (!(d2 <= 0.25 * s.skin * s.skin)) atomic_min(&v.sc->soft_moved, i);
+            for (int d = 0; d < 3; ++d) v.sforce[3 * i + d] = 0.0;
         },
         [=] PLIANT_KERNEL() {
             Scalars<T>& sc = *v.sc;
-            for (index_t c = 0; c < chunks && !sc.soft_rebuild; ++c)
-                if (!(v.smove[c] <= 0.25 * s.skin * s.skin)) sc.soft_rebuild = 1;
+            if (sc.soft_moved != INT_MAX) sc.soft_rebuild = 1;
+            sc.soft_moved = INT_MAX;
             if (sc.soft_rebuild)
                 sc.soft_rmax =
                     soft_grid(s, v.X, un, v.P, v.shead, v.scursor, v.sbucket, v.stc, v.str, v.scell);
