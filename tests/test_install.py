@@ -28,9 +28,13 @@ PLIANT = Path(sys.executable).with_name("pliant")
 INDIRECT = {
     "networkx": "trimesh: hole filling, body splitting and winding repair (issue 11's traceback)",
 }
-# Modules imported only where installed (behind importlib.util.find_spec), each the distribution of
-# the same name, declared in an extra.
-OPTIONAL = {"mujoco": "pliant validate's peer (pliant/validate/peers.py); the test extras install it"}
+# Modules imported only where installed (behind importlib.util.find_spec): module → the distribution
+# declared in an extra that provides it, and why.
+OPTIONAL = {
+    "mujoco": ("mujoco", "pliant validate's peer (pliant/validate/peers.py); the test extras install it"),
+    "newton": ("newton", "pliant validate's peer (pliant/validate/peers.py); the test extras install it"),
+    "warp": ("newton", "Newton's own dependency (warp-lang), used by its peer to damp and synchronize"),
+}
 
 
 def _imported_modules() -> set[str]:
@@ -74,7 +78,8 @@ def test_every_imported_module_is_a_declared_dependency():
     # Optional modules (installed or not here): each is the distribution of that name in an extra.
     extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
     in_extras = {re.split(r"[ ;<>=!~\[]", r, maxsplit=1)[0].lower() for e in extras.values() for r in e}
-    assert set(OPTIONAL) <= _imported_modules() and set(OPTIONAL) <= in_extras, (OPTIONAL, in_extras)
+    assert set(OPTIONAL) <= _imported_modules(), OPTIONAL
+    assert {dist for dist, _ in OPTIONAL.values()} <= in_extras, (OPTIONAL, in_extras)
 
 
 def _commands(group: typer.Typer) -> list[list[str]]:

@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 import pliant.validate.cases as cases
 from pliant.cli import app
 from pliant.validate import Check
-from pliant.validate.peers import _mujoco_missing
+from pliant.validate.peers import _mujoco_missing, _newton_missing
 
 
 def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
@@ -40,6 +40,12 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
         assert f"| {peers['mujoco']['peer']} | {peers['mujoco']['ratio']:.4f} |" in report
     else:
         assert not peers["mujoco"]["ran"] and peers["mujoco"]["note"] == _mujoco_missing()
+    if not _newton_missing():  # the test extras install it
+        case = "peers: Newton semi-implicit, same mesh"
+        assert peers["newton"]["ran"] and case in {r["case"] for r in data["rows"]}
+        assert f"| {peers['newton']['peer']} | {peers['newton']['ratio']:.4f} |" in report
+    else:
+        assert not peers["newton"]["ran"] and peers["newton"]["note"] == _newton_missing()
 
 
 def test_a_failing_check_exits_1_naming_it(tmp_path, monkeypatch):

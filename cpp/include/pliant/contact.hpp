@@ -304,8 +304,10 @@ PLIANT_HD index_t try_grasp(index_t i, const index_t* node_bits, const RigidTool
 /// that opens lets its nodes go; a tool that closes during the step grasps (try_grasp).
 /// Inputs: contact node i → node nodes[i], its bits, reference X [m] (3 per node, AoS,
 /// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt and their
-/// grip bits (closed). Outputs: u⁺ corrected and its increment du⁺ = u⁺ − u where corrected (the next
-/// step's velocity, node_update), force_out, tool_out; grip_tool, grip_at updated.
+/// grip bits (closed), du⁺ the step's increment [m] SoA. Outputs: u⁺ corrected and du⁺ plus the
+/// correction where corrected (the next step's velocity, node_update; added in double rather than
+/// taken as u⁺ − u, which would round the increment again), force_out, tool_out; grip_tool,
+/// grip_at updated.
 template <class T>
 PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits, const double* X,
                             const T* mass, const T* u, index_t P, const RigidTool* tools, int n_tools,
@@ -338,7 +340,7 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node
         force_out[3 * i + d] = free ? m_over_g1 * (x1[d] - xs[d]) : 0.0;
         if (!free) continue;
         u_next[d * P + n] = T(x1[d] - X[3 * n + d]);
-        du_next[d * P + n] = u_next[d * P + n] - u[d * P + n];
+        du_next[d * P + n] = T(double(du_next[d * P + n]) + (x1[d] - xs[d]));  // + the correction
     }
 }
 

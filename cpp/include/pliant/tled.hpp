@@ -287,8 +287,9 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
 /// bitwise reproducible), then u⁺ = u + du⁺, du⁺ = (γ2 − 1) du + γ1 M⁻¹(r − f) (central differences:
 /// u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻ with du = u − u⁻), r = load patterns + follower pressure and
-/// surface traction at u. du is the last step's increment as computed, before u was rounded to T (and
-/// u⁺ − u where a constraint or contact set u⁺ since: apply_constraint, contact_node, soft_pass), so
+/// surface traction at u. du is the last step's increment as computed, before u was rounded to T (plus
+/// the correction where a contact moved u⁺ since: contact_node, soft_pass; u⁺ − u where a constraint
+/// set it: apply_constraint), so
 /// the rounding of u (half a unit in its last place) does not enter the velocity and grow with every
 /// step (docs/engine.md, "Precision of float32 runs with small steps").
 /// Inputs: node data, element forces, load-pattern factors, u and du [m] SoA (3, P).

@@ -183,7 +183,11 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
             for (int d = 0; d < 3; ++d) {
                 const double p = v.sacc[3 * i + d];
                 un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
-                dun[d * v.P + n] = un[d * v.P + n] - uc[d * v.P + n];
+                // The correction adds to the step's increment as computed, not u⁺ − u again: that
+                // difference re-rounds the increment on every contact node every step (in float32 it
+                // loses the digits the increment keeps; in float64 it destabilized the relaxation
+                // of validate's two soft paraboloids, whose 1 ulp disturbances grew).
+                dun[d * v.P + n] = T(double(dun[d * v.P + n]) + W[d] * p);
                 v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
                 v.sacc[3 * i + d] = 0.0;
             }
