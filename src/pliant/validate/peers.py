@@ -255,9 +255,9 @@ def _newton(X, T, root, tip, settle: float) -> tuple[float, float, str]:
 
 
 def run_peers(quick: bool) -> tuple[list[Check], list[dict]]:
-    """Checks (pliant against the closed form and MuJoCo on the same mesh, where MuJoCo is
-    installed) and the peers table: per simulator its tip deflection over the closed form and its
-    simulated seconds per wall second (or why it did not run)."""
+    """Checks (pliant against the closed form, and against MuJoCo and Newton on the same mesh where
+    they are installed) and the peers table: per simulator its tip deflection over the closed form
+    and its simulated seconds per wall second (or why it did not run)."""
     cells, settle = (2, 0.06) if quick else (3, 0.12)  # settled to 6e-7 and 2e-10 (1.5× as long)
     X, T, root, tip = _beam(cells)
     ref = uniform_load_tip()
@@ -265,59 +265,56 @@ def run_peers(quick: bool) -> tuple[list[Check], list[dict]]:
     table = [
         {"peer": "pliant", "ran": True, "ratio": ours / ref, "speed": speed, "note": "cpu, float64, 1 thread"}
     ]
+    peers = (  # name, why not here, run, case, note, why the tolerance, tolerance
+        (
+            "mujoco",
+            _mujoco_missing,
+            lambda: _mujoco(X, T, root, tip, mass, settle),
+            "MuJoCo flex",
+            "flex, Euler",
+            "the same linear tets, masses and damping in two independent codes, linear regime: "
+            "measured 1.3e-5 apart on 192 tets, 9.3e-6 on 648 (MuJoCo's flex is geometrically "
+            "nonlinear: the gap grows with the load)",
+            1e-4,
+        ),
+        (
+            "newton",
+            _newton_missing,
+            lambda: _newton(X, T, root, tip, settle),
+            "Newton semi-implicit",
+            "semi-implicit, Warp CPU device, float32",
+            "the same tets and damping, Newton's stable Neo-Hookean matched to the linear moduli, in "
+            "float32 (the 1.8e-5 m sag is about 10,000 float32 steps of the 0.02 m heights): measured "
+            "1.6e-4 apart on 192 tets, 3.5e-4 on 648",
+            1e-3,
+        ),
+    )
     rows: list[Check] = []
-    why = _mujoco_missing()
-    if not why:
-        theirs, their_speed, version = _mujoco(X, T, root, tip, mass, settle)
+    for name, missing, run, case, note, why_tolerance, tolerance in peers:
+        why = missing()
+        if why:
+            table.append({"peer": name, "ran": False, "note": why})
+            continue
+        theirs, their_speed, version = run()
         table.append(
             {
-                "peer": f"mujoco {version}",
+                "peer": f"{name} {version}",
                 "ran": True,
                 "ratio": theirs / ref,
                 "speed": their_speed,
-                "note": "flex, Euler",
+                "note": note,
             }
         )
+        label = case.split()[0]
         rows.append(
             Check(
-                "peers: MuJoCo flex, same mesh",
-                f"pliant's tip sag against MuJoCo's ({len(T)} tets)",
+                f"peers: {case}, same mesh",
+                f"pliant's tip sag against {label}'s ({len(T)} tets)",
                 ours,
                 theirs,
                 "m",
-                "the same linear tets, masses and damping in two independent codes, linear regime: "
-                "measured 1.3e-5 apart on 192 tets, 9.3e-6 on 648 (MuJoCo's flex is geometrically "
-                "nonlinear: the gap grows with the load)",
-                tolerance=1e-4,
+                why_tolerance,
+                tolerance=tolerance,
             )
         )
-    else:
-        table.append({"peer": "mujoco", "ran": False, "note": why})
-    why = _newton_missing()
-    if not why:
-        theirs, their_speed, version = _newton(X, T, root, tip, settle)
-        table.append(
-            {
-                "peer": f"newton {version}",
-                "ran": True,
-                "ratio": theirs / ref,
-                "speed": their_speed,
-                "note": "semi-implicit, Warp CPU device, float32",
-            }
-        )
-        rows.append(
-            Check(
-                "peers: Newton semi-implicit, same mesh",
-                f"pliant's tip sag against Newton's ({len(T)} tets)",
-                ours,
-                theirs,
-                "m",
-                "the same tets and damping, Newton's stable Neo-Hookean matched to the linear moduli, "
-                "in float32 (the 1.8e-5 m sag is about 10,000 float32 steps of the 0.02 m heights): measured "
-                "1.6e-4 apart on 192 tets, 3.5e-4 on 648",
-                tolerance=1e-3,
-            )
-        )
-    else:
-        table.append({"peer": "newton", "ran": False, "note": why})
     return rows, table
