@@ -181,9 +181,10 @@ std::uint64_t new_version();
 template <class T>
 struct State {
     std::vector<T> u, u_prev;
-    // The last step's increment u − u⁻ as the update computed it, before u was rounded to T (u − u⁻
-    // where a constraint or contact set u): the next step's velocity × Δt (node_update), so that the
-    // rounding of u does not enter it. Set to u − u⁻ whenever u or u⁻ is set from outside.
+    // The last step's increment u − u⁻ as the update computed it, before u was rounded to T (plus the
+    // correction where a contact moved u; u − u⁻ where a constraint set it): the next step's velocity
+    // × Δt (node_update), so that the rounding of u does not enter it. Set to u − u⁻ whenever u or u⁻
+    // is set from outside.
     std::vector<T> du;
     std::vector<T> q;  // viscoelastic state: 6 × visco_terms per element (or edge) slot, AoSoA (may be empty)
     // Grasping, per contact node (the model's contact-node order): the tool holding it (−1: none)

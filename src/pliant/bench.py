@@ -32,8 +32,8 @@ class BenchRow:
     backend: str
     seconds: float  # wall time of the timed steps [s]
     seconds_per_8000: float  # scaled to the study's 8,000 steps [s]
-    element_seconds: float | None  # kernel 1 share of `seconds`; None on the GPU (not timed there)
-    node_seconds: float | None  # kernel 2 (+ constraints) share; None on the GPU
+    element_seconds: float | None  # kernel 1 share of `seconds`; None where not timed (kernel_timed)
+    node_seconds: float | None  # kernel 2 (+ constraints) share; None where not timed
     element_steps_per_second: float
     memory_bytes: int  # model + two states + scratch
     bytes_per_tet: float
@@ -165,8 +165,9 @@ def run_benchmark(
 
 def bench_contact(steps: int = 2000, echo=print, backend: str = "cpu") -> list[dict]:
     """Share of the contact kernel in the step: the demo (Spot, ground plane and sphere) and the
-    liver example pressed by a capsule, on ``backend`` (on the GPU the shares are None: only the
-    wall time is measured). Returns one dict per case."""
+    liver example pressed by a capsule, on ``backend`` (where kernels are not timed, the GPU and
+    the emulated device, the shares are None: only the wall time is measured). Returns one dict
+    per case."""
     from pathlib import Path
 
     from .contact import Capsule

@@ -401,7 +401,7 @@ def bench(
 
 
 def _percent(share, digits=0):
-    """A share of the step as a percentage; "-" where it was not measured (on the GPU)."""
+    """A share of the step as a percentage; "-" where it was not measured (GPU, emulated device)."""
     return "-" if share is None else f"{100 * share:.{digits}f}"
 
 
