@@ -82,4 +82,26 @@ PLIANT_HD void atomic_min(int* p, int v) {
 #endif
 }
 
+/// Atomically adds v to *p and returns the value before (CUDA atomicAdd; host: a fetch-and-add).
+/// Used for counts (integer sums, the same in any order) and slots whose order the result does not
+/// depend on.
+PLIANT_HD int atomic_add(int* p, int v) {
+#if defined(__CUDA_ARCH__)
+    return atomicAdd(p, v);
+#else
+    return __atomic_fetch_add(p, v, __ATOMIC_RELAXED);
+#endif
+}
+
+/// Atomically raises *p to v if v is larger (a maximum: the same in any order).
+PLIANT_HD void atomic_max(std::int64_t* p, std::int64_t v) {
+#if defined(__CUDA_ARCH__)
+    atomicMax(reinterpret_cast<long long*>(p), static_cast<long long>(v));
+#else
+    std::int64_t cur = __atomic_load_n(p, __ATOMIC_RELAXED);
+    while (v > cur && !__atomic_compare_exchange_n(p, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+#endif
+}
+
 }  // namespace pliant

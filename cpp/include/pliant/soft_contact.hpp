@@ -97,43 +97,34 @@ PLIANT_HD index_t soft_hash(long long i, long long j, long long k, index_t mask)
     return static_cast<index_t>(h & static_cast<unsigned long long>(mask));
 }
 
-/// The broad phase's grid (one thread, triangles in order: the same lists for any thread count):
-/// each triangle's centroid tc (3) and bounding radius tr [m] at u, bucketed by the hash of its
-/// centroid's cell (counting sort: bucket b holds cell_tris[head[b] .. head[b + 1])). Returns the
-/// largest bounding radius [m]. Scratch: cursor (buckets), tri_bucket (triangles).
+/// The broad phase's grid, per triangle t (one thread each): its centroid tc (3) and bounding radius
+/// tr [m] at u, and the bucket of its centroid's cell (tri_bucket), returned with the radius in r.
+/// The engine counts the triangles per bucket and lists them by bucket (a counting sort: bucket b
+/// holds cell_tris[head[b] .. head[b + 1])), in whatever order the threads file them: the candidate
+/// lists do not depend on it (soft_candidates keeps the nearest by distance, then triangle).
 template <class T>
-PLIANT_HD double soft_grid(const SoftSurface& s, const double* X, const T* u, index_t P, index_t* head,
-                           index_t* cursor, index_t* tri_bucket, double* tc, double* tr, index_t* cell_tris) {
-    const index_t H = s.hash_mask + 1;
-    for (index_t b = 0; b <= H; ++b) head[b] = 0;
-    double rmax = 0.0;
-    for (index_t t = 0; t < s.n_tris; ++t) {
-        double v[3][3], c[3] = {0.0, 0.0, 0.0}, r = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            soft_position(s.tri[3 * t + k], s, X, u, P, v[k]);
-            for (int d = 0; d < 3; ++d) c[d] += v[k][d] / 3.0;
-        }
-        for (int k = 0; k < 3; ++k) {
-            const double a = v[k][0] - c[0], b = v[k][1] - c[1], e = v[k][2] - c[2];
-            const double rk = std::sqrt(a * a + b * b + e * e);
-            r = rk > r ? rk : r;
-        }
-        const bool ok = std::isfinite(c[0] + c[1] + c[2] + r);  // a blown-up node: the check reports it
-        for (int d = 0; d < 3; ++d) tc[3 * t + d] = ok ? c[d] : 0.0;
-        tr[t] = ok ? r : 0.0;
-        if (ok && r > rmax) rmax = r;
-        const index_t b = ok ? soft_hash(soft_cell(c[0], s.cell), soft_cell(c[1], s.cell),
-                                         soft_cell(c[2], s.cell), s.hash_mask)
-                             : 0;
-        tri_bucket[t] = b;
-        ++head[b + 1];
+PLIANT_HD index_t soft_grid_triangle(index_t t, const SoftSurface& s, const double* X, const T* u, index_t P,
+                                     double* tc, double* tr, index_t* tri_bucket, double& r) {
+    double v[3][3], c[3] = {0.0, 0.0, 0.0};
+    r = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        soft_position(s.tri[3 * t + k], s, X, u, P, v[k]);
+        for (int d = 0; d < 3; ++d) c[d] += v[k][d] / 3.0;
     }
-    for (index_t b = 0; b < H; ++b) {
-        head[b + 1] += head[b];
-        cursor[b] = head[b];
+    for (int k = 0; k < 3; ++k) {
+        const double a = v[k][0] - c[0], b = v[k][1] - c[1], e = v[k][2] - c[2];
+        const double rk = std::sqrt(a * a + b * b + e * e);
+        r = rk > r ? rk : r;
     }
-    for (index_t t = 0; t < s.n_tris; ++t) cell_tris[cursor[tri_bucket[t]]++] = t;
-    return rmax;
+    const bool ok = std::isfinite(c[0] + c[1] + c[2] + r);  // a blown-up node: the check reports it
+    for (int d = 0; d < 3; ++d) tc[3 * t + d] = ok ? c[d] : 0.0;
+    r = ok ? r : 0.0;
+    tr[t] = r;
+    const index_t b =
+        ok ? soft_hash(soft_cell(c[0], s.cell), soft_cell(c[1], s.cell), soft_cell(c[2], s.cell), s.hash_mask)
+           : 0;
+    tri_bucket[t] = b;
+    return b;
 }
 
 /// Whether triangle t touches surface node i's neighbourhood: it shares a vertex with a triangle

@@ -43,9 +43,11 @@ struct Scalars {
     int status;              // check verdict (RunStatus)
     index_t where;
     double value;
-    int soft_rebuild;  // soft contact: rebuild the candidate lists this step (set at each run's start)
+    int soft_due;      // soft contact: rebuild the candidate lists at the next step (set at each run's start)
+    int soft_rebuild;  // soft contact: rebuild them this step (due, or a node left its skin)
     int soft_moved;  // soft contact: smallest surface node beyond skin/2 of its last rebuild (INT_MAX: none)
-    double soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m]
+    std::int64_t
+        soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m], its bits
     index_t soft_active, soft_touched;  // soft contact: nodes with candidates; nodes of a sweep's contacts
     index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
     index_t soft_items;                 // soft contact: the larger of soft_active and soft_edges_active
@@ -93,6 +95,7 @@ struct DeviceView {
     double *sb, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare, *erec_w, *erec_p;
     double* sx;  // the surface positions at u⁺ [m] (3 per node: soft_current), kept through the pass
     index_t *shead, *scursor, *sbucket, *scell, *scand, *snear, *srec, *sactive, *stouched, *erec, *eactive;
+    std::int64_t* spart;  // the chunk sums of the rebuild's prefix sums (Engine::scan)
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -161,6 +164,9 @@ public:
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
     void contact_pass(const Phase& ph, bool relaxing);
     void soft_pass(const Phase& ph, bool relaxing);
+    void soft_lists(const T* u);
+    template <class Count, class Total, class Emit>
+    void scan(index_t n, const int* flag, const Count& count, const Total& total, const Emit& emit);
     Scalars<T> check(const T* u_new, double t_elem, double t_node, double blowup, RunReport& rep);
     void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt);
     void copy(T* dst, const T* src, std::size_t n);
@@ -206,6 +212,7 @@ private:
         d_soft_mu_, sx_;
     DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, snear_, srec_, sactive_, stouched_,
         erec_, eactive_;
+    DeviceBuffer<std::int64_t, Dev> spart_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceBuffer<T, Dev> anp_gamma_;

@@ -109,6 +109,8 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     erec_p_ = DeviceBuffer<double, Dev>(dev_, 3 * ne);
     sactive_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     stouched_ = DeviceBuffer<index_t, Dev>(dev_, ns);
+    const std::size_t items = ns + ne > H ? ns + ne : H;  // the larger of the rebuild's two prefix sums
+    spart_ = DeviceBuffer<std::int64_t, Dev>(dev_, items / scan_chunk(static_cast<index_t>(items)) + 1);
     d_soft_mu_ = DeviceBuffer<double, Dev>::mirror(dev_, m_.soft_mu);
 }
 
@@ -174,6 +176,7 @@ void Engine<T, Dev>::refresh_view() {
     v.sshare = sshare_.data();
     v.erec = erec_.data(), v.erec_w = erec_w_.data(), v.erec_p = erec_p_.data();
     v.sactive = sactive_.data(), v.stouched = stouched_.data(), v.eactive = eactive_.data();
+    v.spart = spart_.data();
 }
 
 /// Copies a state to the device unless the device holds it already (same object, same version).
@@ -210,7 +213,7 @@ void Engine<T, Dev>::set_scalars(double t0, double dt, double alpha) {
     s.t0 = t0;
     s.it = central_difference<T>(dt, alpha);
     s.alpha = alpha;
-    s.soft_rebuild = 1;  // the state may have changed since the last run: new candidate lists
+    s.soft_due = 1;  // the state may have changed since the last run: new candidate lists
     s.soft_moved = INT_MAX;
     sc_.upload(&s, 1);
 }

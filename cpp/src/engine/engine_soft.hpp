@@ -4,27 +4,114 @@
 
 namespace pliant {
 
-/// After a rebuild, one thread: the surface nodes with candidates, in order (sactive; their count
-/// in the scalars), and the sharp edges with an end node that has some (eactive). Only they are
-/// checked until the next rebuild.
-template <class T>
-PLIANT_HD void soft_activate(const DeviceView<T>& v, const SoftSurface& s) {
-    Scalars<T>& sc = *v.sc;
-    if (!sc.soft_rebuild) return;
-    index_t n = 0;
-    for (index_t i = 0; i < s.n_nodes; ++i)
-        if (v.scand[static_cast<std::size_t>(i) * kSoftCandidates] >= 0) v.sactive[n++] = i;
-    sc.soft_active = n;
-    index_t ne = 0;
-    for (index_t e = 0; e < s.n_edges; ++e) {
-        v.erec[e] = -1;  // inactive edges hold no contact (soft_edge_partner reads the other side's)
-        if (v.scand[static_cast<std::size_t>(s.edge[2 * e]) * kSoftCandidates] >= 0 ||
-            v.scand[static_cast<std::size_t>(s.edge[2 * e + 1]) * kSoftCandidates] >= 0)
-            v.eactive[ne++] = e;
-    }
-    sc.soft_edges_active = ne;
-    sc.soft_items = n > ne ? n : ne;
-    sc.soft_rebuild = 0;
+/// Items per chunk of Engine::scan over n items: the power of two from 64 up that is at least √n, so
+/// that the one thread over the chunks and each chunk's thread both walk about √n.
+inline index_t scan_chunk(index_t n) {
+    index_t c = 64;
+    while (static_cast<long long>(c) * c < n) c *= 2;
+    return c;
+}
+
+/// Prefix sums over items [0, n), in chunks (scan_chunk), the same on every device and thread count:
+/// (1) one thread per chunk sums count(i) over its items into spart; (2) one thread turns those
+/// into each chunk's offset and calls total(the sum of all); (3) one thread per chunk calls
+/// emit(i, before) for its items in order, before = the sum of count over the items before i. The
+/// kernels return at once unless *flag (inside `when`, CUDA launches them whatever it holds).
+template <class T, class Dev>
+template <class Count, class Total, class Emit>
+void Engine<T, Dev>::scan(index_t n, const int* flag, const Count& count, const Total& total,
+                          const Emit& emit) {
+    const index_t size = scan_chunk(n), chunks = (n + size - 1) / size;
+    std::int64_t* part = v_.spart;
+    dev_.each(chunks, [=] PLIANT_KERNEL(index_t c) {
+        if (!*flag) return;
+        const index_t end = (c + 1) * size < n ? (c + 1) * size : n;
+        std::int64_t sum = 0;
+        for (index_t i = c * size; i < end; ++i) sum += count(i);
+        part[c] = sum;
+    });
+    dev_.serial([=] PLIANT_KERNEL() {
+        if (!*flag) return;
+        std::int64_t sum = 0;
+        for (index_t c = 0; c < chunks; ++c) {
+            const std::int64_t k = part[c];
+            part[c] = sum;
+            sum += k;
+        }
+        total(sum);
+    });
+    dev_.each(chunks, [=] PLIANT_KERNEL(index_t c) {
+        if (!*flag) return;
+        const index_t end = (c + 1) * size < n ? (c + 1) * size : n;
+        std::int64_t before = part[c];
+        for (index_t i = c * size; i < end; ++i) {
+            const std::int64_t k = count(i);
+            emit(i, before);
+            before += k;
+        }
+    });
+}
+
+/// A rebuild of the broad phase at displacements u [m], every part in parallel: (1) per triangle,
+/// its centroid, radius and bucket (soft_grid_triangle), counted per bucket (scursor) and the
+/// largest radius kept; (2) the buckets' starts (shead, by scan); (3) per triangle, its slot in its
+/// bucket (scursor counts down to 0 again, ready for the next rebuild); (4) per surface node, its
+/// candidates (soft_candidates); (5) the surface nodes that have some, in order (sactive, their
+/// count soft_active), and the sharp edges with an end node that has some (eactive): only they are
+/// checked until the next rebuild (one scan: nodes count in the low 32 bits, edges in the high).
+template <class T, class Dev>
+void Engine<T, Dev>::soft_lists(const T* u) {
+    const DeviceView<T> v = v_;
+    const SoftSurface s = v.soft;
+    const int* flag = &v.sc->soft_rebuild;
+    const index_t H = s.hash_mask + 1;
+    dev_.each(s.n_tris, [=] PLIANT_KERNEL(index_t t) {
+        if (!v.sc->soft_rebuild) return;
+        double r;
+        const index_t b = soft_grid_triangle(t, s, v.X, u, v.P, v.stc, v.str, v.sbucket, r);
+        atomic_add(&v.scursor[b], 1);
+        atomic_max(&v.sc->soft_rmax, double_bits(r));  // r >= 0: its bits order as the values do
+    });
+    scan(
+        H, flag, [=] PLIANT_KERNEL(index_t b) -> std::int64_t { return v.scursor[b]; },
+        [=] PLIANT_KERNEL(std::int64_t sum) { v.shead[H] = static_cast<index_t>(sum); },
+        [=] PLIANT_KERNEL(index_t b, std::int64_t before) { v.shead[b] = static_cast<index_t>(before); });
+    dev_.each(s.n_tris, [=] PLIANT_KERNEL(index_t t) {
+        if (!v.sc->soft_rebuild) return;
+        const index_t b = v.sbucket[t];
+        v.scell[v.shead[b] + atomic_add(&v.scursor[b], -1) - 1] = t;
+    });
+    dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
+        if (v.sc->soft_rebuild)
+            soft_candidates(i, s, v.X, u, v.P, bits_double(v.sc->soft_rmax), v.shead, v.scell, v.stc, v.str,
+                            v.scand, v.snear, v.sb);
+    });
+    const index_t ns = s.n_nodes;
+    auto has = [=] PLIANT_KERNEL(index_t i) {
+        return v.scand[static_cast<std::size_t>(i) * kSoftCandidates] >= 0;
+    };
+    scan(
+        ns + s.n_edges, flag,
+        [=] PLIANT_KERNEL(index_t k) -> std::int64_t {
+            if (k < ns) return has(k) ? 1 : 0;
+            const index_t e = k - ns;
+            return has(s.edge[2 * e]) || has(s.edge[2 * e + 1]) ? std::int64_t(1) << 32 : 0;
+        },
+        [=] PLIANT_KERNEL(std::int64_t sum) {
+            Scalars<T>& sc = *v.sc;
+            sc.soft_active = static_cast<index_t>(sum & 0xffffffff);
+            sc.soft_edges_active = static_cast<index_t>(sum >> 32);
+            sc.soft_items = sc.soft_active > sc.soft_edges_active ? sc.soft_active : sc.soft_edges_active;
+        },
+        [=] PLIANT_KERNEL(index_t k, std::int64_t before) {
+            if (k < ns) {
+                if (has(k)) v.sactive[before & 0xffffffff] = k;
+                return;
+            }
+            const index_t e = k - ns;
+            v.erec[e] = -1;  // inactive edges hold no contact (soft_edge_partner reads the other side's)
+            if (has(s.edge[2 * e]) || has(s.edge[2 * e + 1])) v.eactive[before >> 32] = e;
+        });
 }
 
 /// The sharp edge that edge e's contact of the sweep is with, or −1: none, or the same two edges found
@@ -115,10 +202,10 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
 
 /// The soft-contact pass of a step: (1) skin test, one thread per surface node (and the surface
 /// positions sx), a rebuild of the candidate lists if a surface node moved more than skin/2 since
-/// the last one (or the run just started), and the list of the nodes that have candidates; (2) per such node,
-/// its contact and impulse (soft_detect); (3) one thread adds the impulses into the nodes, in node order,
-/// each averaged over the contacts sharing its nodes, and into the step's per-pair forces; (4) per node
-/// touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports; (2)–(4)
+/// the last one (or the run just started: soft_lists), and the list of the nodes that have candidates; (2)
+/// per such node, its contact and impulse (soft_detect); (3) one thread adds the impulses into the nodes, in
+/// node order, each averaged over the contacts sharing its nodes, and into the step's per-pair forces; (4)
+/// per node touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports; (2)–(4)
 /// repeated kSoftSweeps times, kSoftRelaxSweeps in a relaxation (Jacobi sweeps on the corrected
 /// positions), (2) skipped after a sweep that touched nothing. Launch sizes come from the counts
 /// the kernels wrote (each_counted, when): the CPU walks only those items.
@@ -145,20 +232,13 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
         },
         [=] PLIANT_KERNEL() {
             Scalars<T>& sc = *v.sc;
-            if (sc.soft_moved != INT_MAX) sc.soft_rebuild = 1;
+            sc.soft_rebuild = sc.soft_due || sc.soft_moved != INT_MAX;
+            sc.soft_due = 0;
             sc.soft_moved = INT_MAX;
-            if (sc.soft_rebuild)
-                sc.soft_rmax =
-                    soft_grid(s, v.X, un, v.P, v.shead, v.scursor, v.sbucket, v.stc, v.str, v.scell);
+            if (sc.soft_rebuild) sc.soft_rmax = 0;
         });
-    dev_.when(&v.sc->soft_rebuild, [&] {  // on the CPU, steps without a rebuild skip both launches
-        dev_.each(s.n_nodes, [=] PLIANT_KERNEL(index_t i) {
-            if (v.sc->soft_rebuild)
-                soft_candidates(i, s, v.X, un, v.P, v.sc->soft_rmax, v.shead, v.scell, v.stc, v.str, v.scand,
-                                v.snear, v.sb);
-        });
-        dev_.serial([=] PLIANT_KERNEL() { soft_activate(v, s); });
-    });
+    // On the CPU, steps without a rebuild skip its launches.
+    dev_.when(&v.sc->soft_rebuild, [&] { soft_lists(un); });
     const int sweeps = relaxing ? kSoftRelaxSweeps : kSoftSweeps;
     for (int sweep = 0; sweep < sweeps; ++sweep) {
         const bool first = sweep == 0;
