@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "graphs.hpp"
 #include "in_order.hpp"
@@ -51,6 +52,14 @@ __global__ void serial_kernel(F f) {
     f();
 }
 
+#if CUDART_VERSION >= 13000
+/// Sets a graph's IF condition from a flag the kernels before it wrote.
+template <class V>
+__global__ void condition_kernel(cudaGraphConditionalHandle h, const V* flag) {
+    cudaGraphSetConditional(h, *flag ? 1u : 0u);
+}
+#endif
+
 struct ExecDeleter {
     void operator()(CUgraphExec_st* g) const { cudaGraphExecDestroy(g); }
 };
@@ -66,10 +75,12 @@ public:
     explicit CudaDevice(int device) {
         cuda_detail::check(cudaSetDevice(device), "cudaSetDevice");
         cuda_detail::check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "stream");
+        cuda_detail::check(cudaStreamCreateWithFlags(&body_stream_, cudaStreamNonBlocking), "stream");
     }
     ~CudaDevice() {
         graphs_.clear();
         if (stream_) cudaStreamDestroy(stream_);
+        if (body_stream_) cudaStreamDestroy(body_stream_);
     }
     CudaDevice(const CudaDevice&) = delete;
     CudaDevice& operator=(const CudaDevice&) = delete;
@@ -114,9 +125,19 @@ public:
             n_max, count, f);
         cuda_detail::check(cudaPeekAtLastError(), "launch");
     }
-    /// body's launches, always: the flag lives on the device, and the kernels test it themselves.
+    /// body's launches if *flag, a value an earlier kernel wrote. In a graph (CUDA 13 and later):
+    /// an IF node (a conditional node) holding them, its condition set from *flag by a kernel, so
+    /// that a step without a rebuild launches none of them. Otherwise, and launched one by one,
+    /// they always run: the kernels test the flag themselves.
     template <class V, class F>
-    void when(const V* /*flag*/, F&& body) {
+    void when(const V* flag, F&& body) {
+#if CUDART_VERSION >= 13000
+        cudaStreamCaptureStatus st = cudaStreamCaptureStatusNone;
+        if (!dry_) cuda_detail::check(cudaStreamIsCapturing(stream_, &st), "capture status");
+        if (st == cudaStreamCaptureStatusActive) return conditional(flag, body);
+#else
+        (void)flag;
+#endif
         body();
     }
     template <class F>
@@ -184,7 +205,54 @@ public:
     }
 
 private:
-    cudaStream_t stream_{};
+#if CUDART_VERSION >= 13000
+    /// when() in a capture: the IF node after the launches so far, body captured into its graph
+    /// on a second stream (CUDA programming guide, "Conditional graph nodes").
+    template <class V, class F>
+    void conditional(const V* flag, F&& body) {
+        using cuda_detail::check;
+        cudaStreamCaptureStatus st;
+        cudaGraph_t graph;
+        check(cudaStreamGetCaptureInfo(stream_, &st, nullptr, &graph), "capture info");
+        cudaGraphConditionalHandle h;
+        check(cudaGraphConditionalHandleCreate(&h, graph, 0, 0), "conditional handle");
+        cuda_detail::condition_kernel<<<1, 1, 0, stream_>>>(h, flag);
+        check(cudaPeekAtLastError(), "launch");
+        const cudaGraphNode_t* deps = nullptr;
+        const cudaGraphEdgeData* edges = nullptr;
+        std::size_t n = 0;
+        check(cudaStreamGetCaptureInfo(stream_, &st, nullptr, &graph, &deps, &edges, &n), "capture info");
+        cudaGraphNodeParams p{};
+        p.type = cudaGraphNodeTypeConditional;
+        p.conditional.handle = h;
+        p.conditional.type = cudaGraphCondTypeIf;
+        p.conditional.size = 1;
+        cudaGraphNode_t node;
+        check(cudaGraphAddNode(&node, graph, deps, edges, n, &p), "conditional node");
+        check(
+            cudaStreamUpdateCaptureDependencies(stream_, &node, nullptr, 1, cudaStreamSetCaptureDependencies),
+            "capture dependencies");
+        std::swap(stream_, body_stream_);  // body's launches go to the IF node's graph
+        cudaError_t e = cudaStreamBeginCaptureToGraph(stream_, p.conditional.phGraph_out[0], nullptr, nullptr,
+                                                      0, cudaStreamCaptureModeThreadLocal);
+        if (e == cudaSuccess) {
+            try {
+                body();
+            } catch (...) {
+                cudaGraph_t g;
+                cudaStreamEndCapture(stream_, &g);
+                std::swap(stream_, body_stream_);
+                throw;
+            }
+            cudaGraph_t g;
+            e = cudaStreamEndCapture(stream_, &g);
+        }
+        std::swap(stream_, body_stream_);
+        check(e, "capture of a conditional node");
+    }
+#endif
+
+    cudaStream_t stream_{}, body_stream_{};
     bool dry_ = false;
     GraphCache<Graph> graphs_;
 };
