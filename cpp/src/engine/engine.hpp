@@ -57,7 +57,7 @@ struct Scalars {
 /// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
 template <class T>
 struct DeviceView {
-    index_t n_nodes, P, slots, n_contact, chunks;
+    index_t n_nodes, P, slots, n_contact, chunks, contact_chunk;  // contact nodes per chunk: chunk_size
     int n_curves, n_factors, n_tools, visco_w;
     const T* anp_gamma;  // T4ANP stabilization γ per group (AveragedPressure)
     ElementData<T> el;
@@ -110,8 +110,15 @@ struct Span {
     index_t edge_begin, edge_end;  // its groups' edge domains (edge-smoothed strain)
 };
 
-/// Contact nodes per chunk: each chunk sums its per-tool forces, chunks are summed in order.
-constexpr index_t kContactChunk = 512;
+/// Items per chunk of a fixed-order sum over n items (the tool forces over the contact nodes, the
+/// rebuild's prefix sums: Engine::scan): the power of two from 64 up that is at least √n, so that
+/// each chunk's thread and the one thread over the chunks both walk about √n items (on a GPU, one
+/// thread walking thousands is what a step waits for).
+inline index_t chunk_size(index_t n) {
+    index_t c = 64;
+    while (static_cast<long long>(c) * c < n) c *= 2;
+    return c;
+}
 /// Nodes per chunk of the relaxation's residual sums (fixed: the same bits for any thread count).
 constexpr index_t kMeasureChunk = 1024;
 /// Steps per replayed launch sequence (a CUDA graph) between two checks: a multiple of 6, the

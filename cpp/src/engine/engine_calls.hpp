@@ -28,7 +28,8 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     sc_ = DeviceBuffer<Scalars<T>, Dev>(dev_, 1);
     pose0_ = DeviceBuffer<Pose, Dev>(dev_, nt);
     pose1_ = DeviceBuffer<Pose, Dev>(dev_, nt);
-    const std::size_t chunks = (nc + kContactChunk - 1) / kContactChunk;
+    const std::size_t chunks =
+        (nc + chunk_size(static_cast<index_t>(nc)) - 1) / chunk_size(static_cast<index_t>(nc));
     cforce_ = DeviceBuffer<double, Dev>(dev_, 3 * nc);
     ctool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
     gtool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
@@ -110,7 +111,7 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     sactive_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     stouched_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     const std::size_t items = ns + ne > H ? ns + ne : H;  // the larger of the rebuild's two prefix sums
-    spart_ = DeviceBuffer<std::int64_t, Dev>(dev_, items / scan_chunk(static_cast<index_t>(items)) + 1);
+    spart_ = DeviceBuffer<std::int64_t, Dev>(dev_, items / chunk_size(static_cast<index_t>(items)) + 1);
     d_soft_mu_ = DeviceBuffer<double, Dev>::mirror(dev_, m_.soft_mu);
 }
 
@@ -122,7 +123,8 @@ void Engine<T, Dev>::refresh_view() {
     v.n_nodes = m.n_nodes, v.P = m.n_pad;
     v.slots = m.n_blocks * kLanes;
     v.n_contact = static_cast<index_t>(m.contact_nodes.size());
-    v.chunks = (v.n_contact + kContactChunk - 1) / kContactChunk;
+    v.contact_chunk = chunk_size(v.n_contact);
+    v.chunks = (v.n_contact + v.contact_chunk - 1) / v.contact_chunk;
     v.n_curves = static_cast<int>(m.curves.size());
     v.n_factors = static_cast<int>(m.pattern_curve.size());
     v.n_tools = static_cast<int>(tools_.size());

@@ -4,15 +4,7 @@
 
 namespace pliant {
 
-/// Items per chunk of Engine::scan over n items: the power of two from 64 up that is at least √n, so
-/// that the one thread over the chunks and each chunk's thread both walk about √n.
-inline index_t scan_chunk(index_t n) {
-    index_t c = 64;
-    while (static_cast<long long>(c) * c < n) c *= 2;
-    return c;
-}
-
-/// Prefix sums over items [0, n), in chunks (scan_chunk), the same on every device and thread count:
+/// Prefix sums over items [0, n), in chunks (chunk_size), the same on every device and thread count:
 /// (1) one thread per chunk sums count(i) over its items into spart; (2) one thread turns those
 /// into each chunk's offset and calls total(the sum of all); (3) one thread per chunk calls
 /// emit(i, before) for its items in order, before = the sum of count over the items before i. The
@@ -21,7 +13,7 @@ template <class T, class Dev>
 template <class Count, class Total, class Emit>
 void Engine<T, Dev>::scan(index_t n, const int* flag, const Count& count, const Total& total,
                           const Emit& emit) {
-    const index_t size = scan_chunk(n), chunks = (n + size - 1) / size;
+    const index_t size = chunk_size(n), chunks = (n + size - 1) / size;
     std::int64_t* part = v_.spart;
     dev_.each(chunks, [=] PLIANT_KERNEL(index_t c) {
         if (!*flag) return;

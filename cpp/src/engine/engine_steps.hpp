@@ -249,9 +249,9 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     });
 }
 
-/// Contact of the surface nodes with the rigid tools (and grasping), in fixed chunks of nodes each summing
-/// its per-tool force and torque; then one thread adds the chunks in order into the step's history row (the
-/// same bits for any thread count).
+/// Contact of the surface nodes with the rigid tools (and grasping), one thread per node; then
+/// chunks of nodes (chunk_size) each sum their per-tool force and torque, node by node, and one
+/// thread adds the chunks in order into the step's history row (the same bits for any thread count).
 template <class T, class Dev>
 void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
     const DeviceView<T> v = v_;
@@ -259,17 +259,17 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
     const T* uc = v.u[ph.cur];
     T* un = v.u[ph.next];
     T* dun = v.du[ph.next];
+    dev_.each(v.n_contact, [=] PLIANT_KERNEL(index_t i) {
+        contact_node(i, v.cnodes, v.cbits, v.X, mass, uc, v.P, v.tools, v.n_tools, v.pose0, v.pose1, v.closed,
+                     v.grid, double(v.sc->it.g1), un, dun, v.cforce, v.ctool, v.gtool, v.gat);
+    });
     dev_.each(v.chunks, [=] PLIANT_KERNEL(index_t c) {
         const int w = 6 * v.n_tools;
         double* h = v.chunk + static_cast<std::size_t>(c) * w;
         for (int k = 0; k < w; ++k) h[k] = 0.0;
-        const index_t end = (c + 1) * kContactChunk < v.n_contact ? (c + 1) * kContactChunk : v.n_contact;
-        const double g1 = double(v.sc->it.g1);
-        for (index_t i = c * kContactChunk; i < end; ++i) {
-            contact_node(i, v.cnodes, v.cbits, v.X, mass, uc, v.P, v.tools, v.n_tools, v.pose0, v.pose1,
-                         v.closed, v.grid, g1, un, dun, v.cforce, v.ctool, v.gtool, v.gat);
+        const index_t end = (c + 1) * v.contact_chunk < v.n_contact ? (c + 1) * v.contact_chunk : v.n_contact;
+        for (index_t i = c * v.contact_chunk; i < end; ++i)
             add_tool_reaction(i, v.cnodes, v.X, un, v.P, v.pose1, v.cforce, v.ctool, h);
-        }
     });
     dev_.serial([=] PLIANT_KERNEL() {
         const int w = 6 * v.n_tools;
