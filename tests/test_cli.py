@@ -109,6 +109,20 @@ def test_bench_on_a_device_without_kernel_timings(tmp_path):
     assert cells[5] == "-"  # kernel 1 %
 
 
+def test_bench_contact_cases_run_on_every_backend(backend, monkeypatch):
+    """`pliant bench --contact`'s two tool-contact cases (run from the repository root, where the
+    liver example lives), a few steps each: every case runs, and its kernel shares are measured
+    on the CPU and null elsewhere (not timed one by one)."""
+    from pliant.bench import bench_contact
+
+    monkeypatch.chdir(Path(__file__).resolve().parents[1])
+    rows = bench_contact(steps=20, echo=lambda r: None, backend=backend)
+    assert [r["case"] for r in rows] == ["demo: Spot + ground + sphere", "liver + capsule"]
+    for r in rows:
+        assert r["tets"] > 0 and r["contact_nodes"] > 0 and r["tools"] >= 1 and r["seconds"] > 0
+        assert (r["contact_share"] is None) == (backend != "cpu")
+
+
 def test_bad_option_exits_2():
     r = runner.invoke(app, ["bench", "--sizes", "abc"])
     assert r.exit_code == 2
