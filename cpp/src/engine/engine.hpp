@@ -191,6 +191,14 @@ public:
     void launch_damping(const Span& sp, const T* u, const T* du, T beta_over_dt);
 
 private:
+    /// k steps between two checks, as launch sequences of at most kGraphSteps steps each replayed
+    /// by the device (dev_.repeat), key naming the host bookkeeping the launches bake in (the
+    /// buffer phase): the same at each sequence's start, kGraphSteps being a multiple of its period.
+    template <class Step>
+    void replay_steps(long k, long key, Step&& step) {
+        for (long done = 0; done < k; done += kGraphSteps)
+            dev_.repeat(std::min(kGraphSteps, k - done), key, step);
+    }
     template <class Visitor>
     void dispatch(Visitor&& visit);
     void load(const State<T>& s);

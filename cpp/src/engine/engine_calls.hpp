@@ -245,11 +245,10 @@ RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int 
         long d = 0;
         while (d < n) {
             const long k = std::min(G, n - d);
-            for (long u = 0; u < k; u += kGraphSteps)
-                dev_.repeat(std::min(kGraphSteps, k - u), ph.cur, [&] {
-                    step_once(ph, dt, dt, false, nullptr, rep);
-                    ph.rotate();
-                });
+            replay_steps(k, ph.cur, [&] {
+                step_once(ph, dt, dt, false, nullptr, rep);
+                ph.rotate();
+            });
             d += k;
             // J belongs to the last step's input (t), the newest u to t + Δt.
             if (check(v_.u[ph.cur], t0 + (d - 1) * dt, t0 + d * dt, blowup, rep).status) break;
@@ -303,12 +302,11 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
         const long G = check_every > 0 ? check_every : 1;
         while (d < max_steps && !stop) {
             const long k = std::min(G, max_steps - d);
-            for (long u = 0; u < k; u += kGraphSteps)
-                dev_.repeat(std::min(kGraphSteps, k - u), 2 * ph.cur + fc, [&] {
-                    step_once(ph, dt, 0.0, true, v_.f_node[fc], rep);
-                    ph.rotate();
-                    fc = 1 - fc;
-                });
+            replay_steps(k, 2 * ph.cur + fc, [&] {
+                step_once(ph, dt, 0.0, true, v_.f_node[fc], rep);
+                ph.rotate();
+                fc = 1 - fc;
+            });
             d += k;
             if (d % G != 0 || d < 2) continue;
             // The measures belong to the last step's input u[prev] (f_node[1 − fc]) and the one
