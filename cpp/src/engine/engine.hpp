@@ -46,8 +46,9 @@ struct Scalars {
     int soft_due;      // soft contact: rebuild the candidate lists at the next step (set at each run's start)
     int soft_rebuild;  // soft contact: rebuild them this step (due, or a node left its skin)
     int soft_moved;  // soft contact: smallest surface node beyond skin/2 of its last rebuild (INT_MAX: none)
-    std::int64_t
-        soft_rmax;  // soft contact: largest triangle bounding radius at the last rebuild [m], its bits
+    // soft contact: the largest triangle bounding radius at the last rebuild [m], as its bits (an
+    // atomic maximum; non-negative doubles order as their bits do)
+    std::int64_t soft_rmax;
     index_t soft_active, soft_touched;  // soft contact: nodes with candidates; nodes of a sweep's contacts
     index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
     index_t soft_items;                 // soft contact: the larger of soft_active and soft_edges_active
@@ -119,6 +120,9 @@ inline index_t chunk_size(index_t n) {
     while (static_cast<long long>(c) * c < n) c *= 2;
     return c;
 }
+/// Chunks of chunk_size(n) items over n items (not monotone in n: where the chunk size doubles,
+/// the count halves).
+inline index_t chunk_count(index_t n) { return (n + chunk_size(n) - 1) / chunk_size(n); }
 /// Nodes per chunk of the relaxation's residual sums (fixed: the same bits for any thread count).
 constexpr index_t kMeasureChunk = 1024;
 /// Steps per replayed launch sequence (a CUDA graph) between two checks: a multiple of 6, the

@@ -28,8 +28,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     sc_ = DeviceBuffer<Scalars<T>, Dev>(dev_, 1);
     pose0_ = DeviceBuffer<Pose, Dev>(dev_, nt);
     pose1_ = DeviceBuffer<Pose, Dev>(dev_, nt);
-    const std::size_t chunks =
-        (nc + chunk_size(static_cast<index_t>(nc)) - 1) / chunk_size(static_cast<index_t>(nc));
+    const std::size_t chunks = chunk_count(static_cast<index_t>(nc));
     cforce_ = DeviceBuffer<double, Dev>(dev_, 3 * nc);
     ctool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
     gtool_ = DeviceBuffer<index_t, Dev>(dev_, nc);
@@ -110,8 +109,11 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     erec_p_ = DeviceBuffer<double, Dev>(dev_, 3 * ne);
     sactive_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     stouched_ = DeviceBuffer<index_t, Dev>(dev_, ns);
-    const std::size_t items = ns + ne > H ? ns + ne : H;  // the larger of the rebuild's two prefix sums
-    spart_ = DeviceBuffer<std::int64_t, Dev>(dev_, items / chunk_size(static_cast<index_t>(items)) + 1);
+    // Chunk sums of the rebuild's two prefix sums (Engine::scan): over the buckets, and over the
+    // surface nodes and sharp edges.
+    const index_t parts =
+        std::max(chunk_count(static_cast<index_t>(H)), chunk_count(static_cast<index_t>(ns + ne)));
+    spart_ = DeviceBuffer<std::int64_t, Dev>(dev_, static_cast<std::size_t>(parts));
     d_soft_mu_ = DeviceBuffer<double, Dev>::mirror(dev_, m_.soft_mu);
 }
 
@@ -124,7 +126,7 @@ void Engine<T, Dev>::refresh_view() {
     v.slots = m.n_blocks * kLanes;
     v.n_contact = static_cast<index_t>(m.contact_nodes.size());
     v.contact_chunk = chunk_size(v.n_contact);
-    v.chunks = (v.n_contact + v.contact_chunk - 1) / v.contact_chunk;
+    v.chunks = chunk_count(v.n_contact);
     v.n_curves = static_cast<int>(m.curves.size());
     v.n_factors = static_cast<int>(m.pattern_curve.size());
     v.n_tools = static_cast<int>(tools_.size());

@@ -13,7 +13,7 @@ template <class T, class Dev>
 template <class Count, class Total, class Emit>
 void Engine<T, Dev>::scan(index_t n, const int* flag, const Count& count, const Total& total,
                           const Emit& emit) {
-    const index_t size = chunk_size(n), chunks = (n + size - 1) / size;
+    const index_t size = chunk_size(n), chunks = chunk_count(n);  // spart holds chunks (allocate_soft)
     std::int64_t* part = v_.spart;
     dev_.each(chunks, [=] PLIANT_KERNEL(index_t c) {
         if (!*flag) return;
