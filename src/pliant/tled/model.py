@@ -138,7 +138,8 @@ class Model:
     Attributes: ``n_nodes``, ``n_elements``, ``dtype``, ``damping`` α [1/s],
     ``stiffness_damping`` β [s], ``dt_critical`` [s] (smallest h_min/c_d over elements, reduced for
     β by the factor √(1 + ξ²) − ξ, ξ = β/(h_min/c_d)), ``dt_critical_element`` (user element index),
-    ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,); with soft contact,
+    ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,), ``nodal_pressure``
+    (T4ANP on) and ``nodal_pressure_stabilization`` (as the builder had it); with soft contact,
     ``bodies`` (body of each element, (M,); else None) and ``contact_pairs`` (the pairs of bodies
     (a, b), a <= b, in the order of ``ContactReport.pairs``).
     """
@@ -158,8 +159,10 @@ class Model:
         self.dtype = dtype
         self.damping = float(builder.damping)
         self.stiffness_damping = float(builder.stiffness_damping)
+        self.nodal_pressure = bool(builder.nodal_pressure)
+        self.nodal_pressure_stabilization = builder.nodal_pressure_stabilization
         self.sets = list(builder.sets)
-        self._builder = builder.snapshot()  # what rebuilds the model after a cut (pliant.cutting)
+        self._builder = builder.snapshot()  # what rebuilds the model (rebuilt; pliant.cutting)
         N, M = X.shape[0], T.shape[0]
 
         # Element order: by element set, then along a Morton curve of the centroids.
@@ -344,6 +347,13 @@ class Model:
         self.constrained = held
 
     # --- numbering ----------------------------------------------------------------------------
+    def rebuilt(self, dtype: str) -> "Model":
+        """This model built again from its builder at ``dtype`` ("float32" or "float64"), on as many
+        threads (its warnings were given when it was first built)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return self._builder.finalize(dtype, threads=self.threads)
+
     def to_user_nodes(self, a: np.ndarray) -> np.ndarray:
         out = np.empty_like(a)
         out[self._node_order] = a

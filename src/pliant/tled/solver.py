@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import copy
 import math
-import warnings
 import weakref
 from typing import Any
 
@@ -67,9 +66,7 @@ def _stable_limit(model, dt: float) -> float:
         # float32 force differences are too noisy for Lanczos (ω_max 6.7x too high on ball_ball): a
         # float64 copy of the model gives the step.
         if model.dtype != np.float64:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # the model's own warnings were given when it was built
-                exact = model._builder.finalize("float64", threads=model.threads)
+            exact = model.rebuilt("float64")
         model._stable_step = stable_step(exact, exact.state())
     limit = EXACT_MARGIN * model._stable_step
     if dt > limit:
@@ -248,11 +245,10 @@ class Solver:
             )
         if status == RunStatus.Inverted:
             e = m.user_element(rep["where"])
-            b = m._builder
             # T4ANP without stabilization resists an element's own volume change by shear alone.
             hint = (
                 '; with nodal_pressure, try nodal_pressure_stabilization = "shear"'
-                if b.nodal_pressure and anp_stabilization(b.nodal_pressure_stabilization) == (0.0, False)
+                if m.nodal_pressure and anp_stabilization(m.nodal_pressure_stabilization) == (0.0, False)
                 else ""
             )
             raise InstabilityError(
