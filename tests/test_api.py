@@ -194,3 +194,33 @@ def test_engine_log_matches_libm(single):
     nz = xs != 0.0
     err = np.abs(got[nz] - want[nz]) / np.abs(want[nz])
     assert err.max() <= 3 * eps, f"worst at J - 1 = {xs[nz][np.argmax(err)]:.3g}: {err.max():.3g}"
+
+
+def test_a_model_rebuilt_at_another_dtype_is_that_build():
+    # Model.rebuilt(dtype) is the builder's finalize at that dtype: the same masses (float32 holds
+    # them to 1e-7 relative), the same step over the same 20 steps of gravity to float32's 1e-6
+    # of the largest displacement, and the T4ANP settings as the builder had them.
+    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (10, 2, 2))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=2e4, nu=0.45), density=1000.0)
+    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
+    b.set_gravity((0.0, 0.0, -9.81))
+    b.nodal_pressure = True
+    b.nodal_pressure_stabilization = "shear"
+    single = b.finalize("float32")
+    double = single.rebuilt("float64")
+    direct = b.finalize("float64")
+    assert (
+        double.dtype == np.float64
+        and double.nodal_pressure
+        and double.nodal_pressure_stabilization == "shear"
+    )
+    np.testing.assert_array_equal(double.mass, direct.mass)
+    np.testing.assert_allclose(single.mass, direct.mass, rtol=1e-7)
+    runs = [pl.Simulation(m, dt=1e-4) for m in (single, double, direct)]
+    for sim in runs:
+        sim.run(steps=20)
+    np.testing.assert_array_equal(runs[1].state.displacements, runs[2].state.displacements)
+    scale = np.abs(runs[2].state.displacements).max()
+    assert np.abs(runs[0].state.displacements - runs[2].state.displacements).max() < 1e-6 * scale + 1e-12
