@@ -8,13 +8,19 @@ import pliant as pl
 from pliant.contact import Sphere
 
 
-def _model(backend="cpu"):
+def _builder():
+    """A 10 × 2 × 2 cm bar, its end x = 0 held, under gravity."""
     X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (10, 2, 2))
     b = pl.ModelBuilder()
     b.add_mesh(X, T)
     b.set_material(pl.NeoHookean(E=2e4, nu=0.45), density=1000.0)
     b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
     b.set_gravity((0.0, 0.0, -9.81))
+    return b
+
+
+def _model(backend="cpu"):
+    b = _builder()
     b.add_tool(Sphere(0.01).at(0.0, (0.06, 0.01, -0.0101)).at(0.02, (0.06, 0.01, -0.008)))
     return b.finalize("float64", backend=backend)
 
@@ -200,12 +206,7 @@ def test_a_model_rebuilt_at_another_dtype_is_that_build():
     # Model.rebuilt(dtype) is the builder's finalize at that dtype: the same masses (float32 holds
     # them to 1e-7 relative), the same step over the same 20 steps of gravity to float32's 1e-6
     # of the largest displacement, and the T4ANP settings as the builder had them.
-    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (10, 2, 2))
-    b = pl.ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(pl.NeoHookean(E=2e4, nu=0.45), density=1000.0)
-    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
-    b.set_gravity((0.0, 0.0, -9.81))
+    b = _builder()
     b.nodal_pressure = True
     b.nodal_pressure_stabilization = "shear"
     single = b.finalize("float32")

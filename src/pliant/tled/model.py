@@ -346,7 +346,6 @@ class Model:
         self.last_load_time = max(c.end_time for c in curves)
         self.constrained = held
 
-    # --- numbering ----------------------------------------------------------------------------
     def rebuilt(self, dtype: str) -> "Model":
         """This model built again from its builder at ``dtype`` ("float32" or "float64"), on as many
         threads (its warnings were given when it was first built)."""
@@ -354,6 +353,7 @@ class Model:
             warnings.simplefilter("ignore")
             return self._builder.finalize(dtype, threads=self.threads)
 
+    # --- numbering ----------------------------------------------------------------------------
     def to_user_nodes(self, a: np.ndarray) -> np.ndarray:
         out = np.empty_like(a)
         out[self._node_order] = a
