@@ -35,17 +35,16 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
         assert (tmp_path / png).stat().st_size > 5000 and f"]({png})" in report
     peers = {p["peer"].split()[0]: p for p in data["peers"]}
     assert peers["pliant"]["ran"] and 0.4 < peers["pliant"]["ratio"] < 1.0  # locked linear tets
-    if not _mujoco_missing():  # the test extras install it
-        assert peers["mujoco"]["ran"] and "peers: MuJoCo flex, same mesh" in {r["case"] for r in data["rows"]}
-        assert f"| {peers['mujoco']['peer']} | {peers['mujoco']['ratio']:.4f} |" in report
-    else:
-        assert not peers["mujoco"]["ran"] and peers["mujoco"]["note"] == _mujoco_missing()
-    if not _newton_missing():  # the test extras install it
-        case = "peers: Newton semi-implicit, same mesh"
-        assert peers["newton"]["ran"] and case in {r["case"] for r in data["rows"]}
-        assert f"| {peers['newton']['peer']} | {peers['newton']['ratio']:.4f} |" in report
-    else:
-        assert not peers["newton"]["ran"] and peers["newton"]["note"] == _newton_missing()
+    for name, case, missing in (
+        ("mujoco", "peers: MuJoCo flex, same mesh", _mujoco_missing),
+        ("newton", "peers: Newton semi-implicit, same mesh", _newton_missing),
+    ):
+        peer = peers[name]
+        if not missing():  # the test extras install it
+            assert peer["ran"] and case in {r["case"] for r in data["rows"]}
+            assert f"| {peer['peer']} | {peer['ratio']:.4f} |" in report
+        else:
+            assert not peer["ran"] and peer["note"] == missing()
 
 
 def test_a_failing_check_exits_1_naming_it(tmp_path, monkeypatch):

@@ -7,8 +7,8 @@ namespace pliant {
 /// Prefix sums over items [0, n), in chunks (chunk_size), the same on every device and thread count:
 /// (1) one thread per chunk sums count(i) over its items into spart; (2) one thread turns those
 /// into each chunk's offset and calls total(the sum of all); (3) one thread per chunk calls
-/// emit(i, before) for its items in order, before = the sum of count over the items before i. The
-/// kernels return at once unless *flag (inside `when`, CUDA launches them whatever it holds).
+/// emit(i, before, k) for its items in order, k = count(i), before = the sum of count over the items before
+/// i. The kernels return at once unless *flag (inside `when`, CUDA launches them whatever it holds).
 template <class T, class Dev>
 template <class Count, class Total, class Emit>
 void Engine<T, Dev>::scan(index_t n, const int* flag, const Count& count, const Total& total,
@@ -38,7 +38,7 @@ void Engine<T, Dev>::scan(index_t n, const int* flag, const Count& count, const 
         std::int64_t before = part[c];
         for (index_t i = c * size; i < end; ++i) {
             const std::int64_t k = count(i);
-            emit(i, before);
+            emit(i, before, k);
             before += k;
         }
     });
@@ -67,7 +67,9 @@ void Engine<T, Dev>::soft_lists(const T* u) {
     scan(
         H, flag, [=] PLIANT_KERNEL(index_t b) -> std::int64_t { return v.scursor[b]; },
         [=] PLIANT_KERNEL(std::int64_t sum) { v.shead[H] = static_cast<index_t>(sum); },
-        [=] PLIANT_KERNEL(index_t b, std::int64_t before) { v.shead[b] = static_cast<index_t>(before); });
+        [=] PLIANT_KERNEL(index_t b, std::int64_t before, std::int64_t) {
+            v.shead[b] = static_cast<index_t>(before);
+        });
     dev_.each(s.n_tris, [=] PLIANT_KERNEL(index_t t) {
         if (!v.sc->soft_rebuild) return;
         const index_t b = v.sbucket[t];
@@ -95,14 +97,13 @@ void Engine<T, Dev>::soft_lists(const T* u) {
             sc.soft_edges_active = static_cast<index_t>(sum >> 32);
             sc.soft_items = sc.soft_active > sc.soft_edges_active ? sc.soft_active : sc.soft_edges_active;
         },
-        [=] PLIANT_KERNEL(index_t k, std::int64_t before) {
+        [=] PLIANT_KERNEL(index_t k, std::int64_t before, std::int64_t active) {
             if (k < ns) {
-                if (has(k)) v.sactive[before & 0xffffffff] = k;
+                if (active) v.sactive[before & 0xffffffff] = k;
                 return;
             }
-            const index_t e = k - ns;
-            v.erec[e] = -1;  // inactive edges hold no contact (soft_edge_partner reads the other side's)
-            if (has(s.edge[2 * e]) || has(s.edge[2 * e + 1])) v.eactive[before >> 32] = e;
+            v.erec[k - ns] = -1;  // inactive edges hold no contact (soft_edge_partner reads the other side's)
+            if (active) v.eactive[before >> 32] = k - ns;
         });
 }
 

@@ -117,30 +117,35 @@ def _mujoco(X, T, root, tip, mass, settle: float) -> tuple[float, float, str]:
     return float(-(d.flexvert_xpos[tip, 2] - x0[tip, 2]).mean()), settle / wall, mujoco.__version__
 
 
+def _not_importable(*modules: str) -> str:
+    """Why the first of ``modules`` (a peer's package, then what it needs) cannot be imported here
+    ("" if all can): not installed, or a broken install, which must not stop the report."""
+    if importlib.util.find_spec(modules[0]) is None:
+        return f"not installed (pip install {modules[0]})"
+    for m in modules:
+        try:
+            importlib.import_module(m)
+        except Exception as e:
+            return f"installed but not importable ({type(e).__name__}: {e})"
+    return ""
+
+
 def _mujoco_missing() -> str:
     """Why MuJoCo cannot run here ("" if it can): not installed, or a partial install (mujoco 4
     ships in three distributions that share the package folder)."""
-    if importlib.util.find_spec("mujoco") is None:
-        return "not installed (pip install mujoco)"
-    try:
-        import mujoco
-    except Exception as e:  # a broken install must not stop the report
-        return f"installed but not importable ({type(e).__name__})"
+    why = _not_importable("mujoco")
+    if why:
+        return why
+    import mujoco
+
     if not all(hasattr(mujoco, a) for a in ("MjModel", "set_mju_user_warning", "mj_step")):
         return "installed but incomplete (no MjModel: reinstall mujoco)"
     return ""
 
 
 def _newton_missing() -> str:
-    """Why Newton cannot run here ("" if it can)."""
-    if importlib.util.find_spec("newton") is None:
-        return "not installed (pip install newton)"
-    try:
-        import newton  # noqa: F401
-        import warp  # noqa: F401
-    except Exception as e:  # a broken install must not stop the report
-        return f"installed but not importable ({type(e).__name__}: {e})"
-    return ""
+    """Why Newton cannot run here ("" if it can): Newton and Warp, which its peer launches."""
+    return _not_importable("newton", "warp")
 
 
 @contextlib.contextmanager
