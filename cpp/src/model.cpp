@@ -392,7 +392,12 @@ void Model<T>::build_soft_contact(const ModelInput& in) {
             longest = std::sqrt(e2) > longest ? std::sqrt(e2) : longest;
         }
     }
-    soft_cell = longest > soft_skin ? longest : soft_skin;
+    soft_band = 0.0;
+    for (double h : soft_tri_h) soft_band = kSoftBehind * h > soft_band ? kSoftBehind * h : soft_band;
+    // A triangle's bounding radius is at most 2/3 of its longest edge, so with cells this large the
+    // candidates of an undeformed surface lie in the 27 cells around a node (soft_candidates' reach).
+    const double reach = 2.0 / 3.0 * longest + soft_skin + soft_band;
+    soft_cell = longest > reach ? longest : reach;
     build_soft_adjacency();
     build_soft_edges();
     std::size_t H = 1;

@@ -123,6 +123,7 @@ struct Model {
     std::vector<double> soft_mu, soft_tri_h;
     index_t soft_labels = 0, soft_pairs = 0, soft_hash_mask = 0;
     double soft_skin = 0.0, soft_cell = 0.0;
+    double soft_band = 0.0;    // kSoftBehind × the longest mean edge of a surface triangle [m]
     double dt_critical = 0.0;  // min over elements of h_min / c_d [s]
     index_t dt_critical_elem = -1;
     std::vector<double> elem_dt;  // per builder element: h_min / c_d [s] (host only, for reports)

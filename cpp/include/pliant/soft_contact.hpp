@@ -18,10 +18,11 @@
 // any of its four nodes takes part in, at least one: Macklin et al. 2014, ACM TOG 33(4):153, §4.2), which
 // keeps the Jacobi update from closing a gap twice; what is left is closed at the next steps.
 //
-// Broad phase: a Verlet list. Every surface node keeps up to kSoftCandidates triangles whose bounding
-// sphere lies within `skin` of it, found through a hashed uniform grid of triangle centroids; the
-// lists are rebuilt when some surface node has moved more than skin/2 since the last build (then no
-// triangle can reach a node that is not on its list), and at the start of every run.
+// Broad phase: a Verlet list. Every surface node keeps up to kSoftCandidates triangles that lie
+// within `skin` plus the triangle's contact band of it (soft_candidates), found through a hashed
+// uniform grid of triangle centroids; the lists are rebuilt when some surface node has moved more
+// than skin/2 since the last build (then no triangle can come within its band of a node that does
+// not list it), and at the start of every run.
 #pragma once
 
 #include <cmath>
@@ -71,6 +72,7 @@ struct SoftSurface {
     const index_t* pair = nullptr;      // labels × labels: pair index of (slave, master), −1: none
     const double* mu = nullptr;         // per pair: μs, μk
     double skin = 0.0, cell = 0.0;      // Verlet skin and grid cell size [m]
+    double band_max = 0.0;              // kSoftBehind × the longest mean edge of a triangle [m]
 };
 
 /// Current position [m] of surface node i: X + u.
@@ -202,12 +204,38 @@ PLIANT_HD bool soft_near_reference(index_t i, index_t t, const SoftSurface& s, c
     return d2 < s.tri_h[t] * s.tri_h[t];
 }
 
-/// Candidate triangles of surface node i (cand: kSoftCandidates entries, nearest first by the
-/// distance from the node to the triangle's bounding sphere, ties by triangle; −1 pads): those
-/// within `skin` [m], of a body the node's body may touch, not incident to the node nor, in its own
-/// body, to its neighbours (soft_adjacent). near[i]: bit q set if candidate q is of the node's own
-/// body and was near it in the reference configuration (soft_near_reference). xb (3 per node)
-/// records where the node was, for the rebuild test.
+/// Distance [m] from x to the triangle of surface nodes v[0..3) at displacements u (X + u; a
+/// degenerate triangle: to its first node).
+template <class T>
+PLIANT_HD double soft_distance(const double x[3], const index_t* v, const SoftSurface& s, const double* X,
+                               const T* u, index_t P) {
+    double a[3], b[3], c[3], w[3] = {1.0, 0.0, 0.0};
+    soft_position(v[0], s, X, u, P, a);
+    soft_position(v[1], s, X, u, P, b);
+    soft_position(v[2], s, X, u, P, c);
+    if (soft_closest(a, b, c, x, w) < 0) w[0] = 1.0, w[1] = w[2] = 0.0;
+    double d2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+        const double e = x[d] - (w[0] * a[d] + w[1] * b[d] + w[2] * c[d]);
+        d2 += e * e;
+    }
+    return std::sqrt(d2);
+}
+
+/// Candidate triangles of surface node i (cand: kSoftCandidates entries, nearest first, ties by
+/// triangle; −1 pads): those of a body the node's body may touch, not incident to the node nor, in
+/// its own body, to its neighbours (soft_adjacent), that lie within skin + band [m] of it (band =
+/// kSoftBehind × the triangle's mean edge: the farthest a contact's closest point may lie). Until the
+/// next rebuild the node and every vertex move at most skin/2 (the skin test), and a point's
+/// distance to a triangle changes by at most the largest of those moves together, so every triangle
+/// that comes within its band of the node before then is on the list: soft_detect, which looks no
+/// farther, finds what a search of the whole surface would. Triangles with a sharp edge are also kept
+/// while their bounding sphere lies within the skin: the edge–edge test of the node's edges reads
+/// their edges (soft_edge_detect), and edges can cross farther from their end nodes than the band.
+/// A bounding sphere's distance bounds the triangle's from below and sorts out the far ones before
+/// the closest point is computed. near[i]: bit q set if candidate q is of the node's own body and was
+/// near it in the reference configuration (soft_near_reference). xb (3 per node) records where the
+/// node was, for the rebuild test.
 template <class T>
 PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X, const T* u, index_t P,
                                double rmax, const index_t* head, const index_t* cell_tris, const double* tc,
@@ -219,7 +247,7 @@ PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X,
     double key[kSoftCandidates];
     int n = 0;
     if (std::isfinite(x[0] + x[1] + x[2])) {
-        int reach = static_cast<int>(std::ceil((rmax + s.skin) / s.cell));
+        int reach = static_cast<int>(std::ceil((rmax + s.skin + s.band_max) / s.cell));
         reach = reach < 1 ? 1 : (reach > kSoftReach ? kSoftReach : reach);
         const long long c0 = soft_cell(x[0], s.cell), c1 = soft_cell(x[1], s.cell),
                         c2 = soft_cell(x[2], s.cell);
@@ -235,11 +263,16 @@ PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X,
                         if (s.label[v[0]] == s.label[i] && soft_adjacent(i, t, s)) continue;
                         const double dx = x[0] - tc[3 * t], dy = x[1] - tc[3 * t + 1],
                                      dz = x[2] - tc[3 * t + 2];
-                        const double dist = std::sqrt(dx * dx + dy * dy + dz * dz) - tr[t];
-                        if (!(dist <= s.skin)) continue;
+                        const double sphere = std::sqrt(dx * dx + dy * dy + dz * dz) - tr[t];
+                        const double reach_t = s.skin + kSoftBehind * s.tri_h[t];
+                        if (!(sphere <= reach_t)) continue;
                         bool seen = false;  // two cells of one bucket list a triangle twice
                         for (int q = 0; q < n; ++q) seen = seen || out[q] == t;
                         if (seen) continue;
+                        const double dist = soft_distance(x, v, s, X, u, P);
+                        const bool sharp = s.tri_edge[3 * t] >= 0 || s.tri_edge[3 * t + 1] >= 0 ||
+                                           s.tri_edge[3 * t + 2] >= 0;
+                        if (!(dist <= reach_t) && !(sharp && sphere <= s.skin)) continue;
                         // Insertion into the sorted list, the farthest dropped when full.
                         int p = n < kSoftCandidates ? n++ : kSoftCandidates;
                         while (p > 0 && (key[p - 1] > dist || (key[p - 1] == dist && out[p - 1] > t))) {
