@@ -104,4 +104,14 @@ PLIANT_HD void atomic_max(std::int64_t* p, std::int64_t v) {
 #endif
 }
 
+/// A hint that *p will be read soon (host: a prefetch into the caches; device: nothing). No effect
+/// on any result.
+PLIANT_HD void prefetch(const void* p) {
+#if defined(__CUDA_ARCH__)
+    (void)p;
+#else
+    __builtin_prefetch(p);
+#endif
+}
+
 }  // namespace pliant

@@ -71,6 +71,7 @@ public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda";
     static constexpr bool kLaneLoops = false;  // lanes are threads: uniform branches cost nothing
+    static constexpr bool kPrefetch = false;   // the GPU hides memory latency with other warps
 
     explicit CudaDevice(int device) {
         cuda_detail::check(cudaSetDevice(device), "cudaSetDevice");

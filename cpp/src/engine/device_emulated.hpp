@@ -25,6 +25,7 @@ public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda-emulated";
     static constexpr bool kLaneLoops = false;  // lanes are threads, as on CUDA
+    static constexpr bool kPrefetch = false;   // as on CUDA
 
     EmulatedDevice() = default;
     EmulatedDevice(const EmulatedDevice&) = delete;

@@ -243,6 +243,8 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     T* un = v.u[ph.next];
     T* dun = v.du[ph.next];
     dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
+        if (v.prefetch && n + kPrefetchAhead < v.n_nodes)
+            prefetch_incidences(n + kPrefetchAhead, nd, v.f_elem);
         node_update(n, nd, v.f_elem, v.pf, v.sc->it, uc, duc, v.P, un, dun, f_node_out);
         for (index_t i = v.co[n]; i < v.co[n + 1]; ++i)
             apply_constraint(i, v.cdof, v.cval, v.ccurve, v.cnext, uc, un, dun);
