@@ -324,7 +324,7 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
 /// Prefetches the element-force lines node n's gather reads (node_update; three lines per incidence,
 /// one per component). Kernel 2 of a model that outgrows the caches waits on these irregular loads;
 /// issued kPrefetchAhead nodes ahead they arrive in time (the 1M-tet benchmark: kernel 2 from 62 %
-/// of the step to about 40 %). No effect on any result.
+/// of the step to 44–46 %, docs/engine.md). No effect on any result.
 constexpr int kPrefetchAhead = 16;
 template <class T>
 PLIANT_HD void prefetch_incidences(index_t n, const NodeData<T>& nd, const T* f_elem) {

@@ -27,8 +27,7 @@ public:
     static constexpr bool kSharesHost = true;  // model arrays are used in place, not copied
     static constexpr const char* kName = "cpu";
     static constexpr bool kLaneLoops = true;  // lanes run in SIMD loops: uniform branches cost vectorization
-    static constexpr bool kPrefetch =
-        true;  // caches between memory and the threads: kernel 2 prefetches its gathers on large models
+    static constexpr bool kPrefetch = true;   // kernel 2 prefetches its gathers on large models
 
     // threads: 1 .. thread_limit(), or <= 0 for OpenMP's default.
     explicit ThreadsDevice(int threads) : threads_(threads > 0 ? threads : omp_get_max_threads()) {
