@@ -186,21 +186,30 @@ PLIANT_HD int soft_closest(const double a[3], const double b[3], const double c[
     return set(va / den, vb / den, vc / den, 6);
 }
 
+/// soft_closest, and the squared distance [m²] from x to that closest point (d2, out); a degenerate
+/// triangle (feature −1) gives its first vertex (w = 1, 0, 0).
+PLIANT_HD int soft_closest_d2(const double a[3], const double b[3], const double c[3], const double x[3],
+                              double w[3], double& d2) {
+    w[0] = 1.0, w[1] = w[2] = 0.0;
+    const int feature = soft_closest(a, b, c, x, w);
+    d2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+        const double e = x[d] - (w[0] * a[d] + w[1] * b[d] + w[2] * c[d]);
+        d2 += e * e;
+    }
+    return feature;
+}
+
 /// Whether surface node i lay within a mean edge of triangle t in the reference configuration X
 /// [m] (a cut's two sides coincide there): the self contact of edges is for surfaces that
 /// deformation brought together (soft_edge_detect).
 PLIANT_HD bool soft_near_reference(index_t i, index_t t, const SoftSurface& s, const double* X) {
-    double v[3][3], x[3], w[3] = {1.0, 0.0, 0.0};  // a degenerate triangle: its first node
+    double v[3][3], x[3], w[3], d2;
     for (int d = 0; d < 3; ++d) {
         x[d] = X[3 * s.node[i] + d];
         for (int k = 0; k < 3; ++k) v[k][d] = X[3 * s.node[s.tri[3 * t + k]] + d];
     }
-    soft_closest(v[0], v[1], v[2], x, w);
-    double d2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-        const double g = x[d] - (w[0] * v[0][d] + w[1] * v[1][d] + w[2] * v[2][d]);
-        d2 += g * g;
-    }
+    soft_closest_d2(v[0], v[1], v[2], x, w, d2);
     return d2 < s.tri_h[t] * s.tri_h[t];
 }
 
@@ -209,16 +218,11 @@ PLIANT_HD bool soft_near_reference(index_t i, index_t t, const SoftSurface& s, c
 template <class T>
 PLIANT_HD double soft_distance(const double x[3], const index_t* v, const SoftSurface& s, const double* X,
                                const T* u, index_t P) {
-    double a[3], b[3], c[3], w[3] = {1.0, 0.0, 0.0};
+    double a[3], b[3], c[3], w[3], d2;
     soft_position(v[0], s, X, u, P, a);
     soft_position(v[1], s, X, u, P, b);
     soft_position(v[2], s, X, u, P, c);
-    if (soft_closest(a, b, c, x, w) < 0) w[0] = 1.0, w[1] = w[2] = 0.0;
-    double d2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-        const double e = x[d] - (w[0] * a[d] + w[1] * b[d] + w[2] * c[d]);
-        d2 += e * e;
-    }
+    soft_closest_d2(a, b, c, x, w, d2);
     return std::sqrt(d2);
 }
 
@@ -414,13 +418,9 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
         soft_current(v[0], xs, a);
         soft_current(v[1], xs, b);
         soft_current(v[2], xs, c);
-        const int feature = soft_closest(a, b, c, x1, w);
+        double d2;
+        const int feature = soft_closest_d2(a, b, c, x1, w, d2);
         if (feature < 0) continue;
-        double d2 = 0.0;
-        for (int d = 0; d < 3; ++d) {
-            const double e = x1[d] - (w[0] * a[d] + w[1] * b[d] + w[2] * c[d]);
-            d2 += e * e;
-        }
         const index_t lb = s.label[v[0]];
         int k = 0;
         while (k < n_bodies && body[k] != lb) ++k;
