@@ -79,6 +79,15 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
     }
 }
 
+/// Kernel 1 (element_forces, below) from the displacement gradient H [1] of slot (b, l).
+template <class T, class Material>
+PLIANT_HD void element_forces_at(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                                 const Mat3<T>& H, T* f_out, T* J_out) {
+    const Kinematics<T> k = kinematics(H);
+    store_forces<false>(b, l, el, mat.pk1(k), f_out);
+    J_out[aosoa(b, l, 0, 1)] = k.J;
+}
+
 /// Kernel 1, one element per lane: element nodal forces f_a = V0 · F S ∇X N_a
 /// (Miller et al. 2007, CNME 23:121, eq. 12; Taylor et al. 2008, IEEE TMI 27(5), eq. 6).
 /// Inputs: material, element data, displacements u [m] SoA (3, P).
@@ -86,9 +95,7 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
 template <class T, class Material>
 PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
                               index_t P, T* f_out, T* J_out) {
-    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
-    store_forces<false>(b, l, el, mat.pk1(k), f_out);
-    J_out[aosoa(b, l, 0, 1)] = k.J;
+    element_forces_at(b, l, mat, el, displacement_gradient(b, l, el, u, P), f_out, J_out);
 }
 
 /// Stiffness-proportional (Rayleigh β) damping as a viscous stress, added to the element forces:
@@ -129,10 +136,17 @@ PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const E
 /// elements of node a; (3) element_forces with p̄ = ¼ Σ p̄_a of the element's corners in place of
 /// its own pressure. Volumetric locking of nearly incompressible tissue is much reduced.
 /// (1) Inputs: decoupled material, element data, u [m] SoA (3, P). Output: ep_out [N·m] (slot).
-template <class T, class Material>
+/// kKeep: H_out [1] (AoSoA K=9) also receives the displacement gradient, which pass (3) then reads
+/// instead of gathering the displacements again (Dev::kKeepsAnpGradient).
+template <bool kKeep, class T, class Material>
 PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
-                                index_t P, T* ep_out) {
-    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
+                                index_t P, T* ep_out, T* H_out) {
+    const Mat3<T> H = displacement_gradient(b, l, el, u, P);
+    if constexpr (kKeep) {
+        PLIANT_UNROLL
+        for (int k = 0; k < 9; ++k) H_out[aosoa(b, l, k, 9)] = H.a[k];
+    }
+    const Kinematics<T> k = kinematics(H);
     ep_out[aosoa(b, l, 0, 1)] = el.vol[aosoa(b, l, 0, 1)] * mat.pressure(k);
 }
 
@@ -160,11 +174,19 @@ PLIANT_HD T corner_pressure(index_t b, int l, const ElementData<T>& el, const T*
 
 /// (3) Element forces of slot (b, l) with its corners' mean nodal pressure p̄ [Pa] (node_p), with
 /// the fraction stab (γ) of its own pressure mixed back in (AveragedPressure).
-template <class T, class Material>
+/// kKept: the displacement gradient is read from H (pass (1)'s H_out), else computed from u [m].
+template <bool kKept, class T, class Material>
 PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
-                                  index_t P, const T* node_p, T stab, T* f_out, T* J_out) {
-    element_forces(b, l, AveragedPressure<Material, T>{mat, corner_pressure(b, l, el, node_p), stab}, el, u,
-                   P, f_out, J_out);
+                                  index_t P, const T* H, const T* node_p, T stab, T* f_out, T* J_out) {
+    const AveragedPressure<Material, T> ap{mat, corner_pressure(b, l, el, node_p), stab};
+    if constexpr (kKept) {
+        Mat3<T> Hk;
+        PLIANT_UNROLL
+        for (int k = 0; k < 9; ++k) Hk.a[k] = H[aosoa(b, l, k, 9)];
+        element_forces_at(b, l, ap, el, Hk, f_out, J_out);
+    } else {
+        element_forces(b, l, ap, el, u, P, f_out, J_out);
+    }
 }
 
 /// Time-integration coefficients of central differences with mass-proportional damping α [1/s]:

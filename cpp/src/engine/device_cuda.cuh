@@ -70,8 +70,9 @@ class CudaDevice : public InOrderThen<CudaDevice> {
 public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda";
-    static constexpr bool kLaneLoops = false;  // lanes are threads: uniform branches cost nothing
-    static constexpr bool kPrefetch = false;   // the GPU hides memory latency with other warps
+    static constexpr bool kLaneLoops = false;         // lanes are threads: uniform branches cost nothing
+    static constexpr bool kPrefetch = false;          // the GPU hides memory latency with other warps
+    static constexpr bool kKeepsAnpGradient = false;  // T4ANP's pass (3) recomputes H (not measured)
 
     explicit CudaDevice(int device) {
         cuda_detail::check(cudaSetDevice(device), "cudaSetDevice");

@@ -24,8 +24,9 @@ class EmulatedDevice : public InOrderThen<EmulatedDevice> {
 public:
     static constexpr bool kSharesHost = false;
     static constexpr const char* kName = "cuda-emulated";
-    static constexpr bool kLaneLoops = false;  // lanes are threads, as on CUDA
-    static constexpr bool kPrefetch = false;   // as on CUDA
+    static constexpr bool kLaneLoops = false;         // lanes are threads, as on CUDA
+    static constexpr bool kPrefetch = false;          // as on CUDA
+    static constexpr bool kKeepsAnpGradient = false;  // as on CUDA
 
     EmulatedDevice() = default;
     EmulatedDevice(const EmulatedDevice&) = delete;

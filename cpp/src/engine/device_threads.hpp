@@ -28,6 +28,7 @@ public:
     static constexpr const char* kName = "cpu";
     static constexpr bool kLaneLoops = true;  // lanes run in SIMD loops: uniform branches cost vectorization
     static constexpr bool kPrefetch = true;   // kernel 2 prefetches its gathers on large models
+    static constexpr bool kKeepsAnpGradient = true;  // T4ANP's pass (3) reads pass (1)'s gradients
 
     // threads: 1 .. thread_limit(), or <= 0 for OpenMP's default.
     explicit ThreadsDevice(int threads) : threads_(threads > 0 ? threads : omp_get_max_threads()) {

@@ -80,6 +80,7 @@ struct DeviceView {
     const RigidTool* tools;
     const double *keys, *grips;  // keyframes, grasping tools' close/open times
     T *u[3], *du[3], *q, *f_elem, *J, *elem_p, *node_p, *f_node[2], *cnext, *pf;
+    T* H_anp;  // T4ANP: displacement gradients of pass (1) for pass (3), AoSoA K=9 (Dev::kKeepsAnpGradient)
     Scalars<T>* sc;
     Pose *pose0, *pose1;
     double *cforce, *chunk, *hist, *fcon, *partial;
@@ -189,7 +190,7 @@ public:
     void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt);
     void copy(T* dst, const T* src, std::size_t n);
     void fill(T* dst, T value, std::size_t n);
-    template <class M, Variant V>
+    template <class M, Variant V, bool kKeep>
     void launch_pressure(const Span& sp, const T* u);
     template <class M, Variant V>
     void launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt);
@@ -229,8 +230,8 @@ private:
     ModelBuffers<T, Dev> mb_;
     DeviceBuffer<RigidTool, Dev> d_tools_;
     DeviceBuffer<double, Dev> d_keys_, d_grips_, cforce_, chunk_, hist_, fcon_, partial_, gat_;
-    DeviceBuffer<T, Dev> u_[3], du_[3], q_, f_elem_, J_, elem_p_, node_p_, f_node_[2], cnext_, pf_, H_elem_,
-        Hbar_, P_edge_;
+    DeviceBuffer<T, Dev> u_[3], du_[3], q_, f_elem_, J_, elem_p_, node_p_, H_anp_, f_node_[2], cnext_, pf_,
+        H_elem_, Hbar_, P_edge_;
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;

@@ -20,6 +20,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);
     node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
     const bool smoothed = m.smoothing == StrainSmoothing::Edge;
+    H_anp_ = DeviceBuffer<T, Dev>(dev_, Dev::kKeepsAnpGradient && m.anp && !smoothed ? 9 * S : 0);
     H_elem_ = DeviceBuffer<T, Dev>(dev_, smoothed ? 9 * S : 0);
     Hbar_ = DeviceBuffer<T, Dev>(dev_, 9 * static_cast<std::size_t>(m.n_edges));
     P_edge_ = DeviceBuffer<T, Dev>(dev_, 9 * static_cast<std::size_t>(m.n_edges));
@@ -155,7 +156,7 @@ void Engine<T, Dev>::refresh_view() {
     v.grid = mb_.grid.data(), v.tools = d_tools_.data(), v.keys = d_keys_.data(), v.grips = d_grips_.data();
     for (int k = 0; k < 3; ++k) v.u[k] = u_[k].data(), v.du[k] = du_[k].data();
     v.q = q_.data(), v.f_elem = f_elem_.data(), v.J = J_.data();
-    v.elem_p = elem_p_.data(), v.node_p = node_p_.data();
+    v.elem_p = elem_p_.data(), v.node_p = node_p_.data(), v.H_anp = H_anp_.data();
     v.f_node[0] = f_node_[0].data(), v.f_node[1] = f_node_[1].data();
     v.cnext = cnext_.data(), v.pf = pf_.data(), v.sc = sc_.data();
     v.pose0 = pose0_.data(), v.pose1 = pose1_.data();

@@ -67,14 +67,15 @@ void Engine<T, Dev>::dispatch(Visitor&& visit) {
     }
 }
 
+/// T4ANP's pass (1) of span sp; kKeep: it also keeps the displacement gradients for pass (3).
 template <class T, class Dev>
-template <class M, Variant V>
+template <class M, Variant V, bool kKeep>
 void Engine<T, Dev>::launch_pressure(const Span& sp, const T* u) {
     if constexpr (V == Variant::Anp) {
         const DeviceView<T> v = v_;
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
             const M mat = make_material<M>(v.mats[v.block_group[b]]);
-            element_pressure(b, l, mat, v.el, u, v.P, v.elem_p);
+            element_pressure<kKeep>(b, l, mat, v.el, u, v.P, v.elem_p, v.H_anp);
         });
     }
 }
@@ -139,8 +140,8 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
             (void)v, (void)u;  // captured before any `if constexpr` (nvcc)
             const M mat = make_material<M>(v.mats[v.block_group[b]]);
             if constexpr (V == Variant::Anp) {
-                element_forces_anp(b, l, mat, v.el, u, v.P, v.node_p, v.anp_gamma[v.block_group[b]], v.f_elem,
-                                   v.J);
+                element_forces_anp<Dev::kKeepsAnpGradient>(b, l, mat, v.el, u, v.P, v.H_anp, v.node_p,
+                                                           v.anp_gamma[v.block_group[b]], v.f_elem, v.J);
             } else {
                 element_forces(b, l, mat, v.el, u, v.P, v.f_elem, v.J);
             }
@@ -153,7 +154,12 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
 template <class T, class Dev>
 void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
     if (m_.anp) {
-        dispatch([&]<class M, Variant V>(const Span& sp) { launch_pressure<M, V>(sp, u); });
+        // Pass (3) reads pass (1)'s gradients where the device keeps them (Dev::kKeepsAnpGradient),
+        // but not with the edge-smoothed strain: its pass (3) reads the edges' stresses.
+        if (Dev::kKeepsAnpGradient && !v_.smoothed)
+            dispatch([&]<class M, Variant V>(const Span& sp) { launch_pressure<M, V, true>(sp, u); });
+        else
+            dispatch([&]<class M, Variant V>(const Span& sp) { launch_pressure<M, V, false>(sp, u); });
         dev_.barrier();
         const DeviceView<T> v = v_;
         dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
