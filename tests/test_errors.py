@@ -87,6 +87,44 @@ def test_bad_mesh_arrays():
         b.add_mesh(X, np.array([[0, 1, 1, 3]]))
 
 
+def test_repeated_and_overlapping_elements_are_named():
+    """A tetrahedron given twice (its mass and stiffness counted twice; a lone pair has no
+    boundary, which crashed the run's picture: exit 3) and a third element on an interior face
+    (elements that overlap) are refused, naming the elements and the face."""
+    X = 0.01 * np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1], [0.2, 0.2, -0.5]])
+    b = pl.ModelBuilder()
+    with pytest.raises(pl.MeshError, match=r"element 2 has the same four nodes as element 0: \[3, 1, 2, 0\]"):
+        b.add_mesh(X, np.array([[0, 1, 2, 3], [0, 2, 1, 4], [3, 1, 2, 0]]))
+    with pytest.raises(pl.MeshError, match=r"face \[0, 1, 2\] belongs to elements 0, 1 and 2"):
+        b.add_mesh(X, np.array([[0, 1, 2, 3], [0, 2, 1, 4], [0, 2, 1, 5]]))
+    b.add_mesh(X, np.array([[0, 1, 2, 3], [0, 2, 1, 4]]))  # two elements on a face: fine
+
+
+@pytest.mark.parametrize("offset", [0, 2**40])  # node numbers packed into one integer, or not
+def test_repeat_search_matches_brute_force(offset):
+    """topology.repeated_element / overshared_face against a direct search over all pairs and
+    triples, on random small index sets where repeats are likely."""
+    from itertools import combinations
+
+    from pliant.mesh.topology import overshared_face, repeated_element
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        T = np.array([rng.choice(7, 4, replace=False) for _ in range(rng.integers(1, 9))]) + offset
+        keys = [tuple(sorted(t)) for t in T]
+        pairs = [(i, j) for i, j in combinations(range(len(T)), 2) if keys[i] == keys[j]]
+        want = min(pairs, key=lambda p: (p[0], p[1])) if pairs else None
+        got = repeated_element(T)
+        assert got == want, (T, got, want)
+        faces = [{f for f in combinations(k, 3)} for k in keys]
+        triple = any(set.intersection(*(faces[e] for e in tri)) for tri in combinations(range(len(T)), 3))
+        shared = overshared_face(T)
+        assert (shared is None) == (not triple), (T, shared)
+        if shared is not None:
+            face, elems = shared
+            assert len(set(elems)) == 3 and all(tuple(face) in faces[e] for e in elems)
+
+
 def test_conflicting_constraints_and_bad_loads():
     X, T = _tet()
     b = pl.ModelBuilder()

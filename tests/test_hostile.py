@@ -226,6 +226,16 @@ def test_flat_surface_is_refused_as_enclosing_no_volume(tmp_path):
     assert not (tmp_path / "flat.vtu").exists()
 
 
+def test_a_repeated_element_is_refused_by_name(tmp_path):
+    """Two copies of one tet have no boundary: the run went on and its picture crashed (exit 3)."""
+    X = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]) * 0.01
+    p = tmp_path / "twice.vtu"
+    meshio.write(p, meshio.Mesh(X, [("tetra", np.array([[0, 1, 2, 3], [1, 2, 3, 0]]))]))
+    s = scene(tmp_path, SCENE.replace('primitive = "box"', f'file = "{p}"'))
+    refused(cli("run", s, "-o", tmp_path / "o"), "element 1 has the same four nodes as element 0")
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
 def test_quality_of_degenerate_tets_prints_no_nan(tmp_path):
     """A zero-volume tet made 'the worst element costs nan× the steps'."""
     X = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0], [1, 1, 0]])

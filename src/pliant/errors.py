@@ -35,7 +35,8 @@ class MaterialError(InputError):
 
 
 class MeshError(InputError):
-    """A mesh that cannot be simulated (bad indices, NaN coordinates, unreadable file...)."""
+    """A mesh that cannot be simulated (bad indices, NaN coordinates, unreadable file, an element
+    given twice, a face shared by three elements...)."""
 
 
 class InvertedElementError(MeshError):

@@ -17,6 +17,44 @@ def boundary_faces(tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return faces[once], owner[once]
 
 
+def _first_repeat(keys: np.ndarray, run: int) -> np.ndarray | None:
+    """Indices (run,) of the first run of ``run`` equal rows of ``keys`` (R, k) non-negative
+    integers, in ascending order of the rows' first index; None if no row occurs ``run`` times."""
+    keys = np.ascontiguousarray(keys, dtype=np.int64)
+    n = int(keys.max()) + 1 if keys.size else 1
+    flat: np.ndarray
+    if float(n) ** keys.shape[1] < 2.0**62:  # one integer per row
+        flat = np.zeros(len(keys), np.int64)
+        for c in range(keys.shape[1]):
+            flat = flat * n + keys[:, c]
+    else:  # the rows' bytes: equal rows, equal keys
+        flat = keys.view(np.dtype((np.void, 8 * keys.shape[1]))).ravel()
+    order = np.argsort(flat, kind="stable")
+    f = flat[order]
+    same = f[run - 1 :] == f[: len(f) - run + 1]
+    if not same.any():
+        return None
+    starts = np.nonzero(same)[0]
+    first = starts[np.argmin(order[starts])]  # the run whose first row comes first
+    return np.sort(order[first : first + run])
+
+
+def repeated_element(tets: np.ndarray) -> tuple[int, int] | None:
+    """The first pair (i, j), i < j, of tetrahedra (M, 4) made of the same four nodes, or None."""
+    pair = _first_repeat(np.sort(np.asarray(tets), axis=1), 2)
+    return None if pair is None else (int(pair[0]), int(pair[1]))
+
+
+def overshared_face(tets: np.ndarray) -> tuple[list[int], list[int]] | None:
+    """A triangle shared by more than two tetrahedra (M, 4), as (its three nodes, ascending; three
+    of the elements), or None. In a conforming tet mesh an interior face belongs to two elements
+    and a boundary face to one: a third overlaps them."""
+    key = np.sort(np.asarray(tets), axis=1)
+    faces = key[:, [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]].reshape(-1, 3)
+    rows = _first_repeat(faces, 3)
+    return None if rows is None else (faces[rows[0]].tolist(), (rows // 4).tolist())
+
+
 def boundary_nodes(tets: np.ndarray) -> np.ndarray:
     """Indices of the nodes on the boundary faces, ascending."""
     return np.unique(boundary_faces(tets)[0])

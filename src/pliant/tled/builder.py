@@ -17,6 +17,7 @@ from .. import _core
 from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
+from ..mesh.topology import overshared_face, repeated_element
 from .curves import Constant, LoadCurve
 from .anp import ANP_STABILIZATION, anp_stabilization
 from .smoothing import strain_smoothing
@@ -38,6 +39,25 @@ def _dofs(dofs) -> list[int]:
     if any(d not in (0, 1, 2) for d in out):
         raise InputError(f"dofs = {shown(dofs)}: expected 0, 1, 2 or letters from 'xyz'")
     return out
+
+
+def _check_conforming(T: np.ndarray, src: str) -> None:
+    """Refuse tetrahedra (M, 4) that repeat an element (its material and mass counted twice) or
+    put a third element on a face (overlapping elements)."""
+    pair = repeated_element(T)
+    if pair is not None:
+        i, j = pair
+        raise MeshError(
+            f"{src}: element {j} has the same four nodes as element {i}: {T[j].tolist()}; "
+            "expected each tetrahedron once"
+        )
+    shared = overshared_face(T)
+    if shared is not None:
+        face, (a, b, c) = shared
+        raise MeshError(
+            f"{src}: face {face} belongs to elements {a}, {b} and {c}; expected at most two "
+            "(elements that overlap)"
+        )
 
 
 @dataclass
@@ -129,6 +149,7 @@ class ModelBuilder:
         if dup.size:
             k = int(dup[0])
             raise DegenerateElementError(f"{src}: element {k} repeats a node: {T[k].tolist()}", k)
+        _check_conforming(T, src)
         base = self.nodes.shape[0]
         first = self.tets.shape[0]
         self.nodes = np.vstack([self.nodes, X])
