@@ -436,6 +436,7 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
     m.attr("material_params") = kMaterialParams;  // parameters per material group
     m.attr("prony_max") = kPronyMax;              // Prony terms per group (half isochoric)
     m.attr("masked_tools") = kMaskedTools;        // tools that can be restricted to node sets
+    m.attr("soft_band") = kSoftBehind;            // soft contact's band: this × a triangle's mean edge [1]
     // The kinds the engine dispatches on, bound so that Python names them and restates no number.
     nb::enum_<MaterialKind>(m, "MaterialKind", nb::is_arithmetic(), "Hyperelastic material models.")
         .value("NeoHookean", MaterialKind::NeoHookean)

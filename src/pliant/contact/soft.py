@@ -208,6 +208,74 @@ def engine_surface(
     )
 
 
+def initial_overlap(X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs) -> dict | None:
+    """The deepest surface node that starts inside another body it touches: a dict with ``node``,
+    its ``body``, the ``other`` body, ``depth`` [m] (distance to the other's surface) and ``band``
+    [m] (the soft-contact band at the closest triangle: ``_core.soft_band`` × its mean edge, the
+    deepest a node inside counts as a contact); None if no node starts inside. X: reference nodes
+    [m] (N, 3); T: tets (M, 4); labels: body per element (M,); pairs: the touching (a, b), a <= b
+    (pairs of one body, self contact, are not checked: a body's own surface is where it starts).
+    Each node is located among the 8 tets with the nearest centroids, of all bodies at once."""
+    from scipy.spatial import cKDTree
+
+    from .. import _core
+    from ..mesh.embed import barycentric
+    from ..mesh.topology import boundary_faces
+
+    n_bodies = int(labels.max()) + 1
+    touch = np.zeros((n_bodies, n_bodies), bool)
+    for a, b in pairs:
+        touch[a, b] = touch[b, a] = a != b
+    if not touch.any():
+        return None
+    faces, owner = boundary_faces(T)
+    face_body = labels[owner]
+    node_body = np.full(X.shape[0], -1, np.int64)
+    node_body[faces.ravel()] = np.repeat(face_body, 3)
+    nodes = np.nonzero(node_body >= 0)[0]
+    nodes = nodes[touch[node_body[nodes]].any(axis=1)]
+    k = min(8, len(T))
+    _, cand = cKDTree(X[T].mean(axis=1)).query(X[nodes], k=k)
+    cand = cand.reshape(len(nodes), k)
+    inside = np.full(len(nodes), -1, np.int64)  # the body a node lies in (−1: none)
+    for j in range(k):
+        other = labels[cand[:, j]]
+        w = barycentric(X[T[cand[:, j]]], X[nodes])
+        hit = (inside < 0) & touch[node_body[nodes], other] & (w.min(axis=1) >= -1e-9)  # faces too
+        inside[hit] = other[hit]
+    worst = None
+    for other in np.unique(inside[inside >= 0]):
+        sel = nodes[inside == other]
+        worst = _deepest(X, sel, node_body, faces[face_body == other], int(other), _core.soft_band, worst)
+    return worst
+
+
+def _deepest(X, nodes, node_body, faces, other: int, band_fraction: float, worst: dict | None) -> dict | None:
+    """initial_overlap's record for the deepest of ``nodes`` below ``faces`` (body ``other``'s
+    surface), if deeper than ``worst`` and than round-off (a node on that surface touches)."""
+    from scipy.spatial import cKDTree
+
+    from .sdf import point_triangle_distance
+
+    tri, P = X[faces], X[nodes]
+    kf = min(16, len(tri))
+    _, fc = cKDTree(tri.mean(axis=1)).query(P, k=kf)
+    fc = fc.reshape(len(P), kf)
+    depth, near = np.full(len(P), np.inf), np.zeros(len(P), np.int64)
+    for j in range(kf):
+        d, _ = point_triangle_distance(P, *(tri[fc[:, j], c] for c in range(3)))
+        better = d < depth
+        depth[better], near[better] = d[better], fc[better, j]
+    i = int(np.argmax(depth))
+    t = tri[near[i]]
+    band = band_fraction * float(np.linalg.norm(t - np.roll(t, 1, axis=0), axis=1).mean())
+    if depth[i] <= 1e-9 * band or (worst is not None and depth[i] <= worst["depth"]):
+        return worst
+    return dict(
+        node=int(nodes[i]), body=int(node_body[nodes[i]]), other=other, depth=float(depth[i]), band=band
+    )
+
+
 def no_surface() -> dict:
     """The engine's soft-contact arrays of a model without soft contact."""
     return dict(

@@ -24,7 +24,7 @@ class Embedding:
         return np.einsum("vk,vkd->vd", self.weights, node_positions[tets[self.tet]])
 
 
-def _barycentric(P: np.ndarray, X: np.ndarray) -> np.ndarray:
+def barycentric(P: np.ndarray, X: np.ndarray) -> np.ndarray:
     """Barycentric coordinates of points X (n, 3) in tets P (n, 4, 3)."""
     A = np.stack([P[:, 1] - P[:, 0], P[:, 2] - P[:, 0], P[:, 3] - P[:, 0]], axis=2)
     lam = np.linalg.solve(A, (X - P[:, 0])[..., None])[..., 0]
@@ -50,7 +50,7 @@ def embed_surface(
     best_score = np.full(len(V), -np.inf)
     for j in range(k):
         t = cand[:, j]
-        w = _barycentric(nodes[tets[t]], V)
+        w = barycentric(nodes[tets[t]], V)
         score = w.min(axis=1)
         better = score > best_score
         best_score[better], best_t[better], best_w[better] = score[better], t[better], w[better]

@@ -94,6 +94,31 @@ def _warn_slow_element(source: str, dt: np.ndarray, altitude: np.ndarray) -> Non
         )
 
 
+def _check_initial_overlap(source: str, X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs) -> None:
+    """Soft contact needs the bodies it pairs to start apart or touching: a node that starts inside
+    another body deeper than the contact band is never pushed out (an InputError), a shallower
+    one is pushed out in the first step, a jolt (a PliantWarning)."""
+    from ..contact.soft import initial_overlap
+
+    o = initial_overlap(X, T, labels, pairs)
+    if o is None:
+        return
+    where = (
+        f"{source}: soft contact: node {o['node']} of body {o['body']} starts {o['depth']:.3g} m inside "
+        f"body {o['other']}"
+    )
+    if o["depth"] > o["band"]:
+        raise InputError(
+            f"{where}, deeper than the contact band there ({o['band']:.3g} m: {_core.soft_band:g} x the "
+            "nearest triangle's mean edge), so contact would never push it out; expected the bodies apart or "
+            "touching at the start (move them apart)"
+        )
+    warnings.warn(
+        PliantWarning(f"{where}: contact pushes it out in the first step, a jolt; start the bodies apart"),
+        stacklevel=4,
+    )
+
+
 def _prony_row(prony) -> list[float]:
     """One group's Prony terms in the engine's layout (materials.hpp, Prony): n_iso, n_vol, then
     (α, τ) pairs, isochoric at 0.., volumetric at prony_max/2.."""
@@ -268,6 +293,8 @@ class Model:
         )
         self.contact_pairs = soft.pop("pairs")  # soft-contact pairs of bodies (a <= b), index order
         self.bodies = soft.pop("labels")  # body of each element (user order), or None
+        if self.contact_pairs:
+            _check_initial_overlap(builder.source, X, T, self.bodies, self.contact_pairs)
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
             for grp in np.nonzero(keep)[0]:
