@@ -533,6 +533,10 @@ def test_bodies_that_start_deep_inside_each_other_are_refused():
         InputError, match=r"blocks: soft contact: node \d+ of body \d starts 0.008 m inside body \d"
     ):
         overlapping_blocks(0.012).finalize("float64")
+    # A body given twice (a copied [[body]] without its translate): its surface lies on the
+    # other's, its centre node 1 cm (half the block) inside it.
+    with pytest.raises(InputError, match=r"node \d+ of body 1 starts 0.01 m inside body 0"):
+        overlapping_blocks(0.0).finalize("float64")
 
 
 def test_a_slight_initial_overlap_warns_and_is_pushed_out(backend):

@@ -209,7 +209,7 @@ def engine_surface(
 
 
 def initial_overlap(X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs) -> dict | None:
-    """The deepest surface node that starts inside another body it touches: a dict with ``node``,
+    """The deepest node that starts inside another body it touches: a dict with ``node``,
     its ``body``, the ``other`` body, ``depth`` [m] (distance to the other's surface) and ``band``
     [m] (the soft-contact band at the closest triangle: ``_core.soft_band`` × its mean edge, the
     deepest a node inside counts as a contact); None if no node starts inside. X: reference nodes
@@ -231,7 +231,9 @@ def initial_overlap(X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs) -> 
     faces, owner = boundary_faces(T)
     face_body = labels[owner]
     node_body = np.full(X.shape[0], -1, np.int64)
-    node_body[faces.ravel()] = np.repeat(face_body, 3)
+    node_body[T.ravel()] = np.repeat(labels, 4)
+    # Every node, not only the surface's: a body given twice (a copied [[body]] without its
+    # translate) has its surface on the other's, and its inner nodes deep inside.
     nodes = np.nonzero(node_body >= 0)[0]
     nodes = nodes[touch[node_body[nodes]].any(axis=1)]
     k = min(8, len(T))
