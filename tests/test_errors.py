@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import pliant as pl
+from pliant.mesh import box_tets
 
 
 def _tet():
@@ -98,6 +99,51 @@ def test_repeated_and_overlapping_elements_are_named():
     with pytest.raises(pl.MeshError, match=r"face \[0, 1, 2\] belongs to elements 0, 1 and 2"):
         b.add_mesh(X, np.array([[0, 1, 2, 3], [0, 2, 1, 4], [0, 2, 1, 5]]))
     b.add_mesh(X, np.array([[0, 1, 2, 3], [0, 2, 1, 4]]))  # two elements on a face: fine
+
+
+def test_tangled_elements_are_named():
+    """Two tets on the same side of their common face overlap (a node dragged through a face):
+    refused naming both and the face; the same two on either side are a mesh."""
+    X = 0.01 * np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.2, 0.2, 0.5], [0.2, 0.2, -0.5]])
+    with pytest.raises(
+        pl.MeshError, match=r"elements 0 and 1 lie on the same side of their common face \[0, 1, 2\]"
+    ):
+        pl.ModelBuilder().add_mesh(X, np.array([[0, 1, 2, 3], [1, 0, 2, 4]]))
+    pl.ModelBuilder().add_mesh(X, np.array([[0, 1, 2, 3], [0, 2, 1, 5]]))
+
+
+def test_folded_face_matches_the_sides_of_each_face():
+    """topology.folded_face against the geometry: for every face two tets share, the signs of
+    their opposite nodes' heights above the face's plane (opposite: a mesh; equal: folded). On
+    jittered boxes with random elements turned over (orientation must not matter) and random
+    nodes moved far enough to tangle."""
+    from pliant.mesh.topology import folded_face
+
+    rng = np.random.default_rng(3)
+    for trial in range(30):
+        X, T = box_tets((1.0, 1.0, 1.0), (3, 3, 2), jitter=0.2, seed=trial)
+        T = T.copy()
+        turn = rng.random(len(T)) < 0.5
+        T[turn, 0], T[turn, 1] = T[turn, 1], T[turn, 0].copy()
+        if trial % 2:
+            X = X.copy()
+            X[rng.integers(len(X))] += rng.normal(0, 0.6, 3)
+        folded = set()
+        by_face = {}
+        for e, t in enumerate(T):
+            for k in range(4):
+                face = tuple(sorted(np.delete(t, k)))
+                by_face.setdefault(face, []).append((e, t[k]))
+        for face, pair in by_face.items():
+            if len(pair) == 2:
+                n = np.cross(X[face[1]] - X[face[0]], X[face[2]] - X[face[0]])
+                h = [np.dot(X[apex] - X[face[0]], n) for _, apex in pair]
+                if h[0] * h[1] > 0:
+                    folded.add(face)
+        got = folded_face(X, T)
+        assert (got is None) == (not folded), (trial, got, folded)
+        if got is not None:
+            assert tuple(got[0]) in folded
 
 
 @pytest.mark.parametrize("offset", [0, 2**40])  # node numbers packed into one integer, or not
@@ -305,7 +351,9 @@ def test_slow_element_warning_matches_the_quality_tool():
     """The warning's element and factor agree with pliant.mesh.critical_time_steps, which computes
     h_min / √((λ + 2μ)/ρ) per element in NumPy (the engine's own per-element steps feed the
     warning); 3 significant digits, as printed."""
-    X, T = pl.mesh.box_tets((0.1, 0.02, 0.02), (5, 2, 2), jitter=0.499)
+    # A 0.1 mm layer of cells among 2 cm ones (a jitter of 0.499 made such elements, by tangling
+    # the mesh, until box_tets stopped letting its elements turn over).
+    X, T = pl.mesh.grid_tets([0.0, 0.02, 0.04, 0.0401, 0.06, 0.1], [0.0, 0.01, 0.02], [0.0, 0.01, 0.02])
     mat = pl.NeoHookean(E=5e5, nu=0.45)
     b = pl.ModelBuilder()
     b.add_mesh(X, T)

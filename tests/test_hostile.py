@@ -15,6 +15,7 @@ import meshio
 import numpy as np
 import pytest
 
+from pliant.mesh import grid_tets
 from test_niftysim import _cube_xml
 
 PLIANT = Path(sys.executable).with_name("pliant")
@@ -156,9 +157,13 @@ def test_box_sizes_and_jitter_are_bounded(tmp_path):
 
 
 def test_an_element_that_ruins_the_time_step_is_named(tmp_path):
-    """A jitter of 0.499 leaves an element 18,000 times slower than the median: the run works, but
-    the user is told which element costs the steps (it used to be silent)."""
-    p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [5, 2, 2]\njitter = 0.499"))
+    """A 0.1 mm layer of cells in a bar of 2 cm ones leaves elements 100 times slower than the
+    median: the run works, but the user is told which element costs the steps (it used to be
+    silent)."""
+    X, T = grid_tets([0.0, 0.02, 0.04, 0.0401, 0.06, 0.1], [0.0, 0.01, 0.02], [0.0, 0.01, 0.02])
+    mesh = tmp_path / "thin.vtu"
+    meshio.write(mesh, meshio.Mesh(X - (0.05, 0.01, 0.01), [("tetra", T)]))
+    p = scene(tmp_path, SCENE.replace('primitive = "box"', f'file = "{mesh}"'))
     r = cli("run", p, "-o", tmp_path / "o", "--no-progress")
     warn = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert r.returncode == 0 and len(warn) == 1 and warn[0].startswith("warning: "), r.stderr

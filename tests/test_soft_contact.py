@@ -388,21 +388,26 @@ def crossed_bars_model(contact: bool, friction=0.0, drag=0.0, backend="cpu", gap
 
 
 def joined_bars_model(self_contact: bool, backend="cpu", lift=0.02):
-    """diamond_bars with B lift [m] above A, joined into one body by one tet from a triangle of A's
-    end cap to B's nearest node; free flight, undamped. Returns the model and the node indices of
-    A's top edge and B's bottom edge."""
+    """diamond_bars with B lift [m] above A, joined into one body by two tets through a node P
+    beyond both bars' ends: one from a triangle of A's end cap (x = −4 cm) to P, one from a
+    triangle of B's (y = −4 cm) to P (each outside its bar: a tet from A's cap to a node of B
+    overlapped A). Free flight, undamped. Returns the model and the node indices of A's top edge
+    and B's bottom edge; P is the last node."""
     from pliant.mesh.topology import boundary_faces
 
     A, B, T, top, bottom = diamond_bars(lift)
     faces, _ = boundary_faces(T)
-    cap = faces[np.all(A[faces, 0] < A[:, 0].min() + 1e-9, axis=1)][0]
-    needle = np.array([*cap, len(A) + np.argmin(np.linalg.norm(B - A[cap].mean(0), axis=1))])
-    X = np.vstack([A, B])
-    e = X[needle]
-    if np.linalg.det(np.stack([e[1] - e[0], e[2] - e[0], e[3] - e[0]])) < 0:
-        needle[[1, 2]] = needle[[2, 1]]  # positive orientation
+    cap_a = faces[np.all(A[faces, 0] < A[:, 0].min() + 1e-9, axis=1)][0]
+    cap_b = faces[np.all(B[faces, 1] < B[:, 1].min() + 1e-9, axis=1)][0] + len(A)
+    X = np.vstack([A, B, [[-0.06, -0.06, 0.5 * (A[:, 2].mean() + B[:, 2].mean())]]])
+    P = len(X) - 1
+    links = np.array([[*cap_a, P], [*cap_b, P]])
+    for t in links:
+        e = X[t]
+        if np.linalg.det(np.stack([e[1] - e[0], e[2] - e[0], e[3] - e[0]])) < 0:
+            t[[1, 2]] = t[[2, 1]]  # positive orientation
     b = pl.ModelBuilder()
-    b.add_mesh(X, np.vstack([T, T + len(A), needle]))
+    b.add_mesh(X, np.vstack([T, T + len(A), links]))
     b.set_material(pl.NeoHookean(E=1e5, nu=0.3), density=1000.0)
     b.damping = 0.0
     b.set_soft_contact(self_contact=self_contact)
@@ -471,7 +476,7 @@ def test_a_body_s_own_crossing_edges_are_put_back_in_touch(backend):
         model, top, bottom = joined_bars_model(self_contact, backend=backend)
         assert set(model.bodies.tolist()) == {0}
         sim = pl.Simulation(model)
-        n = model.n_nodes // 2
+        n = (model.n_nodes - 1) // 2  # B's nodes and P from n on
         u = np.zeros((model.n_nodes, 3))
         u[n:, 2] = -(0.02 - 1e-4)
         v = 1.5e-4 / (2 * sim.dt)
@@ -479,8 +484,8 @@ def test_a_body_s_own_crossing_edges_are_put_back_in_touch(backend):
         vel[:n, 2], vel[n:, 2] = v, -v
         sim.state.set_displacements(u, velocities=vel, dt=sim.dt)
         sim.run(steps=1)
-        # 1e-12 m: round-off of the positions, and the joining tet's force in the first step (its
-        # stretch is 2 cm on a 5 cm tet: about 1e-14 m of motion in one step at this Δt).
+        # 1e-12 m: round-off of the positions, and the joining tets' force in the first step (A's
+        # link is stretched 2 cm over about 5 cm: about 1e-14 m of motion in one step at this Δt).
         assert crossing_gap(sim, top, bottom) == pytest.approx(after, abs=1e-12)
 
 

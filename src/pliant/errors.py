@@ -36,7 +36,7 @@ class MaterialError(InputError):
 
 class MeshError(InputError):
     """A mesh that cannot be simulated (bad indices, NaN coordinates, unreadable file, an element
-    given twice, a face shared by three elements...)."""
+    given twice, a face shared by three elements or two on the same side of it...)."""
 
 
 class InvertedElementError(MeshError):

@@ -77,7 +77,8 @@ def box_tets(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Box [origin, origin + size] [m] split into nx·ny·nz hexahedra of 6 tetrahedra each (Kuhn
     triangulation, conforming). ``jitter`` moves interior nodes randomly by up to that fraction of
-    a cell, making the mesh unstructured. Returns nodes (N, 3) [m] and tets (M, 4)."""
+    a cell, making the mesh unstructured (less where a move would turn an element inside out:
+    _untangled). Returns nodes (N, 3) [m] and tets (M, 4)."""
     try:
         nx, ny, nz = (int(c) for c in cells)
     except (TypeError, ValueError, OverflowError):
@@ -101,6 +102,27 @@ def box_tets(
         h = size / np.array([nx, ny, nz])
         rng = np.random.default_rng(seed)
         interior = np.all((X > 1e-12 * size) & (X < size * (1 - 1e-12)), axis=1)
+        X0 = X.copy()
         X[interior] += rng.uniform(-1, 1, (interior.sum(), 3)) * jitter * h
-        T = orient_positive(X, T)
+        X = _untangled(X0, X, T)
     return X + np.asarray(origin, float), T
+
+
+def _untangled(X0: np.ndarray, X: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Nodes X moved from X0 [m] (N, 3), with the moves of the nodes of any element that the
+    moves turned inside out (T positively oriented on X0) halved, until none is: a Kuhn cell's
+    thinnest tets turn over beyond about a fifth of a cell's jitter, and turning them back (as
+    orient_positive would) makes them overlap their neighbours, a tangled mesh. Every element
+    keeps its orientation, the boundary does not move: a valid mesh."""
+    vol0 = np.einsum(
+        "ij,ij->i", np.cross(X0[T[:, 1]] - X0[T[:, 0]], X0[T[:, 2]] - X0[T[:, 0]]), X0[T[:, 3]] - X0[T[:, 0]]
+    )
+    for _ in range(64):
+        P = X[T]
+        vol = np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0])
+        bad = vol <= 1e-6 * vol0
+        if not bad.any():
+            return X
+        nodes = np.unique(T[bad])
+        X[nodes] = X0[nodes] + 0.5 * (X[nodes] - X0[nodes])
+    return X0

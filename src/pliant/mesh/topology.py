@@ -17,18 +17,23 @@ def boundary_faces(tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return faces[once], owner[once]
 
 
-def _first_repeat(keys: np.ndarray, run: int) -> np.ndarray | None:
-    """Indices (run,) of the first run of ``run`` equal rows of ``keys`` (R, k) non-negative
-    integers, in ascending order of the rows' first index; None if no row occurs ``run`` times."""
+def _row_keys(keys: np.ndarray) -> np.ndarray:
+    """One sortable value per row of ``keys`` (R, k), non-negative integers: equal rows, equal
+    values (an integer in base max + 1 where it fits in 62 bits, else the row's bytes)."""
     keys = np.ascontiguousarray(keys, dtype=np.int64)
     n = int(keys.max()) + 1 if keys.size else 1
-    flat: np.ndarray
-    if float(n) ** keys.shape[1] < 2.0**62:  # one integer per row
+    if float(n) ** keys.shape[1] < 2.0**62:
         flat = np.zeros(len(keys), np.int64)
         for c in range(keys.shape[1]):
             flat = flat * n + keys[:, c]
-    else:  # the rows' bytes: equal rows, equal keys
-        flat = keys.view(np.dtype((np.void, 8 * keys.shape[1]))).ravel()
+        return flat
+    return keys.view(np.dtype((np.void, 8 * keys.shape[1]))).ravel()
+
+
+def _first_repeat(keys: np.ndarray, run: int) -> np.ndarray | None:
+    """Indices (run,) of the first run of ``run`` equal rows of ``keys`` (R, k) non-negative
+    integers, in ascending order of the rows' first index; None if no row occurs ``run`` times."""
+    flat = _row_keys(keys)
     order = np.argsort(flat, kind="stable")
     f = flat[order]
     same = f[run - 1 :] == f[: len(f) - run + 1]
@@ -53,6 +58,35 @@ def overshared_face(tets: np.ndarray) -> tuple[list[int], list[int]] | None:
     faces = key[:, [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]].reshape(-1, 3)
     rows = _first_repeat(faces, 3)
     return None if rows is None else (faces[rows[0]].tolist(), (rows // 4).tolist())
+
+
+def folded_face(nodes: np.ndarray, tets: np.ndarray) -> tuple[list[int], list[int]] | None:
+    """A triangle whose two tetrahedra lie on the same side of it (elements that overlap: a
+    tangled mesh), as (its three nodes, ascending; the two elements), or None. Whatever each
+    tetrahedron's orientation: its faces' windings are taken outward from its signed volume, and
+    the two windings of a shared face must be opposite. Tets of zero volume are left out.
+    nodes: [m] (N, 3); tets: (M, 4)."""
+    X, T = np.asarray(nodes, float), np.asarray(tets, np.int64)
+    P = X[T]
+    det = np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0])
+    local = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])  # outward for det > 0
+    faces = T[:, local].reshape(-1, 3)
+    owner = np.repeat(np.arange(len(T)), 4)
+    keep = np.repeat(det != 0, 4)
+    faces, owner = faces[keep], owner[keep]
+    order = np.argsort(faces, axis=1, kind="stable")
+    # Parity of the permutation that sorts each winding (a, b, c): even for the cyclic orders.
+    even = ((order[:, 1] - order[:, 0]) % 3) == 1
+    outward = even ^ (det[owner] < 0)
+    key = np.sort(faces, axis=1)
+    flat = _row_keys(key)
+    sort = np.argsort(flat, kind="stable")
+    f, o = flat[sort], outward[sort]
+    same = (f[1:] == f[:-1]) & (o[1:] == o[:-1])
+    if not same.any():
+        return None
+    i = int(np.argmax(same))
+    return key[sort[i]].tolist(), sorted((int(owner[sort[i]]), int(owner[sort[i + 1]])))
 
 
 def boundary_nodes(tets: np.ndarray) -> np.ndarray:

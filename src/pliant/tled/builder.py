@@ -17,7 +17,7 @@ from .. import _core
 from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
-from ..mesh.topology import overshared_face, repeated_element
+from ..mesh.topology import folded_face, overshared_face, repeated_element
 from .curves import Constant, LoadCurve
 from .anp import ANP_STABILIZATION, anp_stabilization
 from .smoothing import strain_smoothing
@@ -41,9 +41,10 @@ def _dofs(dofs) -> list[int]:
     return out
 
 
-def _check_conforming(T: np.ndarray, src: str) -> None:
-    """Refuse tetrahedra (M, 4) that repeat an element (its material and mass counted twice) or
-    put a third element on a face (overlapping elements)."""
+def _check_conforming(X: np.ndarray, T: np.ndarray, src: str) -> None:
+    """Refuse tetrahedra (M, 4) that repeat an element (its material and mass counted twice), put
+    a third element on a face, or put two on the same side of their face (overlapping elements).
+    X: nodes [m] (N, 3)."""
     pair = repeated_element(T)
     if pair is not None:
         i, j = pair
@@ -57,6 +58,13 @@ def _check_conforming(T: np.ndarray, src: str) -> None:
         raise MeshError(
             f"{src}: face {face} belongs to elements {a}, {b} and {c}; expected at most two "
             "(elements that overlap)"
+        )
+    folded = folded_face(X, T)
+    if folded is not None:
+        face, (a, b) = folded
+        raise MeshError(
+            f"{src}: elements {a} and {b} lie on the same side of their common face {face}: they "
+            "overlap (a tangled mesh); expected the two elements of a face on either side of it"
         )
 
 
@@ -149,7 +157,7 @@ class ModelBuilder:
         if dup.size:
             k = int(dup[0])
             raise DegenerateElementError(f"{src}: element {k} repeats a node: {T[k].tolist()}", k)
-        _check_conforming(T, src)
+        _check_conforming(X, T, src)
         base = self.nodes.shape[0]
         first = self.tets.shape[0]
         self.nodes = np.vstack([self.nodes, X])
