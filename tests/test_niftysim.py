@@ -112,6 +112,50 @@ def test_small_model_matches_the_same_model_built_through_the_api(tmp_path, etyp
     assert np.array_equal(sim_a.displacements, sim_b.displacements)
 
 
+def test_element_sets_listed_after_their_material_are_read(tmp_path):
+    """The user guide's <ElementSet>s list their elements after the <Material> child; only the
+    text before it was read, so a set of listed elements became the first Size elements (or a
+    clash with the next set). Two sets, even and odd elements, each with its Neo-Hookean, run to
+    the same bits as the model built with the API; an element in no set is named."""
+    X, T, left, right, xml = _cube_xml()
+    nh = '<Material Type="NH"><ElasticParams NumParams="2">{} {}</ElasticParams></Material>'
+    even, odd = np.arange(0, len(T), 2), np.arange(1, len(T), 2)
+    fmt = lambda a: " ".join(str(v) for v in np.ravel(a))  # noqa: E731
+    sets = (
+        f'<ElementSet Size="{even.size}">\n  {nh.format(1000, 20000)}\n  {fmt(even)}\n</ElementSet>\n'
+        f'<ElementSet Size="{odd.size}">\n  {nh.format(3000, 60000)}\n  {fmt(odd)}\n</ElementSet>'
+    )
+    one = f'<ElementSet Size="{len(T)}">{nh.format(1000, 20000)}0</ElementSet>'
+    assert one in xml
+    p = tmp_path / "two.xml"
+    p.write_text(xml.replace(one, sets))
+    sc = load_niftysim(p)
+    sim_a = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(mu=1000, K=20000), density=1000, elements=even)
+    b.set_material(pl.NeoHookean(mu=3000, K=60000), density=1000, elements=odd)
+    b.damping = 20
+    b.fix(left)
+    b.prescribe(right, 0.01, "x", curve=pl.SmoothRamp(0.05))
+    f = np.zeros((len(right), 3))
+    f[:, 2] = np.linspace(-1, -2, len(right))
+    b.add_force(right, f, curve=pl.Ramp(0.05))
+    sim_b = pl.Simulation(b.finalize("float64"), dt=1e-4)
+    sim_a.run(until=0.05)
+    sim_b.run(until=0.05)
+    assert np.abs(sim_a.displacements).max() > 1e-3
+    assert np.array_equal(sim_a.displacements, sim_b.displacements)
+    q = tmp_path / "missing.xml"
+    short = (
+        f'<ElementSet Size="{even.size}">{nh.format(1000, 20000)} {fmt(even)}</ElementSet>'
+        f'<ElementSet Size="{odd.size - 1}">{nh.format(3000, 60000)} {fmt(odd[:-1])}</ElementSet>'
+    )
+    q.write_text(xml.replace(one, short))
+    with pytest.raises(pl.InputError, match=f"element {odd[-1]} is in no <ElementSet>"):
+        load_niftysim(q)
+
+
 @pytest.mark.parametrize("etype", ["T4", "T4ANP"])
 def test_elements_given_in_either_orientation_run_as_niftysim_runs_them(tmp_path, etype):
     """NiftySim takes |det J| (tledElementT4::ComputeDhDx): a model with every third element's

@@ -78,11 +78,17 @@ class NiftySimError(FileError):
     """A NiftySim file that cannot be imported (malformed, or a feature pliant does not support)."""
 
 
+def own_text(el) -> str:
+    """An element's own text: before its first child and after each (an <ElementSet>'s elements
+    follow its <Material>, as in the user guide's examples), not its children's."""
+    return " ".join([el.text or "", *(c.tail or "" for c in el)])
+
+
 def _numbers(el, path, what, dtype=float):
-    """The whitespace-separated numbers of an element: finite floats, or integers."""
+    """The whitespace-separated numbers of an element's own text: finite floats, or integers."""
     if el is None:
         raise NiftySimError(f"<{what}> is missing", str(path), what)
-    words = (el.text or "").split()
+    words = own_text(el).split()
     try:
         a = np.array(words, dtype=np.float64 if dtype is float else dtype)
     except (ValueError, OverflowError):
@@ -403,7 +409,7 @@ def element_set(es, M: int, f: str, key: str) -> np.ndarray:
     """The elements of an <ElementSet> among M: its list, Size="all", or the shorthand of Size
     consecutive elements from the first listed (user guide v2.4 §3.3; tledModel::GetElSet)."""
     size = es.get("Size", "")
-    listed = _numbers(es, f, key, np.int64) if (es.text or "").strip() else np.zeros(0, np.int64)
+    listed = _numbers(es, f, key, np.int64)
     if size == "all":
         return np.arange(M)
     try:
@@ -434,9 +440,11 @@ def facets_facing(X: np.ndarray, B: np.ndarray, normal: np.ndarray, angle: float
 
 def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupported) -> None:
     """<ElementSet>s: a material and a density on listed (or all) elements."""
+    covered = np.zeros(M, bool)
     for k, es in enumerate(root.findall("ElementSet")):
         key = f"ElementSet[{k}]"
         elems = element_set(es, M, f, key)
+        covered[elems] = True
         m = es.find("Material")
         if m is None:
             raise NiftySimError("<ElementSet> without <Material>", f, key)
@@ -469,6 +477,9 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
                 unsupported(f"Material Type={mtype}", "pliant imports NH, LE, PY, AB, TI, NHV and TIV")
                 continue
             b.set_material(material, rho, elements=elems, name=key)
+    if not covered.all():
+        e = int(np.argmin(covered))
+        raise NiftySimError(f"element {e} is in no <ElementSet>; expected every element in one (§3.4.1)", f)
 
 
 def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupported) -> None:

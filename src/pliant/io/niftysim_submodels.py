@@ -14,6 +14,8 @@ checks and messages (the sub-models named in them by their index)."""
 
 from __future__ import annotations
 
+import copy
+
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -126,7 +128,10 @@ def _offset_set(es: ET.Element, M: int, first: int, f: str, key: str) -> ET.Elem
     elems = element_set(es, M, f, key)
     out = ET.Element("ElementSet", dict(es.attrib, Size=str(elems.size)))
     out.text = " ".join(str(int(e) + first) for e in elems)
-    out.extend(list(es))
+    for child in es:  # the children without the text after them: the elements are out.text now
+        c = copy.copy(child)
+        c.tail = None
+        out.append(c)
     return out
 
 
