@@ -256,6 +256,22 @@ def test_quality_of_degenerate_tets_prints_no_nan(tmp_path):
     assert s["degenerate"] == 1 and s["dt_critical"]["element"] == 0
 
 
+def test_quality_names_elements_that_overlap(tmp_path):
+    """Two positive tets on the same side of their face: quality showed a clean mesh (0 inverted,
+    0 degenerate) that the run then refused; it names the overlap now, as the run does."""
+    X = 0.01 * np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.2, 0.2, 0.5]])
+    p = tmp_path / "tangled.vtu"
+    meshio.write(p, meshio.Mesh(X, [("tetra", np.array([[0, 1, 2, 3], [0, 1, 2, 4]]))]))
+    words = "elements 0 and 1 lie on the same side of their common face [0, 1, 2]"
+    r = cli("mesh", "quality", p)
+    assert r.returncode == 0 and words in r.stdout.replace("\n", " "), r.stdout + r.stderr
+    import json
+
+    assert words in json.loads(cli("mesh", "quality", p, "--json").stdout)["not_conforming"]
+    s = scene(tmp_path, SCENE.replace('primitive = "box"', f'file = "{p}"'))
+    refused(cli("run", s, "-o", tmp_path / "o"), words)
+
+
 # --- messages ---------------------------------------------------------------------------------
 def test_empty_key_is_quoted_in_the_message(tmp_path):
     p = scene(tmp_path, SCENE + '"" = 1\n')

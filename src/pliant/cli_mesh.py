@@ -199,6 +199,7 @@ def quality_cmd(
     from .materials import LinearElastic
     from .mesh import critical_time_steps, quality_summary, tet_quality
     from .mesh.quality import quality_histogram
+    from .mesh.topology import conformity_problem
 
     if png:
         check_output_file(png, "picture")
@@ -209,6 +210,7 @@ def quality_cmd(
     q = tet_quality(X, T)
     dt = critical_time_steps(X, T, LinearElastic(E=E, nu=nu), density)
     s = quality_summary(q, dt)
+    s["not_conforming"] = conformity_problem(X, T)  # None, or why the mesh cannot be simulated
     if png:
         quality_histogram(png, q, dt)
     if as_json:
@@ -219,6 +221,8 @@ def quality_cmd(
         f"degenerate (zero volume), {s['slivers_min_dihedral_below_5deg']} slivers (min "
         "dihedral < 5°)"
     )
+    if s["not_conforming"]:
+        console.print(f"  not one mesh: {s['not_conforming']}", markup=False)
     for k in ("radius_edge", "min_dihedral", "max_dihedral", "volume"):
         v = s[k]
         console.print(f"  {k:13s} min {v['min']:.4g}  median {v['median']:.4g}  max {v['max']:.4g}")

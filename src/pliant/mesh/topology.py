@@ -89,6 +89,34 @@ def folded_face(nodes: np.ndarray, tets: np.ndarray) -> tuple[list[int], list[in
     return key[sort[i]].tolist(), sorted((int(owner[sort[i]]), int(owner[sort[i + 1]])))
 
 
+def conformity_problem(nodes: np.ndarray, tets: np.ndarray) -> str | None:
+    """Why tetrahedra (M, 4) on nodes [m] (N, 3) are not one conforming mesh, naming the elements
+    and the face, or None: an element given twice (its material and mass counted twice), a face
+    of three elements, or two elements on the same side of their face (they overlap)."""
+    T = np.asarray(tets)
+    pair = repeated_element(T)
+    if pair is not None:
+        i, j = pair
+        return (
+            f"element {j} has the same four nodes as element {i}: {T[j].tolist()}; expected each "
+            "tetrahedron once"
+        )
+    shared = overshared_face(T)
+    if shared is not None:
+        face, (a, b, c) = shared
+        return (
+            f"face {face} belongs to elements {a}, {b} and {c}; expected at most two (elements that overlap)"
+        )
+    folded = folded_face(nodes, T)
+    if folded is not None:
+        face, (a, b) = folded
+        return (
+            f"elements {a} and {b} lie on the same side of their common face {face}: they overlap (a "
+            "tangled mesh); expected the two elements of a face on either side of it"
+        )
+    return None
+
+
 def boundary_nodes(tets: np.ndarray) -> np.ndarray:
     """Indices of the nodes on the boundary faces, ascending."""
     return np.unique(boundary_faces(tets)[0])

@@ -17,7 +17,7 @@ from .. import _core
 from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
-from ..mesh.topology import folded_face, overshared_face, repeated_element
+from ..mesh.topology import conformity_problem
 from .curves import Constant, LoadCurve
 from .anp import ANP_STABILIZATION, anp_stabilization
 from .smoothing import strain_smoothing
@@ -42,30 +42,11 @@ def _dofs(dofs) -> list[int]:
 
 
 def _check_conforming(X: np.ndarray, T: np.ndarray, src: str) -> None:
-    """Refuse tetrahedra (M, 4) that repeat an element (its material and mass counted twice), put
-    a third element on a face, or put two on the same side of their face (overlapping elements).
-    X: nodes [m] (N, 3)."""
-    pair = repeated_element(T)
-    if pair is not None:
-        i, j = pair
-        raise MeshError(
-            f"{src}: element {j} has the same four nodes as element {i}: {T[j].tolist()}; "
-            "expected each tetrahedron once"
-        )
-    shared = overshared_face(T)
-    if shared is not None:
-        face, (a, b, c) = shared
-        raise MeshError(
-            f"{src}: face {face} belongs to elements {a}, {b} and {c}; expected at most two "
-            "(elements that overlap)"
-        )
-    folded = folded_face(X, T)
-    if folded is not None:
-        face, (a, b) = folded
-        raise MeshError(
-            f"{src}: elements {a} and {b} lie on the same side of their common face {face}: they "
-            "overlap (a tangled mesh); expected the two elements of a face on either side of it"
-        )
+    """Refuse tetrahedra (M, 4) that do not make one conforming mesh (topology.conformity_problem:
+    an element given twice, three on a face, two on the same side of a face). X: nodes [m] (N, 3)."""
+    problem = conformity_problem(X, T)
+    if problem is not None:
+        raise MeshError(f"{src}: {problem}")
 
 
 @dataclass
