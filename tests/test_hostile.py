@@ -122,6 +122,7 @@ def test_huge_duration_is_refused_before_anything_runs(tmp_path):
         (('NumNodes="27"', 'NumNodes="x"'), "NumNodes"),
         (("<Nodes>0 ", "<Nodes>99999 "), "node 99999"),
         (("0.01</Magnitudes>", "nan</Magnitudes>"), "Magnitudes"),
+        (('NumParams="2">1000 20000', 'NumParams="3">1000 20000'), "NumParams"),
     ],
 )
 def test_niftysim_bad_values_are_named(tmp_path, patch, key):

@@ -447,7 +447,7 @@ def test_other_hyperelastic_materials(tmp_path, xml, expect):
     bad.write_text(
         text.replace('NumParams="6">1000 10000 500 0 0 2', 'NumParams="5">1000 10000 500 0 0')
         .replace('NumParams="3">1000 2.5', 'NumParams="2">1000')
-        .replace(">300 200 100 50 80 10000<", ">300 200 100 50 80<")
+        .replace('NumParams="6">300 200 100 50 80 10000<', 'NumParams="5">300 200 100 50 80<')
     )
     with pytest.raises(NiftySimError, match="takes"):
         load_niftysim(bad)

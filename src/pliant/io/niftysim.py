@@ -451,6 +451,14 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
         mtype = m.get("Type")
         ep = m.find("ElasticParams")
         vals = _numbers(ep, f, f"{key}/ElasticParams") if ep is not None else np.zeros(0)
+        declared = ep.get("NumParams") if ep is not None else None
+        if declared is not None and declared.strip() != str(vals.size):
+            raise NiftySimError(
+                f'<ElasticParams NumParams="{declared[:20]}"> holds {vals.size} value(s); expected as '
+                "many as it declares",
+                f,
+                f"{key}/ElasticParams",
+            )
         rho_el = m.find("Density")
         rho = (
             _scalar(rho_el.text, f, f"{key}/Material/Density", float, 0.0)
