@@ -268,6 +268,13 @@ def _deepest(X, nodes, node_body, faces, other: int, band_fraction: float, worst
         d, _ = point_triangle_distance(P, *(tri[fc[:, j], c] for c in range(3)))
         better = d < depth
         depth[better], near[better] = d[better], fc[better, j]
+    # The candidates' nearest faces bound each depth from above; the deepest few get it exactly,
+    # against every face of the other body (a large face among small ones can be missed).
+    for j in np.argsort(depth)[-32:]:
+        d, _ = point_triangle_distance(
+            np.repeat(P[j : j + 1], len(tri), axis=0), tri[:, 0], tri[:, 1], tri[:, 2]
+        )
+        depth[j], near[j] = d.min(), int(np.argmin(d))
     i = int(np.argmax(depth))
     t = tri[near[i]]
     band = band_fraction * float(np.linalg.norm(t - np.roll(t, 1, axis=0), axis=1).mean())
