@@ -270,12 +270,13 @@ def _deepest(X, nodes, node_body, faces, other: int, band_fraction: float, worst
         depth[better], near[better] = d[better], fc[better, j]
     # The candidates' nearest faces bound each depth from above; the deepest few get it exactly,
     # against every face of the other body (a large face among small ones can be missed).
-    for j in np.argsort(depth)[-32:]:
+    top = np.argsort(depth)[-32:]
+    for j in top:
         d, _ = point_triangle_distance(
             np.repeat(P[j : j + 1], len(tri), axis=0), tri[:, 0], tri[:, 1], tri[:, 2]
         )
         depth[j], near[j] = d.min(), int(np.argmin(d))
-    i = int(np.argmax(depth))
+    i = int(top[np.argmax(depth[top])])  # exact depths only: never deeper than the truth
     t = tri[near[i]]
     band = band_fraction * float(np.linalg.norm(t - np.roll(t, 1, axis=0), axis=1).mean())
     if depth[i] <= 1e-9 * band or (worst is not None and depth[i] <= worst["depth"]):
