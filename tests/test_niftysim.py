@@ -138,6 +138,10 @@ def test_element_sets_listed_after_their_material_are_read(tmp_path):
     p.write_text(xml.replace(one, sets))
     materials = [(pl.NeoHookean(mu=1000, K=20000), even), (pl.NeoHookean(mu=3000, K=60000), odd)]
     same_motion_as_by_hand(load_niftysim(p), X, T, left, right, materials)
+    # A sweep's override of one listed element (the text after <Material>) swaps two elements'
+    # materials: element 1 joins the first set, element 0 the second.
+    swapped = load_niftysim(p, overrides={"ElementSet[0][0]": 1, "ElementSet[1][0]": 0})
+    assert [s.elements.tolist()[:2] for s in swapped.builder.sets] == [[1, 2], [0, 3]]
     q = tmp_path / "missing.xml"
     short = (
         f'<ElementSet Size="{even.size}">{nh.format(1000, 20000)} {fmt(even)}</ElementSet>'

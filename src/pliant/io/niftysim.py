@@ -164,14 +164,17 @@ def set_xml_key(root, key: str, value, f: str = "") -> None:
                 f,
                 key,
             )
-    words = (el.text or "").split()
+    words = own_text(el).split()  # its numbers may follow its children (an <ElementSet>'s)
     if len(idx) == 2:
         if idx[1] >= len(words):
             raise NiftySimError(f"<{el.tag}> holds {len(words)} value(s); [{idx[1]}] is out of range", f, key)
         words[idx[1]] = _word(value)
-        el.text = " ".join(words)
+        text = " ".join(words)
     else:
-        el.text = " ".join(map(_word, value)) if isinstance(value, (list, tuple)) else _word(value)
+        text = " ".join(map(_word, value)) if isinstance(value, (list, tuple)) else _word(value)
+    el.text = text
+    for child in el:  # the whole text is before the children now
+        child.tail = None
 
 
 def _word(v) -> str:
