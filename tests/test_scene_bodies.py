@@ -83,3 +83,14 @@ def test_bad_bodies_and_contact_name_the_key(tmp_path, edit, key, words):
     with pytest.raises(SceneError) as e:
         load_scene(_write(tmp_path, SCENE.replace(*edit)))
     assert e.value.key == key and words in str(e.value)
+
+
+def test_bodies_that_start_inside_each_other_are_named_by_the_scene(tmp_path):
+    """The block sunk 5 mm into the base (elements 5 mm thick, band 1.2 mm): refused when the
+    model is built, the bodies named as the scene names them; the deepest node, on the block's
+    bottom face, lies 5 mm under the base's top (the closed form of the overlap)."""
+    sc = load_scene(
+        _write(tmp_path, SCENE.replace("translate = [0.0, 0.0, 0.0101]", "translate = [0.0, 0.0, 0.005]"))
+    )
+    with pytest.raises(pl.InputError, match=r"of body 1 \('block'\) starts 0.005 m inside body 0 \('base'\)"):
+        sc.builder.finalize("float64")

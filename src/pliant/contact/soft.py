@@ -58,7 +58,8 @@ class SoftContact:
     bodies (a, b) that touch, or None for every pair of different bodies; self_contact: True for
     every body, or the bodies that touch themselves; skin: the broad phase's Verlet skin [m]
     (default SKIN_FRACTION × the median surface edge); labels: body per element, fixed (set by
-    ``ModelBuilder.split`` so that cut pieces keep their body), or None (computed at finalize).
+    ``ModelBuilder.split`` so that cut pieces keep their body), or None (computed at finalize);
+    names: what messages call each body number (a scene's body names), where known.
     """
 
     mu_s: float = 0.0
@@ -67,6 +68,12 @@ class SoftContact:
     self_contact: bool | tuple[int, ...] = False
     skin: float | None = None
     labels: np.ndarray | None = None
+    names: dict[int, str] | None = None
+
+    def name(self, body: int) -> str:
+        """How messages name body number ``body``: its scene name, or 'body N'."""
+        known = (self.names or {}).get(body)
+        return f"body {body} ({known!r})" if known else f"body {body}"
 
     @staticmethod
     def make(friction=0.0, pairs=None, self_contact=False, skin=None) -> SoftContact:

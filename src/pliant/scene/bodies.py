@@ -106,3 +106,4 @@ def set_contact(ctx: Ctx, spec, b: ModelBuilder, sets: dict, names: list[str]) -
         b.set_soft_contact(spec.get("friction", 0.0), pairs=pairs, self_contact=selfs, skin=spec.get("skin"))
     except InputError as e:
         raise ctx.error("contact", str(e)) from None
+    b.soft_contact.names = {int(x): name for name in names for x in np.unique(labels[sets[name]])}

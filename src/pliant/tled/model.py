@@ -94,7 +94,9 @@ def _warn_slow_element(source: str, dt: np.ndarray, altitude: np.ndarray) -> Non
         )
 
 
-def _check_initial_overlap(source: str, X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs) -> None:
+def _check_initial_overlap(
+    source: str, X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs, contact
+) -> None:
     """Soft contact needs the bodies it pairs to start apart or touching: a node that starts inside
     another body deeper than the contact band is never pushed out (an InputError), a shallower
     one is pushed out in the first step, a jolt (a PliantWarning)."""
@@ -104,8 +106,8 @@ def _check_initial_overlap(source: str, X: np.ndarray, T: np.ndarray, labels: np
     if o is None:
         return
     where = (
-        f"{source}: soft contact: node {o['node']} of body {o['body']} starts {o['depth']:.3g} m inside "
-        f"body {o['other']}"
+        f"{source}: soft contact: node {o['node']} of {contact.name(o['body'])} starts {o['depth']:.3g} m "
+        f"inside {contact.name(o['other'])}"
     )
     if o["depth"] > o["band"]:
         raise InputError(
@@ -294,7 +296,9 @@ class Model:
         self.contact_pairs = soft.pop("pairs")  # soft-contact pairs of bodies (a <= b), index order
         self.bodies = soft.pop("labels")  # body of each element (user order), or None
         if self.contact_pairs:
-            _check_initial_overlap(builder.source, X, T, self.bodies, self.contact_pairs)
+            _check_initial_overlap(
+                builder.source, X, T, self.bodies, self.contact_pairs, builder.soft_contact
+            )
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
             for grp in np.nonzero(keep)[0]:
