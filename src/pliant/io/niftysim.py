@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FileError, InputError
+from ..mesh.primitives import orient_positive
 from ..materials import ArrudaBoyce, NeoHookean, Polynomial, StVenantKirchhoff, TransverselyIsotropic
 from ..job import Scene
 from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
@@ -263,24 +264,21 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
 
 
 def _reoriented(X: np.ndarray, T: np.ndarray, f: str, warnings: list[str]) -> np.ndarray:
-    """The tetrahedra (M, 4) with those of negative orientation turned over (two nodes swapped),
+    """The tetrahedra (M, 4) with those of negative orientation turned over (orient_positive),
     and a warning that says how many. NiftySim takes each element's volume as |det J| / 6 and its
     shape-function derivatives from J⁻¹ (tledElementT4::ComputeDhDx), so either orientation is the
     same element there; pliant's elements are positively oriented. Elements that overlap (two on
     the same side of a face) are still refused, by ModelBuilder.add_mesh."""
-    P = X[np.asarray(T, np.int64)] if T.size and T.min() >= 0 and T.max() < len(X) else None
-    if P is None:  # bad indices: add_mesh names them
+    if not (T.size and T.min() >= 0 and T.max() < len(X)):  # bad indices: add_mesh names them
         return T
-    det = np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0])
-    neg = np.nonzero(det < 0)[0]
+    turned = orient_positive(X, T)
+    neg = np.nonzero(np.any(turned != T, axis=1))[0]
     if neg.size:
-        T = T.copy()
-        T[neg[:, None], [1, 2]] = T[neg[:, None], [2, 1]]
         warnings.append(
             f"{f}: {neg.size} of {len(T)} element(s) given with negative orientation (first: element "
-            f"{int(neg[0])}) turned over (nodes 2 and 3 swapped), as NiftySim takes |det J|"
+            f"{int(neg[0])}) turned over (nodes 3 and 4 swapped), as NiftySim takes |det J|"
         )
-    return T
+    return turned
 
 
 def _flatten(root, f: str):

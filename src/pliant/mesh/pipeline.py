@@ -9,6 +9,7 @@ import time
 import numpy as np
 
 from ..errors import MeshError
+from .primitives import tet_volumes
 from .repair import repair_surface, require_volume, simplify
 from .tetra import MAX_TETS, tetrahedralize
 
@@ -102,10 +103,7 @@ def surface_to_tets(
     eps = 2e-3 if epsilon is None else float(epsilon)
     for attempt in range(2):
         X, T = tetrahedralize(V, F, edge_length=el, epsilon=eps, keep_all=len(parts) > 1)
-        e = X[T]
-        vol = float(
-            np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]).sum() / 6
-        )
+        vol = float(tet_volumes(X, T).sum())
         ratio = vol / ref_vol if ref_vol else 1.0
         info["volume_ratio"] = ratio
         if ref_vol is None or low is None or 0.9 * low <= vol <= 1.1 * ref_vol:

@@ -9,14 +9,17 @@ import numpy as np
 from ..errors import InputError
 
 
+def tet_volumes(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Signed volumes [m³] (M,) of tets (M, 4) on nodes [m] (N, 3): det[X1−X0, X2−X0, X3−X0] / 6,
+    positive for positively oriented tets."""
+    P = np.asarray(nodes, float)[np.asarray(tets, np.int64)]
+    return np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0]) / 6.0
+
+
 def orient_positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """Return tets (M, 4) with corners 2 and 3 swapped where det[X1−X0, X2−X0, X3−X0] < 0."""
-    X = np.asarray(nodes, float)
     T = np.array(tets, dtype=np.int64)
-    d = np.einsum(
-        "ij,ij->i", np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]), X[T[:, 3]] - X[T[:, 0]]
-    )
-    neg = d < 0
+    neg = tet_volumes(nodes, T) < 0
     T[neg, 2], T[neg, 3] = T[neg, 3].copy(), T[neg, 2].copy()
     return T
 
@@ -114,13 +117,9 @@ def _untangled(X0: np.ndarray, X: np.ndarray, T: np.ndarray) -> np.ndarray:
     thinnest tets turn over beyond about a fifth of a cell's jitter, and turning them back (as
     orient_positive would) makes them overlap their neighbours, a tangled mesh. Every element
     keeps its orientation, the boundary does not move: a valid mesh."""
-    vol0 = np.einsum(
-        "ij,ij->i", np.cross(X0[T[:, 1]] - X0[T[:, 0]], X0[T[:, 2]] - X0[T[:, 0]]), X0[T[:, 3]] - X0[T[:, 0]]
-    )
+    vol0 = tet_volumes(X0, T)
     for _ in range(64):
-        P = X[T]
-        vol = np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0])
-        bad = vol <= 1e-6 * vol0
+        bad = tet_volumes(X, T) <= 1e-6 * vol0
         if not bad.any():
             return X
         nodes = np.unique(T[bad])

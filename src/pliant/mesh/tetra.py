@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from .primitives import orient_positive
+from .primitives import orient_positive, tet_volumes
 
 
 MAX_TETS = 2e7  # beyond this fTetWild runs for hours and exhausts a workstation's memory
@@ -167,9 +167,7 @@ def tetrahedralize(
         )
     tets = orient_positive(nodes, tets)
     # Drop unused nodes and (near-)zero-volume slivers.
-    e = nodes[tets]
-    vol = np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]) / 6
-    tets = tets[vol > 1e-9 * el**3]
+    tets = tets[tet_volumes(nodes, tets) > 1e-9 * el**3]
     tets = largest_component(tets, keep_all)
     used = np.unique(tets)
     remap = np.full(len(nodes), -1, dtype=np.int64)

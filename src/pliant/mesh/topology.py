@@ -66,9 +66,10 @@ def folded_face(nodes: np.ndarray, tets: np.ndarray) -> tuple[list[int], list[in
     tetrahedron's orientation: its faces' windings are taken outward from its signed volume, and
     the two windings of a shared face must be opposite. Tets of zero volume are left out.
     nodes: [m] (N, 3); tets: (M, 4)."""
-    X, T = np.asarray(nodes, float), np.asarray(tets, np.int64)
-    P = X[T]
-    det = np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0])
+    from .primitives import tet_volumes
+
+    T = np.asarray(tets, np.int64)
+    det = tet_volumes(nodes, T)
     local = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])  # outward for det > 0
     faces = T[:, local].reshape(-1, 3)
     owner = np.repeat(np.arange(len(T)), 4)
