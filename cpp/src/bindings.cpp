@@ -433,10 +433,11 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
     // The backends use_backend accepts: one engine (engine/engine.hpp) on three devices.
     m.attr("backends") = nb::make_tuple("cpu", "cuda-emulated", "cuda");
     // Layout limits of the model description, so that Python restates none of them.
-    m.attr("material_params") = kMaterialParams;  // parameters per material group
-    m.attr("prony_max") = kPronyMax;              // Prony terms per group (half isochoric)
-    m.attr("masked_tools") = kMaskedTools;        // tools that can be restricted to node sets
-    m.attr("soft_band") = kSoftBehind;            // soft contact's band: this × a triangle's mean edge [1]
+    m.attr("material_params") = kMaterialParams;     // parameters per material group
+    m.attr("prony_max") = kPronyMax;                 // Prony terms per group (half isochoric)
+    m.attr("masked_tools") = kMaskedTools;           // tools that can be restricted to node sets
+    m.attr("soft_band") = kSoftBehind;               // soft contact's band: this × a triangle's mean edge [1]
+    m.attr("large_model_bytes") = kLargeModelBytes;  // beyond it the CPU streams and prefetches [bytes]
     // The kinds the engine dispatches on, bound so that Python names them and restates no number.
     nb::enum_<MaterialKind>(m, "MaterialKind", nb::is_arithmetic(), "Hyperelastic material models.")
         .value("NeoHookean", MaterialKind::NeoHookean)

@@ -52,9 +52,11 @@ PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& 
 }
 
 /// Element nodal forces of a first Piola–Kirchhoff stress Pk [Pa]: f_a = V0 · Pk ∇X N_a for
-/// a < 3 and f_3 = −Σ f_a, stored (Add = false) or added (Add = true) into f_out [N] AoSoA K=12.
+/// a < 3 and f_3 = −Σ f_a, stored (Add = false) or added (Add = true) into f_out [N] AoSoA K=12,
+/// as its block ob (b; or 0 of a one-block scratch, which the CPU streams to the forces).
 template <bool Add, class T>
-PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Mat3<T>& Pk, T* f_out) {
+PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Mat3<T>& Pk, index_t ob,
+                            T* f_out) {
     const T V0 = el.vol[aosoa(b, l, 0, 1)];
     T g[9];
     PLIANT_UNROLL
@@ -67,25 +69,34 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
             const T fa = V0 * (Pk.a[3 * i] * g[3 * a] + Pk.a[3 * i + 1] * g[3 * a + 1] +
                                Pk.a[3 * i + 2] * g[3 * a + 2]);
             if constexpr (Add)
-                f_out[aosoa(b, l, 3 * a + i, 12)] += fa;
+                f_out[aosoa(ob, l, 3 * a + i, 12)] += fa;
             else
-                f_out[aosoa(b, l, 3 * a + i, 12)] = fa;
+                f_out[aosoa(ob, l, 3 * a + i, 12)] = fa;
             f3 -= fa;
         }
         if constexpr (Add)
-            f_out[aosoa(b, l, 9 + i, 12)] += f3;
+            f_out[aosoa(ob, l, 9 + i, 12)] += f3;
         else
-            f_out[aosoa(b, l, 9 + i, 12)] = f3;
+            f_out[aosoa(ob, l, 9 + i, 12)] = f3;
     }
 }
 
-/// Kernel 1 (element_forces, below) from the displacement gradient H [1] of slot (b, l).
+/// Kernel 1 (element_forces, below) from the displacement gradient H [1] of slot (b, l), written
+/// as block ob of f_out and J_out (store_forces).
 template <class T, class Material>
 PLIANT_HD void element_forces_at(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                                 const Mat3<T>& H, T* f_out, T* J_out) {
+                                 const Mat3<T>& H, index_t ob, T* f_out, T* J_out) {
     const Kinematics<T> k = kinematics(H);
-    store_forces<false>(b, l, el, mat.pk1(k), f_out);
-    J_out[aosoa(b, l, 0, 1)] = k.J;
+    store_forces<false>(b, l, el, mat.pk1(k), ob, f_out);
+    J_out[aosoa(ob, l, 0, 1)] = k.J;
+}
+
+/// Kernel 1 (element_forces, below), written as block ob of f_out and J_out (store_forces). The
+/// gradient goes in as a temporary: a named copy of it stops the CPU's SIMD loop.
+template <class T, class Material>
+PLIANT_HD void element_forces_to(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
+                                 index_t P, index_t ob, T* f_out, T* J_out) {
+    element_forces_at(b, l, mat, el, displacement_gradient(b, l, el, u, P), ob, f_out, J_out);
 }
 
 /// Kernel 1, one element per lane: element nodal forces f_a = V0 · F S ∇X N_a
@@ -95,7 +106,7 @@ PLIANT_HD void element_forces_at(index_t b, int l, const Material& mat, const El
 template <class T, class Material>
 PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
                               index_t P, T* f_out, T* J_out) {
-    element_forces_at(b, l, mat, el, displacement_gradient(b, l, el, u, P), f_out, J_out);
+    element_forces_to(b, l, mat, el, u, P, b, f_out, J_out);
 }
 
 /// Stiffness-proportional (Rayleigh β) damping as a viscous stress, added to the element forces:
@@ -127,7 +138,7 @@ PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const E
     const Sym3<T> Sd = scale(beta_over_dt, add_identity(lam * trace(Edt), scale(T(2) * mu, Edt)));
     Mat3<T> F = H;
     F.a[0] += T(1), F.a[4] += T(1), F.a[8] += T(1);
-    store_forces<true>(b, l, el, mul(F, Sd), f_inout);
+    store_forces<true>(b, l, el, mul(F, Sd), b, f_inout);
 }
 
 /// Average nodal pressure tetrahedron (T4ANP; Bonet & Burton 1998, Commun. Numer. Meth. Eng.
@@ -183,7 +194,7 @@ PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const E
         Mat3<T> Hk;
         PLIANT_UNROLL
         for (int k = 0; k < 9; ++k) Hk.a[k] = H[aosoa(b, l, k, 9)];
-        element_forces_at(b, l, ap, el, Hk, f_out, J_out);
+        element_forces_at(b, l, ap, el, Hk, b, f_out, J_out);
     } else {
         element_forces(b, l, ap, el, u, P, f_out, J_out);
     }

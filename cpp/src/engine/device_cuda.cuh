@@ -72,6 +72,7 @@ public:
     static constexpr const char* kName = "cuda";
     static constexpr bool kLaneLoops = false;         // lanes are threads: uniform branches cost nothing
     static constexpr bool kPrefetch = false;          // the GPU hides memory latency with other warps
+    static constexpr bool kStreams = false;           // kernel 1 stores its forces as they come
     static constexpr bool kKeepsAnpGradient = false;  // T4ANP's pass (3) recomputes H (not measured)
 
     explicit CudaDevice(int device) {

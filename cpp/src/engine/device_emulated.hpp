@@ -26,6 +26,7 @@ public:
     static constexpr const char* kName = "cuda-emulated";
     static constexpr bool kLaneLoops = false;         // lanes are threads, as on CUDA
     static constexpr bool kPrefetch = false;          // as on CUDA
+    static constexpr bool kStreams = false;           // kernel 1 stores its forces as they come
     static constexpr bool kKeepsAnpGradient = false;  // as on CUDA
 
     EmulatedDevice() = default;

@@ -64,6 +64,7 @@ struct DeviceView {
     ElementData<T> el;
     bool smoothed;              // edge-smoothed strain (smoothing.hpp)
     bool prefetch;              // kernel 2 prefetches its gathers (Dev::kPrefetch, a model beyond the caches)
+    bool stream;                // kernel 1 streams its forces past the caches (Dev::kStreams, the same)
     EdgeData<T> ed;             // its edge domains
     const index_t* edge_group;  // edge → material group
     T *H_elem, *Hbar, *P_edge;  // element gradients (9 per slot), edge gradients (AoSoA K=9),
@@ -132,12 +133,6 @@ constexpr index_t kMeasureChunk = 1024;
 /// graph serves every unit of a run. Longer runs between checks launch it repeatedly instead of
 /// capturing (and instantiating) a graph of check_every steps for each rotation phase.
 constexpr long kGraphSteps = 48;
-
-/// Model size [bytes] beyond which the CPU's kernel 2 prefetches its gathers (prefetch_incidences,
-/// Dev::kPrefetch): a typical last-level cache, 32 MiB (the OS's figure is not used: on a virtual
-/// machine it names the host's). Below it the data stay in the caches and the prefetches only cost
-/// instructions (27,918 tets: 1.0 → 1.26 s for 8,000 steps with them).
-constexpr std::size_t kPrefetchModelBytes = std::size_t(32) << 20;
 
 template <class T, class Dev>
 class Engine final : public Backend<T> {

@@ -135,7 +135,8 @@ void Engine<T, Dev>::refresh_view() {
     v.anp_gamma = anp_gamma_.data();
     v.el = {mb_.elem_nodes.data(), mb_.elem_grad.data(), mb_.elem_vol.data()};
     v.smoothed = m.smoothing == StrainSmoothing::Edge;
-    v.prefetch = Dev::kPrefetch && m.bytes() > kPrefetchModelBytes;
+    v.prefetch = Dev::kPrefetch && m.bytes() > kLargeModelBytes;
+    v.stream = Dev::kStreams && m.bytes() > kLargeModelBytes;
     v.ed = {mb_.edge_off.data(), mb_.edge_slot.data(), mb_.edge_w.data(), mb_.elem_edges.data()};
     v.edge_group = mb_.edge_group.data();
     v.H_elem = H_elem_.data(), v.Hbar = Hbar_.data(), v.P_edge = P_edge_.data();

@@ -134,6 +134,16 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
         with_visco_kernel(sp, visco_mode, [&]<int kMode, int kTerms>() {
             launch_visco_forces<M, kMode, kTerms>(sp, u, visco_mode, dt);
         });
+    } else if (Dev::kStreams && V == Variant::Plain && v_.stream) {
+        if constexpr (Dev::kStreams && V == Variant::Plain) {  // a model beyond the caches (CPU)
+            const DeviceView<T> v = v_;
+            dev_.template blocks_streamed<12, 1>(sp.block_begin, sp.block_end, v.f_elem, v.J,
+                                                 [=] PLIANT_KERNEL(index_t b, int l, T* f_out, T* J_out) {
+                                                     const M mat = make_material<M>(v.mats[v.block_group[b]]);
+                                                     element_forces_to(b, l, mat, v.el, u, v.P, 0, f_out,
+                                                                       J_out);
+                                                 });
+        }
     } else {
         const DeviceView<T> v = v_;
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
