@@ -178,6 +178,19 @@ def test_elements_given_in_either_orientation_run_as_niftysim_runs_them(tmp_path
     assert np.abs(u).max() > 1e-3 and np.abs(u - v).max() <= 1e-12 * np.abs(u).max()
 
 
+def test_an_ignored_material_names_its_element_set(tmp_path):
+    """--ignore skips a feature a run can do without; an unsupported material cannot be skipped (its
+    elements would have none): the import names the set and the count instead of a later
+    "element 0 has no material" in the API's words."""
+    *_, xml = _cube_xml(
+        material='<Material Type="HGO"><ElasticParams NumParams="2">1 2</ElasticParams></Material>'
+    )
+    p = tmp_path / "m.xml"
+    p.write_text(xml)
+    with pytest.raises(NiftySimError, match=r"ElementSet\[0\]/Material.*48 element\(s\) without a material"):
+        load_niftysim(p, ignore=("Material Type=HGO",))
+
+
 @pytest.mark.parametrize(
     "kwargs, name",
     [

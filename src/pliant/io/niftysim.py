@@ -484,7 +484,12 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
                     material = _visco(m, material, f, key)
             else:
                 unsupported(f"Material Type={mtype}", "pliant imports NH, LE, PY, AB, TI, NHV and TIV")
-                continue
+                raise NiftySimError(  # ignored: a run has no material to give those elements
+                    f"ignoring <Material Type={mtype!r}> leaves the set's {elems.size} element(s) without "
+                    "a material; expected NH, LE, PY, AB, TI, NHV or TIV for them",
+                    f,
+                    f"{key}/Material",
+                )
             b.set_material(material, rho, elements=elems, name=key)
     if not covered.all():
         e = int(np.argmin(covered))
