@@ -260,15 +260,10 @@ def test_step_in_out_matches_run(backend):
 def test_a_model_beyond_the_caches_runs_as_a_small_one():
     """Beyond _core.large_model_bytes the CPU writes kernel 1's forces through a one-block scratch
     and streams them past the caches, and kernel 2 prefetches its gathers; the emulated CUDA device
-    does neither. A 288,000-tet float64 plate under gravity on both, 30 steps: the same motion to
+    does neither. The module's bar in 288,000 tets (float64), 30 steps on both: the same motion to
     the module's float64 tolerance (a wrong block or lane would be off by the whole force), and the
     same bits on one and two CPU threads."""
-    X, T = pl.mesh.box_tets((0.1, 0.05, 0.02), (80, 40, 15))
-    b = pl.ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(pl.NeoHookean(E=2e4, nu=0.45), density=1000.0)
-    b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
-    b.set_gravity((0.0, 0.0, -9.81))
+    b = bar("cpu", cells=(80, 40, 15))[0]
     runs = {}
     for name, on in {
         "cpu 1": dict(threads=1),
@@ -280,7 +275,7 @@ def test_a_model_beyond_the_caches_runs_as_a_small_one():
         sim = pl.Simulation(m, dt=1e-5)
         sim.run(steps=30)
         runs[name] = sim.displacements
-    assert np.abs(runs["cpu 2"]).max() > 1e-7  # it fell: ½ g t² = 4.4e-7 m at t = 0.3 ms
+    assert np.abs(runs["cpu 2"]).max() > 0.0  # gravity has begun to ramp up
     np.testing.assert_array_equal(runs["cpu 1"], runs["cpu 2"])
     close(runs["emulated"], runs["cpu 2"], "float64", "streamed vs stored forces")
 
