@@ -109,6 +109,22 @@ def test_same_bits_run_after_run(backend):
     np.testing.assert_array_equal(runs[0], runs[1])
 
 
+def test_the_sweeps_sums_do_not_depend_on_the_order_of_the_contacts():
+    # A GPU block adds the contacts' impulses into the nodes in whatever order its threads take
+    # them (soft_gather); the sums are of integers (fixed point), so no order can show. The emulated
+    # device runs those loops in the reverse of the CPU's order, touched-node list included
+    # (ReversedTeam), and otherwise computes what the CPU does: the same bits, where floating-point
+    # sums in another order would differ in their last bits at every node two contacts share.
+    runs = []
+    for backend in ("cpu", "cuda-emulated"):
+        model, n0 = two_blocks(backend, threads=1 if backend == "cpu" else None)
+        sim = colliding(model, n0)
+        sim.run(until=0.02)
+        assert sim.solver.contact_report().pairs[0].force[:, 0].min() < -0.1  # they did collide
+        runs.append(sim.positions)
+    np.testing.assert_array_equal(runs[0], runs[1])
+
+
 def stacked(theta=0.0, friction=0.0, damping=0.0):
     """A 2 × 2 × 1 cm block (E = 200 kPa) on an 8 × 3 × 1 cm base (2 MPa, bottom fixed), gravity
     tilted by θ (an incline without tilting the mesh)."""

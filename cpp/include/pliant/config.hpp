@@ -93,6 +93,17 @@ PLIANT_HD int atomic_add(int* p, int v) {
 #endif
 }
 
+/// The same for 64-bit integers (CUDA: atomicAdd on the unsigned type, the same two's-complement
+/// sum). Fixed-point sums (soft_gather) are integer sums: the same in any order.
+PLIANT_HD std::int64_t atomic_add(std::int64_t* p, std::int64_t v) {
+#if defined(__CUDA_ARCH__)
+    return static_cast<std::int64_t>(
+        atomicAdd(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(v)));
+#else
+    return __atomic_fetch_add(p, v, __ATOMIC_RELAXED);
+#endif
+}
+
 /// Atomically raises *p to v if v is larger (a maximum: the same in any order).
 PLIANT_HD void atomic_max(std::int64_t* p, std::int64_t v) {
 #if defined(__CUDA_ARCH__)
@@ -103,6 +114,37 @@ PLIANT_HD void atomic_max(std::int64_t* p, std::int64_t v) {
     }
 #endif
 }
+
+/// The threads of a team launch (each_counted_then_team) on the CPU and the emulated device: one
+/// thread, which runs each loop in order, so that its sums need no atomics. CUDA's team is a block
+/// (BlockTeam, device_cuda.cuh): each loop strided over its threads, sync a __syncthreads, add and
+/// max atomic. Team code writes only what no other item of the same loop reads, or through add and
+/// max, whose results no order changes.
+struct SerialTeam {
+    /// f(i) for i in [0, n).
+    template <class F>
+    PLIANT_HD void each(index_t n, const F& f) const {
+        for (index_t i = 0; i < n; ++i) f(i);
+    }
+    /// Every thread's writes before it are seen by every thread after it.
+    PLIANT_HD void sync() const {}
+    /// f() on one thread of the team.
+    template <class F>
+    PLIANT_HD void one(const F& f) const {
+        f();
+    }
+    /// *p += v; the value before.
+    template <class V>
+    PLIANT_HD V add(V* p, V v) const {
+        const V before = *p;
+        *p = before + v;
+        return before;
+    }
+    /// *p = max(*p, v).
+    PLIANT_HD void max(std::int64_t* p, std::int64_t v) const {
+        if (v > *p) *p = v;
+    }
+};
 
 /// A hint that *p will be read soon (host: a prefetch into the caches; device: nothing). No effect
 /// on any result.

@@ -1,5 +1,5 @@
 // pliant — the CUDA device layer: the only code that calls the CUDA runtime (allocation, copies,
-// the three launch shapes, one stream, graphs). Everything else the CUDA backend does is the
+// the four launch shapes, one stream, graphs). Everything else the CUDA backend does is the
 // engine of engine.hpp, which CI runs on the emulated device (device_emulated.hpp) without a GPU.
 // Keep this file small: it is what only a machine with a GPU tests (docs/engine.md lists it).
 #pragma once
@@ -52,6 +52,38 @@ __global__ void serial_kernel(F f) {
     f();
 }
 
+/// Threads of one team launch: a block of kTeamThreads (SerialTeam's interface, config.hpp).
+constexpr int kTeamThreads = 256;
+struct BlockTeam {
+    template <class F>
+    PLIANT_HD void each(index_t n, const F& f) const {
+#if defined(__CUDA_ARCH__)
+        for (index_t i = threadIdx.x; i < n; i += blockDim.x) f(i);
+#endif
+    }
+    PLIANT_HD void sync() const {
+#if defined(__CUDA_ARCH__)
+        __syncthreads();
+#endif
+    }
+    template <class F>
+    PLIANT_HD void one(const F& f) const {
+#if defined(__CUDA_ARCH__)
+        if (threadIdx.x == 0) f();
+#endif
+    }
+    template <class V>
+    PLIANT_HD V add(V* p, V v) const {
+        return atomic_add(p, v);
+    }
+    PLIANT_HD void max(std::int64_t* p, std::int64_t v) const { atomic_max(p, v); }
+};
+
+template <class F>
+__global__ void __launch_bounds__(kTeamThreads) team_kernel(F f) {
+    f(BlockTeam{});
+}
+
 #if CUDART_VERSION >= 13000
 /// Sets a graph's IF condition from a flag the kernels before it wrote.
 template <class V>
@@ -74,6 +106,7 @@ public:
     static constexpr bool kPrefetch = false;          // the GPU hides memory latency with other warps
     static constexpr bool kStreams = false;           // kernel 1 stores its forces as they come
     static constexpr bool kKeepsAnpGradient = false;  // T4ANP's pass (3) recomputes H (not measured)
+    using Team = cuda_detail::BlockTeam;              // the threads of a team launch (each_counted_then_team)
 
     explicit CudaDevice(int device) {
         cuda_detail::check(cudaSetDevice(device), "cudaSetDevice");
@@ -156,6 +189,13 @@ public:
     void serial(const F& f) {
         if (dry_) return;
         cuda_detail::serial_kernel<<<1, 1, 0, stream_>>>(f);
+        cuda_detail::check(cudaPeekAtLastError(), "launch");
+    }
+    /// g(team) on one block of kTeamThreads threads (BlockTeam).
+    template <class G>
+    void team(const G& g) {
+        if (dry_) return;
+        cuda_detail::team_kernel<<<1, cuda_detail::kTeamThreads, 0, stream_>>>(g);
         cuda_detail::check(cudaPeekAtLastError(), "launch");
     }
     template <class V>

@@ -20,6 +20,16 @@
 
 namespace pliant {
 
+/// The emulated device's team: SerialTeam with each loop run backwards. A CUDA block's threads take
+/// a team's items in no set order; running them here in the reverse of the CPU's order lets a test
+/// compare the two devices bit for bit (tests/test_soft_contact.py) where order would show.
+struct ReversedTeam : SerialTeam {
+    template <class F>
+    void each(index_t n, const F& f) const {
+        for (index_t i = n - 1; i >= 0; --i) f(i);
+    }
+};
+
 class EmulatedDevice : public InOrderThen<EmulatedDevice> {
 public:
     static constexpr bool kSharesHost = false;
@@ -28,6 +38,7 @@ public:
     static constexpr bool kPrefetch = false;          // as on CUDA
     static constexpr bool kStreams = false;           // kernel 1 stores its forces as they come
     static constexpr bool kKeepsAnpGradient = false;  // as on CUDA
+    using Team = ReversedTeam;                        // the threads of a team launch (each_counted_then_team)
 
     EmulatedDevice() = default;
     EmulatedDevice(const EmulatedDevice&) = delete;
@@ -83,6 +94,11 @@ public:
     template <class F>
     void serial(const F& f) {
         launch_or_record([f] { f(); });
+    }
+    /// g(team) on one team: here one thread, its loops backwards (ReversedTeam).
+    template <class G>
+    void team(const G& g) {
+        launch_or_record([g] { g(ReversedTeam{}); });
     }
     template <class V>
     V read(const V* p) {

@@ -32,6 +32,7 @@ public:
     static constexpr bool kLaneLoops = true;  // lanes run in SIMD loops: uniform branches cost vectorization
     static constexpr bool kPrefetch = true;   // kernel 2 prefetches its gathers on large models
     static constexpr bool kKeepsAnpGradient = true;  // T4ANP's pass (3) reads pass (1)'s gradients
+    using Team = SerialTeam;                         // the threads of a team launch (each_counted_then_team)
     static constexpr bool kStreams = true;  // kernel 1 streams its forces past the caches on large models
 
     // threads: 1 .. thread_limit(), or <= 0 for OpenMP's default.
@@ -94,6 +95,12 @@ public:
     template <class F, class G>
     void each_counted_then(index_t n_max, const index_t* count, const F& f, const G& g) {
         each_then(*count < n_max ? *count : n_max, f, g);
+    }
+    /// each_counted_then(n_max, count, f, g) with g(team) for g(): the team is the one thread
+    /// (SerialTeam).
+    template <class F, class G>
+    void each_counted_then_team(index_t n_max, const index_t* count, const F& f, const G& g) {
+        each_counted_then(n_max, count, f, [&] { g(SerialTeam{}); });
     }
     /// body()'s launches if *flag, a value an earlier launch wrote before its wait: every thread reads
     /// it once, before body's first launch (body may change it only after that launch's wait), so all

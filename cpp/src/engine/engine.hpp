@@ -53,6 +53,10 @@ struct Scalars {
     index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
     index_t soft_items;                 // soft contact: the larger of soft_active and soft_edges_active
     index_t soft_redo;                  // soft contact: soft_items if the last sweep moved a node, else 0
+    // soft contact: the largest impulse component of a sweep's contacts [kg·m], as its bits (an atomic
+    // maximum), and the unit of that sweep's fixed-point impulse sums [kg·m] (soft_gather)
+    std::int64_t soft_pmax;
+    double soft_unit;
 };
 
 /// Everything the kernels read or write, as device pointers and sizes (trivially copyable).
@@ -94,9 +98,12 @@ struct DeviceView {
     // Soft contact (engine_soft.hpp): the surface, positions at the last rebuild (3 per surface node),
     // each chunk's largest move², the grid (bucket heads, cursors, each triangle's bucket, centroid,
     // radius; triangles by bucket), candidates (kSoftCandidates per node), each node's contact
-    // (triangle, weights, impulse), contacts per node, impulse sums and forces [N] (3 per node).
+    // (triangle, weights, impulse), forces [N] (3 per node); a sweep's sums in fixed point
+    // (soft_gather): shares (units of 2^-32) and impulses (units of Scalars::soft_unit) per node, and
+    // impulses per pair (3 each).
     SoftSurface soft;
-    double *sb, *stc, *str, *srec_w, *srec_p, *sacc, *sforce, *sshare, *erec_w, *erec_p;
+    double *sb, *stc, *str, *srec_w, *srec_p, *sforce, *erec_w, *erec_p;
+    std::int64_t *sshare, *sacc, *spair;
     double* sx;  // the surface positions at u⁺ [m] (3 per node: soft_current), kept through the pass
     index_t *shead, *scursor, *sbucket, *scell, *scand, *snear, *srec, *sactive, *stouched, *erec, *eactive;
     std::int64_t* spart;  // the chunk sums of the rebuild's prefix sums (Engine::scan)
@@ -230,11 +237,10 @@ private:
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
-    DeviceBuffer<double, Dev> sb_, stc_, str_, srec_w_, srec_p_, sacc_, sforce_, sshare_, erec_w_, erec_p_,
-        d_soft_mu_, sx_;
+    DeviceBuffer<double, Dev> sb_, stc_, str_, srec_w_, srec_p_, sforce_, erec_w_, erec_p_, d_soft_mu_, sx_;
     DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, snear_, srec_, sactive_, stouched_,
         erec_, eactive_;
-    DeviceBuffer<std::int64_t, Dev> spart_;
+    DeviceBuffer<std::int64_t, Dev> spart_, sshare_, sacc_, spair_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceBuffer<T, Dev> anp_gamma_;

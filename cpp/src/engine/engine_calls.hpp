@@ -93,7 +93,7 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     str_ = DeviceBuffer<double, Dev>(dev_, nst);
     srec_w_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
     srec_p_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
-    sacc_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
+    sacc_ = DeviceBuffer<std::int64_t, Dev>(dev_, 3 * ns);
     sforce_ = DeviceBuffer<double, Dev>(dev_, 3 * ns);
     shead_ = DeviceBuffer<index_t, Dev>(dev_, H + 1);
     scursor_ = DeviceBuffer<index_t, Dev>(dev_, H);
@@ -102,7 +102,8 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     scand_ = DeviceBuffer<index_t, Dev>(dev_, ns * kSoftCandidates);
     snear_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     srec_ = DeviceBuffer<index_t, Dev>(dev_, ns);
-    sshare_ = DeviceBuffer<double, Dev>(dev_, ns);
+    sshare_ = DeviceBuffer<std::int64_t, Dev>(dev_, ns);
+    spair_ = DeviceBuffer<std::int64_t, Dev>(dev_, 3 * static_cast<std::size_t>(m_.soft_pairs));
     const std::size_t ne = m_.soft_edges.size() / 2;
     erec_ = DeviceBuffer<index_t, Dev>(dev_, ne);
     eactive_ = DeviceBuffer<index_t, Dev>(dev_, ne);
@@ -181,7 +182,7 @@ void Engine<T, Dev>::refresh_view() {
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();
     v.shead = shead_.data(), v.scursor = scursor_.data(), v.sbucket = sbucket_.data();
     v.scell = scell_.data(), v.scand = scand_.data(), v.snear = snear_.data(), v.srec = srec_.data(),
-    v.sshare = sshare_.data();
+    v.sshare = sshare_.data(), v.spair = spair_.data();
     v.erec = erec_.data(), v.erec_w = erec_w_.data(), v.erec_p = erec_p_.data();
     v.sactive = sactive_.data(), v.stouched = stouched_.data(), v.eactive = eactive_.data();
     v.spart = spart_.data();

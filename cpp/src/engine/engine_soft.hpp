@@ -117,80 +117,149 @@ PLIANT_HD index_t soft_edge_partner(const DeviceView<T>& v, index_t e) {
     return f >= 0 && f < e && v.erec[f] == e ? -1 : f;
 }
 
-/// Adds weight w to surface node n's share of the sweep's contacts (sshare: 1 for each contact it
-/// is the slave of, its barycentric weight in each it is a triangle node of; 0 again once
-/// applied); its first contact lists it in stouched.
-template <class T>
-PLIANT_HD void soft_count(const DeviceView<T>& v, index_t n, double w) {
-    if (v.sshare[n] == 0.0) v.stouched[v.sc->soft_touched++] = n;
-    v.sshare[n] += w;
+/// Bits below the point of a sweep's fixed-point shares: a weight w in (0, 1] counts
+/// max(1, round(w 2^32)) units, so that every node a contact reaches counts at least one.
+constexpr int kSoftShareBits = 32;
+
+/// x / unit rounded to the nearest integer (ties to even), given per_unit = 1/unit; 0 for NaN or
+/// beyond ±2^62, which soft_gather's units keep every finite sweep within.
+PLIANT_HD std::int64_t soft_fixed(double x, double per_unit) {
+    const double y = x * per_unit;
+    if (!((y < 0.0 ? -y : y) < 4.6e18)) return 0;
+#if defined(__CUDA_ARCH__)
+    return __double2ll_rn(y);
+#else
+    return std::llrint(y);
+#endif
 }
 
-/// Step (3) of soft_pass, one thread: the contacts' impulses, averaged over the contacts sharing a
-/// node (Macklin et al. 2014 §4.2: each impulse divided by the largest share among its nodes, or by
-/// one if that is less (a lone edge contact's weights are below one), the
-/// shares counted by barycentric weight, so that a node at the corner of a triangle others hit
-/// counts about once, not once per triangle), into sacc (3 per surface node) in node order, and the
-/// force each pair's first body received from its second, p/γ1 [N], into the step's history row.
+/// Contact c of a sweep: c < soft_active, the node contact of sactive[c] (its slave, then its
+/// triangle's nodes); beyond, the edge contact of eactive[c − soft_active] (the edge's ends, then
+/// its partner's). Its nodes, their weights (the first body's positive: 1 for a slave, 1 − a and a
+/// for an edge; the second body's negative: the barycentric weights, 1 − b and b), and its impulse
+/// p [kg·m] (3, on the first body). False if it has no contact this sweep.
+struct SoftContact {
+    index_t node[4];
+    double w[4];
+    const double* p;
+};
 template <class T>
-PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool first) {
+PLIANT_HD bool soft_contact_at(const DeviceView<T>& v, const SoftSurface& s, index_t c, SoftContact& k) {
+    const index_t na = v.sc->soft_active;
+    if (c < na) {
+        const index_t i = v.sactive[c], t = v.srec[i];
+        if (t < 0) return false;
+        k.node[0] = i, k.w[0] = 1.0, k.p = v.srec_p + 3 * i;
+        for (int j = 0; j < 3; ++j) k.node[j + 1] = s.tri[3 * t + j], k.w[j + 1] = -v.srec_w[3 * i + j];
+        return true;
+    }
+    const index_t e = v.eactive[c - na], f = soft_edge_partner(v, e);
+    if (f < 0) return false;
+    const double a = v.erec_w[2 * e], b = v.erec_w[2 * e + 1];
+    k.node[0] = s.edge[2 * e], k.node[1] = s.edge[2 * e + 1], k.w[0] = 1.0 - a, k.w[1] = a;
+    k.node[2] = s.edge[2 * f], k.node[3] = s.edge[2 * f + 1], k.w[2] = -(1.0 - b), k.w[3] = -b;
+    k.p = v.erec_p + 3 * e;
+    return true;
+}
+
+/// Whether a contact's weight w reaches its node (a weight of 0 moves nothing; NaN neither).
+PLIANT_HD bool soft_reaches(double w) { return w > 0.0 || w < 0.0; }
+
+/// Step (3a) of soft_pass for contact c: each node it reaches adds |w| to its share of the sweep's
+/// contacts (sshare, fixed point: kSoftShareBits), the contact first reaching it lists it in
+/// stouched, and its impulse's largest component raises the sweep's (soft_pmax).
+template <class T, class Team>
+PLIANT_HD void soft_count(const DeviceView<T>& v, const SoftSurface& s, const Team& team, index_t c) {
+    SoftContact k;
+    if (!soft_contact_at(v, s, c, k)) return;
+    for (int j = 0; j < 4; ++j) {
+        if (!soft_reaches(k.w[j])) continue;
+        std::int64_t q =
+            soft_fixed(k.w[j] < 0.0 ? -k.w[j] : k.w[j], double(std::int64_t(1) << kSoftShareBits));
+        if (q < 1) q = 1;
+        const index_t n = k.node[j];
+        if (team.add(&v.sshare[n], q) == 0) v.stouched[team.add(&v.sc->soft_touched, index_t(1))] = n;
+    }
+    for (int d = 0; d < 3; ++d) team.max(&v.sc->soft_pmax, double_bits(k.p[d] < 0.0 ? -k.p[d] : k.p[d]));
+}
+
+/// The unit [kg·m] of a sweep's fixed-point impulse sums: 2^(e_p + e_m − 62), with |p| < 2^e_p for
+/// every impulse component (pmax, as bits) and m < 2^e_m contacts. A node's or a pair's sum then
+/// stays below m (2^(62 − e_m) + 2) < 2^63 units (|p| / share <= |p|: every share is at least one),
+/// and resolves 2^(e_m − 62) of the largest impulse (10^-16 of it for 60 contacts). NaN if pmax is
+/// not finite (the sums are NaN then, and the step's check reports them).
+PLIANT_HD double soft_unit(std::int64_t pmax, index_t m) {
+    const int field = static_cast<int>((pmax >> 52) & 0x7ff);
+    if (field == 0x7ff) return bits_double(std::int64_t(0x7ff8) << 48);  // NaN
+    int ep = field - 1022, em = 0;                                       // pmax < 2^ep (frexp's exponent)
+    if (ep < -900) ep = -900;  // below 2^-900 an impulse is nothing: keep the unit a normal number
+    while (em < 31 && (std::int64_t(1) << em) <= m) ++em;
+    return bits_double(std::int64_t(ep + em - 62 + 1023) << 52);  // within -962 .. 994: a normal number
+}
+
+/// Step (3b) of soft_pass for contact c: its impulse divided by the largest share among the nodes
+/// it reaches (Macklin et al. 2014 §4.2: the contacts sharing a node averaged; shares counted by
+/// weight, so that a node at the corner of a triangle others hit counts about once, not once per
+/// triangle; never below one, so that a lone edge contact, weights below one, keeps its whole
+/// impulse), w p added to each node's sum (sacc) and the first body's impulse to its pair's (spair),
+/// in fixed point (soft_unit). The nodes' parts are rounded one by one and the node of the largest
+/// weight takes what makes them sum to zero: the pair's impulses are equal and opposite exactly.
+template <class T, class Team>
+PLIANT_HD void soft_spread(const DeviceView<T>& v, const SoftSurface& s, const Team& team, index_t c,
+                           double unit) {
+    SoftContact k;
+    if (!soft_contact_at(v, s, c, k)) return;
+    std::int64_t most = std::int64_t(1) << kSoftShareBits;
+    int big = 0;
+    for (int j = 0; j < 4; ++j) {
+        if (!soft_reaches(k.w[j])) continue;
+        if (v.sshare[k.node[j]] > most) most = v.sshare[k.node[j]];
+        if ((k.w[j] < 0.0 ? -k.w[j] : k.w[j]) > (k.w[big] < 0.0 ? -k.w[big] : k.w[big])) big = j;
+    }
+    // p / share in units: share >= 1 and unit a power of two
+    const double scale = double(std::int64_t(1) << kSoftShareBits) / (double(most) * unit);
+    const index_t la = s.label[k.node[0]], lb = s.label[k.node[2]];
+    const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
+    for (int d = 0; d < 3; ++d) {
+        const double p = k.p[d] * scale;
+        std::int64_t q[4], sum = 0, first = 0;
+        for (int j = 0; j < 4; ++j) sum += q[j] = soft_reaches(k.w[j]) ? soft_fixed(k.w[j], p) : 0;
+        q[big] -= sum;
+        for (int j = 0; j < 4; ++j) {
+            if (soft_reaches(k.w[j])) team.add(&v.sacc[3 * k.node[j] + d], q[j]);
+            if (k.w[j] > 0.0) first += q[j];
+        }
+        team.add(&v.spair[3 * pr + d], la <= lb ? first : -first);  // a pair's first body: its lower label
+    }
+}
+
+/// Step (3) of soft_pass, on one team: the sweep's contacts' impulses into the nodes they reach
+/// (sacc) and into the step's per-pair forces p/γ1 [N] (its history row), (a) the shares counted
+/// (soft_count), (b) the impulses spread (soft_spread), (c) the pairs' sums added to the row. Every
+/// sum is of integers (fixed point): the same bits whatever order the team's threads take.
+template <class T, class Team>
+PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool first, const Team& team) {
     Scalars<T>& sc = *v.sc;
-    sc.soft_touched = 0;
-    for (index_t a = 0; a < sc.soft_active; ++a) {
-        const index_t i = v.sactive[a], t = v.srec[i];
-        if (t < 0) continue;
-        soft_count(v, i, 1.0);
-        for (int k = 0; k < 3; ++k)
-            if (v.srec_w[3 * i + k] > 0.0) soft_count(v, s.tri[3 * t + k], v.srec_w[3 * i + k]);
-    }
-    for (index_t q = 0; q < sc.soft_edges_active; ++q) {  // edge–edge contacts: four nodes, weighted
-        const index_t e = v.eactive[q], f = soft_edge_partner(v, e);
-        if (f < 0) continue;
-        const index_t nodes[4] = {s.edge[2 * e], s.edge[2 * e + 1], s.edge[2 * f], s.edge[2 * f + 1]};
-        const double w[4] = {1.0 - v.erec_w[2 * e], v.erec_w[2 * e], 1.0 - v.erec_w[2 * e + 1],
-                             v.erec_w[2 * e + 1]};
-        for (int j = 0; j < 4; ++j) soft_count(v, nodes[j], w[j]);
-    }
-    double* row = v.hist + sc.row * v.hist_width + 6 * v.n_tools;
-    if (first)
-        for (index_t k = 0; k < 3 * v.n_pairs; ++k) row[k] = 0.0;
-    const double g1 = double(sc.it.g1);
-    for (index_t a = 0; a < sc.soft_active; ++a) {
-        const index_t i = v.sactive[a], t = v.srec[i];
-        if (t < 0) continue;
-        const index_t* tri = s.tri + 3 * t;
-        double share = v.sshare[i];
-        for (int k = 0; k < 3; ++k)
-            if (v.srec_w[3 * i + k] > 0.0 && v.sshare[tri[k]] > share) share = v.sshare[tri[k]];
-        const index_t la = s.label[i], lb = s.label[tri[0]];
-        const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
-        const double sign = la <= lb ? 1.0 : -1.0;  // the pair's first body is its lower label
-        for (int d = 0; d < 3; ++d) {
-            const double p = v.srec_p[3 * i + d] / share;
-            v.sacc[3 * i + d] += p;
-            for (int k = 0; k < 3; ++k) v.sacc[3 * tri[k] + d] -= v.srec_w[3 * i + k] * p;
-            row[3 * pr + d] += sign * p / g1;
+    team.one([&] { sc.soft_touched = 0; });
+    team.sync();
+    const index_t m = sc.soft_active + sc.soft_edges_active;
+    team.each(m, [&](index_t c) { soft_count(v, s, team, c); });
+    team.sync();
+    const double unit = soft_unit(sc.soft_pmax, m);
+    team.each(m, [&](index_t c) { soft_spread(v, s, team, c, unit); });
+    team.sync();
+    team.one([&] {
+        double* row = v.hist + sc.row * v.hist_width + 6 * v.n_tools;
+        const double g1 = double(sc.it.g1);
+        for (index_t k = 0; k < 3 * v.n_pairs; ++k) {
+            row[k] = (first ? 0.0 : row[k]) + double(v.spair[k]) * unit / g1;
+            v.spair[k] = 0;
         }
-    }
-    for (index_t q = 0; q < sc.soft_edges_active; ++q) {
-        const index_t e = v.eactive[q], f = soft_edge_partner(v, e);
-        if (f < 0) continue;
-        const index_t nodes[4] = {s.edge[2 * e], s.edge[2 * e + 1], s.edge[2 * f], s.edge[2 * f + 1]};
-        const double w[4] = {1.0 - v.erec_w[2 * e], v.erec_w[2 * e], -(1.0 - v.erec_w[2 * e + 1]),
-                             -v.erec_w[2 * e + 1]};
-        double share = 1.0;  // never below one: a lone contact (weights < 1) gets its whole impulse
-        for (int j = 0; j < 4; ++j) share = v.sshare[nodes[j]] > share ? v.sshare[nodes[j]] : share;
-        const index_t la = s.label[nodes[0]], lb = s.label[nodes[2]];
-        const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
-        const double sign = la <= lb ? 1.0 : -1.0;
-        for (int d = 0; d < 3; ++d) {
-            const double p = v.erec_p[3 * e + d] / share;
-            for (int j = 0; j < 4; ++j) v.sacc[3 * nodes[j] + d] += w[j] * p;
-            row[3 * pr + d] += sign * p / g1;
-        }
-    }
-    // A sweep after one that moved nothing would find what it found: nothing (soft_pass skips it).
-    sc.soft_redo = sc.soft_touched > 0 ? sc.soft_items : 0;
+        sc.soft_unit = unit;
+        sc.soft_pmax = 0;
+        // A sweep after one that moved nothing would find what it found: nothing (soft_pass skips it).
+        sc.soft_redo = sc.soft_touched > 0 ? sc.soft_items : 0;
+    });
 }
 
 /// The soft-contact pass of a step: (1) skin test, one thread per surface node (and the surface
@@ -236,7 +305,7 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     for (int sweep = 0; sweep < sweeps; ++sweep) {
         const bool first = sweep == 0;
         const index_t items = s.n_nodes > s.n_edges ? s.n_nodes : s.n_edges;
-        dev_.each_counted_then(
+        dev_.each_counted_then_team(
             items, first ? &v.sc->soft_items : &v.sc->soft_redo,
             [=] PLIANT_KERNEL(index_t a) {
                 if (a < v.sc->soft_active)
@@ -246,15 +315,15 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
                     soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.snear, v.erec,
                                      v.erec_w, v.erec_p);
             },
-            [=] PLIANT_KERNEL() { soft_gather(v, s, first); });
+            [=] PLIANT_KERNEL(const typename Dev::Team& team) { soft_gather(v, s, first, team); });
         dev_.each_counted(s.n_nodes, &v.sc->soft_touched, [=] PLIANT_KERNEL(index_t a) {
             const index_t i = v.stouched[a];
             double W[3];
             soft_inverse_mass(i, s, mass, W);
             const index_t n = s.node[i];
-            const double g1 = double(v.sc->it.g1);
+            const double g1 = double(v.sc->it.g1), unit = v.sc->soft_unit;
             for (int d = 0; d < 3; ++d) {
-                const double p = v.sacc[3 * i + d];
+                const double p = double(v.sacc[3 * i + d]) * unit;
                 un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
                 // The correction adds to the step's increment as computed, not u⁺ − u again: that
                 // difference re-rounds the increment on every contact node every step (in float32 it
@@ -262,10 +331,10 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
                 // of validate's two soft paraboloids, whose 1 ulp disturbances grew).
                 dun[d * v.P + n] = T(double(dun[d * v.P + n]) + W[d] * p);
                 v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
-                v.sacc[3 * i + d] = 0.0;
+                v.sacc[3 * i + d] = 0;
             }
             soft_position(i, s, v.X, un, v.P, v.sx + 3 * i);
-            v.sshare[i] = 0.0;
+            v.sshare[i] = 0;
         });
     }
 }

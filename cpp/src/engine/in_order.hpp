@@ -7,7 +7,8 @@
 
 namespace pliant {
 
-/// each_then and each_counted_then for Device (CRTP), from its each, each_counted and serial.
+/// each_then, each_counted_then and each_counted_then_team for Device (CRTP), from its each,
+/// each_counted, serial and team.
 template <class Device>
 class InOrderThen {
 public:
@@ -22,6 +23,13 @@ public:
     void each_counted_then(index_t n_max, const index_t* count, const F& f, const G& g) {
         self().each_counted(n_max, count, f);
         self().serial(g);
+    }
+
+    /// each_counted(n_max, count, f), then g(team) on one team (SerialTeam; CUDA: a block).
+    template <class F, class G>
+    void each_counted_then_team(index_t n_max, const index_t* count, const F& f, const G& g) {
+        self().each_counted(n_max, count, f);
+        self().team(g);
     }
 
 private:
