@@ -185,9 +185,9 @@ PLIANT_HD void soft_count(const DeviceView<T>& v, const SoftSurface& s, const Te
 
 /// The unit [kg·m] of a sweep's fixed-point impulse sums: 2^(e_p + e_m − 62), with |p| < 2^e_p for
 /// every impulse component (pmax, as bits) and m < 2^e_m contacts. A node's or a pair's sum then
-/// stays below m (2^(62 − e_m) + 2) < 2^63 units (|p| / share <= |p|: every share is at least one),
-/// and resolves 2^(e_m − 62) of the largest impulse (10^-16 of it for 60 contacts). NaN if pmax is
-/// not finite (the sums are NaN then, and the step's check reports them).
+/// stays below m (2^(62 − e_m) + 2) < 2^63 units (|p| / share <= |p|: every share is at least one);
+/// the unit is at most 2^(e_m − 61) of the largest impulse (3e-17 of it for 60 contacts). NaN if
+/// pmax is not finite (the sums are NaN then, and the step's check reports them).
 PLIANT_HD double soft_unit(std::int64_t pmax, index_t m) {
     const int field = static_cast<int>((pmax >> 52) & 0x7ff);
     if (field == 0x7ff) return bits_double(std::int64_t(0x7ff8) << 48);  // NaN
