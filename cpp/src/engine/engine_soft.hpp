@@ -265,8 +265,9 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
 /// The soft-contact pass of a step: (1) skin test, one thread per surface node (and the surface
 /// positions sx), a rebuild of the candidate lists if a surface node moved more than skin/2 since
 /// the last one (or the run just started: soft_lists), and the list of the nodes that have candidates; (2)
-/// per such node, its contact and impulse (soft_detect); (3) one thread adds the impulses into the nodes, in
-/// node order, each averaged over the contacts sharing its nodes, and into the step's per-pair forces; (4)
+/// per such node, its contact and impulse (soft_detect), and per active sharp edge (soft_edge_detect);
+/// (3) one team adds the impulses into the nodes, each averaged over the contacts sharing its nodes,
+/// and into the step's per-pair forces (soft_gather: fixed point, in any order); (4)
 /// per node touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports; (2)–(4)
 /// repeated kSoftSweeps times, kSoftRelaxSweeps in a relaxation (Jacobi sweeps on the corrected
 /// positions), (2) skipped after a sweep that touched nothing. Launch sizes come from the counts
