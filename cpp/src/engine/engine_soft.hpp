@@ -117,15 +117,15 @@ PLIANT_HD index_t soft_edge_partner(const DeviceView<T>& v, index_t e) {
     return f >= 0 && f < e && v.erec[f] == e ? -1 : f;
 }
 
-/// Bits below the point of a sweep's fixed-point shares: a weight w in (0, 1] counts
+/// One unit of a sweep's fixed-point shares is 2^-32: a weight w in (0, 1] counts
 /// max(1, round(w 2^32)) units, so that every node a contact reaches counts at least one.
-constexpr int kSoftShareBits = 32;
+constexpr double kSoftShareUnits = 4294967296.0;  // 2^32 units per share of one
 
 /// x / unit rounded to the nearest integer (ties to even), given per_unit = 1/unit; 0 for NaN or
 /// beyond ±2^62, which soft_gather's units keep every finite sweep within.
 PLIANT_HD std::int64_t soft_fixed(double x, double per_unit) {
     const double y = x * per_unit;
-    if (!((y < 0.0 ? -y : y) < 4.6e18)) return 0;
+    if (!(std::fabs(y) < 4.6e18)) return 0;
 #if defined(__CUDA_ARCH__)
     return __double2ll_rn(y);
 #else
@@ -166,7 +166,7 @@ PLIANT_HD bool soft_contact_at(const DeviceView<T>& v, const SoftSurface& s, ind
 PLIANT_HD bool soft_reaches(double w) { return w > 0.0 || w < 0.0; }
 
 /// Step (3a) of soft_pass for contact c: each node it reaches adds |w| to its share of the sweep's
-/// contacts (sshare, fixed point: kSoftShareBits), the contact first reaching it lists it in
+/// contacts (sshare, fixed point: kSoftShareUnits), the contact first reaching it lists it in
 /// stouched, and its impulse's largest component raises the sweep's (soft_pmax).
 template <class T, class Team>
 PLIANT_HD void soft_count(const DeviceView<T>& v, const SoftSurface& s, const Team& team, index_t c) {
@@ -174,13 +174,12 @@ PLIANT_HD void soft_count(const DeviceView<T>& v, const SoftSurface& s, const Te
     if (!soft_contact_at(v, s, c, k)) return;
     for (int j = 0; j < 4; ++j) {
         if (!soft_reaches(k.w[j])) continue;
-        std::int64_t q =
-            soft_fixed(k.w[j] < 0.0 ? -k.w[j] : k.w[j], double(std::int64_t(1) << kSoftShareBits));
+        std::int64_t q = soft_fixed(std::fabs(k.w[j]), kSoftShareUnits);
         if (q < 1) q = 1;
         const index_t n = k.node[j];
         if (team.add(&v.sshare[n], q) == 0) v.stouched[team.add(&v.sc->soft_touched, index_t(1))] = n;
     }
-    for (int d = 0; d < 3; ++d) team.max(&v.sc->soft_pmax, double_bits(k.p[d] < 0.0 ? -k.p[d] : k.p[d]));
+    for (int d = 0; d < 3; ++d) team.max(&v.sc->soft_pmax, double_bits(std::fabs(k.p[d])));
 }
 
 /// The unit [kg·m] of a sweep's fixed-point impulse sums: 2^(e_p + e_m − 62), with |p| < 2^e_p for
@@ -209,15 +208,15 @@ PLIANT_HD void soft_spread(const DeviceView<T>& v, const SoftSurface& s, const T
                            double unit) {
     SoftContact k;
     if (!soft_contact_at(v, s, c, k)) return;
-    std::int64_t most = std::int64_t(1) << kSoftShareBits;
+    std::int64_t most = static_cast<std::int64_t>(kSoftShareUnits);
     int big = 0;
     for (int j = 0; j < 4; ++j) {
         if (!soft_reaches(k.w[j])) continue;
         if (v.sshare[k.node[j]] > most) most = v.sshare[k.node[j]];
-        if ((k.w[j] < 0.0 ? -k.w[j] : k.w[j]) > (k.w[big] < 0.0 ? -k.w[big] : k.w[big])) big = j;
+        if (std::fabs(k.w[j]) > std::fabs(k.w[big])) big = j;
     }
     // p / share in units: share >= 1 and unit a power of two
-    const double scale = double(std::int64_t(1) << kSoftShareBits) / (double(most) * unit);
+    const double scale = kSoftShareUnits / (double(most) * unit);
     const index_t la = s.label[k.node[0]], lb = s.label[k.node[2]];
     const index_t pr = s.pair[static_cast<std::size_t>(la) * s.labels + lb];
     for (int d = 0; d < 3; ++d) {
