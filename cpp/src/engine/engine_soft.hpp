@@ -261,13 +261,40 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
     });
 }
 
+/// Step (4) of soft_pass for touched surface node i, on the team after its sums: the correction W p
+/// [m] of its summed impulse p (sacc, in the sweep's unit) added to u⁺ [m] (un) and to the step's
+/// increment (dun), its force p/γ1 [N] kept for reports (sforce), its surface position (sx)
+/// refreshed, its sums cleared for the next sweep. Each touched node once: no two items write one node.
+template <class T>
+PLIANT_HD void soft_correct(const DeviceView<T>& v, const SoftSurface& s, const T* mass, index_t i, T* un,
+                            T* dun) {
+    double W[3];
+    soft_inverse_mass(i, s, mass, W);
+    const index_t n = s.node[i];
+    const double g1 = double(v.sc->it.g1), unit = v.sc->soft_unit;
+    for (int d = 0; d < 3; ++d) {
+        const double p = double(v.sacc[3 * i + d]) * unit;
+        un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
+        // The correction adds to the step's increment as computed, not u⁺ − u again: that
+        // difference re-rounds the increment on every contact node every step (in float32 it
+        // loses the digits the increment keeps; in float64 it destabilized the relaxation
+        // of validate's two soft paraboloids, whose 1 ulp disturbances grew).
+        dun[d * v.P + n] = T(double(dun[d * v.P + n]) + W[d] * p);
+        v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
+        v.sacc[3 * i + d] = 0;
+    }
+    soft_position(i, s, v.X, un, v.P, v.sx + 3 * i);
+    v.sshare[i] = 0;
+}
+
 /// The soft-contact pass of a step: (1) skin test, one thread per surface node (and the surface
 /// positions sx), a rebuild of the candidate lists if a surface node moved more than skin/2 since
 /// the last one (or the run just started: soft_lists), and the list of the nodes that have candidates; (2)
 /// per such node, its contact and impulse (soft_detect), and per active sharp edge (soft_edge_detect);
 /// (3) one team adds the impulses into the nodes, each averaged over the contacts sharing its nodes,
-/// and into the step's per-pair forces (soft_gather: fixed point, in any order); (4)
-/// per node touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports; (2)–(4)
+/// and into the step's per-pair forces (soft_gather: fixed point, in any order), then (4) per node
+/// touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports
+/// (soft_correct, on the same team: one launch and one wait fewer a sweep than its own); (2)–(4)
 /// repeated kSoftSweeps times, kSoftRelaxSweeps in a relaxation (Jacobi sweeps on the corrected
 /// positions), (2) skipped after a sweep that touched nothing. Launch sizes come from the counts
 /// the kernels wrote (each_counted, when): the CPU walks only those items.
@@ -315,27 +342,12 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
                     soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.snear, v.erec,
                                      v.erec_w, v.erec_p);
             },
-            [=] PLIANT_KERNEL(const typename Dev::Team& team) { soft_gather(v, s, first, team); });
-        dev_.each_counted(s.n_nodes, &v.sc->soft_touched, [=] PLIANT_KERNEL(index_t a) {
-            const index_t i = v.stouched[a];
-            double W[3];
-            soft_inverse_mass(i, s, mass, W);
-            const index_t n = s.node[i];
-            const double g1 = double(v.sc->it.g1), unit = v.sc->soft_unit;
-            for (int d = 0; d < 3; ++d) {
-                const double p = double(v.sacc[3 * i + d]) * unit;
-                un[d * v.P + n] = T(double(un[d * v.P + n]) + W[d] * p);
-                // The correction adds to the step's increment as computed, not u⁺ − u again: that
-                // difference re-rounds the increment on every contact node every step (in float32 it
-                // loses the digits the increment keeps; in float64 it destabilized the relaxation
-                // of validate's two soft paraboloids, whose 1 ulp disturbances grew).
-                dun[d * v.P + n] = T(double(dun[d * v.P + n]) + W[d] * p);
-                v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
-                v.sacc[3 * i + d] = 0;
-            }
-            soft_position(i, s, v.X, un, v.P, v.sx + 3 * i);
-            v.sshare[i] = 0;
-        });
+            [=] PLIANT_KERNEL(const typename Dev::Team& team) {
+                soft_gather(v, s, first, team);
+                team.sync();
+                team.each(v.sc->soft_touched,
+                          [&](index_t a) { soft_correct(v, s, mass, v.stouched[a], un, dun); });
+            });
     }
 }
 
