@@ -200,6 +200,41 @@ PLIANT_HD int soft_closest_d2(const double a[3], const double b[3], const double
     return feature;
 }
 
+/// Closest point of triangle t to x [m] at the surface positions xs [m] (soft_current):
+/// soft_closest_d2's feature (returned), weights w (out) and squared distance d2 [m²] (out).
+PLIANT_HD int soft_closest_to(index_t t, const SoftSurface& s, const double* xs, const double x[3],
+                              double w[3], double& d2) {
+    double a[3], b[3], c[3];
+    soft_current(s.tri[3 * t], xs, a);
+    soft_current(s.tri[3 * t + 1], xs, b);
+    soft_current(s.tri[3 * t + 2], xs, c);
+    return soft_closest_d2(a, b, c, x, w, d2);
+}
+
+/// soft_detect's closest points of a node's candidate q (triangle t) to its position x [m]:
+/// computed as the node's thread walks its candidates (the CPU), or
+struct SoftClosestComputed {
+    const SoftSurface* s;
+    const double* xs;  // the surface positions [m] (soft_current)
+    PLIANT_HD int operator()(int, index_t t, const double x[3], double w[3], double& d2) const {
+        return soft_closest_to(t, *s, xs, x, w, d2);
+    }
+};
+/// read from slots base + q, where a launch before, one thread per (node, candidate), stored them
+/// (Dev::kSplitsDetection: on a GPU one thread walking the candidates was the detection's longest
+/// chain of loads): features f, squared distances d2 [m²], weights w (3 per slot). The same bits.
+struct SoftClosestStored {
+    const int* f;
+    const double *d2, *w;
+    std::size_t base;
+    PLIANT_HD int operator()(int q, index_t, const double*, double w_out[3], double& d2_out) const {
+        const std::size_t k = base + static_cast<std::size_t>(q);
+        for (int d = 0; d < 3; ++d) w_out[d] = w[3 * k + d];
+        d2_out = d2[k];
+        return f[k];
+    }
+};
+
 /// Whether surface node i lay within a mean edge of triangle t in the reference configuration X
 /// [m] (a cut's two sides coincide there): the self contact of edges is for surfaces that
 /// deformation brought together (soft_edge_detect).
@@ -396,11 +431,12 @@ PLIANT_HD void soft_friction(const double rel[3], const double n[3], double lamb
 /// over the step (stick if the impulse that removes it is within μs λ, else μk λ against it).
 /// Outputs rec_tri[i] (−1: no contact), rec_w (3 weights of c), rec_p (3). Inputs: reference X
 /// [m] AoS, mass [kg], u and u⁺ [m] SoA (3, P) (u⁺ after the tool contact), xs the surface
-/// positions at u⁺ [m] (soft_current).
-template <class T>
+/// positions at u⁺ [m] (soft_current), cand (soft_candidates), closest: the closest points of the
+/// node's candidates (SoftClosestComputed, or SoftClosestStored).
+template <class T, class Closest>
 PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, const T* mass, const T* u,
                            const T* u_next, index_t P, const double* xs, const index_t* cand,
-                           index_t* rec_tri, double* rec_w, double* rec_p) {
+                           const Closest& closest, index_t* rec_tri, double* rec_w, double* rec_p) {
     rec_tri[i] = -1;
     const index_t* list = cand + static_cast<std::size_t>(i) * kSoftCandidates;
     if (list[0] < 0) return;
@@ -413,15 +449,10 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
     int near_f[kSoftCandidates], n_bodies = 0;
     for (int q = 0; q < kSoftCandidates && list[q] >= 0; ++q) {
         const index_t t = list[q];
-        const index_t* v = s.tri + 3 * t;
-        double a[3], b[3], c[3], w[3];
-        soft_current(v[0], xs, a);
-        soft_current(v[1], xs, b);
-        soft_current(v[2], xs, c);
-        double d2;
-        const int feature = soft_closest_d2(a, b, c, x1, w, d2);
+        double w[3], d2;
+        const int feature = closest(q, t, x1, w, d2);
         if (feature < 0) continue;
-        const index_t lb = s.label[v[0]];
+        const index_t lb = s.label[s.tri[3 * t]];
         int k = 0;
         while (k < n_bodies && body[k] != lb) ++k;
         if (k == n_bodies)

@@ -107,6 +107,9 @@ public:
     static constexpr bool kStreams = false;           // kernel 1 stores its forces as they come
     static constexpr bool kKeepsAnpGradient = false;  // T4ANP's pass (3) recomputes H (not measured)
     using Team = cuda_detail::BlockTeam;              // the threads of a team launch (each_counted_then_team)
+    // Soft contact: one thread per (active node, candidate) computes the closest points a launch
+    // ahead of the node's (soft_pass): one thread walking its candidates was the longest chain of loads.
+    static constexpr bool kSplitsDetection = true;
 
     explicit CudaDevice(int device) {
         cuda_detail::check(cudaSetDevice(device), "cudaSetDevice");

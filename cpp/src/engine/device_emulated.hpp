@@ -39,6 +39,7 @@ public:
     static constexpr bool kStreams = false;           // kernel 1 stores its forces as they come
     static constexpr bool kKeepsAnpGradient = false;  // as on CUDA
     using Team = ReversedTeam;                        // the threads of a team launch (each_counted_then_team)
+    static constexpr bool kSplitsDetection = true;    // as on CUDA
 
     EmulatedDevice() = default;
     EmulatedDevice(const EmulatedDevice&) = delete;

@@ -33,6 +33,9 @@ public:
     static constexpr bool kPrefetch = true;   // kernel 2 prefetches its gathers on large models
     static constexpr bool kKeepsAnpGradient = true;  // T4ANP's pass (3) reads pass (1)'s gradients
     using Team = SerialTeam;                         // the threads of a team launch (each_counted_then_team)
+    // Soft contact: a node's thread computes its candidates' closest points itself (soft_detect);
+    // a launch of its own per sweep would cost a wait.
+    static constexpr bool kSplitsDetection = false;
     static constexpr bool kStreams = true;  // kernel 1 streams its forces past the caches on large models
 
     // threads: 1 .. thread_limit(), or <= 0 for OpenMP's default.

@@ -53,6 +53,8 @@ struct Scalars {
     index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
     index_t soft_items;                 // soft contact: the larger of soft_active and soft_edges_active
     index_t soft_redo;                  // soft contact: soft_items if the last sweep moved a node, else 0
+    index_t soft_lanes;       // soft contact: soft_active × kSoftCandidates (Dev::kSplitsDetection's items)
+    index_t soft_lanes_redo;  // soft contact: soft_lanes if the last sweep moved a node, else 0
     // soft contact: the largest impulse component of a sweep's contacts [kg·m], as its bits (an atomic
     // maximum), and the unit of that sweep's fixed-point impulse sums [kg·m] (soft_gather)
     std::int64_t soft_pmax;
@@ -107,6 +109,10 @@ struct DeviceView {
     double* sx;  // the surface positions at u⁺ [m] (3 per node: soft_current), kept through the pass
     index_t *shead, *scursor, *sbucket, *scell, *scand, *snear, *srec, *sactive, *stouched, *erec, *eactive;
     std::int64_t* spart;  // the chunk sums of the rebuild's prefix sums (Engine::scan)
+    // Dev::kSplitsDetection: each active node's candidates' closest points (kSoftCandidates slots per
+    // entry of sactive): feature, squared distance [m²], weights (3 per slot).
+    int* slane_f;
+    double *slane_d2, *slane_w;
 };
 
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
@@ -237,7 +243,9 @@ private:
     DeviceBuffer<Scalars<T>, Dev> sc_;
     DeviceBuffer<Pose, Dev> pose0_, pose1_;
     DeviceBuffer<index_t, Dev> ctool_, closed_, gtool_;
-    DeviceBuffer<double, Dev> sb_, stc_, str_, srec_w_, srec_p_, sforce_, erec_w_, erec_p_, d_soft_mu_, sx_;
+    DeviceBuffer<double, Dev> sb_, stc_, str_, srec_w_, srec_p_, sforce_, erec_w_, erec_p_, d_soft_mu_, sx_,
+        slane_d2_, slane_w_;
+    DeviceBuffer<int, Dev> slane_f_;
     DeviceBuffer<index_t, Dev> shead_, scursor_, sbucket_, scell_, scand_, snear_, srec_, sactive_, stouched_,
         erec_, eactive_;
     DeviceBuffer<std::int64_t, Dev> spart_, sshare_, sacc_, spair_;

@@ -110,6 +110,12 @@ void Engine<T, Dev>::allocate_soft(std::size_t ns, std::size_t nst) {
     erec_w_ = DeviceBuffer<double, Dev>(dev_, 2 * ne);
     erec_p_ = DeviceBuffer<double, Dev>(dev_, 3 * ne);
     sactive_ = DeviceBuffer<index_t, Dev>(dev_, ns);
+    if constexpr (Dev::kSplitsDetection) {  // the candidates' closest points, computed a launch ahead
+        const std::size_t lanes = ns * kSoftCandidates;
+        slane_f_ = DeviceBuffer<int, Dev>(dev_, lanes);
+        slane_d2_ = DeviceBuffer<double, Dev>(dev_, lanes);
+        slane_w_ = DeviceBuffer<double, Dev>(dev_, 3 * lanes);
+    }
     stouched_ = DeviceBuffer<index_t, Dev>(dev_, ns);
     // Chunk sums of the rebuild's two prefix sums (Engine::scan): over the buckets, and over the
     // surface nodes and sharp edges.
@@ -186,6 +192,7 @@ void Engine<T, Dev>::refresh_view() {
     v.erec = erec_.data(), v.erec_w = erec_w_.data(), v.erec_p = erec_p_.data();
     v.sactive = sactive_.data(), v.stouched = stouched_.data(), v.eactive = eactive_.data();
     v.spart = spart_.data();
+    v.slane_f = slane_f_.data(), v.slane_d2 = slane_d2_.data(), v.slane_w = slane_w_.data();
 }
 
 /// Copies a state to the device unless the device holds it already (same object, same version).

@@ -96,6 +96,7 @@ void Engine<T, Dev>::soft_lists(const T* u) {
             sc.soft_active = static_cast<index_t>(sum & 0xffffffff);
             sc.soft_edges_active = static_cast<index_t>(sum >> 32);
             sc.soft_items = sc.soft_active > sc.soft_edges_active ? sc.soft_active : sc.soft_edges_active;
+            sc.soft_lanes = sc.soft_active * kSoftCandidates;
         },
         [=] PLIANT_KERNEL(index_t k, std::int64_t before, std::int64_t active) {
             if (k < ns) {
@@ -258,7 +259,25 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
         sc.soft_pmax = 0;
         // A sweep after one that moved nothing would find what it found: nothing (soft_pass skips it).
         sc.soft_redo = sc.soft_touched > 0 ? sc.soft_items : 0;
+        sc.soft_lanes_redo = sc.soft_touched > 0 ? sc.soft_lanes : 0;
     });
+}
+
+/// Step (2) of soft_pass for the a-th node that has candidates (sactive[a]): soft_detect, its
+/// candidates' closest points computed as it walks them, or, if split (Dev::kSplitsDetection), read
+/// from the slots the launch before filled (a kSoftCandidates from a × kSoftCandidates).
+template <bool split, class T>
+PLIANT_HD void soft_detect_active(const DeviceView<T>& v, const SoftSurface& s, const T* mass, const T* uc,
+                                  const T* un, index_t a) {
+    const index_t i = v.sactive[a];
+    if constexpr (split)
+        soft_detect(i, s, v.X, mass, uc, un, v.P, v.sx, v.scand,
+                    SoftClosestStored{v.slane_f, v.slane_d2, v.slane_w,
+                                      static_cast<std::size_t>(a) * kSoftCandidates},
+                    v.srec, v.srec_w, v.srec_p);
+    else
+        soft_detect(i, s, v.X, mass, uc, un, v.P, v.sx, v.scand, SoftClosestComputed{&s, v.sx}, v.srec,
+                    v.srec_w, v.srec_p);
 }
 
 /// Step (4) of soft_pass for touched surface node i, on the team after its sums: the correction W p
@@ -290,7 +309,8 @@ PLIANT_HD void soft_correct(const DeviceView<T>& v, const SoftSurface& s, const 
 /// The soft-contact pass of a step: (1) skin test, one thread per surface node (and the surface
 /// positions sx), a rebuild of the candidate lists if a surface node moved more than skin/2 since
 /// the last one (or the run just started: soft_lists), and the list of the nodes that have candidates; (2)
-/// per such node, its contact and impulse (soft_detect), and per active sharp edge (soft_edge_detect);
+/// per such node, its contact and impulse (soft_detect; where Dev::kSplitsDetection, a launch before
+/// computes its candidates' closest points, one thread each), and per active sharp edge (soft_edge_detect);
 /// (3) one team adds the impulses into the nodes, each averaged over the contacts sharing its nodes,
 /// and into the step's per-pair forces (soft_gather: fixed point, in any order), then (4) per node
 /// touched, the correction W p applied to u⁺ (and sx) and its force p/γ1 kept for reports
@@ -332,12 +352,23 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
     for (int sweep = 0; sweep < sweeps; ++sweep) {
         const bool first = sweep == 0;
         const index_t items = s.n_nodes > s.n_edges ? s.n_nodes : s.n_edges;
+        if constexpr (Dev::kSplitsDetection)  // (2) split: the closest points, one thread per candidate
+            dev_.each_counted(
+                s.n_nodes * kSoftCandidates, first ? &v.sc->soft_lanes : &v.sc->soft_lanes_redo,
+                [=] PLIANT_KERNEL(index_t k) {
+                    const index_t i = v.sactive[k / kSoftCandidates];
+                    const index_t t =
+                        v.scand[static_cast<std::size_t>(i) * kSoftCandidates + k % kSoftCandidates];
+                    if (t < 0) return;
+                    double x[3], w[3];
+                    soft_current(i, v.sx, x);
+                    v.slane_f[k] = soft_closest_to(t, s, v.sx, x, w, v.slane_d2[k]);
+                    for (int d = 0; d < 3; ++d) v.slane_w[3 * static_cast<std::size_t>(k) + d] = w[d];
+                });
         dev_.each_counted_then_team(
             items, first ? &v.sc->soft_items : &v.sc->soft_redo,
             [=] PLIANT_KERNEL(index_t a) {
-                if (a < v.sc->soft_active)
-                    soft_detect(v.sactive[a], s, v.X, mass, uc, un, v.P, v.sx, v.scand, v.srec, v.srec_w,
-                                v.srec_p);
+                if (a < v.sc->soft_active) soft_detect_active<Dev::kSplitsDetection>(v, s, mass, uc, un, a);
                 if (a < v.sc->soft_edges_active)
                     soft_edge_detect(v.eactive[a], s, v.X, mass, uc, v.P, v.sx, v.scand, v.snear, v.erec,
                                      v.erec_w, v.erec_p);
