@@ -114,7 +114,10 @@ def test_the_sweeps_sums_do_not_depend_on_the_order_of_the_contacts():
     # them (soft_gather); the sums are of integers (fixed point), so no order can show. The emulated
     # device runs those loops in the reverse of the CPU's order, touched-node list included
     # (ReversedTeam), and otherwise computes what the CPU does: the same bits, where floating-point
-    # sums in another order would differ in their last bits at every node two contacts share.
+    # sums in another order would differ in their last bits at every node two contacts share. It
+    # also computes the candidates' closest points in a launch of their own, as a GPU does
+    # (kSplitsDetection), where the CPU's node thread computes them as it walks its candidates:
+    # any difference between the two detections would show here too.
     runs = []
     for backend in ("cpu", "cuda-emulated"):
         model, n0 = two_blocks(backend, threads=1 if backend == "cpu" else None)
