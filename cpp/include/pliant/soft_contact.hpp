@@ -211,8 +211,9 @@ PLIANT_HD int soft_closest_to(index_t t, const SoftSurface& s, const double* xs,
     return soft_closest_d2(a, b, c, x, w, d2);
 }
 
-/// soft_detect's closest points of a node's candidate q (triangle t) to its position x [m]:
-/// computed as the node's thread walks its candidates (the CPU), or
+/// soft_detect's closest point of a node's candidate q (triangle t) to its position x [m]
+/// (soft_closest_to's feature, weights w and squared distance d2), computed as the node's thread
+/// walks its candidates (the CPU; SoftClosestStored reads them from a launch before).
 struct SoftClosestComputed {
     const SoftSurface* s;
     const double* xs;  // the surface positions [m] (soft_current)
@@ -220,9 +221,10 @@ struct SoftClosestComputed {
         return soft_closest_to(t, *s, xs, x, w, d2);
     }
 };
-/// read from slots base + q, where a launch before, one thread per (node, candidate), stored them
-/// (Dev::kSplitsDetection: on a GPU one thread walking the candidates was the detection's longest
-/// chain of loads): features f, squared distances d2 [m²], weights w (3 per slot). The same bits.
+/// soft_detect's closest point of a node's candidate q, read from slot base + q, where a launch
+/// before, one thread per (node, candidate), stored it (Dev::kSplitsDetection: on a GPU one thread
+/// walking the candidates was the detection's longest chain of loads): features f, squared distances
+/// d2 [m²], weights w (3 per slot). The same bits as SoftClosestComputed's.
 struct SoftClosestStored {
     const int* f;
     const double *d2, *w;

@@ -263,6 +263,20 @@ PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool fi
     });
 }
 
+/// Step (2) of soft_pass, split (Dev::kSplitsDetection), for slot k = a × kSoftCandidates + q: the
+/// closest point of the a-th active node's candidate q (its feature, squared distance and weights)
+/// into the slot, which SoftClosestStored reads; nothing past the node's list.
+template <class T>
+PLIANT_HD void soft_closest_slot(const DeviceView<T>& v, const SoftSurface& s, index_t k) {
+    const index_t i = v.sactive[k / kSoftCandidates];
+    const index_t t = v.scand[static_cast<std::size_t>(i) * kSoftCandidates + k % kSoftCandidates];
+    if (t < 0) return;
+    double x[3], w[3];
+    soft_current(i, v.sx, x);
+    v.slane_f[k] = soft_closest_to(t, s, v.sx, x, w, v.slane_d2[k]);
+    for (int d = 0; d < 3; ++d) v.slane_w[3 * static_cast<std::size_t>(k) + d] = w[d];
+}
+
 /// Step (2) of soft_pass for the a-th node that has candidates (sactive[a]): soft_detect, its
 /// candidates' closest points computed as it walks them, or, if split (Dev::kSplitsDetection), read
 /// from the slots the launch before filled (a kSoftCandidates from a × kSoftCandidates).
@@ -353,18 +367,8 @@ void Engine<T, Dev>::soft_pass(const Phase& ph, bool relaxing) {
         const bool first = sweep == 0;
         const index_t items = s.n_nodes > s.n_edges ? s.n_nodes : s.n_edges;
         if constexpr (Dev::kSplitsDetection)  // (2) split: the closest points, one thread per candidate
-            dev_.each_counted(
-                s.n_nodes * kSoftCandidates, first ? &v.sc->soft_lanes : &v.sc->soft_lanes_redo,
-                [=] PLIANT_KERNEL(index_t k) {
-                    const index_t i = v.sactive[k / kSoftCandidates];
-                    const index_t t =
-                        v.scand[static_cast<std::size_t>(i) * kSoftCandidates + k % kSoftCandidates];
-                    if (t < 0) return;
-                    double x[3], w[3];
-                    soft_current(i, v.sx, x);
-                    v.slane_f[k] = soft_closest_to(t, s, v.sx, x, w, v.slane_d2[k]);
-                    for (int d = 0; d < 3; ++d) v.slane_w[3 * static_cast<std::size_t>(k) + d] = w[d];
-                });
+            dev_.each_counted(s.n_nodes * kSoftCandidates, first ? &v.sc->soft_lanes : &v.sc->soft_lanes_redo,
+                              [=] PLIANT_KERNEL(index_t k) { soft_closest_slot(v, s, k); });
         dev_.each_counted_then_team(
             items, first ? &v.sc->soft_items : &v.sc->soft_redo,
             [=] PLIANT_KERNEL(index_t a) {
