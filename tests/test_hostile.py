@@ -171,6 +171,14 @@ def test_an_element_that_ruins_the_time_step_is_named(tmp_path):
     assert re.search(r"element \d+ limits the stable time step", warn[0])
 
 
+def test_a_density_too_small_for_any_stable_step_is_named(tmp_path):
+    """density = 5e-324 kg/m^3 passes as a finite number > 0, but sqrt((lambda + 2 mu) / density)
+    overflows: every element's stable step is 0 s, and the critical step with damping divided by
+    it (ZeroDivisionError, exit 3; found by tests/test_fuzz.py with PLIANT_FUZZ_EXAMPLES=1500)."""
+    p = scene(tmp_path, SCENE.replace("density = 1000.0", "density = 5e-324"))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "element 0", "wave speed", "infinite", "density")
+
+
 # --- files: unreadable input, unwritable output ----------------------------------------------
 def _bad_outputs(tmp_path):
     (tmp_path / "file").write_text("x")

@@ -17,7 +17,7 @@ import numpy as np
 from .. import _core
 from ..checks import shown
 from ..contact.soft import engine_surface, no_surface
-from ..errors import InputError, MeshError, PliantWarning
+from ..errors import InputError, MaterialError, MeshError, PliantWarning
 from .curves import Constant, LoadCurve
 from .anp import anp_stabilization
 from .smoothing import strain_smoothing
@@ -92,6 +92,25 @@ def _warn_slow_element(source: str, dt: np.ndarray, altitude: np.ndarray) -> Non
             ),
             stacklevel=4,
         )
+
+
+def _check_wave_speeds(source: str, dt: np.ndarray, sets: list, owner: np.ndarray) -> None:
+    """Refuse a model whose element stable steps (smallest altitude / dilatational wave speed
+    √((λ + 2μ)/ρ), ``dt`` [s] per element, user order) are not finite and positive: moduli and a
+    density that each pass as positive numbers can still make the wave speed overflow (a density of
+    1e-320 kg/m³) or vanish, and the run would then divide by the zero step. Names the first such
+    element, its set and density."""
+    bad = np.flatnonzero(~(np.isfinite(dt) & (dt > 0)))
+    if bad.size == 0:
+        return
+    e = int(bad[0])
+    s = sets[int(owner[e])]
+    speed = "infinite" if dt[e] == 0 else "zero" if np.isinf(dt[e]) else "not a number"
+    raise MaterialError(
+        f"{source}: element {e} of set {s.name!r} ({type(s.material).__name__}, density {s.density:.3g} "
+        f"kg/m^3): its dilatational wave speed, sqrt((lambda + 2 mu) / density), is {speed}, so no time "
+        "step is stable; expected moduli [Pa] and a density [kg/m^3] of physical size"
+    )
 
 
 def _check_initial_overlap(
@@ -363,16 +382,14 @@ class Model:
         self._results_backend = None  # made on first use (element_results, internal_forces)
         self._backend, self._device = "cpu", 0  # the default backend of its solvers
         self._solver = None  # weak reference: the last solver that ran
+        steps = self.to_user_elements(np.asarray(self._engine.critical_steps()))
+        _check_wave_speeds(builder.source, steps, self.sets, owner)
         self.dt_critical = _damped_critical_step(float(self._engine.dt_critical), self.stiffness_damping)
         self._stable_step: float | None = None  # 2/ω_max with β, when a solver first needs it
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
-        _warn_slow_element(
-            builder.source,
-            self.to_user_elements(np.asarray(self._engine.critical_steps())),
-            np.asarray(geometry[1], float),
-        )
+        _warn_slow_element(builder.source, steps, np.asarray(geometry[1], float))
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)
         self.constrained = held
