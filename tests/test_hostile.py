@@ -15,6 +15,7 @@ import meshio
 import numpy as np
 import pytest
 
+import pliant as pl
 from pliant.mesh import grid_tets
 from test_niftysim import _cube_xml
 
@@ -155,6 +156,11 @@ def test_box_sizes_and_jitter_are_bounded(tmp_path):
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), "tets")
     p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [5, 2, 2]\njitter = 0.7"))
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), "jitter")
+    # a subnormal size passes as a length > 0, but the cells' corners coincide (the fuzzer's case:
+    # the message showed a numpy array of the coordinates, named xs, which the scene does not have)
+    p = scene(tmp_path, SCENE.replace("size = [0.1, 0.02, 0.02]", "size = [0.1, 0.02, 5e-324]"))
+    line = refused(cli("run", p, "-o", tmp_path / "o"), str(p), "size = [0.1, 0.02, 5e-324]", "too small")
+    assert "array(" not in line and "xs =" not in line
 
 
 def test_an_element_that_ruins_the_time_step_is_named(tmp_path):
@@ -177,6 +183,65 @@ def test_a_density_too_small_for_any_stable_step_is_named(tmp_path):
     it (ZeroDivisionError, exit 3; found by tests/test_fuzz.py with PLIANT_FUZZ_EXAMPLES=1500)."""
     p = scene(tmp_path, SCENE.replace("density = 1000.0", "density = 5e-324"))
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), "element 0", "wave speed", "infinite", "density")
+
+
+# --- memory: a mesh larger than the machine ---------------------------------------------------
+def _guarded(argv, capsys):
+    """The pliant program run in this process (so that a test can make the machine small): its
+    exit code and its non-empty stderr lines."""
+    import io
+
+    from rich.console import Console
+
+    from pliant.cli import app
+    from pliant.guard import run_guarded
+
+    buf = io.StringIO()
+    capsys.readouterr()
+    code = run_guarded(app, [str(a) for a in argv], Console(file=buf, width=400))
+    text = buf.getvalue() + capsys.readouterr().err
+    return code, [ln for ln in text.splitlines() if ln.strip()]
+
+
+def _machine_with(monkeypatch, *available):
+    """Makes pliant.memory see these amounts available [bytes], one per check, the last one
+    thereafter (Linux's MemAvailable otherwise)."""
+    import pliant.memory
+
+    left = list(available)
+    monkeypatch.setattr(pliant.memory, "available_memory", lambda: left.pop(0) if len(left) > 1 else left[0])
+
+
+def test_a_mesh_larger_than_the_machine_is_refused_before_it_is_made(tmp_path, monkeypatch, capsys):
+    """Linux gives every allocation and ends the process without a word when the pages run out: a
+    box, a model or a run's frames that need more than the memory available are refused up front,
+    naming the size and both amounts (exit 2). 1 GB available here: the 6e6-tet box of [100, 100,
+    100] cells needs 2.4 GB at box_tets' 400 bytes a tet (measured 320)."""
+    _machine_with(monkeypatch, 1e9)
+    p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [100, 100, 100]"))
+    code, lines = _guarded(["run", p, "-o", tmp_path / "o"], capsys)
+    assert code == 2 and len(lines) == 1, lines
+    for w in (str(p), "cells = [100, 100, 100]", "6e+06 tets", "2.4 GB", "1 GB available"):
+        assert w in lines[0], (w, lines[0])
+    assert not (tmp_path / "o").exists()  # refused before anything was made
+
+
+def test_a_model_or_frames_larger_than_the_machine_are_refused(tmp_path, monkeypatch, capsys):
+    """The same for a mesh that exists (a file, or the API's arrays) but whose model would not fit
+    (300 bytes a tet on top of the mesh), and for a model whose frames would not (700)."""
+    X, T = grid_tets(*(np.linspace(0.0, 0.01, 11),) * 3)  # 6,000 tets
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(mu=1e4, K=1e5), 1000.0)
+    _machine_with(monkeypatch, 1e6)  # 1.8 MB needed
+    with pytest.raises(pl.InputError, match=r"a model of 6,000 tets needs about 0.0018 GB of memory"):
+        b.finalize()
+    _machine_with(monkeypatch, 1e12, 1e12, 1e6)  # the box and the model fit, the frames (4.2 MB) do not
+    p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [10, 10, 10]"))
+    code, lines = _guarded(["run", p, "-o", tmp_path / "o", "--no-progress"], capsys)
+    assert code == 2 and len(lines) == 1 and "the frames of 6,000 tets needs about 0.0042 GB" in lines[0], (
+        lines
+    )
 
 
 # --- files: unreadable input, unwritable output ----------------------------------------------

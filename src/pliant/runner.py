@@ -15,6 +15,7 @@ from . import __version__
 from .errors import InputError, InstabilityError, PliantWarning
 from .io import ResultWriter, atomic_write_text, check_output_dir
 from .job import Scene
+from .memory import OUTPUT_BYTES_PER_TET, require_memory
 from .tled import Solver
 from .tled.solver import MAX_STEPS
 
@@ -117,6 +118,10 @@ def run_scene(
         warnings.warn(PliantWarning(text), stacklevel=2)
     for w in held:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if out is not None:
+        require_memory(
+            model.n_elements, OUTPUT_BYTES_PER_TET, f"{scene.source}: the frames of {model.n_elements:,} tets"
+        )
     total = total_steps(scene.duration, solver.dt)
     state = model.state()
     embedding: Any = None

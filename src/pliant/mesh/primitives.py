@@ -6,7 +6,9 @@ import itertools
 
 import numpy as np
 
+from ..checks import shown
 from ..errors import InputError
+from ..memory import BOX_BYTES_PER_TET, require_memory
 
 
 def tet_volumes(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
@@ -34,7 +36,7 @@ def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
         c = np.asarray(c, float)
         if c.ndim != 1 or c.size < 2 or not np.all(np.isfinite(c)) or np.any(np.diff(c) <= 0):
             raise InputError(
-                f"{name}s = {c!r}; expected at least 2 finite, strictly increasing coordinates [m]"
+                f"{name}s = {shown(c)}; expected at least 2 finite, strictly increasing coordinates [m]"
             )
         g.append(c)
     nx, ny, nz = (c.size - 1 for c in g)
@@ -92,6 +94,9 @@ def box_tets(
         raise InputError(
             f"cells = {[nx, ny, nz]} make {6 * nx * ny * nz:.3g} tets; expected at most {MAX_BOX_TETS:.0e}"
         )
+    require_memory(
+        6 * nx * ny * nz, BOX_BYTES_PER_TET, f"cells = {[nx, ny, nz]} ({6 * nx * ny * nz:.3g} tets)"
+    )
     size = np.asarray(size, float)
     if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
         raise InputError(f"size = {np.asarray(size).tolist()}; expected three finite lengths > 0 [m]")
@@ -100,7 +105,13 @@ def box_tets(
             f"jitter = {float(jitter)}; expected 0 <= jitter < 0.5 (a fraction of a "
             "cell: half a cell or more can turn elements inside out)"
         )
-    X, T = grid_tets(*(np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))))
+    lines = [np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))]
+    if any(np.any(np.diff(c) <= 0) for c in lines):  # subnormal sizes: the cells' corners coincide
+        raise InputError(
+            f"size = {size.tolist()} in cells = {[nx, ny, nz]} gives cells too small to tell their "
+            "corners apart; expected lengths [m] of physical size"
+        )
+    X, T = grid_tets(*lines)
     if jitter > 0:
         h = size / np.array([nx, ny, nz])
         rng = np.random.default_rng(seed)

@@ -17,6 +17,7 @@ from .. import _core
 from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
+from ..memory import MODEL_BYTES_PER_TET, require_memory
 from ..mesh.topology import conformity_problem
 from .curves import Constant, LoadCurve
 from .anp import ANP_STABILIZATION, anp_stabilization
@@ -445,6 +446,9 @@ class ModelBuilder:
 
         if self.n_elements == 0:
             raise MeshError(f"{self.source}: no tetrahedra; add a mesh before finalize()")
+        require_memory(
+            self.n_elements, MODEL_BYTES_PER_TET, f"{self.source}: a model of {self.n_elements:,} tets"
+        )
         dtype = np.dtype(dtype)
         if dtype not in (np.float32, np.float64):
             raise InputError(f"dtype = {dtype}; expected float32 or float64")
