@@ -98,7 +98,7 @@ def _check_wave_speeds(source: str, dt: np.ndarray, sets: list, owner: np.ndarra
     """Refuse a model whose element stable steps (smallest altitude / dilatational wave speed
     √((λ + 2μ)/ρ), ``dt`` [s] per element, user order) are not finite and positive: moduli and a
     density that each pass as positive numbers can still make the wave speed overflow (a density of
-    1e-320 kg/m³) or vanish, and the run would then divide by the zero step. Names the first such
+    5e-324 kg/m³) or vanish, and the run would then divide by the zero step. Names the first such
     element, its set and density."""
     bad = np.flatnonzero(~(np.isfinite(dt) & (dt > 0)))
     if bad.size == 0:
