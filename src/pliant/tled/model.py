@@ -25,12 +25,10 @@ from .smoothing import strain_smoothing
 __all__ = ["Model", "State"]
 
 
-def _lumped_mass(X: np.ndarray, T: np.ndarray, density: np.ndarray) -> np.ndarray:
-    """Lumped nodal masses [kg] (N,): a quarter of each element's ρ V0 to each of its nodes
-    (X (N, 3) [m], T (M, 4), density (M,) [kg/m³]); V0 = det[X1 − X0, X2 − X0, X3 − X0] / 6."""
-    e = X[T[:, 1:]] - X[T[:, :1]]
-    v0 = np.einsum("ij,ij->i", e[:, 0], np.cross(e[:, 1], e[:, 2])) / 6.0
-    return np.bincount(T.ravel(), np.repeat(density * v0 / 4.0, 4), minlength=len(X))
+def _lumped_mass(n_nodes: int, T: np.ndarray, volume: np.ndarray, density: np.ndarray) -> np.ndarray:
+    """Lumped nodal masses [kg] (n_nodes,): a quarter of each element's ρ V0 to each of its nodes
+    (T (M, 4), V0 (M,) [m³] as the engine computed them (tet_geometry), density (M,) [kg/m³])."""
+    return np.bincount(T.ravel(), np.repeat(density * volume / 4.0, 4), minlength=n_nodes)
 
 
 def _morton_order(points: np.ndarray) -> np.ndarray:
@@ -251,7 +249,9 @@ class Model:
             R = pattern_of.setdefault(k, np.zeros((N, 3)))
             np.add.at(R, node_rank[ids], f)
         if builder._node_gravity:  # add_gravity: m_a g on its nodes, m_a = Σ ρ V0 / 4 as the engine's
-            m_a = _lumped_mass(X, T, np.array([s.density for s in self.sets])[owner])
+            m_a = _lumped_mass(
+                N, T, np.asarray(geometry[0], float), np.array([s.density for s in self.sets])[owner]
+            )
             for ids, g, c in builder._node_gravity:
                 R = pattern_of.setdefault(cid(c), np.zeros((N, 3)))
                 np.add.at(R, node_rank[ids], m_a[ids, None] * g)
