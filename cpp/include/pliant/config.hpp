@@ -115,6 +115,16 @@ PLIANT_HD void atomic_max(std::int64_t* p, std::int64_t v) {
 #endif
 }
 
+/// One element slot's scratch in a phased launch (Dev::blocks_phased): value k at p[k · kStride].
+/// On the CPU a block's lanes lie side by side (kStride = kLanes, so that each phase's SIMD loop
+/// reads and writes whole vectors); on CUDA and the emulated device each thread has its own row
+/// (kStride = 1, registers on CUDA).
+template <class T, int kStride>
+struct SlotScratch {
+    T* p;
+    PLIANT_HD T& operator[](int k) const { return p[k * kStride]; }
+};
+
 /// The threads of a team launch (each_counted_then_team) on the CPU and the emulated device: one
 /// thread, which runs each loop in order, so that its sums need no atomics. CUDA's team is a block
 /// (BlockTeam, device_cuda.cuh): each loop strided over its threads, sync a __syncthreads, add and

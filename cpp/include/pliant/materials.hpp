@@ -356,17 +356,56 @@ enum class ViscoMode : int {
     RelaxedStore = 3,  // the same, and store it (the state after a quasi-static solution)
 };
 
+/// The two elastic parts of a decoupled material's S that Prony terms relax (ViscoMaterial):
+/// isochoric S_iso = pk2_iso and volumetric S_vol = J p C⁻¹ [Pa].
+template <class T>
+struct SplitStress {
+    Sym3<T> iso, vol;
+};
+template <class M, class T>
+PLIANT_HD SplitStress<T> split_pk2(const M& m, const Kinematics<T>& k) {
+    const Sym3<T> Ci = inverse_cauchy_green(k);
+    return {m.pk2_iso(k, Ci), scale(k.J * m.pressure(k), Ci)};
+}
+
+/// Prony term t's stress-like state D_t [Pa] of one element (Taylor et al. 2009, MICCAI, eqs. 9-12):
+/// advanced by backward Euler, D ← τ/(Δt + τ) D + Δt α/(Δt + τ) S_e, from the element's elastic
+/// part S_e (se.iso for an isochoric term, se.vol for a volumetric one); or the stored D; or the
+/// fully relaxed D = α S_e (ViscoMode, fixed at compile time by kMode >= 0, else `mode`).
+/// d: the term's 6 state values (xx, yy, zz, xy, yz, xz), stride `stride` apart; dt [s].
+template <int kMode, class T>
+PLIANT_HD Sym3<T> prony_term(const Prony<T>& pr, int t, T dt, const SplitStress<T>& se, T* d, int stride,
+                             ViscoMode mode) {
+    const ViscoMode md = kMode >= 0 ? static_cast<ViscoMode>(kMode) : mode;
+    const int i = pr.term_index(t);
+    const T w = t < pr.n_iso ? T(1) : T(0);  // its stress: isochoric (1) or volumetric (0)
+    const Sym3<T> s = axpby(w, se.iso, T(1) - w, se.vol);
+    const T e[6] = {s.xx, s.yy, s.zz, s.xy, s.yz, s.xz};
+    const T den = dt + pr.tau[i];
+    T D[6];
+    PLIANT_UNROLL
+    for (int c = 0; c < 6; ++c) {
+        if (md == ViscoMode::Relaxed || md == ViscoMode::RelaxedStore) {
+            D[c] = pr.alpha[i] * e[c];
+            if (md == ViscoMode::RelaxedStore) d[c * stride] = D[c];
+        } else if (md == ViscoMode::Stored) {
+            D[c] = d[c * stride];
+        } else {
+            D[c] = pr.tau[i] / den * d[c * stride] + dt * pr.alpha[i] / den * e[c];
+            d[c * stride] = D[c];
+        }
+    }
+    return {D[0], D[1], D[2], D[3], D[4], D[5]};
+}
+
 /// Visco-hyperelastic response of a decoupled material (Taylor et al. 2009, "Modelling anisotropic
 /// viscoelasticity for real-time soft tissue simulation", MICCAI, eqs. 9-12; NiftySim's NHV): each
-/// Prony term keeps a stress-like state D_i, advanced per step by backward Euler,
-/// D_i ← τ_i/(Δt + τ_i) D_i + Δt α_i/(Δt + τ_i) S_e (S_e its isochoric or volumetric elastic part),
-/// and S = S_e,iso + S_e,vol − Σ D_i. `mode` (ViscoMode): advance the state, use it, or the fully
-/// relaxed response D_i = α_i S_e (and store it).
-/// q: the element's 6·(n_iso + n_vol) state values, stride `stride` between components.
-/// kMode >= 0 fixes the mode at compile time (the ViscoMode of that value; `mode` is then unused),
-/// and kTerms >= 0 the number of terms (pr.terms()): the CPU's lane loop then carries one mode's
-/// arithmetic and no per-term test, so it vectorizes (Engine::launch_visco_forces).
-template <class M, class T, int kMode = -1, int kTerms = -1>
+/// Prony term keeps a stress-like state D_i (prony_term), and S = S_e,iso + S_e,vol − Σ D_i.
+/// `mode` (ViscoMode): advance the state, use it, or the fully relaxed response D_i = α_i S_e (and
+/// store it). q: the element's 6·(n_iso + n_vol) state values, stride `stride` between components.
+/// The time step's kernels run the same terms as phases instead (visco_begin, below), which on
+/// the CPU vectorize whatever the number of terms.
+template <class M, class T>
 struct ViscoMaterial {
     const M& m;
     const Prony<T>& pr;
@@ -375,42 +414,50 @@ struct ViscoMaterial {
     int stride;
     ViscoMode mode;
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const {
-        const ViscoMode md = kMode >= 0 ? static_cast<ViscoMode>(kMode) : mode;
-        const Sym3<T> Ci = inverse_cauchy_green(k);
-        const Sym3<T> iso = m.pk2_iso(k, Ci), vol = scale(k.J * m.pressure(k), Ci);
-        Sym3<T> S = axpby(T(1), iso, T(1), vol);
-        // A fixed trip count (kTerms, or every possible term with the absent ones skipped by a
-        // uniform test), fully unrolled, so that the CPU's lane loop vectorizes around it.
-        constexpr int kN = kTerms >= 0 ? kTerms : kPronyMax;
-        PLIANT_UNROLL
-        for (int t = 0; t < kN; ++t) {
-            if (kTerms < 0 && t >= pr.terms()) continue;
-            const int i = pr.term_index(t);
-            const T w = t < pr.n_iso ? T(1) : T(0);  // its stress: isochoric (1) or volumetric (0)
-            const Sym3<T> se = axpby(w, iso, T(1) - w, vol);
-            const T e[6] = {se.xx, se.yy, se.zz, se.xy, se.yz, se.xz};
-            T* d = q + 6 * t * stride;
-            const T den = dt + pr.tau[i];
-            T D[6];
-            PLIANT_UNROLL
-            for (int c = 0; c < 6; ++c) {
-                if (md == ViscoMode::Relaxed || md == ViscoMode::RelaxedStore) {
-                    D[c] = pr.alpha[i] * e[c];
-                    if (md == ViscoMode::RelaxedStore) d[c * stride] = D[c];
-                } else if (md == ViscoMode::Stored) {
-                    D[c] = d[c * stride];
-                } else {
-                    D[c] = pr.tau[i] / den * d[c * stride] + dt * pr.alpha[i] / den * e[c];
-                    d[c * stride] = D[c];
-                }
-            }
-            S = axpby(T(1), S, T(-1), Sym3<T>{D[0], D[1], D[2], D[3], D[4], D[5]});
-        }
+        const SplitStress<T> se = split_pk2(m, k);
+        Sym3<T> S = axpby(T(1), se.iso, T(1), se.vol);
+        for (int t = 0; t < pr.terms(); ++t)
+            S = axpby(T(1), S, T(-1), prony_term<-1>(pr, t, dt, se, q + 6 * t * stride, stride, mode));
         return S;
     }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const { return m.energy(k); }
 };
+
+/// ViscoMaterial's P = F S in three phases over one slot's scratch s (s[k]: Dev::blocks_phased,
+/// SlotScratch), so that a loop over the Prony terms can run around a SIMD loop over slots instead
+/// of inside each slot (where its test stops the CPU's vectorizer; any number of terms then runs at
+/// full width, the same arithmetic in the same order as ViscoMaterial). The scratch holds
+/// kViscoScratch values: S [Pa] at 0..5 (xx, yy, zz, xy, yz, xz), S_iso at 6..11, S_vol at
+/// 12..17, F at 18..26.
+/// (1) visco_begin: S = S_iso + S_vol of kinematics k. (2) visco_term, t = 0..terms−1:
+/// S −= D_t (prony_term; q: the slot's state, stride apart). (3) visco_pk1: P = F S.
+inline constexpr int kViscoScratch = 27;
+template <class M, class T, class Scratch>
+PLIANT_HD void visco_begin(const M& m, const Kinematics<T>& k, Scratch s) {
+    const SplitStress<T> se = split_pk2(m, k);
+    const auto put = [&](int o, const Sym3<T>& x) {
+        s[o] = x.xx, s[o + 1] = x.yy, s[o + 2] = x.zz, s[o + 3] = x.xy, s[o + 4] = x.yz, s[o + 5] = x.xz;
+    };
+    put(0, axpby(T(1), se.iso, T(1), se.vol)), put(6, se.iso), put(12, se.vol);
+    PLIANT_UNROLL
+    for (int i = 0; i < 9; ++i) s[18 + i] = k.F.a[i];
+}
+template <int kMode, class T, class Scratch>
+PLIANT_HD void visco_term(const Prony<T>& pr, int t, T dt, T* q, int stride, ViscoMode mode, Scratch s) {
+    const auto at = [&](int o) { return Sym3<T>{s[o], s[o + 1], s[o + 2], s[o + 3], s[o + 4], s[o + 5]}; };
+    const Sym3<T> D =
+        prony_term<kMode>(pr, t, dt, SplitStress<T>{at(6), at(12)}, q + 6 * t * stride, stride, mode);
+    const Sym3<T> S = axpby(T(1), at(0), T(-1), D);
+    s[0] = S.xx, s[1] = S.yy, s[2] = S.zz, s[3] = S.xy, s[4] = S.yz, s[5] = S.xz;
+}
+template <class T, class Scratch>
+PLIANT_HD Mat3<T> visco_pk1(Scratch s) {
+    Mat3<T> F;
+    PLIANT_UNROLL
+    for (int i = 0; i < 9; ++i) F.a[i] = s[18 + i];
+    return mul(F, Sym3<T>{s[0], s[1], s[2], s[3], s[4], s[5]});
+}
 
 /// Parameters per material (the most any material takes: TransverselyIsotropic's μ, K, η, a).
 constexpr int kMaterialParams = 8;

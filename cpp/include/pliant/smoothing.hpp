@@ -65,18 +65,31 @@ PLIANT_HD void edge_gradient(index_t k, const EdgeData<T>& ed, const T* H_elem, 
     for (int c = 0; c < 9; ++c) Hbar_out[aosoa(k / kLanes, k % kLanes, c, 9)] = H[c];
 }
 
-/// Pass 2b, one edge per lane of edge block b: the smoothed stress P̄_k = P(I + H̄_k) [Pa] into
-/// P_out[9k .. 9k+8] (row-major: pass 3 gathers an edge's nine values together). Inputs: material
-/// (isochoric only under T4ANP), smoothed gradients (AoSoA K=9).
-template <class T, class Material>
-PLIANT_HD void edge_stress(index_t b, int l, const Material& mat, const T* Hbar, T* P_out) {
+/// Edge slot (b, l)'s smoothed gradient H̄ [1] (AoSoA K=9).
+template <class T>
+PLIANT_HD Mat3<T> edge_gradient_at(index_t b, int l, const T* Hbar) {
     Mat3<T> H;
     PLIANT_UNROLL
     for (int c = 0; c < 9; ++c) H.a[c] = Hbar[aosoa(b, l, c, 9)];
-    const Mat3<T> Pk = mat.pk1(kinematics(H));
+    return H;
+}
+
+/// Edge slot (b, l)'s stress Pk [Pa] into P_out[9k .. 9k+8], k = b·kLanes + l (row-major: pass 3
+/// gathers an edge's nine values together).
+template <class T>
+PLIANT_HD void store_edge_stress(index_t b, int l, const Mat3<T>& Pk, T* P_out) {
     T* p = P_out + 9 * (static_cast<std::size_t>(b) * kLanes + l);
     PLIANT_UNROLL
     for (int c = 0; c < 9; ++c) p[c] = Pk.a[c];
+}
+
+/// Pass 2b, one edge per lane of edge block b: the smoothed stress P̄_k = P(I + H̄_k) [Pa] into
+/// P_out (store_edge_stress). Inputs: material (isochoric only under T4ANP), smoothed gradients
+/// (AoSoA K=9). A viscoelastic material's runs as the phases of visco_begin (materials.hpp) with
+/// kinematics(edge_gradient_at) and store_edge_stress(visco_pk1).
+template <class T, class Material>
+PLIANT_HD void edge_stress(index_t b, int l, const Material& mat, const T* Hbar, T* P_out) {
+    store_edge_stress(b, l, mat.pk1(kinematics(edge_gradient_at(b, l, Hbar))), P_out);
 }
 
 /// P̃_e = (1/6) Σ P̄_k [Pa] over the six edges of slot (b, l).

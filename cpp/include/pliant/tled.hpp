@@ -109,6 +109,22 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
     element_forces_to(b, l, mat, el, u, P, b, f_out, J_out);
 }
 
+/// Kernel 1 of a viscoelastic material as the phases of visco_begin (materials.hpp), over slot
+/// (b, l)'s scratch s: (1) visco_forces_begin: kinematics from u [m] SoA (3, P), J_out (det F,
+/// K=1), visco_begin; (2) visco_term for each Prony term (the caller's); (3) visco_forces_end:
+/// f_out [N] AoSoA K=12 from P = F S (store_forces).
+template <class T, class Material, class Scratch>
+PLIANT_HD void visco_forces_begin(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
+                                  index_t P, T* J_out, Scratch s) {
+    const Kinematics<T> k = kinematics(displacement_gradient(b, l, el, u, P));
+    visco_begin(mat, k, s);
+    J_out[aosoa(b, l, 0, 1)] = k.J;
+}
+template <class T, class Scratch>
+PLIANT_HD void visco_forces_end(index_t b, int l, const ElementData<T>& el, T* f_out, Scratch s) {
+    store_forces<false>(b, l, el, visco_pk1<T>(s), b, f_out);
+}
+
 /// Stiffness-proportional (Rayleigh β) damping as a viscous stress, added to the element forces:
 /// S_d = β (λ0 tr(Ė) I + 2μ0 Ė), Ė = sym(Fᵀ Ḟ), Ḟ = ∇X v with the half-step velocity
 /// v = du/Δt (du = u − u⁻ before rounding: node_update), and f_a += V0 · F S_d ∇X N_a. At small strain this

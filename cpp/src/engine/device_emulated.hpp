@@ -91,6 +91,23 @@ public:
                 for (int l = 0; l < kLanes; ++l) f(b, l);
         });
     }
+    /// A phased kernel's slot scratch (SlotScratch): each thread's own row, as on CUDA.
+    template <class T>
+    using Scratch = SlotScratch<T, 1>;
+    /// As on CUDA: each slot runs pre, mid for t in [0, n), and post in turn on its own scratch.
+    template <class T, int W, class Pre, class Mid, class Post>
+    void blocks_phased(index_t b0, index_t b1, int n, const Pre& pre, const Mid& mid, const Post& post) {
+        launch_or_record([b0, b1, n, pre, mid, post] {
+            for (index_t b = b0; b < b1; ++b)
+                for (int l = 0; l < kLanes; ++l) {
+                    T sc[W];
+                    const Scratch<T> s{sc};
+                    pre(b, l, s);
+                    for (int t = 0; t < n; ++t) mid(b, l, t, s);
+                    post(b, l, s);
+                }
+        });
+    }
     void barrier() {}  // launches run in order, as on one CUDA stream
     template <class F>
     void serial(const F& f) {

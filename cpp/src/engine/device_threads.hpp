@@ -122,6 +122,29 @@ public:
             for (int l = 0; l < kLanes; ++l) f(b, l);
         }
     }
+    /// A phased kernel's slot scratch (SlotScratch): the block's lanes side by side.
+    template <class T>
+    using Scratch = SlotScratch<T, kLanes>;
+    /// For the element slots of blocks [b0, b1): pre(b, l, s), then mid(b, l, t, s) for t in [0, n),
+    /// then post(b, l, s), s the slot's W values of scratch (Scratch<T>, in the L1 cache). Each phase
+    /// is its own SIMD loop over the block's lanes, so that a loop of run-time length n runs around
+    /// the lanes instead of inside each (where its test would stop the vectorizer). No wait at the
+    /// end: call barrier().
+    template <class T, int W, class Pre, class Mid, class Post>
+    void blocks_phased(index_t b0, index_t b1, int n, const Pre& pre, const Mid& mid, const Post& post) {
+#pragma omp for schedule(static) nowait
+        for (index_t b = b0; b < b1; ++b) {
+            alignas(64) T sc[W * kLanes];
+#pragma omp simd
+            for (int l = 0; l < kLanes; ++l) pre(b, l, Scratch<T>{sc + l});
+            for (int t = 0; t < n; ++t) {
+#pragma omp simd
+                for (int l = 0; l < kLanes; ++l) mid(b, l, t, Scratch<T>{sc + l});
+            }
+#pragma omp simd
+            for (int l = 0; l < kLanes; ++l) post(b, l, Scratch<T>{sc + l});
+        }
+    }
     /// blocks(b0, b1, f) for a kernel whose outputs are whole blocks of two AoSoA arrays, K1 and K2
     /// values a slot (kernel 1: forces, K = 12, and J, K = 1): f(b, l, o1, o2) writes slot l of block 0
     /// of o1 and o2, a one-block scratch in the L1 cache, which is then copied to block b of out1 and

@@ -185,9 +185,11 @@ public:
     void forces(const T* u, ViscoMode visco_mode, double dt);
     void edge_stresses(const T* u, ViscoMode visco_mode, double dt);
     template <class F>
-    void with_visco_kernel(const Span& sp, ViscoMode visco_mode, F&& f);
-    template <class M, Variant V, int kMode, int kTerms>
-    void launch_edge_stress(const Span& sp, ViscoMode visco_mode, double dt);
+    void with_visco_mode(ViscoMode visco_mode, F&& f);
+    template <class M, Variant V>
+    void launch_edge_stress(const Span& sp);
+    template <class M, int kMode>
+    void launch_visco_edge_stress(const Span& sp, ViscoMode visco_mode, double dt);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
     void contact_pass(const Phase& ph, bool relaxing);
     void soft_pass(const Phase& ph, bool relaxing);
@@ -202,7 +204,7 @@ public:
     void launch_pressure(const Span& sp, const T* u);
     template <class M, Variant V>
     void launch_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt);
-    template <class M, int kMode, int kTerms>
+    template <class M, int kMode>
     void launch_visco_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt);
     template <class M, Variant V>
     void launch_measures(const Span& sp, const T* u, double dt, T* out);

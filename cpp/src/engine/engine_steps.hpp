@@ -80,44 +80,37 @@ void Engine<T, Dev>::launch_pressure(const Span& sp, const T* u) {
     }
 }
 
-/// Calls f.template operator()<kMode, kTerms>() with what a viscoelastic kernel of span sp fixes at
-/// compile time (ViscoMaterial): in a time step (Advance) the mode, and on devices whose lanes run
-/// in SIMD loops (Dev::kLaneLoops) the span's number of Prony terms when it is 1 to 4, the common
-/// cases, so that the loop carries no per-term test and vectorizes; -1 where decided at run time.
+/// Calls f.template operator()<kMode>() with the ViscoMode a viscoelastic kernel fixes at compile
+/// time: in a time step (Advance) the mode, so that its loops carry one mode's arithmetic; -1 (the
+/// mode decided at run time) for the rest (outputs, relaxation).
 template <class T, class Dev>
 template <class F>
-void Engine<T, Dev>::with_visco_kernel(const Span& sp, ViscoMode visco_mode, F&& f) {
-    constexpr int kAdvance = static_cast<int>(ViscoMode::Advance);
-    if (visco_mode != ViscoMode::Advance) return f.template operator()<-1, -1>();
-    if constexpr (Dev::kLaneLoops) {
-        const int terms = groups_[sp.group].visco.terms();  // the same for every group of the span
-        if (terms == 1) return f.template operator()<kAdvance, 1>();
-        if (terms == 2) return f.template operator()<kAdvance, 2>();
-        if (terms == 3) return f.template operator()<kAdvance, 3>();
-        if (terms == 4) return f.template operator()<kAdvance, 4>();
-    }
-    f.template operator()<kAdvance, -1>();
+void Engine<T, Dev>::with_visco_mode(ViscoMode visco_mode, F&& f) {
+    if (visco_mode == ViscoMode::Advance)
+        return f.template operator()<static_cast<int>(ViscoMode::Advance)>();
+    f.template operator()<-1>();
 }
 
-/// How a viscoelastic kernel holds its group's Prony series: with the term count known at compile
-/// time, a reference (a struct copy inside the CPU's lane loop stops its vectorization); otherwise
-/// a copy, which the state's stores cannot alias (the scalar loop then keeps it in registers).
-template <class T, int kTerms>
-using PronyArg = std::conditional_t<(kTerms >= 0), const Prony<T>&, Prony<T>>;
-
-/// Viscoelastic element forces; kMode, kTerms >= 0: fixed at compile time (ViscoMaterial).
+/// Viscoelastic element forces (visco_forces_begin, tled.hpp): the element, each of the span's
+/// Prony terms and the forces as three phases of one launch (Dev::blocks_phased), so that on the
+/// CPU every term count vectorizes; kMode >= 0: the ViscoMode fixed at compile time.
 template <class T, class Dev>
-template <class M, int kMode, int kTerms>
+template <class M, int kMode>
 void Engine<T, Dev>::launch_visco_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
+    using S = typename Dev::template Scratch<T>;
     const DeviceView<T> v = v_;
     const T tdt = T(dt);
-    dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
-        const M mat = make_material<M>(v.mats[v.block_group[b]]);
-        const PronyArg<T, kTerms> pr = v.prony[v.block_group[b]];
-        const ViscoMaterial<M, T, kMode, kTerms> vm{mat,    pr,        tdt, v.q + aosoa(b, l, 0, v.visco_w),
-                                                    kLanes, visco_mode};
-        element_forces(b, l, vm, v.el, u, v.P, v.f_elem, v.J);
-    });
+    const int terms = groups_[sp.group].visco.terms();  // the same for every group of the span
+    dev_.template blocks_phased<T, kViscoScratch>(
+        sp.block_begin, sp.block_end, terms,
+        [=] PLIANT_KERNEL(index_t b, int l, S s) {
+            visco_forces_begin(b, l, make_material<M>(v.mats[v.block_group[b]]), v.el, u, v.P, v.J, s);
+        },
+        [=] PLIANT_KERNEL(index_t b, int l, int t, S s) {
+            visco_term<kMode>(v.prony[v.block_group[b]], t, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes,
+                              visco_mode, s);
+        },
+        [=] PLIANT_KERNEL(index_t b, int l, S s) { visco_forces_end(b, l, v.el, v.f_elem, s); });
 }
 
 template <class T, class Dev>
@@ -130,10 +123,9 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
             element_forces_smoothed<V == Variant::Anp>(b, l, mat, v.el, v.ed, v.P_edge, u, v.P, v.node_p,
                                                        v.anp_gamma[v.block_group[b]], v.f_elem, v.J);
         });
-    } else if constexpr (V == Variant::Visco) {  // the time step's mode and terms compiled on their own
-        with_visco_kernel(sp, visco_mode, [&]<int kMode, int kTerms>() {
-            launch_visco_forces<M, kMode, kTerms>(sp, u, visco_mode, dt);
-        });
+    } else if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own; terms as phases
+        with_visco_mode(visco_mode,
+                        [&]<int kMode>() { launch_visco_forces<M, kMode>(sp, u, visco_mode, dt); });
     } else if (Dev::kStreams && V == Variant::Plain && v_.stream) {
         if constexpr (Dev::kStreams && V == Variant::Plain) {  // a model beyond the caches (CPU)
             const DeviceView<T> v = v_;
@@ -191,40 +183,50 @@ void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) 
     dev_.barrier();
     dev_.each(m_.n_edges, [=] PLIANT_KERNEL(index_t k) { edge_gradient(k, v.ed, v.H_elem, v.Hbar); });
     dispatch([&]<class M, Variant V>(const Span& sp) {
-        if constexpr (V == Variant::Visco) {
-            with_visco_kernel(sp, visco_mode, [&]<int kMode, int kTerms>() {
-                launch_edge_stress<M, V, kMode, kTerms>(sp, visco_mode, dt);
-            });
-        } else {
-            launch_edge_stress<M, V, -1, -1>(sp, visco_mode, dt);
-        }
+        if constexpr (V == Variant::Visco)
+            with_visco_mode(visco_mode,
+                            [&]<int kMode>() { launch_visco_edge_stress<M, kMode>(sp, visco_mode, dt); });
+        else
+            launch_edge_stress<M, V>(sp);
     });
     dev_.barrier();
 }
 
 /// Edge stresses of a span's edge blocks; under T4ANP the isochoric part only (p̄ = 0, γ = 0):
-/// each element adds its volumetric part (SmoothedStress). Viscoelastic groups keep their Prony
-/// state per edge (the state's slots are edge slots; kMode, kTerms as in launch_visco_forces).
+/// each element adds its volumetric part (SmoothedStress).
 template <class T, class Dev>
-template <class M, Variant V, int kMode, int kTerms>
-void Engine<T, Dev>::launch_edge_stress(const Span& sp, ViscoMode visco_mode, double dt) {
+template <class M, Variant V>
+void Engine<T, Dev>::launch_edge_stress(const Span& sp) {
+    const DeviceView<T> v = v_;
+    dev_.blocks(sp.edge_begin / kLanes, sp.edge_end / kLanes, [=] PLIANT_KERNEL(index_t b, int l) {
+        const M mat = make_material<M>(v.mats[v.edge_group[b * kLanes]]);
+        if constexpr (V == Variant::Anp)
+            edge_stress(b, l, AveragedPressure<M, T>{mat, T(0), T(0)}, v.Hbar, v.P_edge);
+        else
+            edge_stress(b, l, mat, v.Hbar, v.P_edge);
+    });
+}
+
+/// Edge stresses of a viscoelastic span: its Prony state per edge (the state's slots are edge
+/// slots), the terms as phases as in launch_visco_forces.
+template <class T, class Dev>
+template <class M, int kMode>
+void Engine<T, Dev>::launch_visco_edge_stress(const Span& sp, ViscoMode visco_mode, double dt) {
+    using S = typename Dev::template Scratch<T>;
     const DeviceView<T> v = v_;
     const T tdt = T(dt);
-    dev_.blocks(sp.edge_begin / kLanes, sp.edge_end / kLanes, [=] PLIANT_KERNEL(index_t b, int l) {
-        (void)v, (void)tdt, (void)visco_mode;  // captured before any `if constexpr` (nvcc)
-        const index_t g = v.edge_group[b * kLanes];
-        const M mat = make_material<M>(v.mats[g]);
-        if constexpr (V == Variant::Anp) {
-            edge_stress(b, l, AveragedPressure<M, T>{mat, T(0), T(0)}, v.Hbar, v.P_edge);
-        } else if constexpr (V == Variant::Visco) {
-            const PronyArg<T, kTerms> pr = v.prony[g];
-            const ViscoMaterial<M, T, kMode, kTerms> vm{
-                mat, pr, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes, visco_mode};
-            edge_stress(b, l, vm, v.Hbar, v.P_edge);
-        } else {
-            edge_stress(b, l, mat, v.Hbar, v.P_edge);
-        }
-    });
+    const int terms = groups_[sp.group].visco.terms();
+    dev_.template blocks_phased<T, kViscoScratch>(
+        sp.edge_begin / kLanes, sp.edge_end / kLanes, terms,
+        [=] PLIANT_KERNEL(index_t b, int l, S s) {
+            visco_begin(make_material<M>(v.mats[v.edge_group[b * kLanes]]),
+                        kinematics(edge_gradient_at(b, l, v.Hbar)), s);
+        },
+        [=] PLIANT_KERNEL(index_t b, int l, int t, S s) {
+            visco_term<kMode>(v.prony[v.edge_group[b * kLanes]], t, tdt, v.q + aosoa(b, l, 0, v.visco_w),
+                              kLanes, visco_mode, s);
+        },
+        [=] PLIANT_KERNEL(index_t b, int l, S s) { store_edge_stress(b, l, visco_pk1<T>(s), v.P_edge); });
 }
 
 /// Stiffness-proportional damping (β [s]): each element's viscous forces from its half-step
