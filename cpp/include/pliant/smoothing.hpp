@@ -145,14 +145,20 @@ struct SmoothedStress {
 };
 
 /// Pass 3: element forces of slot (b, l) from the mean stress of its edges (and, kAnp, its
-/// volumetric part from the corners' nodal pressures node_p). Outputs as element_forces.
+/// volumetric part from the corners' nodal pressures node_p). The element's own F (its J, and
+/// under T4ANP its volumetric stress) comes from pass 1's gradient H_elem (9 per slot), the same
+/// values, not gathered from the displacements again. Outputs as element_forces.
 template <bool kAnp, class T, class Material>
 PLIANT_HD void element_forces_smoothed(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                                       const EdgeData<T>& ed, const T* P_edge, const T* u, index_t P,
+                                       const EdgeData<T>& ed, const T* P_edge, const T* H_elem,
                                        const T* node_p, T stab, T* f_out, T* J_out) {
     const T p = kAnp ? corner_pressure(b, l, el, node_p) : T(0);
     const SmoothedStress<Material, T, kAnp> sm{mat, mean_edge_stress(b, l, ed.elem_edges, P_edge), p, stab};
-    element_forces(b, l, sm, el, u, P, f_out, J_out);
+    const T* h = H_elem + 9 * (static_cast<std::size_t>(b) * kLanes + l);
+    Mat3<T> H;
+    PLIANT_UNROLL
+    for (int c = 0; c < 9; ++c) H.a[c] = h[c];
+    element_forces_at(b, l, sm, el, H, b, f_out, J_out);
 }
 
 }  // namespace pliant

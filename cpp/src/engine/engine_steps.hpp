@@ -120,7 +120,7 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
         const DeviceView<T> v = v_;
         dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
             const M mat = make_material<M>(v.mats[v.block_group[b]]);
-            element_forces_smoothed<V == Variant::Anp>(b, l, mat, v.el, v.ed, v.P_edge, u, v.P, v.node_p,
+            element_forces_smoothed<V == Variant::Anp>(b, l, mat, v.el, v.ed, v.P_edge, v.H_elem, v.node_p,
                                                        v.anp_gamma[v.block_group[b]], v.f_elem, v.J);
         });
     } else if constexpr (V == Variant::Visco) {  // the time step's mode compiled on its own; terms as phases
