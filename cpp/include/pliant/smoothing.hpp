@@ -49,6 +49,18 @@ PLIANT_HD void element_gradient(index_t b, int l, const ElementData<T>& el, cons
     for (int c = 0; c < 9; ++c) h[c] = H.a[c];
 }
 
+/// Pass 1 under T4ANP: element_gradient, and T4ANP's pass (1) from the same gradient, ep_out = V0
+/// p(J) [N·m] (slot; element_pressure), so that the displacements are gathered once.
+template <class T, class Material>
+PLIANT_HD void element_gradient_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el,
+                                         const T* u, index_t P, T* H_out, T* ep_out) {
+    const Mat3<T> H = displacement_gradient(b, l, el, u, P);
+    T* h = H_out + 9 * (static_cast<std::size_t>(b) * kLanes + l);
+    PLIANT_UNROLL
+    for (int c = 0; c < 9; ++c) h[c] = H.a[c];
+    ep_out[aosoa(b, l, 0, 1)] = el.vol[aosoa(b, l, 0, 1)] * mat.pressure(kinematics(H));
+}
+
 /// Pass 2a: edge k's smoothed gradient H̄_k = Σ w_ek H_e [1] into Hbar_out (AoSoA K=9 over edge
 /// blocks) (Nguyen-Thoi et al. 2009, CMAME 198:3479, eq. 20). Inputs: edge data, element
 /// gradients (9 per slot).

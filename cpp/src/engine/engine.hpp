@@ -184,6 +184,7 @@ public:
     void step_scalars(double time_dt, bool fixed_row);
     void forces(const T* u, ViscoMode visco_mode, double dt);
     void edge_stresses(const T* u, ViscoMode visco_mode, double dt);
+    void nodal_pressures();
     template <class F>
     void with_visco_mode(ViscoMode visco_mode, F&& f);
     template <class M, Variant V>

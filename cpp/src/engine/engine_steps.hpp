@@ -155,32 +155,56 @@ void Engine<T, Dev>::launch_forces(const Span& sp, const T* u, ViscoMode visco_m
 /// viscoelastic groups do with their Prony state (ViscoMode).
 template <class T, class Dev>
 void Engine<T, Dev>::forces(const T* u, ViscoMode visco_mode, double dt) {
-    if (m_.anp) {
-        // Pass (3) reads pass (1)'s gradients where the device keeps them (Dev::kKeepsAnpGradient),
-        // but not with the edge-smoothed strain: its pass (3) reads the edges' stresses.
-        if (Dev::kKeepsAnpGradient && !v_.smoothed)
+    if (v_.smoothed) {
+        edge_stresses(u, visco_mode, dt);  // with T4ANP, its passes (1) and (2) too
+    } else if (m_.anp) {
+        // Pass (3) reads pass (1)'s gradients where the device keeps them (Dev::kKeepsAnpGradient).
+        if (Dev::kKeepsAnpGradient)
             dispatch([&]<class M, Variant V>(const Span& sp) { launch_pressure<M, V, true>(sp, u); });
         else
             dispatch([&]<class M, Variant V>(const Span& sp) { launch_pressure<M, V, false>(sp, u); });
         dev_.barrier();
-        const DeviceView<T> v = v_;
-        dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
-            v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.nodes.inc_index, v.elem_p, v.node_volume);
-        });
+        nodal_pressures();
     }
-    if (v_.smoothed) edge_stresses(u, visco_mode, dt);
     dispatch([&]<class M, Variant V>(const Span& sp) { launch_forces<M, V>(sp, u, visco_mode, dt); });
     dev_.barrier();
 }
 
+/// T4ANP's pass (2): every node's averaged pressure from the elements' V0 p(J).
+template <class T, class Dev>
+void Engine<T, Dev>::nodal_pressures() {
+    const DeviceView<T> v = v_;
+    dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
+        v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.nodes.inc_index, v.elem_p, v.node_volume);
+    });
+}
+
 /// Passes 1 and 2 of the edge-smoothed strain (smoothing.hpp): every element's displacement
-/// gradient, every edge domain's mean gradient, then its stress per material group.
+/// gradient, every edge domain's mean gradient, then its stress per material group. With T4ANP
+/// pass 1 also gives the elements' V0 p(J) (element_gradient_pressure: the displacements gathered
+/// once), and the nodal pressures follow it.
 template <class T, class Dev>
 void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
-    dev_.blocks(0, m_.n_blocks,
-                [=] PLIANT_KERNEL(index_t b, int l) { element_gradient(b, l, v.el, u, v.P, v.H_elem); });
-    dev_.barrier();
+    if (m_.anp) {
+        dispatch([&]<class M, Variant V>(const Span& sp) {
+            if constexpr (V == Variant::Anp)
+                dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+                    element_gradient_pressure(b, l, make_material<M>(v.mats[v.block_group[b]]), v.el, u, v.P,
+                                              v.H_elem, v.elem_p);
+                });
+            else
+                dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+                    element_gradient(b, l, v.el, u, v.P, v.H_elem);
+                });
+        });
+        dev_.barrier();
+        nodal_pressures();
+    } else {
+        dev_.blocks(0, m_.n_blocks,
+                    [=] PLIANT_KERNEL(index_t b, int l) { element_gradient(b, l, v.el, u, v.P, v.H_elem); });
+        dev_.barrier();
+    }
     dev_.each(m_.n_edges, [=] PLIANT_KERNEL(index_t k) { edge_gradient(k, v.ed, v.H_elem, v.Hbar); });
     dispatch([&]<class M, Variant V>(const Span& sp) {
         if constexpr (V == Variant::Visco)
