@@ -185,6 +185,8 @@ public:
     void forces(const T* u, ViscoMode visco_mode, double dt);
     void edge_stresses(const T* u, ViscoMode visco_mode, double dt);
     void nodal_pressures();
+    template <class M, Variant V>
+    void launch_gradient(const Span& sp, const T* u);
     template <class F>
     void with_visco_mode(ViscoMode visco_mode, F&& f);
     template <class M, Variant V>

@@ -187,17 +187,7 @@ template <class T, class Dev>
 void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
     if (m_.anp) {
-        dispatch([&]<class M, Variant V>(const Span& sp) {
-            if constexpr (V == Variant::Anp)
-                dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
-                    element_gradient_pressure(b, l, make_material<M>(v.mats[v.block_group[b]]), v.el, u, v.P,
-                                              v.H_elem, v.elem_p);
-                });
-            else
-                dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
-                    element_gradient(b, l, v.el, u, v.P, v.H_elem);
-                });
-        });
+        dispatch([&]<class M, Variant V>(const Span& sp) { launch_gradient<M, V>(sp, u); });
         dev_.barrier();
         nodal_pressures();
     } else {
@@ -214,6 +204,22 @@ void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) 
             launch_edge_stress<M, V>(sp);
     });
     dev_.barrier();
+}
+
+/// Pass 1 of the edge-smoothed strain under T4ANP for span sp: the element gradients, and for
+/// T4ANP's groups their V0 p(J) too (element_gradient_pressure).
+template <class T, class Dev>
+template <class M, Variant V>
+void Engine<T, Dev>::launch_gradient(const Span& sp, const T* u) {
+    const DeviceView<T> v = v_;
+    if constexpr (V == Variant::Anp)
+        dev_.blocks(sp.block_begin, sp.block_end, [=] PLIANT_KERNEL(index_t b, int l) {
+            element_gradient_pressure(b, l, make_material<M>(v.mats[v.block_group[b]]), v.el, u, v.P,
+                                      v.H_elem, v.elem_p);
+        });
+    else
+        dev_.blocks(sp.block_begin, sp.block_end,
+                    [=] PLIANT_KERNEL(index_t b, int l) { element_gradient(b, l, v.el, u, v.P, v.H_elem); });
 }
 
 /// Edge stresses of a span's edge blocks; under T4ANP the isochoric part only (p̄ = 0, γ = 0):
