@@ -59,6 +59,12 @@ MATERIALS = {
     "ArrudaBoyce": pl.ArrudaBoyce(6e3, 2.0, 5e4),
     "TransverselyIsotropic": pl.TransverselyIsotropic(6e3, 5e4, 3.0, (1.0, 0.0, 0.0)),
     "Viscoelastic": pl.Viscoelastic(pl.NeoHookean(E=2e4, nu=0.45), iso=[(0.4, 0.005)], vol=[(0.2, 0.01)]),
+    # the most terms a material takes, each its own (α, τ): every term's phase on every device
+    "Viscoelastic 4+4": pl.Viscoelastic(
+        pl.MooneyRivlin(2e3, 1e3, 5e4),
+        iso=[(0.1, 0.002), (0.1, 0.005), (0.1, 0.01), (0.1, 0.03)],
+        vol=[(0.05, 0.002), (0.05, 0.005), (0.05, 0.01), (0.05, 0.03)],
+    ),
 }
 
 
