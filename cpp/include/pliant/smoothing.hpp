@@ -39,14 +39,26 @@ struct EdgeData {
 };
 
 /// Pass 1: the displacement gradient H_e [1] of element slot s = b·kLanes + l into H_out[9s .. 9s+8]
-/// (slot-major: each edge gathers its elements' nine values from one cache line or two).
-/// Inputs: element data, displacements u [m] SoA (3, P).
+/// (slot-major: each edge gathers its elements' nine values from one cache line or two); returns
+/// it too. Inputs: element data, displacements u [m] SoA (3, P).
 template <class T>
-PLIANT_HD void element_gradient(index_t b, int l, const ElementData<T>& el, const T* u, index_t P, T* H_out) {
+PLIANT_HD Mat3<T> element_gradient(index_t b, int l, const ElementData<T>& el, const T* u, index_t P,
+                                   T* H_out) {
     const Mat3<T> H = displacement_gradient(b, l, el, u, P);
     T* h = H_out + 9 * (static_cast<std::size_t>(b) * kLanes + l);
     PLIANT_UNROLL
     for (int c = 0; c < 9; ++c) h[c] = H.a[c];
+    return H;
+}
+
+/// Slot (b, l)'s gradient [1] as pass 1 stored it in H_elem (element_gradient).
+template <class T>
+PLIANT_HD Mat3<T> stored_gradient(index_t b, int l, const T* H_elem) {
+    const T* h = H_elem + 9 * (static_cast<std::size_t>(b) * kLanes + l);
+    Mat3<T> H;
+    PLIANT_UNROLL
+    for (int c = 0; c < 9; ++c) H.a[c] = h[c];
+    return H;
 }
 
 /// Pass 1 under T4ANP: element_gradient, and T4ANP's pass (1) from the same gradient, ep_out = V0
@@ -54,10 +66,7 @@ PLIANT_HD void element_gradient(index_t b, int l, const ElementData<T>& el, cons
 template <class T, class Material>
 PLIANT_HD void element_gradient_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el,
                                          const T* u, index_t P, T* H_out, T* ep_out) {
-    const Mat3<T> H = displacement_gradient(b, l, el, u, P);
-    T* h = H_out + 9 * (static_cast<std::size_t>(b) * kLanes + l);
-    PLIANT_UNROLL
-    for (int c = 0; c < 9; ++c) h[c] = H.a[c];
+    const Mat3<T> H = element_gradient(b, l, el, u, P, H_out);
     ep_out[aosoa(b, l, 0, 1)] = el.vol[aosoa(b, l, 0, 1)] * mat.pressure(kinematics(H));
 }
 
@@ -166,11 +175,7 @@ PLIANT_HD void element_forces_smoothed(index_t b, int l, const Material& mat, co
                                        const T* node_p, T stab, T* f_out, T* J_out) {
     const T p = kAnp ? corner_pressure(b, l, el, node_p) : T(0);
     const SmoothedStress<Material, T, kAnp> sm{mat, mean_edge_stress(b, l, ed.elem_edges, P_edge), p, stab};
-    const T* h = H_elem + 9 * (static_cast<std::size_t>(b) * kLanes + l);
-    Mat3<T> H;
-    PLIANT_UNROLL
-    for (int c = 0; c < 9; ++c) H.a[c] = h[c];
-    element_forces_at(b, l, sm, el, H, b, f_out, J_out);
+    element_forces_at(b, l, sm, el, stored_gradient(b, l, H_elem), b, f_out, J_out);
 }
 
 }  // namespace pliant

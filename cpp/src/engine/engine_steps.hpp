@@ -186,15 +186,9 @@ void Engine<T, Dev>::nodal_pressures() {
 template <class T, class Dev>
 void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) {
     const DeviceView<T> v = v_;
-    if (m_.anp) {
-        dispatch([&]<class M, Variant V>(const Span& sp) { launch_gradient<M, V>(sp, u); });
-        dev_.barrier();
-        nodal_pressures();
-    } else {
-        dev_.blocks(0, m_.n_blocks,
-                    [=] PLIANT_KERNEL(index_t b, int l) { element_gradient(b, l, v.el, u, v.P, v.H_elem); });
-        dev_.barrier();
-    }
+    dispatch([&]<class M, Variant V>(const Span& sp) { launch_gradient<M, V>(sp, u); });
+    dev_.barrier();
+    if (m_.anp) nodal_pressures();
     dev_.each(m_.n_edges, [=] PLIANT_KERNEL(index_t k) { edge_gradient(k, v.ed, v.H_elem, v.Hbar); });
     dispatch([&]<class M, Variant V>(const Span& sp) {
         if constexpr (V == Variant::Visco)
@@ -206,8 +200,8 @@ void Engine<T, Dev>::edge_stresses(const T* u, ViscoMode visco_mode, double dt) 
     dev_.barrier();
 }
 
-/// Pass 1 of the edge-smoothed strain under T4ANP for span sp: the element gradients, and for
-/// T4ANP's groups their V0 p(J) too (element_gradient_pressure).
+/// Pass 1 of the edge-smoothed strain for span sp: the element gradients, and for T4ANP's groups
+/// their V0 p(J) too (element_gradient_pressure).
 template <class T, class Dev>
 template <class M, Variant V>
 void Engine<T, Dev>::launch_gradient(const Span& sp, const T* u) {
