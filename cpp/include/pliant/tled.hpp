@@ -356,17 +356,27 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
         f[2] += f_elem[o + 2 * kLanes];
     }
     const T w = it.g1 * nd.inv_mass[n];
-    T rp[3];
-    pressure_force(n, nd, pattern_factors, u, P, rp);
+    T r[3];
+    pressure_force(n, nd, pattern_factors, u, P, r);
+    // Every load before the first store: the stores could alias them as far as the compiler knows,
+    // and it would load them again after each.
+    for (int k = 0; k < nd.n_patterns; ++k) {
+        const T s = pattern_factors[k];
+        const T* lp = nd.load_patterns + static_cast<std::size_t>(k) * 3 * P + n;
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) r[d] += s * lp[d * P];
+    }
+    T un[3], inc[3];
     PLIANT_UNROLL
     for (int d = 0; d < 3; ++d) {
-        const index_t i = d * P + n;
-        T r = rp[d];
-        for (int k = 0; k < nd.n_patterns; ++k) r += pattern_factors[k] * nd.load_patterns[k * 3 * P + i];
-        const T inc = it.c * du[i] + w * (r - f[d]);
-        u_out[i] = u[i] + inc;
-        du_out[i] = inc;
-        if (f_node_out) f_node_out[i] = f[d];
+        inc[d] = it.c * du[d * P + n] + w * (r[d] - f[d]);
+        un[d] = u[d * P + n] + inc[d];
+    }
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) {
+        u_out[d * P + n] = un[d];
+        du_out[d * P + n] = inc[d];
+        if (f_node_out) f_node_out[d * P + n] = f[d];
     }
 }
 
