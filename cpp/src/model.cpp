@@ -167,7 +167,7 @@ void Model<T>::build_incidence(std::vector<index_t> count) {
         if (elem_id[s] < 0) continue;
         for (int a = 0; a < 4; ++a) {
             const index_t n = elem_nodes[aosoa(static_cast<index_t>(s / kLanes), s % kLanes, a, 4)];
-            inc_index[fill[n]++] = aosoa(static_cast<index_t>(s / kLanes), s % kLanes, 3 * a, 12);
+            inc_index[fill[n]++] = corner_force(static_cast<index_t>(s / kLanes), s % kLanes, a);
         }
     }
 }

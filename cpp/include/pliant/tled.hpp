@@ -8,7 +8,9 @@
 //   elem_grad   T      K=9   reference shape-function gradients ∇X N_a [1/m] of corners 0..2,
 //                            row a*3 + i; corner 3 is −(∇N_0 + ∇N_1 + ∇N_2)
 //   elem_vol    T      K=1   reference volume V0 [m³]
-//   f_elem      T      K=12  element nodal forces [N], component corner*3 + dim
+//   f_elem      T            element nodal forces [N], 12·kLanes per block: corner by corner, lane by
+//                            lane, x y z side by side (corner_force), so that a node gathers each
+//                            incidence's three components from one place
 // Node fields are SoA over padded node count P: u[d*P + n] is component d of node n [m].
 #pragma once
 
@@ -51,9 +53,19 @@ PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& 
     return H;
 }
 
+/// Offset in f_elem of corner a's force (x; y and z follow at +1 and +2) of element slot (b, l):
+/// block b's 12·kLanes values hold corner 0's 3·kLanes, lane by lane, then corner 1's, and so on.
+/// Kernel 2 reads each incidence's three components with one load (gather_forces; in the AoSoA
+/// order, component-major, they lay kLanes apart: three loads from three cache lines), and kernel
+/// 1's stores stay whole blocks.
+PLIANT_HD index_t corner_force(index_t b, int l, int a) { return (b * 4 + a) * 3 * kLanes + 3 * l; }
+/// Values of T after the last block of f_elem that the allocation adds: gather_forces reads four
+/// values at a corner's offset, one past its three.
+constexpr int kForcePad = 4;
+
 /// Element nodal forces of a first Piola–Kirchhoff stress Pk [Pa]: f_a = V0 · Pk ∇X N_a for
-/// a < 3 and f_3 = −Σ f_a, stored (Add = false) or added (Add = true) into f_out [N] AoSoA K=12,
-/// as its block ob (b; or 0 of a one-block scratch, which the CPU streams to the forces).
+/// a < 3 and f_3 = −Σ f_a, stored (Add = false) or added (Add = true) into f_out [N]
+/// (corner_force), as its block ob (b; or 0 of a one-block scratch, which the CPU streams to the forces).
 template <bool Add, class T>
 PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Mat3<T>& Pk, index_t ob,
                             T* f_out) {
@@ -69,15 +81,15 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
             const T fa = V0 * (Pk.a[3 * i] * g[3 * a] + Pk.a[3 * i + 1] * g[3 * a + 1] +
                                Pk.a[3 * i + 2] * g[3 * a + 2]);
             if constexpr (Add)
-                f_out[aosoa(ob, l, 3 * a + i, 12)] += fa;
+                f_out[corner_force(ob, l, a) + i] += fa;
             else
-                f_out[aosoa(ob, l, 3 * a + i, 12)] = fa;
+                f_out[corner_force(ob, l, a) + i] = fa;
             f3 -= fa;
         }
         if constexpr (Add)
-            f_out[aosoa(ob, l, 9 + i, 12)] += f3;
+            f_out[corner_force(ob, l, 3) + i] += f3;
         else
-            f_out[aosoa(ob, l, 9 + i, 12)] = f3;
+            f_out[corner_force(ob, l, 3) + i] = f3;
     }
 }
 
@@ -184,8 +196,8 @@ PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t*
                            const T* node_volume) {
     T sum = T(0);
     for (index_t k = inc_offsets[n]; k < inc_offsets[n + 1]; ++k) {
-        const index_t o = inc_index[k];  // (b·12 + 3a)·kLanes + l
-        sum += ep[(o / (12 * kLanes)) * kLanes + o % kLanes];
+        const index_t o = inc_index[k];  // corner_force(b, l, a) = (4b + a)·3 kLanes + 3l
+        sum += ep[(o / (12 * kLanes)) * kLanes + (o % (3 * kLanes)) / 3];
     }
     return sum / node_volume[n];
 }
@@ -275,8 +287,8 @@ PLIANT_HD double curve_value(const LoadCurve& c, double t, const double* table_t
 }
 
 /// Node data for kernel 2: the node → (element, corner) incidence in CSR form. inc_offsets has
-/// N + 1 entries; inc_index holds, per incidence, the AoSoA offset of its x force component in f_elem
-/// (y and z follow at +kLanes and +2 kLanes). Loads: load_patterns[k][d*P + n] [N] scaled by the
+/// N + 1 entries; inc_index holds, per incidence, the offset of its x force component in f_elem
+/// (corner_force; y and z follow at +1 and +2). Loads: load_patterns[k][d*P + n] [N] scaled by the
 /// value of curve k.
 template <class T>
 struct NodeData {
@@ -333,6 +345,35 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
     }
 }
 
+/// Node n's internal force f [N] (3): the sum of its incidences' element forces (corner_force), in
+/// the order of its list, each component's additions in turn (no atomics: the same bits on every
+/// device and thread count). Host code built by GCC or Clang (not nvcc) reads each incidence's x, y,
+/// z with one load of four values and adds them as one vector, the fourth value (the next slot's x,
+/// or past the last slot one of f_elem's kForcePad values) to a lane that is dropped: one load and
+/// one add an incidence where three each had cost kernel 2 a fifth of its time (docs/engine.md).
+template <class T>
+PLIANT_HD void gather_forces(index_t n, const NodeData<T>& nd, const T* f_elem, T f[3]) {
+    const index_t begin = nd.inc_offsets[n], end = nd.inc_offsets[n + 1];
+#if defined(__GNUC__) && !defined(__CUDACC__)
+    typedef T V4 __attribute__((vector_size(4 * sizeof(T))));
+    V4 sum = {T(0), T(0), T(0), T(0)};
+    for (index_t k = begin; k < end; ++k) {
+        V4 x;
+        __builtin_memcpy(&x, f_elem + nd.inc_index[k], sizeof x);
+        sum += x;
+    }
+    f[0] = sum[0], f[1] = sum[1], f[2] = sum[2];
+#else
+    f[0] = f[1] = f[2] = T(0);
+    for (index_t k = begin; k < end; ++k) {
+        const index_t o = nd.inc_index[k];
+        f[0] += f_elem[o];
+        f[1] += f_elem[o + 1];
+        f[2] += f_elem[o + 2];
+    }
+#endif
+}
+
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
 /// bitwise reproducible), then u⁺ = u + du⁺, du⁺ = (γ2 − 1) du + γ1 M⁻¹(r − f) (central differences:
 /// u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻ with du = u − u⁻), r = load patterns + follower pressure and
@@ -347,14 +388,8 @@ template <class T>
 PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, const T* pattern_factors,
                            const Integrator<T>& it, const T* u, const T* du, index_t P, T* u_out, T* du_out,
                            T* f_node_out) {
-    T f[3] = {T(0), T(0), T(0)};
-    const index_t end = nd.inc_offsets[n + 1];
-    for (index_t k = nd.inc_offsets[n]; k < end; ++k) {
-        const index_t o = nd.inc_index[k];
-        f[0] += f_elem[o];
-        f[1] += f_elem[o + kLanes];
-        f[2] += f_elem[o + 2 * kLanes];
-    }
+    T f[3];
+    gather_forces(n, nd, f_elem, f);
     const T w = it.g1 * nd.inv_mass[n];
     T r[3];
     pressure_force(n, nd, pattern_factors, u, P, r);
@@ -380,18 +415,17 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
     }
 }
 
-/// Prefetches the element-force lines node n's gather reads (node_update; three lines per incidence,
-/// one per component). Kernel 2 of a model that outgrows the caches waits on these irregular loads;
-/// issued kPrefetchAhead nodes ahead they arrive in time (the 1M-tet benchmark: kernel 2 from 62 %
-/// of the step to 44–46 %, docs/engine.md). No effect on any result.
+/// Prefetches the element-force lines node n's gather reads (gather_forces; one line per incidence,
+/// two where the four values it loads straddle a line). Kernel 2 of a model that outgrows the caches waits on
+/// these irregular loads; issued kPrefetchAhead nodes ahead they arrive in time (the 1M-tet benchmark: kernel
+/// 2 from 62 % of the step to 44–46 %, docs/engine.md). No effect on any result.
 constexpr int kPrefetchAhead = 16;
 template <class T>
 PLIANT_HD void prefetch_incidences(index_t n, const NodeData<T>& nd, const T* f_elem) {
     for (index_t k = nd.inc_offsets[n]; k < nd.inc_offsets[n + 1]; ++k) {
         const index_t o = nd.inc_index[k];
         prefetch(f_elem + o);
-        prefetch(f_elem + o + kLanes);
-        prefetch(f_elem + o + 2 * kLanes);
+        prefetch(f_elem + o + 3);
     }
 }
 

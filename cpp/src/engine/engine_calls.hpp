@@ -15,7 +15,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     for (auto& d : du_) d = DeviceBuffer<T, Dev>(dev_, P3);
     for (auto& f : f_node_) f = DeviceBuffer<T, Dev>(dev_, P3);
     q_ = DeviceBuffer<T, Dev>(dev_, m.visco_slots() * 6 * static_cast<std::size_t>(m.visco_terms));
-    f_elem_ = DeviceBuffer<T, Dev>(dev_, 12 * S);
+    f_elem_ = DeviceBuffer<T, Dev>(dev_, 12 * S + kForcePad);
     J_ = DeviceBuffer<T, Dev>(dev_, S);
     elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);
     node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
