@@ -59,13 +59,15 @@ PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& 
 /// order, component-major, they lay kLanes apart: three loads from three cache lines), and kernel
 /// 1's stores stay whole blocks.
 PLIANT_HD index_t corner_force(index_t b, int l, int a) { return (b * 4 + a) * 3 * kLanes + 3 * l; }
+/// The element slot b·kLanes + l of a corner_force offset.
+PLIANT_HD index_t corner_force_slot(index_t o) { return o / (12 * kLanes) * kLanes + o % (3 * kLanes) / 3; }
 /// Values of T after the last block of f_elem that the allocation adds: gather_forces reads four
 /// values at a corner's offset, one past its three.
 constexpr int kForcePad = 4;
 
 /// Element nodal forces of a first Piola–Kirchhoff stress Pk [Pa]: f_a = V0 · Pk ∇X N_a for
-/// a < 3 and f_3 = −Σ f_a, stored (Add = false) or added (Add = true) into f_out [N]
-/// (corner_force), as its block ob (b; or 0 of a one-block scratch, which the CPU streams to the forces).
+/// a < 3 and f_3 = −Σ f_a, stored (Add = false) or added (Add = true) into f_out [N] (corner_force),
+/// as its block ob (b; or 0 of a one-block scratch, which the CPU streams to the forces).
 template <bool Add, class T>
 PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Mat3<T>& Pk, index_t ob,
                             T* f_out) {
@@ -190,14 +192,13 @@ PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const Ele
 }
 
 /// (2) Node n's averaged pressure p̄ [Pa] from the element values V0 p (slot layout), gathered
-/// through the node's incidence list (offsets into the 12-wide force layout), over Σ V0 [m³].
+/// through the node's incidence list (corner_force offsets: corner_force_slot), over Σ V0 [m³].
 template <class T>
 PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_index, const T* ep,
                            const T* node_volume) {
     T sum = T(0);
     for (index_t k = inc_offsets[n]; k < inc_offsets[n + 1]; ++k) {
-        const index_t o = inc_index[k];  // corner_force(b, l, a) = (4b + a)·3 kLanes + 3l
-        sum += ep[(o / (12 * kLanes)) * kLanes + (o % (3 * kLanes)) / 3];
+        sum += ep[corner_force_slot(inc_index[k])];
     }
     return sum / node_volume[n];
 }
@@ -416,9 +417,9 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
 }
 
 /// Prefetches the element-force lines node n's gather reads (gather_forces; one line per incidence,
-/// two where the four values it loads straddle a line). Kernel 2 of a model that outgrows the caches waits on
-/// these irregular loads; issued kPrefetchAhead nodes ahead they arrive in time (the 1M-tet benchmark: kernel
-/// 2 from 62 % of the step to 44–46 %, docs/engine.md). No effect on any result.
+/// two where the four values it loads straddle a line). Kernel 2 of a model that outgrows the caches
+/// waits on these irregular loads; issued kPrefetchAhead nodes ahead they arrive in time (the 1M-tet
+/// benchmark: kernel 2 from 62 % of the step to 44–46 %, docs/engine.md). No effect on any result.
 constexpr int kPrefetchAhead = 16;
 template <class T>
 PLIANT_HD void prefetch_incidences(index_t n, const NodeData<T>& nd, const T* f_elem) {
