@@ -72,13 +72,13 @@ PLIANT_HD void element_gradient_pressure(index_t b, int l, const Material& mat, 
 
 /// Pass 2a: edge k's smoothed gradient H̄_k = Σ w_ek H_e [1] into Hbar_out (AoSoA K=9 over edge
 /// blocks) (Nguyen-Thoi et al. 2009, CMAME 198:3479, eq. 20). Inputs: edge data, element
-/// gradients (9 per slot). Host code built by GCC or Clang (not nvcc) adds each element's first
+/// gradients (9 per slot). Where PLIANT_HOST_VECTORS (config.hpp), it adds each element's first
 /// eight values as one vector (one load, one multiply-add) and the ninth alone: each value's
 /// additions are the same, in the same order (gather_forces, tled.hpp, does the same).
 template <class T>
 PLIANT_HD void edge_gradient(index_t k, const EdgeData<T>& ed, const T* H_elem, T* Hbar_out) {
     T H[9] = {T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0)};
-#if defined(__GNUC__) && !defined(__CUDACC__)
+#if PLIANT_HOST_VECTORS
     typedef T V8 __attribute__((vector_size(8 * sizeof(T))));
     V8 H8 = {T(0), T(0), T(0), T(0), T(0), T(0), T(0), T(0)};
     for (index_t i = ed.off[k]; i < ed.off[k + 1]; ++i) {

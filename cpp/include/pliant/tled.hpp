@@ -348,14 +348,14 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
 
 /// Node n's internal force f [N] (3): the sum of its incidences' element forces (corner_force), in
 /// the order of its list, each component's additions in turn (no atomics: the same bits on every
-/// device and thread count). Host code built by GCC or Clang (not nvcc) reads each incidence's x, y,
+/// device and thread count). Where PLIANT_HOST_VECTORS (config.hpp), it reads each incidence's x, y,
 /// z with one load of four values and adds them as one vector, the fourth value (the next slot's x,
 /// or past the last slot one of f_elem's kForcePad values) to a lane that is dropped: one load and
 /// one add an incidence where three each had cost kernel 2 a fifth of its time (docs/engine.md).
 template <class T>
 PLIANT_HD void gather_forces(index_t n, const NodeData<T>& nd, const T* f_elem, T f[3]) {
     const index_t begin = nd.inc_offsets[n], end = nd.inc_offsets[n + 1];
-#if defined(__GNUC__) && !defined(__CUDACC__)
+#if PLIANT_HOST_VECTORS
     typedef T V4 __attribute__((vector_size(4 * sizeof(T))));
     V4 sum = {T(0), T(0), T(0), T(0)};
     for (index_t k = begin; k < end; ++k) {
