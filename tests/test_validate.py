@@ -31,6 +31,10 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
     }
     report = (tmp_path / "report.md").read_text()
     assert f"{len(data['rows'])} of {len(data['rows'])} checks passed" in report
+    # The cases the full run alone has are named as left out, not counted as "0/0 passed".
+    assert data["left_out"] == ["elastica", "hertz", "hertz_soft"]
+    assert "Left out of the quick run (the full run has them): elastica, hertz, hertz_soft." in report
+    assert "elastica: full run only (not in --quick)" in r.output and "0/0" not in r.output
     for png in ("uniaxial.png", "cantilever.png"):
         assert (tmp_path / png).stat().st_size > 5000 and f"]({png})" in report
     peers = {p["peer"].split()[0]: p for p in data["peers"]}
