@@ -170,6 +170,12 @@ void Model<T>::build_incidence(std::vector<index_t> count) {
             inc_index[fill[n]++] = corner_force(static_cast<index_t>(s / kLanes), s % kLanes, a);
         }
     }
+    // T4ANP's nodal average (nodal_pressure) reads element values, one per slot: their slots,
+    // where the arithmetic of corner_force_slot cost as much as the sum
+    if (anp) {
+        inc_slot.resize(inc_index.size());
+        for (std::size_t k = 0; k < inc_index.size(); ++k) inc_slot[k] = corner_force_slot(inc_index[k]);
+    }
 }
 
 /// Edge smoothing domains (smoothing.hpp): every (group, edge) with its elements, weights
@@ -475,11 +481,11 @@ template <class T>
 std::size_t Model<T>::bytes() const {
     auto b = [](const auto& v) { return v.size() * sizeof(v[0]); };
     return b(elem_nodes) + b(elem_grad) + b(elem_vol) + b(elem_id) + b(block_group) + b(inc_offsets) +
-           b(inc_index) + b(mass) + b(inv_mass) + b(relax_mass) + b(relax_inv_mass) + b(node_volume) +
-           b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) + b(press_slot) +
-           b(press_edges) + b(press_value) + b(press_traction) + b(load_patterns) + b(cons_dof) +
-           b(cons_value) + b(cons_curve) + b(cons_offsets) + b(edge_off) + b(edge_slot) + b(edge_group) +
-           b(elem_edges) + b(edge_w);
+           b(inc_index) + b(inc_slot) + b(mass) + b(inv_mass) + b(relax_mass) + b(relax_inv_mass) +
+           b(node_volume) + b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) +
+           b(press_slot) + b(press_edges) + b(press_value) + b(press_traction) + b(load_patterns) +
+           b(cons_dof) + b(cons_value) + b(cons_curve) + b(cons_offsets) + b(edge_off) + b(edge_slot) +
+           b(edge_group) + b(elem_edges) + b(edge_w);
 }
 
 template struct Model<float>;

@@ -192,14 +192,13 @@ PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const Ele
 }
 
 /// (2) Node n's averaged pressure p̄ [Pa] from the element values V0 p (slot layout), gathered
-/// through the node's incidence list (corner_force offsets: corner_force_slot), over Σ V0 [m³].
+/// through the node's incidences' element slots (inc_slot: corner_force_slot of each incidence,
+/// in the incidence order), over Σ V0 [m³].
 template <class T>
-PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_index, const T* ep,
+PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_slot, const T* ep,
                            const T* node_volume) {
     T sum = T(0);
-    for (index_t k = inc_offsets[n]; k < inc_offsets[n + 1]; ++k) {
-        sum += ep[corner_force_slot(inc_index[k])];
-    }
+    for (index_t k = inc_offsets[n]; k < inc_offsets[n + 1]; ++k) sum += ep[inc_slot[k]];
     return sum / node_volume[n];
 }
 

@@ -69,9 +69,9 @@ private:
 /// The model's arrays that the kernels read, on the device.
 template <class T, class Dev>
 struct ModelBuffers {
-    DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, pcurve, co, cdof, ccurve,
-        cnodes, cbits, pf_off, pf_idx, pnodes, pslot, snodes, sbits, slabel, stris, spair, svtri_off, svtri,
-        sedges, stri_edge, edge_off, edge_slot, edge_group, elem_edges;
+    DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, inc_slot, pcurve, co, cdof,
+        ccurve, cnodes, cbits, pf_off, pf_idx, pnodes, pslot, snodes, sbits, slabel, stris, spair, svtri_off,
+        svtri, sedges, stri_edge, edge_off, edge_slot, edge_group, elem_edges;
     DeviceBuffer<T, Dev> edge_w, elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
         patterns, cval, pedges, pvalue, ptraction, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
@@ -84,7 +84,8 @@ struct ModelBuffers {
         auto D = [&](const std::vector<double>& v) { return DeviceBuffer<double, Dev>::mirror(d, v); };
         elem_nodes = I(m.elem_nodes), elem_id = I(m.elem_id), inc_off = I(m.inc_offsets);
         block_group = I(m.block_group);
-        inc_idx = I(m.inc_index), pcurve = I(m.pattern_curve), co = I(m.cons_offsets);
+        inc_idx = I(m.inc_index), inc_slot = I(m.inc_slot), pcurve = I(m.pattern_curve),
+        co = I(m.cons_offsets);
         cdof = I(m.cons_dof), ccurve = I(m.cons_curve), cnodes = I(m.contact_nodes);
         cbits = I(m.contact_bits), pf_off = I(m.pface_offsets), pf_idx = I(m.pface_index);
         pnodes = I(m.press_nodes), pslot = I(m.press_slot);

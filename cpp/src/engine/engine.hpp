@@ -81,6 +81,7 @@ struct DeviceView {
     const Prony<T>* prony;           // per group
     NodeData<T> nodes, relax_nodes;  // physical / dynamic-relaxation inverse masses
     const T *mass, *relax_mass, *free_mask, *node_volume, *cval;
+    const index_t* inc_slot;  // T4ANP: each incidence's element slot (Model::inc_slot)
     const index_t *co, *cdof, *ccurve, *pattern_curve, *cnodes, *cbits;
     const LoadCurve* curves;
     const double *tt, *tv, *X, *grid;

@@ -157,7 +157,7 @@ void Engine<T, Dev>::refresh_view() {
     v.relax_nodes = v.nodes;
     v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
     v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();
-    v.node_volume = mb_.node_vol.data(), v.cval = mb_.cval.data();
+    v.node_volume = mb_.node_vol.data(), v.cval = mb_.cval.data(), v.inc_slot = mb_.inc_slot.data();
     v.co = mb_.co.data(), v.cdof = mb_.cdof.data(), v.ccurve = mb_.ccurve.data();
     v.pattern_curve = mb_.pcurve.data(), v.cnodes = mb_.cnodes.data(), v.cbits = mb_.cbits.data();
     v.curves = mb_.curves.data(), v.tt = mb_.tt.data(), v.tv = mb_.tv.data(), v.X = mb_.X.data();

@@ -175,7 +175,7 @@ template <class T, class Dev>
 void Engine<T, Dev>::nodal_pressures() {
     const DeviceView<T> v = v_;
     dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
-        v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.nodes.inc_index, v.elem_p, v.node_volume);
+        v.node_p[n] = nodal_pressure(n, v.nodes.inc_offsets, v.inc_slot, v.elem_p, v.node_volume);
     });
 }
 
