@@ -281,6 +281,17 @@ def test_a_sweep_file_given_to_run_says_to_use_sweep(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_mesh_given_to_run_says_what_reads_it(tmp_path):
+    mesh = ROOT / "tests" / "data" / "niftysim_sphere.vtk"
+    refused(
+        cli("run", mesh, "-o", tmp_path / "o"),
+        "a mesh (.vtk), not a scene",
+        "[mesh] file",
+        "pliant mesh check",
+    )
+    assert not (tmp_path / "o").exists()
+
+
 def test_results_folder_that_cannot_be_made(tmp_path):
     (tmp_path / "file").write_text("x")
     refused(cli("run", scene(tmp_path), "-o", tmp_path / "file" / "o"), "file", "o")

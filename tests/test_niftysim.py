@@ -495,6 +495,24 @@ def test_contact_surface_inline_and_vtk(tmp_path):
         load_niftysim(p)
 
 
+def test_contact_surface_from_niftysims_own_vtk_polydata(tmp_path):
+    """NiftySim's contact models name surfaces written by VTK (legacy POLYDATA, which meshio does
+    not read): its box_surface.vtk, the unit cube about the origin, becomes a mesh tool whose
+    signed distance is the cube's (inside −0.5 at the centre, 0 on a face, +0.25 a quarter outside;
+    within the distance grid's interpolation, 1.5e-3 as above)."""
+    import shutil
+
+    shutil.copy(Path(__file__).parent / "data" / "niftysim_box_surface.vtk", tmp_path / "box_surface.vtk")
+    *_, text = _cube_xml(
+        extra_constraint='<ContactSurface><VTKSurface Type="T3">box_surface.vtk</VTKSurface></ContactSurface>'
+    )
+    p = tmp_path / "m.xml"
+    p.write_text(text)
+    (tool,) = load_niftysim(p).builder.tools
+    pts = np.array([[0.0, 0.0, 0.0], [0.5, 0.1, -0.2], [0.0, 0.0, 0.75], [-0.2, -0.75, 0.1]])
+    np.testing.assert_allclose(tool.signed_distance(pts), [-0.5, 0.0, 0.25, 0.25], atol=1.5e-3)
+
+
 def test_viscoelastic_nhv_and_tiv(tmp_path):
     """NHV / TIV: the NH / TI elastic parameters and <ViscoParams> (α, τ pairs, isochoric terms
     first; user guide §3.4.4) → pliant.Viscoelastic; a wrong count is a named error."""

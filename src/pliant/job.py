@@ -50,9 +50,20 @@ def load_job(path, ignore=None, overrides: dict | None = None) -> Scene:
         from .io.niftysim import load_niftysim
 
         return load_niftysim(path, tuple(ignore or ()), overrides)
-    from .scene import load_scene
+    from .scene import SceneError, load_scene
 
+    if path.suffix.lower() in MESH_SUFFIXES:
+        raise SceneError(
+            f"a mesh ({path.suffix}), not a scene: expected a scene (.toml) whose [mesh] file names it "
+            "(docs/scenes.md) or a NiftySim model (.xml); `pliant mesh check` and `pliant mesh "
+            "quality` read meshes",
+            str(path),
+        )
     return load_scene(path, overrides)
+
+
+# Mesh files that `pliant run` and `pliant view` may be handed by mistake for a scene.
+MESH_SUFFIXES = {".vtk", ".vtu", ".vtp", ".obj", ".stl", ".ply", ".off", ".msh", ".mesh", ".inp", ".xdmf"}
 
 
 def parse_overrides(items) -> dict:

@@ -1,4 +1,5 @@
-"""Reading volume meshes and writing results (ParaView-ready .vtu/.pvd series, JSON), atomically."""
+"""Reading volume meshes and VTK POLYDATA surfaces, and writing results (ParaView-ready .vtu/.pvd
+series, JSON), atomically."""
 
 from .files import (
     atomic_write,
@@ -10,9 +11,12 @@ from .files import (
 )
 from .mesh import read_volume_mesh
 from .results import ResultWriter
+from .vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
 __all__ = [
     "read_volume_mesh",
+    "read_vtk_polydata",
+    "is_vtk_polydata",
     "ResultWriter",
     "atomic_write",
     "atomic_write_text",

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
+from ..io.vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
 
 def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -38,13 +39,16 @@ def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a triangle surface (.obj, .stl, .ply, .off, .vtk, .vtu... any meshio format with
-    triangles). Raises MeshError for a missing, unreadable, empty or out-of-range mesh."""
+    """Read a triangle surface (.obj, .stl, .ply, .off, .vtk POLYDATA or UNSTRUCTURED_GRID, .vtu...
+    any meshio format with triangles). Raises MeshError for a missing, unreadable, empty or
+    out-of-range mesh."""
     path = Path(path)
     if not path.is_file():
         raise MeshError(f"{path}: no such file")
     if path.suffix.lower() == ".obj":
         V, F = _read_obj(path)
+    elif is_vtk_polydata(path):  # legacy VTK surfaces, which meshio does not read
+        V, F = read_vtk_polydata(path)
     else:
         from ..io.files import read_meshio
 

@@ -33,6 +33,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
     """The mesh of a [mesh] table (or of a [[body]] table: ``key`` names it in errors)."""
     from .. import mesh as pm
     from ..io.mesh import read_volume_mesh
+    from ..io.vtk_polydata import is_vtk_polydata
 
     check_keys(
         ctx,
@@ -87,7 +88,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
             raise ctx.error(f"{key}.file", f"no such file: {f}")
         surface_ext = {".obj", ".stl", ".ply", ".off"}
         try:
-            if f.suffix.lower() in surface_ext:
+            if f.suffix.lower() in surface_ext or is_vtk_polydata(f):  # a surface: tetrahedralized
                 V, F = pm.read_surface(f)
                 from ..mesh.pipeline import BODIES
 
