@@ -137,6 +137,15 @@ def test_malformed_files_are_refused_naming_file_and_line(tmp_path, body, says):
     assert r.exit_code == 2 and says in r.output and "Traceback" not in r.output
 
 
+def test_xml_polydata_is_named_as_not_read(tmp_path):
+    p = tmp_path / "s.vtp"
+    p.write_text('<VTKFile type="PolyData"></VTKFile>')
+    with pytest.raises(
+        MeshError, match=r"s.vtp: VTK XML PolyData \(.vtp\) is not read; expected a legacy .vtk"
+    ):
+        pl.mesh.read_surface(p)
+
+
 def test_truncated_binary_file(tmp_path):
     p = tmp_path / "cut.vtk"
     _binary_file(p)

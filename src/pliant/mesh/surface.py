@@ -49,6 +49,11 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
         V, F = _read_obj(path)
     elif is_vtk_polydata(path):  # legacy VTK surfaces, which meshio does not read
         V, F = read_vtk_polydata(path)
+    elif path.suffix.lower() == ".vtp":
+        raise MeshError(
+            f"{path}: VTK XML PolyData (.vtp) is not read; expected a legacy .vtk (VTK's "
+            "vtkPolyDataWriter), .stl, .ply, .obj or .off surface"
+        )
     else:
         from ..io.files import read_meshio
 
