@@ -34,10 +34,13 @@
 // PLIANT_HOST_VECTORS: 1 where GCC's vector extensions (`vector_size`) exist, in host code built by
 // GCC or Clang, not nvcc. The gathers whose values lie side by side (gather_forces, edge_gradient)
 // then load and add several at once; elsewhere they run the same additions one value at a time.
+// Defined as 0 on the command line, host code takes the scalar path too (a check of their bits).
+#if !defined(PLIANT_HOST_VECTORS)
 #if defined(__GNUC__) && !defined(__CUDACC__)
 #define PLIANT_HOST_VECTORS 1
 #else
 #define PLIANT_HOST_VECTORS 0
+#endif
 #endif
 
 namespace pliant {

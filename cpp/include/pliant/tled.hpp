@@ -193,13 +193,18 @@ PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const Ele
 
 /// (2) Node n's averaged pressure p̄ [Pa] from the element values V0 p (slot layout), gathered
 /// through the node's incidences' element slots (inc_slot: corner_force_slot of each incidence,
-/// in the incidence order), over Σ V0 [m³].
+/// in the incidence order), over Σ V0 [m³]; summed in gather_forces' order (four partial sums).
 template <class T>
 PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_slot, const T* ep,
                            const T* node_volume) {
-    T sum = T(0);
-    for (index_t k = inc_offsets[n]; k < inc_offsets[n + 1]; ++k) sum += ep[inc_slot[k]];
-    return sum / node_volume[n];
+    const index_t end = inc_offsets[n + 1];
+    T s0 = T(0), s1 = T(0), s2 = T(0), s3 = T(0);
+    index_t k = inc_offsets[n];
+    for (; k + 4 <= end; k += 4)
+        s0 += ep[inc_slot[k]], s1 += ep[inc_slot[k + 1]], s2 += ep[inc_slot[k + 2]],
+            s3 += ep[inc_slot[k + 3]];
+    for (; k < end; ++k) s0 += ep[inc_slot[k]];
+    return ((s0 + s1) + (s2 + s3)) / node_volume[n];
 }
 
 /// The mean p̄ = ¼ Σ p̄_a [Pa] of slot (b, l)'s corners' nodal pressures (node_p).
@@ -346,31 +351,50 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
 }
 
 /// Node n's internal force f [N] (3): the sum of its incidences' element forces (corner_force), in
-/// the order of its list, each component's additions in turn (no atomics: the same bits on every
-/// device and thread count). Where PLIANT_HOST_VECTORS (config.hpp), it reads each incidence's x, y,
-/// z with one load of four values and adds them as one vector, the fourth value (the next slot's x,
-/// or past the last slot one of f_elem's kForcePad values) to a lane that is dropped: one load and
-/// one add an incidence where three each had cost kernel 2 a fifth of its time (docs/engine.md).
+/// a fixed order (no atomics: the same bits on every device and thread count): four partial sums,
+/// s_j over the incidences begin + 4i + j of the list's whole groups of four, the last 0–3 into s_0,
+/// then (s_0 + s_1) + (s_2 + s_3). Four chains of additions, where one chain made each addition
+/// wait for the one before (kernel 2 took an add's latency an incidence). Where PLIANT_HOST_VECTORS
+/// (config.hpp), it reads each incidence's x, y, z with one load of four values and adds them as one
+/// vector, the fourth value (the next slot's x, or past the last slot one of f_elem's kForcePad
+/// values) to a lane that is dropped: one load and one add an incidence where three each had cost
+/// kernel 2 a fifth of its time (docs/engine.md). Elsewhere the same additions one value at a time.
 template <class T>
 PLIANT_HD void gather_forces(index_t n, const NodeData<T>& nd, const T* f_elem, T f[3]) {
     const index_t begin = nd.inc_offsets[n], end = nd.inc_offsets[n + 1];
+    index_t k = begin;
 #if PLIANT_HOST_VECTORS
     typedef T V4 __attribute__((vector_size(4 * sizeof(T))));
-    V4 sum = {T(0), T(0), T(0), T(0)};
-    for (index_t k = begin; k < end; ++k) {
-        V4 x;
-        __builtin_memcpy(&x, f_elem + nd.inc_index[k], sizeof x);
-        sum += x;
+    V4 s[4] = {}, x[4];  // (no function returning a V4: without AVX that changes an ABI, a warning)
+    for (; k + 4 <= end; k += 4) {
+        PLIANT_UNROLL
+        for (int j = 0; j < 4; ++j) __builtin_memcpy(&x[j], f_elem + nd.inc_index[k + j], sizeof x[j]);
+        PLIANT_UNROLL
+        for (int j = 0; j < 4; ++j) s[j] += x[j];
     }
+    for (; k < end; ++k) {
+        __builtin_memcpy(&x[0], f_elem + nd.inc_index[k], sizeof x[0]);
+        s[0] += x[0];
+    }
+    const V4 sum = (s[0] + s[1]) + (s[2] + s[3]);
     f[0] = sum[0], f[1] = sum[1], f[2] = sum[2];
 #else
-    f[0] = f[1] = f[2] = T(0);
-    for (index_t k = begin; k < end; ++k) {
-        const index_t o = nd.inc_index[k];
-        f[0] += f_elem[o];
-        f[1] += f_elem[o + 1];
-        f[2] += f_elem[o + 2];
+    T s[4][3] = {};
+    for (; k + 4 <= end; k += 4) {
+        PLIANT_UNROLL
+        for (int j = 0; j < 4; ++j) {
+            const index_t o = nd.inc_index[k + j];
+            PLIANT_UNROLL
+            for (int d = 0; d < 3; ++d) s[j][d] += f_elem[o + d];
+        }
     }
+    for (; k < end; ++k) {
+        const index_t o = nd.inc_index[k];
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) s[0][d] += f_elem[o + d];
+    }
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) f[d] = (s[0][d] + s[1][d]) + (s[2][d] + s[3][d]);
 #endif
 }
 
