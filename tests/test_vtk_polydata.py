@@ -146,13 +146,17 @@ def test_xml_polydata_is_named_as_not_read(tmp_path):
         pl.mesh.read_surface(p)
 
 
-def test_truncated_binary_file(tmp_path):
+@pytest.mark.parametrize("keep", [30, 83, 1])
+def test_truncated_binary_file(tmp_path, keep):
+    """The POLYGONS' 21 values (84 bytes) cut after ``keep`` bytes of the section: 83, one byte
+    short, once read past the end (fuzzing found it)."""
     p = tmp_path / "cut.vtk"
     _binary_file(p)
     data = p.read_bytes()
-    p.write_bytes(data[: data.index(b"POLYGONS") + 30])
+    start = data.index(b"\n", data.index(b"POLYGONS")) + 1
+    p.write_bytes(data[: start + keep])
     with pytest.raises(
-        MeshError, match=r"cut.vtk:\d+: POLYGONS: 21 values announced, the file has \d+ bytes left"
+        MeshError, match=rf"cut.vtk:\d+: POLYGONS: 21 values announced, the file has {keep} bytes left"
     ):
         read_vtk_polydata(p)
 

@@ -86,7 +86,8 @@ class _Reader:
             raise self.fail(f"{what}: data type {type_name!r}; expected one of {', '.join(_TYPES)}")
         left = len(self.data) - self.i
         size = np.dtype(dtype).itemsize
-        if count < 0 or count * (size if binary else 2) > left + 1:  # an ASCII value takes 2 bytes at least
+        # a binary value takes its size; an ASCII one a character and a separator (the last none)
+        if count < 0 or (count * size > left if binary else 2 * count > left + 1):
             raise self.fail(f"{what}: {count} values announced, the file has {left} bytes left (truncated?)")
         if binary:
             out = np.frombuffer(self.data, dtype=">" + dtype, count=count, offset=self.i)
