@@ -162,19 +162,17 @@ void Model<T>::build_incidence(std::vector<index_t> count) {
     for (index_t n = 0; n < n_nodes; ++n) count[n + 1] += count[n];
     inc_offsets.assign(count.begin(), count.end());
     inc_index.assign(static_cast<std::size_t>(count[n_nodes]), 0);
+    // T4ANP's nodal average (nodal_pressure) reads element values, one per slot: each incidence's
+    // slot, beside its force offset
+    inc_slot.assign(anp ? inc_index.size() : 0, 0);
     std::vector<index_t> fill(count.begin(), count.end() - 1);
     for (std::size_t s = 0; s < S; ++s) {
         if (elem_id[s] < 0) continue;
         for (int a = 0; a < 4; ++a) {
             const index_t n = elem_nodes[aosoa(static_cast<index_t>(s / kLanes), s % kLanes, a, 4)];
+            if (anp) inc_slot[fill[n]] = static_cast<index_t>(s);
             inc_index[fill[n]++] = corner_force(static_cast<index_t>(s / kLanes), s % kLanes, a);
         }
-    }
-    // T4ANP's nodal average (nodal_pressure) reads element values, one per slot: their slots,
-    // where the arithmetic of corner_force_slot cost as much as the sum
-    if (anp) {
-        inc_slot.resize(inc_index.size());
-        for (std::size_t k = 0; k < inc_index.size(); ++k) inc_slot[k] = corner_force_slot(inc_index[k]);
     }
 }
 

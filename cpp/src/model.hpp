@@ -98,7 +98,7 @@ struct Model {
     bool anp_shear = false;          // T4ANP: γ = μ/K of each group's material instead (anp_shear_gamma)
     int visco_terms = 0;             // max Prony terms of any group: the State's q holds 6 each
     std::vector<T> node_volume;      // Σ V0 of the elements of each node [m³], (P,), T4ANP only
-    std::vector<index_t> inc_slot;   // T4ANP only: each incidence's element slot (corner_force_slot)
+    std::vector<index_t> inc_slot;   // T4ANP only: each incidence's element slot b·kLanes + l
     // Edge-smoothed strain (smoothing.hpp): per edge its elements (CSR, slots ascending) and weights,
     // its group; per slot its six edges (AoSoA K=6); per group its first edge (G + 1 entries).
     StrainSmoothing smoothing = StrainSmoothing::Element;

@@ -59,8 +59,6 @@ PLIANT_HD Mat3<T> displacement_gradient(index_t b, int l, const ElementData<T>& 
 /// order, component-major, they lay kLanes apart: three loads from three cache lines), and kernel
 /// 1's stores stay whole blocks.
 PLIANT_HD index_t corner_force(index_t b, int l, int a) { return (b * 4 + a) * 3 * kLanes + 3 * l; }
-/// The element slot b·kLanes + l of a corner_force offset.
-PLIANT_HD index_t corner_force_slot(index_t o) { return o / (12 * kLanes) * kLanes + o % (3 * kLanes) / 3; }
 /// Values of T after the last block of f_elem that the allocation adds: gather_forces reads four
 /// values at a corner's offset, one past its three.
 constexpr int kForcePad = 4;
@@ -192,8 +190,8 @@ PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const Ele
 }
 
 /// (2) Node n's averaged pressure p̄ [Pa] from the element values V0 p (slot layout), gathered
-/// through the node's incidences' element slots (inc_slot: corner_force_slot of each incidence,
-/// in the incidence order), over Σ V0 [m³]; summed in gather_forces' order (four partial sums).
+/// through the node's incidences' element slots (inc_slot: each incidence's slot b·kLanes + l, in
+/// the incidence order), over Σ V0 [m³]; summed in gather_forces' order (four partial sums).
 template <class T>
 PLIANT_HD T nodal_pressure(index_t n, const index_t* inc_offsets, const index_t* inc_slot, const T* ep,
                            const T* node_volume) {

@@ -95,14 +95,12 @@ class _Reader:
             if self.data[self.i : self.i + 1] == b"\n":  # the writer ends binary data with a newline
                 self.i += 1
             return out.astype(dtype)
-        words: list[bytes] = []
+        words: list[str] = []
         while len(words) < count:
-            if self.i >= len(self.data):
+            text = self.raw_line()
+            if text is None:
                 raise self.fail(f"{what}: {count} values announced, the file ends after {len(words)}")
-            j = self.data.find(b"\n", self.i)
-            j = len(self.data) if j < 0 else j
-            words += self.data[self.i : j].split()
-            self.i, self.line = j + 1, self.line + 1
+            words += text.split()
         if len(words) != count:
             raise self.fail(f"{what}: {len(words)} values on the lines of {count} announced")
         try:
