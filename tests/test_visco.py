@@ -120,6 +120,48 @@ def test_isochoric_relaxation_of_a_held_homogeneous_stretch(backend, terms, smoo
         assert abs(F - (P_iso * (1 - alpha * g) + P_vol)) <= 2e-3 * P_iso, (tt, F, P_iso, P_vol)
 
 
+def _ramp_relaxation(t, tau, t_r):
+    """g(t) of a Prony term τ after a linear ramp of t_r held from then on (t > t_r)."""
+    return 1 - tau / t_r * (math.exp(-(t - t_r) / tau) - math.exp(-t / tau))
+
+
+@pytest.mark.parametrize("smoothing", ["element", "edge"])
+def test_materials_with_as_many_terms_split_differently_relax_by_their_own_series(backend, smoothing):
+    """Two cubes in one model, both with two Prony terms: A's both isochoric, B's one isochoric and
+    one volumetric (a launch runs the isochoric terms, then the volumetric ones, so groups whose
+    counts differ in that split must not share one). Each cube held at a homogeneous stretch (as
+    above): A's face force P_iso (1 − α1 g1 − α2 g2) + P_vol, B's P_iso (1 − α1 g1) + P_vol (1 − β g2)."""
+    (a1, tau1), (a2, tau2), t_r, stretch, L = (0.3, 0.01), (0.2, 0.04), 0.002, 1.001, 0.01
+    nh = pl.NeoHookean(mu=MU, K=K)
+    cubes = (
+        pl.Viscoelastic(nh, iso=[(a1, tau1), (a2, tau2)]),
+        pl.Viscoelastic(nh, iso=[(a1, tau1)], vol=[(a2, tau2)]),
+    )
+    X, T = pl.mesh.box_tets((L, L, L), (2, 2, 2), jitter=0.25, seed=2)
+    b = pl.ModelBuilder()
+    b.strain_smoothing = smoothing
+    u = np.zeros_like(X)
+    u[:, 0] = (stretch - 1) * X[:, 0]
+    for k, material in enumerate(cubes):
+        cube = b.add_mesh(X + (2 * L * k, 0.0, 0.0), T)
+        b.set_material(material, density=1000.0, elements=cube)
+        b.prescribe(k * len(X) + np.arange(len(X)), u, "xyz", curve=pl.Ramp(t_r))
+    sim = pl.Simulation(b.finalize("float64", backend=backend), dt=2e-6)
+    lam = (stretch, 1.0, 1.0)
+    P_iso = nominal(lambda s: W_nh(s, k=0.0), lam, 0) * L * L  # [N] on the face of area L²
+    P_vol = nominal(lambda s: W_nh(s, mu=0.0), lam, 0) * L * L
+    right = np.nonzero(X[:, 0] > L * (1 - 1e-9))[0]
+    for t in (0.005, 0.02, 0.06):
+        sim.run(until=t)
+        f = sim.model.internal_forces(sim.state)[:, 0]
+        g1, g2 = _ramp_relaxation(sim.time, tau1, t_r), _ramp_relaxation(sim.time, tau2, t_r)
+        expected = (P_iso * (1 - a1 * g1 - a2 * g2) + P_vol, P_iso * (1 - a1 * g1) + P_vol * (1 - a2 * g2))
+        for k in (0, 1):
+            F = f[k * len(X) + right].sum()
+            # 0.2 % of the elastic force, as above (the ramp's nonlinearity, backward Euler's Δt/τ).
+            assert abs(F - expected[k]) <= 2e-3 * (P_iso + P_vol), (k, sim.time, F, expected[k])
+
+
 def test_viscoelastic_inputs_are_checked():
     nh = pl.NeoHookean(mu=MU, K=K)
     with pytest.raises(pl.MaterialError, match="decoupled"):

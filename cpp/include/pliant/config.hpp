@@ -137,6 +137,45 @@ struct SlotScratch {
     PLIANT_HD T& operator[](int k) const { return p[k * kStride]; }
 };
 
+/// The middle phases of a phased launch (Dev::blocks_phased): phase c runs the items first[c] ..
+/// first[c] + size[c] − 1 in one pass, 1 ≤ size[c] ≤ kPhaseItemsMax, the count a compile-time
+/// constant K in that pass, so that its loop over the items unrolls inside the SIMD loop over the
+/// slots. A phase functor `mid` has mid.template uniform<K>(b, first), what the slots of block b
+/// share (computed once a block on the CPU, outside its SIMD loop), and
+/// mid.template operator()<K>(uniform, b, l, s), slot l's part.
+inline constexpr int kPhaseItemsMax = 4;
+struct Phases {
+    int n = 0;
+    int first[2] = {0, 0}, size[2] = {0, 0};
+};
+
+/// f.template operator()<K>(args...) with K = k, 1 ≤ k ≤ kPhaseItemsMax (Phases).
+template <class F, class... A>
+PLIANT_HD void call_phase(int k, const F& f, A... args) {
+    switch (k) {
+        case 1:
+            f.template operator()<1>(args...);
+            break;
+        case 2:
+            f.template operator()<2>(args...);
+            break;
+        case 3:
+            f.template operator()<3>(args...);
+            break;
+        default:
+            f.template operator()<4>(args...);
+            break;
+    }
+}
+
+/// One slot's middle phase (call_phase): mid's uniform part for block b, then the slot's.
+struct PhaseSlot {
+    template <int K, class Mid, class S>
+    PLIANT_HD void operator()(const Mid& mid, index_t b, int l, int first, S s) const {
+        mid.template operator()<K>(mid.template uniform<K>(b, first), b, l, s);
+    }
+};
+
 /// The threads of a team launch (each_counted_then_team) on the CPU and the emulated device: one
 /// thread, which runs each loop in order, so that its sums need no atomics. CUDA's team is a block
 /// (BlockTeam, device_cuda.cuh): each loop strided over its threads, sync a __syncthreads, add and

@@ -346,6 +346,15 @@ struct Prony {
     PLIANT_HD int terms() const { return n_iso + n_vol; }  // 0: elastic
     /// Where state slot t's (α, τ) sit: the isochoric terms' slots first, then the volumetric ones.
     PLIANT_HD int term_index(int t) const { return t < n_iso ? t : kPronyMax / 2 + (t - n_iso); }
+    /// The terms as the middle phases of a phased launch (visco_terms): the isochoric ones in one
+    /// pass, the volumetric ones in another (at most kPronyMax / 2 = kPhaseItemsMax each).
+    PLIANT_HD Phases phases() const {
+        static_assert(kPronyMax / 2 <= kPhaseItemsMax);
+        Phases ph;
+        if (n_iso > 0) ph.first[ph.n] = 0, ph.size[ph.n++] = n_iso;
+        if (n_vol > 0) ph.first[ph.n] = n_iso, ph.size[ph.n++] = n_vol;
+        return ph;
+    }
 };
 
 /// How a viscoelastic element treats its Prony state (ViscoMaterial::mode).
@@ -368,33 +377,50 @@ PLIANT_HD SplitStress<T> split_pk2(const M& m, const Kinematics<T>& k) {
     return {m.pk2_iso(k, Ci), scale(k.J * m.pressure(k), Ci)};
 }
 
-/// Prony term t's stress-like state D_t [Pa] of one element (Taylor et al. 2009, MICCAI, eqs. 9-12):
-/// advanced by backward Euler, D ← τ/(Δt + τ) D + Δt α/(Δt + τ) S_e, from the element's elastic
-/// part S_e (se.iso for an isochoric term, se.vol for a volumetric one); or the stored D; or the
-/// fully relaxed D = α S_e (ViscoMode, fixed at compile time by kMode >= 0, else `mode`).
-/// d: the term's 6 state values (xx, yy, zz, xy, yz, xz), stride `stride` apart; dt [s].
-template <int kMode, class T>
-PLIANT_HD Sym3<T> prony_term(const Prony<T>& pr, int t, T dt, const SplitStress<T>& se, T* d, int stride,
-                             ViscoMode mode) {
-    const ViscoMode md = kMode >= 0 ? static_cast<ViscoMode>(kMode) : mode;
-    const int i = pr.term_index(t);
-    const T w = t < pr.n_iso ? T(1) : T(0);  // its stress: isochoric (1) or volumetric (0)
-    const Sym3<T> s = axpby(w, se.iso, T(1) - w, se.vol);
-    const T e[6] = {s.xx, s.yy, s.zz, s.xy, s.yz, s.xz};
+/// One Prony term's coefficients for a step dt [s]: α, and backward Euler's keep = τ/(Δt + τ) and
+/// gain = Δt α/(Δt + τ) (prony_update). i: the term's (α, τ) slot (Prony::term_index).
+template <class T>
+struct PronyStep {
+    T alpha, keep, gain;
+};
+template <class T>
+PLIANT_HD PronyStep<T> prony_step(const Prony<T>& pr, int i, T dt) {
     const T den = dt + pr.tau[i];
-    T D[6];
+    return {pr.alpha[i], pr.tau[i] / den, dt * pr.alpha[i] / den};
+}
+
+/// A Prony term's stress-like state D [Pa] of one element (Taylor et al. 2009, MICCAI, eqs. 9-12):
+/// advanced by backward Euler, D ← τ/(Δt + τ) D + Δt α/(Δt + τ) S_e (k: prony_step), from the
+/// elastic part S_e it relaxes (e: xx, yy, zz, xy, yz, xz); or the stored D; or the fully relaxed
+/// D = α S_e (ViscoMode, fixed at compile time by kMode >= 0, else `mode`). d: the term's 6 state
+/// values, stride `stride` apart. Output: D_out, the term's D.
+template <int kMode, class T>
+PLIANT_HD void prony_update(const PronyStep<T>& k, const T* e, T* d, int stride, ViscoMode mode, T* D_out) {
+    const ViscoMode md = kMode >= 0 ? static_cast<ViscoMode>(kMode) : mode;
     PLIANT_UNROLL
     for (int c = 0; c < 6; ++c) {
         if (md == ViscoMode::Relaxed || md == ViscoMode::RelaxedStore) {
-            D[c] = pr.alpha[i] * e[c];
-            if (md == ViscoMode::RelaxedStore) d[c * stride] = D[c];
+            D_out[c] = k.alpha * e[c];
+            if (md == ViscoMode::RelaxedStore) d[c * stride] = D_out[c];
         } else if (md == ViscoMode::Stored) {
-            D[c] = d[c * stride];
+            D_out[c] = d[c * stride];
         } else {
-            D[c] = pr.tau[i] / den * d[c * stride] + dt * pr.alpha[i] / den * e[c];
-            d[c * stride] = D[c];
+            D_out[c] = k.keep * d[c * stride] + k.gain * e[c];
+            d[c * stride] = D_out[c];
         }
     }
+}
+
+/// Prony term t's D (prony_update) from the element's elastic parts se: se.iso for an isochoric
+/// term, se.vol for a volumetric one. d: the term's 6 state values, stride `stride` apart.
+template <int kMode, class T>
+PLIANT_HD Sym3<T> prony_term(const Prony<T>& pr, int t, T dt, const SplitStress<T>& se, T* d, int stride,
+                             ViscoMode mode) {
+    const T w = t < pr.n_iso ? T(1) : T(0);  // its stress: isochoric (1) or volumetric (0)
+    const Sym3<T> s = axpby(w, se.iso, T(1) - w, se.vol);
+    const T e[6] = {s.xx, s.yy, s.zz, s.xy, s.yz, s.xz};
+    T D[6];
+    prony_update<kMode>(prony_step(pr, pr.term_index(t), dt), e, d, stride, mode, D);
     return {D[0], D[1], D[2], D[3], D[4], D[5]};
 }
 
@@ -424,14 +450,15 @@ struct ViscoMaterial {
     PLIANT_HD T energy(const Kinematics<T>& k) const { return m.energy(k); }
 };
 
-/// ViscoMaterial's P = F S in three phases over one slot's scratch s (s[k]: Dev::blocks_phased,
-/// SlotScratch), so that a loop over the Prony terms can run around a SIMD loop over slots instead
-/// of inside each slot (where its test stops the CPU's vectorizer; any number of terms then runs at
+/// ViscoMaterial's P = F S in phases over one slot's scratch s (s[k]: Dev::blocks_phased,
+/// SlotScratch), so that the loop over the Prony terms runs around a SIMD loop over slots instead of
+/// inside each slot (where its test stops the CPU's vectorizer; any number of terms then runs at
 /// full width, the same arithmetic in the same order as ViscoMaterial). The scratch holds
 /// kViscoScratch values: S [Pa] at 0..5 (xx, yy, zz, xy, yz, xz), S_iso at 6..11, S_vol at
 /// 12..17, F at 18..26.
-/// (1) visco_begin: S = S_iso + S_vol of kinematics k. (2) visco_term, t = 0..terms−1:
-/// S −= D_t (prony_term; q: the slot's state, stride apart). (3) visco_pk1: P = F S.
+/// (1) visco_begin: S = S_iso + S_vol of kinematics k. (2) visco_terms, once for the isochoric terms
+/// and once for the volumetric ones (Prony::phases): S −= D_t for each (prony_update; q: the slot's
+/// state, stride apart). (3) visco_pk1: P = F S.
 inline constexpr int kViscoScratch = 27;
 template <class M, class T, class Scratch>
 PLIANT_HD void visco_begin(const M& m, const Kinematics<T>& k, Scratch s) {
@@ -443,13 +470,38 @@ PLIANT_HD void visco_begin(const M& m, const Kinematics<T>& k, Scratch s) {
     PLIANT_UNROLL
     for (int i = 0; i < 9; ++i) s[18 + i] = k.F.a[i];
 }
-template <int kMode, class T, class Scratch>
-PLIANT_HD void visco_term(const Prony<T>& pr, int t, T dt, T* q, int stride, ViscoMode mode, Scratch s) {
-    const auto at = [&](int o) { return Sym3<T>{s[o], s[o + 1], s[o + 2], s[o + 3], s[o + 4], s[o + 5]}; };
-    const Sym3<T> D =
-        prony_term<kMode>(pr, t, dt, SplitStress<T>{at(6), at(12)}, q + 6 * t * stride, stride, mode);
-    const Sym3<T> S = axpby(T(1), at(0), T(-1), D);
-    s[0] = S.xx, s[1] = S.yy, s[2] = S.zz, s[3] = S.xy, s[4] = S.yz, s[5] = S.xz;
+/// Phase (2) for the K terms t0 .. t0 + K − 1, all isochoric or all volumetric: what the slots of a
+/// block share (prony_chunk: the terms' coefficients, w = 1 for S_iso or 0 for S_vol, t0), then each
+/// slot's terms (visco_terms), S and the stress they relax read once and S written once.
+template <int K, class T>
+struct PronyChunk {
+    PronyStep<T> k[K];
+    T w;
+    int t0;
+};
+template <int K, class T>
+PLIANT_HD PronyChunk<K, T> prony_chunk(const Prony<T>& pr, int t0, T dt) {
+    PronyChunk<K, T> ch;
+    PLIANT_UNROLL
+    for (int j = 0; j < K; ++j) ch.k[j] = prony_step(pr, pr.term_index(t0 + j), dt);
+    ch.w = t0 < pr.n_iso ? T(1) : T(0);
+    ch.t0 = t0;
+    return ch;
+}
+template <int kMode, int K, class T, class Scratch>
+PLIANT_HD void visco_terms(const PronyChunk<K, T>& ch, T* q, int stride, ViscoMode mode, Scratch s) {
+    T e[6], S[6];  // e: the blend of prony_term, S_iso or S_vol
+    PLIANT_UNROLL
+    for (int c = 0; c < 6; ++c) e[c] = ch.w * s[6 + c] + (T(1) - ch.w) * s[12 + c], S[c] = s[c];
+    PLIANT_UNROLL
+    for (int j = 0; j < K; ++j) {
+        T D[6];
+        prony_update<kMode>(ch.k[j], e, q + 6 * (ch.t0 + j) * stride, stride, mode, D);
+        PLIANT_UNROLL
+        for (int c = 0; c < 6; ++c) S[c] = S[c] - D[c];
+    }
+    PLIANT_UNROLL
+    for (int c = 0; c < 6; ++c) s[c] = S[c];
 }
 template <class T, class Scratch>
 PLIANT_HD Mat3<T> visco_pk1(Scratch s) {

@@ -123,7 +123,7 @@ PLIANT_HD void element_forces(index_t b, int l, const Material& mat, const Eleme
 
 /// Kernel 1 of a viscoelastic material as the phases of visco_begin (materials.hpp), over slot
 /// (b, l)'s scratch s: (1) visco_forces_begin: kinematics from u [m] SoA (3, P), J_out (det F,
-/// K=1), visco_begin; (2) visco_term for each Prony term (the caller's); (3) visco_forces_end:
+/// K=1), visco_begin; (2) visco_terms for the Prony terms (the caller's); (3) visco_forces_end:
 /// f_out [N] AoSoA K=12 from P = F S (store_forces).
 template <class T, class Material, class Scratch>
 PLIANT_HD void visco_forces_begin(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,

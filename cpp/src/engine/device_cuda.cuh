@@ -48,7 +48,7 @@ __global__ void blocks_kernel(index_t b0, index_t b1, F f) {
 }
 
 template <class T, int W, class Pre, class Mid, class Post>
-__global__ void blocks_phased_kernel(index_t b0, index_t b1, int n, Pre pre, Mid mid, Post post) {
+__global__ void blocks_phased_kernel(index_t b0, index_t b1, Phases ph, Pre pre, Mid mid, Post post) {
     const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
     const index_t b = b0 + static_cast<index_t>(i / kLanes);
     if (b >= b1) return;
@@ -56,7 +56,7 @@ __global__ void blocks_phased_kernel(index_t b0, index_t b1, int n, Pre pre, Mid
     T sc[W];  // registers: every index into it is a constant once the phases are inlined
     const SlotScratch<T, 1> s{sc};
     pre(b, l, s);
-    for (int t = 0; t < n; ++t) mid(b, l, t, s);
+    for (int c = 0; c < ph.n; ++c) call_phase(ph.size[c], PhaseSlot{}, mid, b, l, ph.first[c], s);
     post(b, l, s);
 }
 
@@ -203,13 +203,14 @@ public:
     /// A phased kernel's slot scratch (SlotScratch): each thread's own row.
     template <class T>
     using Scratch = SlotScratch<T, 1>;
-    /// pre(b, l, s), mid(b, l, t, s) for t in [0, n), post(b, l, s): one thread per slot, in turn.
+    /// pre(b, l, s), the middle phases of ph (Phases), post(b, l, s): one thread per slot, in turn.
     template <class T, int W, class Pre, class Mid, class Post>
-    void blocks_phased(index_t b0, index_t b1, int n, const Pre& pre, const Mid& mid, const Post& post) {
+    void blocks_phased(index_t b0, index_t b1, const Phases& ph, const Pre& pre, const Mid& mid,
+                       const Post& post) {
         if (dry_ || b1 <= b0) return;
         const long m = static_cast<long>(b1 - b0) * kLanes;
         cuda_detail::blocks_phased_kernel<T, W>
-            <<<cuda_detail::grid_for(m), cuda_detail::kThreads, 0, stream_>>>(b0, b1, n, pre, mid, post);
+            <<<cuda_detail::grid_for(m), cuda_detail::kThreads, 0, stream_>>>(b0, b1, ph, pre, mid, post);
         cuda_detail::check(cudaPeekAtLastError(), "launch");
     }
     void barrier() {}  // one stream: launches run in order

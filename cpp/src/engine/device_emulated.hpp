@@ -94,16 +94,19 @@ public:
     /// A phased kernel's slot scratch (SlotScratch): each thread's own row, as on CUDA.
     template <class T>
     using Scratch = SlotScratch<T, 1>;
-    /// As on CUDA: each slot runs pre, mid for t in [0, n), and post in turn on its own scratch.
+    /// As on CUDA: each slot runs pre, the middle phases of ph (Phases) and post in turn on its own
+    /// scratch.
     template <class T, int W, class Pre, class Mid, class Post>
-    void blocks_phased(index_t b0, index_t b1, int n, const Pre& pre, const Mid& mid, const Post& post) {
-        launch_or_record([b0, b1, n, pre, mid, post] {
+    void blocks_phased(index_t b0, index_t b1, const Phases& ph, const Pre& pre, const Mid& mid,
+                       const Post& post) {
+        launch_or_record([b0, b1, ph, pre, mid, post] {
             for (index_t b = b0; b < b1; ++b)
                 for (int l = 0; l < kLanes; ++l) {
                     T sc[W];
                     const Scratch<T> s{sc};
                     pre(b, l, s);
-                    for (int t = 0; t < n; ++t) mid(b, l, t, s);
+                    for (int c = 0; c < ph.n; ++c)
+                        call_phase(ph.size[c], PhaseSlot{}, mid, b, l, ph.first[c], s);
                     post(b, l, s);
                 }
         });

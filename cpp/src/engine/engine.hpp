@@ -119,7 +119,8 @@ struct DeviceView {
 /// Which element function a material group runs (dispatch happens once, in Engine::dispatch).
 enum class Variant { Plain, Visco, Anp };
 
-/// Consecutive blocks whose groups share a material kind and variant: one launch. The kernels
+/// Consecutive blocks whose groups share a material kind and variant (and Prony term counts,
+/// isochoric and volumetric: the phases of a viscoelastic launch): one launch. The kernels
 /// read each block's material parameters from the device, so groups that differ only in their
 /// values (the copies of a batch, a model's element sets of one kind) cost a single launch.
 struct Span {

@@ -52,13 +52,14 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     gtool_.upload(none.data(), nc);
     const std::size_t ng = groups_.size();
     std::vector<Prony<T>> prony(ng);
-    for (std::size_t g = 0; g < ng; ++g) {  // spans: runs of groups of one kind and Prony term count
+    for (std::size_t g = 0; g < ng; ++g) {  // spans: runs of groups of one kind and Prony term counts
         const Group<T>& a = groups_[g];
         prony[g] = a.visco;
         const Group<T>* last = spans_.empty() ? nullptr : &groups_[spans_.back().group];
         const index_t e0 = smoothed ? m.group_edge_begin[g] : 0,
                       e1 = smoothed ? m.group_edge_begin[g + 1] : 0;
-        if (last && a.material.kind == last->material.kind && a.visco.terms() == last->visco.terms()) {
+        if (last && a.material.kind == last->material.kind && a.visco.n_iso == last->visco.n_iso &&
+            a.visco.n_vol == last->visco.n_vol) {
             spans_.back().block_end = a.block_end;
             spans_.back().edge_end = e1;
         } else {

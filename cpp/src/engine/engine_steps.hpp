@@ -91,25 +91,43 @@ void Engine<T, Dev>::with_visco_mode(ViscoMode visco_mode, F&& f) {
     f.template operator()<-1>();
 }
 
-/// Viscoelastic element forces (visco_forces_begin, tled.hpp): the element, each of the span's
-/// Prony terms and the forces as three phases of one launch (Dev::blocks_phased), so that on the
-/// CPU every term count vectorizes; kMode >= 0: the ViscoMode fixed at compile time.
+/// The middle phases of a viscoelastic launch (Dev::blocks_phased, Phases): the Prony terms t0 ..
+/// t0 + K − 1 (visco_terms) of the series of block b's group, group[b · group_stride] (per element
+/// block, or per edge block: stride kLanes), and slot (b, l)'s state in q (AoSoA, visco_w values a
+/// slot). A named class rather than a lambda: its phase's term count K is a template parameter.
+template <class T, class S, int kMode>
+struct ViscoTermsPhase {
+    const Prony<T>* prony;
+    const index_t* group;
+    index_t group_stride;
+    T* q;
+    int visco_w;
+    T dt;
+    ViscoMode mode;
+    template <int K>
+    PLIANT_HD PronyChunk<K, T> uniform(index_t b, int t0) const {
+        return prony_chunk<K>(prony[group[b * group_stride]], t0, dt);
+    }
+    template <int K>
+    PLIANT_HD void operator()(const PronyChunk<K, T>& ch, index_t b, int l, S s) const {
+        visco_terms<kMode, K>(ch, q + aosoa(b, l, 0, visco_w), kLanes, mode, s);
+    }
+};
+
+/// Viscoelastic element forces (visco_forces_begin, tled.hpp): the element, the span's Prony terms
+/// (isochoric, then volumetric) and the forces as phases of one launch (Dev::blocks_phased), so that
+/// on the CPU every term count vectorizes; kMode >= 0: the ViscoMode fixed at compile time.
 template <class T, class Dev>
 template <class M, int kMode>
 void Engine<T, Dev>::launch_visco_forces(const Span& sp, const T* u, ViscoMode visco_mode, double dt) {
     using S = typename Dev::template Scratch<T>;
     const DeviceView<T> v = v_;
-    const T tdt = T(dt);
-    const int terms = groups_[sp.group].visco.terms();  // the same for every group of the span
     dev_.template blocks_phased<T, kViscoScratch>(
-        sp.block_begin, sp.block_end, terms,
+        sp.block_begin, sp.block_end, groups_[sp.group].visco.phases(),  // the same for the span's groups
         [=] PLIANT_KERNEL(index_t b, int l, S s) {
             visco_forces_begin(b, l, make_material<M>(v.mats[v.block_group[b]]), v.el, u, v.P, v.J, s);
         },
-        [=] PLIANT_KERNEL(index_t b, int l, int t, S s) {
-            visco_term<kMode>(v.prony[v.block_group[b]], t, tdt, v.q + aosoa(b, l, 0, v.visco_w), kLanes,
-                              visco_mode, s);
-        },
+        ViscoTermsPhase<T, S, kMode>{v.prony, v.block_group, 1, v.q, v.visco_w, T(dt), visco_mode},
         [=] PLIANT_KERNEL(index_t b, int l, S s) { visco_forces_end(b, l, v.el, v.f_elem, s); });
 }
 
@@ -238,18 +256,13 @@ template <class M, int kMode>
 void Engine<T, Dev>::launch_visco_edge_stress(const Span& sp, ViscoMode visco_mode, double dt) {
     using S = typename Dev::template Scratch<T>;
     const DeviceView<T> v = v_;
-    const T tdt = T(dt);
-    const int terms = groups_[sp.group].visco.terms();
     dev_.template blocks_phased<T, kViscoScratch>(
-        sp.edge_begin / kLanes, sp.edge_end / kLanes, terms,
+        sp.edge_begin / kLanes, sp.edge_end / kLanes, groups_[sp.group].visco.phases(),
         [=] PLIANT_KERNEL(index_t b, int l, S s) {
             visco_begin(make_material<M>(v.mats[v.edge_group[b * kLanes]]),
                         kinematics(edge_gradient_at(b, l, v.Hbar)), s);
         },
-        [=] PLIANT_KERNEL(index_t b, int l, int t, S s) {
-            visco_term<kMode>(v.prony[v.edge_group[b * kLanes]], t, tdt, v.q + aosoa(b, l, 0, v.visco_w),
-                              kLanes, visco_mode, s);
-        },
+        ViscoTermsPhase<T, S, kMode>{v.prony, v.edge_group, kLanes, v.q, v.visco_w, T(dt), visco_mode},
         [=] PLIANT_KERNEL(index_t b, int l, S s) { store_edge_stress(b, l, visco_pk1<T>(s), v.P_edge); });
 }
 
