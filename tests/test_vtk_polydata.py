@@ -1,6 +1,7 @@
-"""Legacy VTK POLYDATA surfaces (pliant.io.vtk_polydata): NiftySim's own files, binary and version
-5.1 files written here byte by byte from the format's description (The VTK User's Guide, §19.3;
-VTK 9's vtkDataWriter for OFFSETS / CONNECTIVITY), and malformed files refused by name."""
+"""Legacy VTK POLYDATA surfaces (pliant.io.vtk_polydata): NiftySim's own files, files VTK 9.3.1
+wrote, binary and version 5.1 files written here byte by byte from the format's description (The
+VTK User's Guide, §19.3; VTK 9's vtkDataWriter for OFFSETS / CONNECTIVITY), and malformed files
+refused by name."""
 
 import math
 import struct
@@ -42,6 +43,60 @@ def test_niftysims_box_surface():
     report = pl.mesh.check_surface(V, F)
     assert report.watertight and report.outward
     assert report.volume == pytest.approx(1.0, rel=1e-6)  # float32 coordinates of ±0.5: exact
+
+
+# Written by VTK 9.3.1's vtkPolyDataWriter (tests/data/README.md): a vtkSphereSource (radius 2 cm,
+# 16 × 12) as triangles in a binary version 4.2 file, and through vtkStripper as triangle strips
+# in a binary version 5.1 file (OFFSETS / CONNECTIVITY of vtktypeint64); a vtkCubeSource of 3 × 2 ×
+# 1 cm as six quads in an ASCII version 4.2 file with normals and texture coordinates. Volume and
+# area from VTK's vtkMassProperties over its vtkTriangleFilter's triangles of the same data.
+VTK_SPHERE = (162, 320, 3.1994260657508096e-05, 0.004911717311496176)
+VTK_BOX = (24, 12, 5.999999597668654e-06, 0.002199999901652337)
+
+
+def _volume_area(V, F):
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    return np.einsum("ij,ij->", a, np.cross(b, c)) / 6, 0.5 * np.linalg.norm(
+        np.cross(b - a, c - a), axis=1
+    ).sum()
+
+
+def _oriented(F):
+    """Each triangle as its vertex cycle started at its smallest index: orientation kept."""
+    return {tuple(np.roll(f, -int(np.argmin(f)))) for f in F.tolist()}
+
+
+@pytest.mark.parametrize(
+    "name, counts",
+    [
+        ("vtk93_sphere_bin42.vtk", VTK_SPHERE),
+        ("vtk93_sphere_strips_bin51.vtk", VTK_SPHERE),
+        ("vtk93_box_quads_ascii42.vtk", VTK_BOX),
+    ],
+)
+def test_files_vtk_wrote(name, counts):
+    """Files VTK itself wrote read as VTK reads them: its point and triangle counts, and its
+    volume and area (positive volume: outward, the strips' alternate triangles turned back). 1e-9
+    relative: the binary files' float32 coordinates are what VTK summed in another order; the
+    ASCII file's text holds the box's corners exactly (±0.015, ±0.01, ±0.005), VTK's float32 not."""
+    n_points, n_triangles, volume, area = counts
+    V, F = pl.mesh.read_surface(DATA / name)
+    assert V.shape == (n_points, 3) and F.shape == (n_triangles, 3)
+    vol, ar = _volume_area(V, F)
+    rel = 1e-9 if "bin" in name else 1e-7
+    assert vol == pytest.approx(volume, rel=rel) and ar == pytest.approx(area, rel=rel)
+    if "box" in name:  # VTK writes each face with its own 4 corners (for its normals): 6 bodies
+        assert pl.mesh.check_surface(V, F).bodies == 6
+        V, F = pl.mesh.repair_surface(V, F)[:2]  # welded: the closed box
+    report = pl.mesh.check_surface(V, F)
+    assert report.watertight and report.outward and not report.problems
+
+
+def test_vtks_strips_are_its_triangles():
+    """vtkStripper's strips of the sphere are the sphere's own triangles, each in its orientation."""
+    _, F = read_vtk_polydata(DATA / "vtk93_sphere_bin42.vtk")
+    _, S = read_vtk_polydata(DATA / "vtk93_sphere_strips_bin51.vtk")
+    assert _oriented(S) == _oriented(F)
 
 
 # A unit right tetrahedron's four outward faces, a square (as one quad polygon) and a strip.
