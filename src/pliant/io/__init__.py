@@ -1,5 +1,5 @@
-"""Reading volume meshes and VTK POLYDATA surfaces, and writing results (ParaView-ready .vtu/.pvd
-series, JSON), atomically."""
+"""Reading volume meshes (legacy VTK grids meshio refuses too) and VTK POLYDATA surfaces, and
+writing results (ParaView-ready .vtu/.pvd series, JSON), atomically."""
 
 from .files import (
     atomic_write,
@@ -11,12 +11,15 @@ from .files import (
 )
 from .mesh import read_volume_mesh
 from .results import ResultWriter
+from .vtk_grid import is_vtk_grid, read_vtk_grid
 from .vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
 __all__ = [
     "read_volume_mesh",
     "read_vtk_polydata",
     "is_vtk_polydata",
+    "read_vtk_grid",
+    "is_vtk_grid",
     "ResultWriter",
     "atomic_write",
     "atomic_write_text",

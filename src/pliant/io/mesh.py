@@ -8,6 +8,7 @@ import numpy as np
 
 from ..errors import MeshError
 from .files import read_meshio
+from .vtk_grid import is_vtk_grid, read_vtk_grid
 
 
 # Cells of lower dimension that volume-mesh files carry beside their tets (boundary faces, edges,
@@ -19,7 +20,12 @@ def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray
     """Read a tetrahedral mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
     {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds'."""
     path = Path(path)
-    mesh = read_meshio(path, "volume mesh")
+    try:
+        mesh = read_meshio(path, "volume mesh")
+    except MeshError:
+        if not is_vtk_grid(path):
+            raise
+        mesh = read_vtk_grid(path)  # a legacy VTK grid with attributes meshio does not know
     other = sorted({c.type for c in mesh.cells} - {"tetra"} - SURFACE_CELLS)
     if other:
         counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}" for t in other)
