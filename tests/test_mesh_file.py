@@ -1,12 +1,17 @@
-"""A mesh file no one here wrote (NiftySim's tetrahedral sphere, BSD) read through meshio."""
+"""Mesh files no one here wrote (NiftySim's tetrahedral sphere, BSD; meshes gmsh wrote) read
+through meshio."""
 
 from pathlib import Path
 
 import numpy as np
+import pytest
+from typer.testing import CliRunner
 
 import pliant as pl
+from pliant.cli import app
 
-SPHERE = Path(__file__).parent / "data" / "niftysim_sphere.vtk"
+DATA = Path(__file__).parent / "data"
+SPHERE = DATA / "niftysim_sphere.vtk"
 
 
 def _boundary_nodes(T):
@@ -63,3 +68,49 @@ def test_free_fall_under_gravity():
     assert np.allclose(sim.displacements[:, 2], expected, rtol=1e-9)
     assert np.allclose(sim.displacements[:, :2], 0.0, atol=1e-12)
     assert np.abs(sim.element_results()["cauchy"]).max() < 1e-6 * 1e4
+
+
+# tests/data/README.md: two 2 × 2 × 1 cm boxes side by side (x in [0, 2] and [2, 4] cm), meshed by
+# gmsh 4.15.2 (PyPI wheel) with physical volumes "left" (11) and "right" (22) and a physical surface
+# "fixed" (5, the x = 0 face), written as MSH 4.1 ASCII and MSH 2.2 binary. gmsh's own counts of
+# each volume's tets: 70 and 70.
+GMSH_BOXES = ["gmsh415_two_boxes_ascii41.msh", "gmsh415_two_boxes_binary22.msh"]
+
+
+@pytest.mark.parametrize("name", GMSH_BOXES)
+def test_gmsh_physical_volumes_are_element_sets_by_name(name):
+    """Each named physical volume is an element set by its name (and by its tag, as before): gmsh's
+    count of its tets, the box's volume 4e-6 m³ (tets fill a box exactly: 1e-12 relative for the
+    sums' rounding), every centroid on its side of x = 2 cm."""
+    X, T, sets = pl.io.read_volume_mesh(DATA / name)
+    a, b, c, d = (X[T[:, i]] for i in range(4))
+    v = np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6
+    for side, tag in (("left", 11), ("right", 22)):
+        np.testing.assert_array_equal(sets[side], sets[f"gmsh:physical={tag}"])
+        assert len(sets[side]) == 70
+        assert v[sets[side]].sum() == pytest.approx(0.02 * 0.02 * 0.01, rel=1e-12)
+        x = X[T[sets[side]]].mean(axis=1)[:, 0]
+        assert np.all(x < 0.02) if side == "left" else np.all(x > 0.02)
+    assert "fixed" not in sets  # a surface: no element set
+
+
+def test_a_scene_selects_gmsh_volumes_by_name(tmp_path):
+    """Materials on region = { set = "left" } and the rest: the scene runs; an unknown name is
+    refused listing the file's sets."""
+
+    def scene(region: str) -> Path:
+        p = tmp_path / "s.toml"
+        p.write_text(
+            f'[mesh]\nfile = "{DATA / GMSH_BOXES[0]}"\n'
+            '[[material]]\ntype = "neo-hookean"\nE = 9000.0\nnu = 0.45\ndensity = 1000.0\n'
+            f'region = {{ set = "{region}" }}\n'
+            '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
+            '[solver]\nduration = 0.002\n[[constraint]]\ntype = "fix"\n'
+            'nodes = { plane = { point = [0.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0], side = "below" } }\n'
+        )
+        return p
+
+    run = CliRunner().invoke(app, ["run", str(scene("left")), "-o", str(tmp_path / "out")])
+    assert run.exit_code == 0, run.output
+    bad = CliRunner().invoke(app, ["run", str(scene("middle")), "-o", str(tmp_path / "out2")])
+    assert bad.exit_code == 2 and "unknown element set 'middle'" in bad.output and "left" in bad.output

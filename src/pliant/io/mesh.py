@@ -18,7 +18,8 @@ SURFACE_CELLS = {"vertex", "line", "line3", "triangle", "triangle6", "quad", "qu
 
 def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """Read a tetrahedral mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
-    {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds'."""
+    {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds' (and a
+    gmsh file's physical volumes by their names)."""
     path = Path(path)
     try:
         mesh = read_meshio(path, "volume mesh")
@@ -45,11 +46,22 @@ def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray
     X = np.asarray(mesh.points, dtype=float)
     if X.ndim != 2 or X.shape[1] < 3:
         X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
+    return X[:, :3], tets, _element_sets(mesh, [i for i, _ in blocks])
+
+
+def _element_sets(mesh, blocks: list[int]) -> dict[str, np.ndarray]:
+    """{'KEY=v': element indices} from the tets' first cell data of KEY 'gmsh:physical',
+    'CellEntityIds', 'medit:ref' or 'cell_sets'; a gmsh file's named physical volumes
+    ($PhysicalNames, dimension 3) also by their names, unless a name is taken."""
     sets: dict[str, np.ndarray] = {}
     for key in ("gmsh:physical", "CellEntityIds", "medit:ref", "cell_sets"):
         if key in mesh.cell_data:
-            ids = np.concatenate([np.asarray(mesh.cell_data[key][i]).ravel() for i, _ in blocks])
+            ids = np.concatenate([np.asarray(mesh.cell_data[key][i]).ravel() for i in blocks])
             for v in np.unique(ids):
                 sets[f"{key}={int(v)}"] = np.nonzero(ids == v)[0]
+            if key == "gmsh:physical":
+                for name, (tag, dim) in ((n, np.ravel(t)[:2]) for n, t in mesh.field_data.items()):
+                    if int(dim) == 3 and name not in sets:
+                        sets[name] = np.nonzero(ids == int(tag))[0]
             break
-    return X[:, :3], tets, sets
+    return sets
