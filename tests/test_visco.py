@@ -86,6 +86,21 @@ def test_quasi_static_solution_is_the_fully_relaxed_one_and_state_round_trips(tm
     assert np.array_equal(other.displacements, u_ref)
 
 
+def _ramp_relaxation(t, tau, t_r):
+    """g(t) of a Prony term τ after a linear ramp of t_r held from then on (t > t_r)."""
+    return 1 - tau / t_r * (math.exp(-(t - t_r) / tau) - math.exp(-t / tau))
+
+
+def _held_stretch(stretch, L, X):
+    """The Neo-Hookean's isochoric and volumetric face forces P_iso, P_vol [N] of the stretch
+    (λ, 1, 1) on a face of area L² (∂W/∂λ of each part, differentiated numerically), and the nodes
+    of X on that face (x = L)."""
+    lam = (stretch, 1.0, 1.0)
+    P_iso = nominal(lambda s: W_nh(s, k=0.0), lam, 0) * L * L
+    P_vol = nominal(lambda s: W_nh(s, mu=0.0), lam, 0) * L * L
+    return P_iso, P_vol, np.nonzero(X[:, 0] > L * (1 - 1e-9))[0]
+
+
 @pytest.mark.parametrize("smoothing", ["element", "edge"])
 @pytest.mark.parametrize("terms", [1, 3])
 def test_isochoric_relaxation_of_a_held_homogeneous_stretch(backend, terms, smoothing):
@@ -106,23 +121,15 @@ def test_isochoric_relaxation_of_a_held_homogeneous_stretch(backend, terms, smoo
     u[:, 0] = (stretch - 1) * X[:, 0]
     b.prescribe(np.arange(len(X)), u, "xyz", curve=pl.Ramp(t_r))
     sim = pl.Simulation(b.finalize("float64", backend=backend), dt=2e-6)
-    lam = (stretch, 1.0, 1.0)
-    P_iso = nominal(lambda s: W_nh(s, k=0.0), lam, 0) * L * L  # [N] on the face of area L²
-    P_vol = nominal(lambda s: W_nh(s, mu=0.0), lam, 0) * L * L
-    right = np.nonzero(X[:, 0] > L * (1 - 1e-9))[0]
+    P_iso, P_vol, right = _held_stretch(stretch, L, X)
     for t in (0.005, 0.02, 0.06):
         sim.run(until=t)
         F = sim.model.internal_forces(sim.state)[right, 0].sum()
         tt = sim.time
-        g = 1 - tau / t_r * (math.exp(-(tt - t_r) / tau) - math.exp(-tt / tau))
+        g = _ramp_relaxation(tt, tau, t_r)
         # 0.2 % of P_iso: the ramp's stress is linear in t only to the strain's order (1e-3),
         # backward Euler's error is of order Δt/τ = 1e-4, the numerical derivative 1e-9.
         assert abs(F - (P_iso * (1 - alpha * g) + P_vol)) <= 2e-3 * P_iso, (tt, F, P_iso, P_vol)
-
-
-def _ramp_relaxation(t, tau, t_r):
-    """g(t) of a Prony term τ after a linear ramp of t_r held from then on (t > t_r)."""
-    return 1 - tau / t_r * (math.exp(-(t - t_r) / tau) - math.exp(-t / tau))
 
 
 @pytest.mark.parametrize("smoothing", ["element", "edge"])
@@ -147,10 +154,7 @@ def test_materials_with_as_many_terms_split_differently_relax_by_their_own_serie
         b.set_material(material, density=1000.0, elements=cube)
         b.prescribe(k * len(X) + np.arange(len(X)), u, "xyz", curve=pl.Ramp(t_r))
     sim = pl.Simulation(b.finalize("float64", backend=backend), dt=2e-6)
-    lam = (stretch, 1.0, 1.0)
-    P_iso = nominal(lambda s: W_nh(s, k=0.0), lam, 0) * L * L  # [N] on the face of area L²
-    P_vol = nominal(lambda s: W_nh(s, mu=0.0), lam, 0) * L * L
-    right = np.nonzero(X[:, 0] > L * (1 - 1e-9))[0]
+    P_iso, P_vol, right = _held_stretch(stretch, L, X)
     for t in (0.005, 0.02, 0.06):
         sim.run(until=t)
         f = sim.model.internal_forces(sim.state)[:, 0]
