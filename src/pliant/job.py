@@ -37,6 +37,7 @@ class Scene:
     warnings: list[str] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
     blades: list = field(default_factory=list)  # pliant.cutting.Blade: they cut while it runs
+    node_sets: dict = field(default_factory=dict)  # name → node indices, from the mesh files
 
 
 def load_job(path, ignore=None, overrides: dict | None = None) -> Scene:

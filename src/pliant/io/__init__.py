@@ -9,13 +9,14 @@ from .files import (
     make_output_dir,
     read_meshio,
 )
-from .mesh import read_volume_mesh
+from .mesh import read_volume_mesh, read_volume_mesh_sets
 from .results import ResultWriter
 from .vtk_grid import is_vtk_grid, read_vtk_grid
 from .vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
 __all__ = [
     "read_volume_mesh",
+    "read_volume_mesh_sets",
     "read_vtk_polydata",
     "is_vtk_polydata",
     "read_vtk_grid",

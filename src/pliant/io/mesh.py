@@ -20,6 +20,17 @@ def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray
     """Read a tetrahedral mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
     {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds' (and a
     gmsh file's physical volumes by their names)."""
+    return read_volume_mesh_sets(path)[:3]
+
+
+def read_volume_mesh_sets(
+    path,
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """read_volume_mesh's nodes, tets and element sets, and the file's node sets {name: node
+    indices}: the nodes of its tagged lower-dimensional cells (triangles, quads, lines, vertices)
+    by their tag, 'gmsh:physical=5', 'CellEntityIds=3', 'medit:ref=2', and a gmsh file's physical
+    surfaces, curves and points by their names (a physical surface "fixed": the nodes of its
+    triangles)."""
     path = Path(path)
     try:
         mesh = read_meshio(path, "volume mesh")
@@ -46,7 +57,7 @@ def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray
     X = np.asarray(mesh.points, dtype=float)
     if X.ndim != 2 or X.shape[1] < 3:
         X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
-    return X[:, :3], tets, _element_sets(mesh, [i for i, _ in blocks])
+    return X[:, :3], tets, _element_sets(mesh, [i for i, _ in blocks]), _node_sets(mesh)
 
 
 def _element_sets(mesh, blocks: list[int]) -> dict[str, np.ndarray]:
@@ -65,3 +76,26 @@ def _element_sets(mesh, blocks: list[int]) -> dict[str, np.ndarray]:
                         sets[name] = np.nonzero(ids == int(tag))[0]
             break
     return sets
+
+
+def _node_sets(mesh) -> dict[str, np.ndarray]:
+    """{'KEY=v': node indices} of the lower-dimensional cells tagged v in the first cell data of
+    KEY 'gmsh:physical', 'CellEntityIds' or 'medit:ref'; a gmsh file's named physical groups of
+    dimension 0–2 also by their names, unless a name is taken."""
+    low = [i for i, c in enumerate(mesh.cells) if c.type in SURFACE_CELLS]
+    for key in ("gmsh:physical", "CellEntityIds", "medit:ref"):
+        if key not in mesh.cell_data or not low:
+            continue
+        tagged: dict[int, list[np.ndarray]] = {}
+        for i in low:
+            ids = np.asarray(mesh.cell_data[key][i]).ravel()
+            cells = np.asarray(mesh.cells[i].data).reshape(len(ids), -1)
+            for v in np.unique(ids):
+                tagged.setdefault(int(v), []).append(cells[ids == v].ravel())
+        sets = {f"{key}={v}": np.unique(np.concatenate(c)).astype(np.int64) for v, c in tagged.items()}
+        if key == "gmsh:physical":
+            for name, (tag, dim) in ((n, np.ravel(t)[:2]) for n, t in mesh.field_data.items()):
+                if int(dim) < 3 and name not in sets and f"{key}={int(tag)}" in sets:
+                    sets[name] = sets[f"{key}={int(tag)}"]
+        return sets
+    return {}

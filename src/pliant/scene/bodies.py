@@ -13,7 +13,7 @@
     skin = 0.001                # [m], optional (ModelBuilder.set_soft_contact)
 
 Each body's elements form an element set of its name (``region = { set = "kidney" }``); element
-sets of a body's file are named "<body>.<set>".
+sets and node sets of a body's file are named "<body>.<set>" (the first body's as in its file).
 """
 
 from __future__ import annotations
@@ -34,9 +34,10 @@ if TYPE_CHECKING:
 
 def load_bodies(ctx: Ctx, data: dict, base: Path, scene: Scene, b: ModelBuilder) -> tuple:
     """The first body ([mesh]) and every [[body]] into the builder; returns the combined nodes
-    (N, 3), tets (M, 4), the element sets (each body's by its name) and the body names."""
+    (N, 3), tets (M, 4), the element sets (each body's by its name), the body names and the node
+    sets of the bodies' files."""
     with ctx.under("mesh"):
-        X, T, sets = load_mesh(ctx, data["mesh"], base, scene)
+        X, T, sets, node_sets = load_mesh(ctx, data["mesh"], base, scene)
     names = [str(data["mesh"].get("name", "body0"))]
     _add(ctx, b, X, T, scene.meta["mesh_source"], "mesh")
     sets = {**sets, names[0]: np.arange(len(T))}
@@ -56,17 +57,18 @@ def load_bodies(ctx: Ctx, data: dict, base: Path, scene: Scene, b: ModelBuilder)
         if spec.get("embed") or spec.get("embed_subdivide"):
             raise ctx.error(f"{p}.embed", "an embedded visual surface is for the first body ([mesh]) only")
         with ctx.under(p):
-            Xi, Ti, si = load_mesh(ctx, spec, base, scene, key=p)
+            Xi, Ti, si, ni = load_mesh(ctx, spec, base, scene, key=p)
         source = scene.meta["mesh_source"]
         scene.meta.clear()
         scene.meta.update(first_meta)  # the first body's pipeline report and source
         elems = _add(ctx, b, Xi, Ti, source, p)
         sets[name] = elems
         sets.update({f"{name}.{k}": v + elems[0] for k, v in si.items()})
+        node_sets.update({f"{name}.{k}": v + len(X) for k, v in ni.items()})
         T = np.vstack([T, Ti + len(X)])
         X = np.vstack([X, Xi])
         names.append(name)
-    return X, T, sets, names
+    return X, T, sets, names, node_sets
 
 
 def _add(ctx: Ctx, b: ModelBuilder, X, T, source: str, key: str) -> np.ndarray:

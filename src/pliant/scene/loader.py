@@ -119,7 +119,7 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     b = ModelBuilder()
     scene = Scene(str(path), b, title=data.get("title", path.stem))
     _solver_settings(ctx, data.get("solver", {}), scene)
-    X, T, sets, names = load_bodies(ctx, data, path.parent, scene, b)
+    X, T, sets, names, scene.node_sets = load_bodies(ctx, data, path.parent, scene, b)
     _materials(ctx, data["material"], b, X, T, sets)
     if "contact" in data:
         set_contact(ctx, data["contact"], b, sets, names)
@@ -327,7 +327,7 @@ def _constraints(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) ->
             },
             ("type", "nodes"),
         )
-        ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T)
+        ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T, scene.node_sets)
         dofs = c.get("dofs", "xyz")
         with ctx.under(p):
             if c["type"] == "fix":
@@ -381,7 +381,9 @@ def _tools(ctx: Ctx, tables: list, b: ModelBuilder, X, T, base: Path, scene: Sce
         if not isinstance(t, dict):
             raise ctx.error(p, f"expected a table, got {type(t).__name__}")
         with ctx.under(p):
-            only = select_nodes(ctx, t["nodes"], f"{p}.nodes", X, T) if "nodes" in t else None
+            only = (
+                select_nodes(ctx, t["nodes"], f"{p}.nodes", X, T, scene.node_sets) if "nodes" in t else None
+            )
             tool = make_tool(ctx, t, p, base)
             if isinstance(tool, Blade):
                 if only is not None:
@@ -400,7 +402,7 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
     if ld["type"] == "gravity":
         g = vector(ctx, ld.get("g", [0.0, 0.0, -9.81]), f"{p}.g")
         if "nodes" in ld:
-            b.add_gravity(g, select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T), curve)
+            b.add_gravity(g, select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T, scene.node_sets), curve)
         else:
             b.set_gravity(g, curve)
     elif ld["type"] == "force":
@@ -410,7 +412,7 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
                 "a 'force' load needs 'nodes' and one of 'force' (per node [N]) "
                 "or 'total_force' (shared equally [N])",
             )
-        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T, scene.node_sets)
         if "force" in ld:
             f = np.array(vector(ctx, ld["force"], f"{p}.force"))
         else:
@@ -424,7 +426,7 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
                 f"a '{ld['type']}' load needs '{key}' {unit} and 'nodes' (the boundary "
                 "triangles whose three nodes are all selected)",
             )
-        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T)
+        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T, scene.node_sets)
         B, _ = boundary_faces(T)
         faces = B[np.all(np.isin(B, ids), axis=1)]
         if len(faces) == 0:

@@ -30,9 +30,10 @@ def _rotation(deg) -> np.ndarray:
 
 
 def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh"):
-    """The mesh of a [mesh] table (or of a [[body]] table: ``key`` names it in errors)."""
+    """The mesh of a [mesh] table (or of a [[body]] table: ``key`` names it in errors): nodes [m]
+    (N, 3), tets (M, 4), and a mesh file's element sets and node sets (pliant.io.mesh)."""
     from .. import mesh as pm
-    from ..io.mesh import read_volume_mesh
+    from ..io.mesh import read_volume_mesh_sets
     from ..io.vtk_polydata import is_vtk_polydata
 
     check_keys(
@@ -66,6 +67,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
     if ("file" in spec) == ("primitive" in spec):
         raise ctx.error(key, "give exactly one of 'file' or 'primitive'")
     sets: dict[str, np.ndarray] = {}
+    node_sets: dict[str, np.ndarray] = {}
     scale = float(spec.get("scale", 1.0))
     if not scale > 0:
         raise ctx.error(f"{key}.scale", "expected a scale > 0")
@@ -117,7 +119,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                     scene.meta["embed_surface"] = [Ve, Fe]
                 scale = 1.0
             else:
-                X, T, sets = read_volume_mesh(f)
+                X, T, sets, node_sets = read_volume_mesh_sets(f)
         except MeshError as e:
             raise ctx.error(f"{key}.file", str(e)) from None
         scene.meta["mesh_source"] = str(f)
@@ -174,4 +176,4 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
             f"{ctx.file}: the mesh is {extent:g} m across; pliant expects SI "
             "metres: if the file is in millimetres, set mesh.scale = 0.001"
         )
-    return X, np.asarray(T, np.int64), sets
+    return X, np.asarray(T, np.int64), sets, node_sets

@@ -4,6 +4,8 @@ A selection is a table combining any of (intersection):
   all = true | ids = [..] | box = [[x0,y0,z0],[x1,y1,z1]] | sphere = {center=[..], radius=r}
   plane = {point=[..], normal=[..], side="below"|"above"|"on", tol=...}
   surface = true   (only nodes on the boundary surface: with box/sphere/plane, a surface patch)
+  set = "name"     (elements: a mesh file's element set; nodes: its node set, e.g. a gmsh
+                    physical surface)
 Coordinates are in metres, after the mesh transform.
 """
 
@@ -80,17 +82,28 @@ def _mask(ctx: Ctx, spec: dict, path: str, P: np.ndarray, extent: float) -> np.n
     return m
 
 
-def select_nodes(ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Node indices selected by ``spec``; an empty selection is an error naming the key."""
+def select_nodes(
+    ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray, sets: dict[str, np.ndarray] | None = None
+) -> np.ndarray:
+    """Node indices selected by ``spec`` (with ``set``: within the mesh file's node set of that name,
+    ``sets``); an empty selection is an error naming the key."""
     check_keys(ctx, spec, path, _KEYS)
-    if "set" in spec:
-        raise ctx.error(
-            f"{path}.set", "node sets by name are not supported; use ids, box, sphere, plane or surface"
-        )
     if not spec:
-        raise ctx.error(path, "empty selection; give all, ids, box, sphere, plane and/or surface")
+        raise ctx.error(path, "empty selection; give all, ids, box, sphere, plane, surface and/or set")
     extent = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     m = _mask(ctx, spec, path, nodes, extent)
+    if "set" in spec:
+        sets = sets or {}
+        if spec["set"] not in sets:
+            raise ctx.error(
+                f"{path}.set",
+                f"unknown node set {spec['set']!r}; the mesh files have: {', '.join(sets) or 'none'} "
+                "(a gmsh physical surface, curve or point by its name or tag; tagged triangles of "
+                "other formats by tag)",
+            )
+        s = np.zeros(len(nodes), bool)
+        s[sets[spec["set"]]] = True
+        m &= s
     if spec.get("surface"):
         s = np.zeros(len(nodes), bool)
         s[boundary_nodes(tets)] = True
