@@ -335,14 +335,15 @@ def grid_bytes(draw):
 @given(grid_bytes())
 def test_vtk_grid_files_read_or_fail_by_name(data):
     """read_vtk_grid gives finite points and cells that index them, or an InputError naming the
-    file; read_volume_mesh (meshio, then this reader) reads the file or names it."""
+    file; read_volume_mesh and read_surface (meshio, then this reader) read the file or name it."""
     from pliant.io.vtk_grid import read_vtk_grid
 
     p = _write(data, ".vtk")
-    try:  # the fallback after meshio: no other exception than a named InputError
-        pl.io.read_volume_mesh(p)
-    except InputError as e:
-        _check_error(e, p)
+    for read in (pl.io.read_volume_mesh, pl.mesh.read_surface):  # meshio, then this reader
+        try:
+            read(p)
+        except InputError as e:
+            _check_error(e, p)
     try:
         mesh = read_vtk_grid(p)
     except InputError as e:

@@ -130,3 +130,19 @@ def test_non_finite_points_are_named(tmp_path):
     )
     with pytest.raises(MeshError, match="point 3 is not finite"):
         read_vtk_grid(p)
+
+
+def test_a_triangle_surface_in_such_a_grid_reads_as_a_surface():
+    """A surface VTK wrote as an UNSTRUCTURED_GRID of triangles with point normals (vtkAppendFilter of
+    a vtkSphereSource, radius 1 cm, 10 × 6): meshio refuses it; read_surface reads it as VTK does,
+    its 42 points and 80 triangles, closed and outward, with VTK's volume and area
+    (vtkMassProperties; 1e-5 relative: the ASCII file's 6 significant digits)."""
+    path = DATA / "vtk93_sphere_surface_grid51.vtk"
+    V, F = pl.mesh.read_surface(path)
+    assert V.shape == (42, 3) and F.shape == (80, 3)
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    assert np.einsum("ij,ij->", a, np.cross(b, c)) / 6 == pytest.approx(3.544378528791399e-06, rel=1e-5)
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum()
+    assert area == pytest.approx(0.0011558783754087505, rel=1e-5)
+    report = pl.mesh.check_surface(V, F)
+    assert report.watertight and report.outward and not report.problems

@@ -89,6 +89,8 @@ def _node_sets(mesh) -> dict[str, np.ndarray]:
         tagged: dict[int, list[np.ndarray]] = {}
         for i in low:
             ids = np.asarray(mesh.cell_data[key][i]).ravel()
+            if len(ids) != len(mesh.cells[i].data):  # a tag per cell, or none for the block
+                continue
             cells = np.asarray(mesh.cells[i].data).reshape(len(ids), -1)
             for v in np.unique(ids):
                 tagged.setdefault(int(v), []).append(cells[ids == v].ravel())

@@ -40,8 +40,8 @@ def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle surface (.obj, .stl, .ply, .off, .vtk POLYDATA or UNSTRUCTURED_GRID, .vtu...
-    any meshio format with triangles). Raises MeshError for a missing, unreadable, empty or
-    out-of-range mesh."""
+    any meshio format with triangles; a legacy VTK grid meshio refuses through pliant.io.vtk_grid).
+    Raises MeshError for a missing, unreadable, empty or out-of-range mesh."""
     path = Path(path)
     if not path.is_file():
         raise MeshError(f"{path}: no such file")
@@ -56,8 +56,14 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
         )
     else:
         from ..io.files import read_meshio
+        from ..io.vtk_grid import is_vtk_grid, read_vtk_grid
 
-        m = read_meshio(path, "surface mesh")
+        try:
+            m = read_meshio(path, "surface mesh")
+        except MeshError:
+            if not is_vtk_grid(path):
+                raise
+            m = read_vtk_grid(path)  # a legacy VTK grid with attributes meshio does not know
         tris = [c.data for c in m.cells if c.type == "triangle"]
         quads = [c.data for c in m.cells if c.type == "quad"]
         parts = tris + [q[:, [0, 1, 2]] for q in quads] + [q[:, [0, 2, 3]] for q in quads]
