@@ -154,3 +154,17 @@ def meshio_last_displacement(out: Path) -> np.ndarray:
 
     last = sorted(out.glob("*.vtu"))[-1]
     return np.asarray(meshio.read(last).point_data["displacement"])
+
+
+def test_abaqus_element_and_node_sets():
+    """The same boxes written by gmsh as an Abaqus .inp (ELSETs and NSETs of its physical groups,
+    Mesh.SaveGroupsOfElements/Nodes): the ELSETs "left" and "right" are element sets (70 tets, the
+    box's volume each, 1e-12 relative as above), the NSET "fixed" is the nodes on x = 0."""
+    X, T, sets, nodes = pl.io.read_volume_mesh_sets(DATA / "gmsh415_two_boxes.inp")
+    a, b, c, d = (X[T[:, i]] for i in range(4))
+    v = np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6
+    for side in ("left", "right"):
+        assert len(sets[side]) == 70
+        assert v[sets[side]].sum() == pytest.approx(0.02 * 0.02 * 0.01, rel=1e-12)
+    assert np.all(X[T[sets["left"]]].mean(axis=1)[:, 0] < 0.02)
+    np.testing.assert_array_equal(nodes["fixed"], np.nonzero(X[:, 0] == 0.0)[0])

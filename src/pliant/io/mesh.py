@@ -62,27 +62,52 @@ def read_volume_mesh_sets(
 
 def _element_sets(mesh, blocks: list[int]) -> dict[str, np.ndarray]:
     """{'KEY=v': element indices} from the tets' first cell data of KEY 'gmsh:physical',
-    'CellEntityIds', 'medit:ref' or 'cell_sets'; a gmsh file's named physical volumes
-    ($PhysicalNames, dimension 3) also by their names, unless a name is taken."""
+    'CellEntityIds', 'medit:ref' or 'cell_sets'; and by their names, unless a name is taken, a gmsh
+    file's named physical volumes and the file's named sets that hold tets (meshio's cell_sets: an
+    Abaqus ELSET)."""
     sets: dict[str, np.ndarray] = {}
     for key in ("gmsh:physical", "CellEntityIds", "medit:ref", "cell_sets"):
         if key in mesh.cell_data:
             ids = np.concatenate([np.asarray(mesh.cell_data[key][i]).ravel() for i in blocks])
             for v in np.unique(ids):
                 sets[f"{key}={int(v)}"] = np.nonzero(ids == v)[0]
-            if key == "gmsh:physical":
-                for name, (tag, dim) in ((n, np.ravel(t)[:2]) for n, t in mesh.field_data.items()):
-                    if int(dim) == 3 and name not in sets:
-                        sets[name] = np.nonzero(ids == int(tag))[0]
             break
+    for name, tag in _physical_names(mesh, lambda dim: dim == 3):
+        if name not in sets and f"gmsh:physical={tag}" in sets:
+            sets[name] = sets[f"gmsh:physical={tag}"]
+    offsets = np.cumsum([0] + [len(mesh.cells[i].data) for i in blocks])
+    for name, per_block in _named_sets(mesh):
+        tets = [offsets[k] + np.asarray(per_block[i], np.int64) for k, i in enumerate(blocks)]
+        tets = np.concatenate(tets) if tets else np.zeros(0, np.int64)
+        if tets.size and name not in sets:
+            sets[name] = np.unique(tets)
     return sets
+
+
+def _physical_names(mesh, keep):
+    """(name, tag) of a gmsh file's named physical groups ($PhysicalNames, meshio's field_data
+    name → [tag, dimension]) whose dimension ``keep`` accepts."""
+    for name, value in getattr(mesh, "field_data", {}).items():
+        v = np.ravel(value)
+        if v.size >= 2 and keep(int(v[1])):
+            yield name, int(v[0])
+
+
+def _named_sets(mesh):
+    """(name, indices per cell block) of meshio's cell_sets (gmsh's internal ones left out)."""
+    for name, per_block in getattr(mesh, "cell_sets", {}).items():
+        if not name.startswith("gmsh:") and len(per_block) == len(mesh.cells):
+            yield name, [np.zeros(0, np.int64) if b is None else np.asarray(b).ravel() for b in per_block]
 
 
 def _node_sets(mesh) -> dict[str, np.ndarray]:
     """{'KEY=v': node indices} of the lower-dimensional cells tagged v in the first cell data of
-    KEY 'gmsh:physical', 'CellEntityIds' or 'medit:ref'; a gmsh file's named physical groups of
-    dimension 0–2 also by their names, unless a name is taken."""
+    KEY 'gmsh:physical', 'CellEntityIds' or 'medit:ref'; and by their names, unless a name is
+    taken, a gmsh file's named physical surfaces, curves and points, the nodes of the file's named
+    sets of lower-dimensional cells (meshio's cell_sets) and its named node sets (point_sets: an
+    Abaqus NSET)."""
     low = [i for i, c in enumerate(mesh.cells) if c.type in SURFACE_CELLS]
+    sets: dict[str, np.ndarray] = {}
     for key in ("gmsh:physical", "CellEntityIds", "medit:ref"):
         if key not in mesh.cell_data or not low:
             continue
@@ -95,9 +120,17 @@ def _node_sets(mesh) -> dict[str, np.ndarray]:
             for v in np.unique(ids):
                 tagged.setdefault(int(v), []).append(cells[ids == v].ravel())
         sets = {f"{key}={v}": np.unique(np.concatenate(c)).astype(np.int64) for v, c in tagged.items()}
-        if key == "gmsh:physical":
-            for name, (tag, dim) in ((n, np.ravel(t)[:2]) for n, t in mesh.field_data.items()):
-                if int(dim) < 3 and name not in sets and f"{key}={int(tag)}" in sets:
-                    sets[name] = sets[f"{key}={int(tag)}"]
-        return sets
-    return {}
+        break
+    for name, tag in _physical_names(mesh, lambda dim: dim < 3):
+        if name not in sets and f"gmsh:physical={tag}" in sets:
+            sets[name] = sets[f"gmsh:physical={tag}"]
+    n = len(mesh.points)
+    for name, per_block in _named_sets(mesh):
+        parts = [np.asarray(mesh.cells[i].data)[per_block[i]].ravel() for i in low if per_block[i].size]
+        if parts and name not in sets:
+            sets[name] = np.unique(np.concatenate(parts)).astype(np.int64)
+    for name, idx in getattr(mesh, "point_sets", {}).items():
+        idx = np.unique(np.asarray(idx, np.int64).ravel())
+        if idx.size and name not in sets and idx.min() >= 0 and idx.max() < n:
+            sets[name] = idx
+    return sets
