@@ -77,8 +77,8 @@ def _element_sets(mesh, blocks: list[int]) -> dict[str, np.ndarray]:
             sets[name] = sets[f"gmsh:physical={tag}"]
     offsets = np.cumsum([0] + [len(mesh.cells[i].data) for i in blocks])
     for name, per_block in _named_sets(mesh):
-        tets = [offsets[k] + np.asarray(per_block[i], np.int64) for k, i in enumerate(blocks)]
-        tets = np.concatenate(tets) if tets else np.zeros(0, np.int64)
+        parts = [offsets[k] + np.asarray(per_block[i], np.int64) for k, i in enumerate(blocks)]
+        tets = np.concatenate(parts) if parts else np.zeros(0, np.int64)
         if tets.size and name not in sets:
             sets[name] = np.unique(tets)
     return sets
