@@ -44,10 +44,12 @@ struct Kinematics {
     Mat3<T> H, F;  // displacement and deformation gradients, F = I + H
     Sym3<T> E;     // Green–Lagrange strain ½(H + Hᵀ + HᵀH)
     T J, Jm1;      // det F and det F − 1 = tr H + ½((tr H)² − tr H²) + det H
+    T j23;         // J^(−2/3) (inv_cbrt; the decoupled materials' isochoric factor)
 };
 
+/// Kinematics of H without j23 (kinematics, below, sets it).
 template <class T>
-PLIANT_HD Kinematics<T> kinematics(const Mat3<T>& H) {
+PLIANT_HD Kinematics<T> kinematics_of(const Mat3<T>& H) {
     Kinematics<T> k;
     const T* h = H.a;
     k.H = H;
@@ -67,6 +69,24 @@ PLIANT_HD Kinematics<T> kinematics(const Mat3<T>& H) {
         h[0] * h[0] + h[4] * h[4] + h[8] * h[8] + T(2) * (h[1] * h[3] + h[2] * h[6] + h[5] * h[7]);  // tr H²
     k.Jm1 = tr + hf * (tr * tr - tr2) + det(H);
     k.J = T(1) + k.Jm1;
+    k.j23 = T(0);
+    return k;
+}
+
+/// Kinematics of H, J^(−2/3) included (dropped by the compiler where no material reads it).
+template <class T>
+PLIANT_HD Kinematics<T> kinematics(const Mat3<T>& H) {
+    Kinematics<T> k = kinematics_of(H);
+    k.j23 = inv_cbrt(k.J * k.J);
+    return k;
+}
+
+/// kinematics(H) with J^(−2/3) given (j23: computed earlier from the same H, e.g. by T4ANP's
+/// pass (1)), not computed again.
+template <class T>
+PLIANT_HD Kinematics<T> kinematics(const Mat3<T>& H, T j23) {
+    Kinematics<T> k = kinematics_of(H);
+    k.j23 = j23;
     return k;
 }
 
@@ -96,13 +116,13 @@ struct NeoHookean {
     PLIANT_HD T shear_modulus() const { return mu; }
     PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }  // U'(J)
     PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
-        return scale(T(2) * mu * inv_cbrt(k.J * k.J), mul_commuting(Ci, dev(k.E)));
+        return scale(T(2) * mu * k.j23, mul_commuting(Ci, dev(k.E)));
     }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(*this, k, pressure(k)); }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
         const T I1 = T(3) + T(2) * trace(k.E);
-        return mu / T(2) * (inv_cbrt(k.J * k.J) * I1 - T(3)) + K / T(2) * k.Jm1 * k.Jm1;
+        return mu / T(2) * (k.j23 * I1 - T(3)) + K / T(2) * k.Jm1 * k.Jm1;
     }
 };
 
@@ -150,7 +170,7 @@ struct Polynomial {
     PLIANT_HD T shear_modulus() const { return T(2) * (C10 + C01); }
     PLIANT_HD T pressure(const Kinematics<T>& k) const { return K * k.Jm1; }
     PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
-        const T j23 = inv_cbrt(k.J * k.J);
+        const T j23 = k.j23;
         T I1b, I2b;
         isochoric_invariants(k, j23, I1b, I2b);
         const T W1 = C10 + T(2) * C20 * (I1b - T(3)) + C11 * (I2b - T(3));
@@ -161,7 +181,7 @@ struct Polynomial {
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
         T I1b, I2b;
-        isochoric_invariants(k, inv_cbrt(k.J * k.J), I1b, I2b);
+        isochoric_invariants(k, k.j23, I1b, I2b);
         const T x = I1b - T(3), y = I2b - T(3);
         return C10 * x + C01 * y + C20 * x * x + C02 * y * y + C11 * x * y + K / T(2) * k.Jm1 * k.Jm1;
     }
@@ -193,13 +213,13 @@ struct ArrudaBoyce {
         return K / T(2) * k.Jm1 * (k.J + T(1)) / k.J;
     }
     PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
-        const T j23 = inv_cbrt(k.J * k.J);
+        const T j23 = k.j23;
         return isochoric_pk2(k, Ci, W1(j23 * (T(3) + T(2) * trace(k.E))), T(0), j23);
     }
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(*this, k, pressure(k)); }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
-        const T I1b = inv_cbrt(k.J * k.J) * (T(3) + T(2) * trace(k.E));
+        const T I1b = k.j23 * (T(3) + T(2) * trace(k.E));
         const T c[5] = {T(0.5), T(1) / T(20), T(11) / T(1050), T(19) / T(7000), T(519) / T(673750)};
         T w = T(0), p = T(1), q = T(1), l = T(1);
         for (int i = 0; i < 5; ++i) {
@@ -229,7 +249,7 @@ struct TransverselyIsotropic {
                               a[2] * (E.xz * a[0] + E.yz * a[1] + E.zz * a[2]));
     }
     PLIANT_HD Sym3<T> pk2_iso(const Kinematics<T>& k, const Sym3<T>& Ci) const {
-        const T j23 = inv_cbrt(k.J * k.J);
+        const T j23 = k.j23;
         const T i4 = I4(k);
         const T g = T(2) * eta * (j23 * i4 - T(1)) * j23;
         const Sym3<T> aa = {a[0] * a[0], a[1] * a[1], a[2] * a[2], a[0] * a[1], a[1] * a[2], a[0] * a[2]};
@@ -238,7 +258,7 @@ struct TransverselyIsotropic {
     PLIANT_HD Sym3<T> pk2(const Kinematics<T>& k) const { return decoupled_pk2(*this, k, pressure(k)); }
     PLIANT_HD Mat3<T> pk1(const Kinematics<T>& k) const { return mul(k.F, pk2(k)); }
     PLIANT_HD T energy(const Kinematics<T>& k) const {
-        const T j23 = inv_cbrt(k.J * k.J);
+        const T j23 = k.j23;
         const T d4 = j23 * I4(k) - T(1);
         return mu / T(2) * (j23 * (T(3) + T(2) * trace(k.E)) - T(3)) + eta / T(2) * d4 * d4 +
                K / T(2) * k.Jm1 * k.Jm1;

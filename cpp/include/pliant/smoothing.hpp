@@ -192,7 +192,7 @@ PLIANT_HD void element_forces_smoothed(index_t b, int l, const Material& mat, co
                                        const T* node_p, T stab, T* f_out, T* J_out) {
     const T p = kAnp ? corner_pressure(b, l, el, node_p) : T(0);
     const SmoothedStress<Material, T, kAnp> sm{mat, mean_edge_stress(b, l, ed.elem_edges, P_edge), p, stab};
-    element_forces_at(b, l, sm, el, stored_gradient(b, l, H_elem), b, f_out, J_out);
+    element_forces_at(b, l, sm, el, kinematics(stored_gradient(b, l, H_elem)), b, f_out, J_out);
 }
 
 }  // namespace pliant

@@ -97,8 +97,7 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
 /// as block ob of f_out and J_out (store_forces).
 template <class T, class Material>
 PLIANT_HD void element_forces_at(index_t b, int l, const Material& mat, const ElementData<T>& el,
-                                 const Mat3<T>& H, index_t ob, T* f_out, T* J_out) {
-    const Kinematics<T> k = kinematics(H);
+                                 const Kinematics<T>& k, index_t ob, T* f_out, T* J_out) {
     store_forces<false>(b, l, el, mat.pk1(k), ob, f_out);
     J_out[aosoa(ob, l, 0, 1)] = k.J;
 }
@@ -108,7 +107,7 @@ PLIANT_HD void element_forces_at(index_t b, int l, const Material& mat, const El
 template <class T, class Material>
 PLIANT_HD void element_forces_to(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
                                  index_t P, index_t ob, T* f_out, T* J_out) {
-    element_forces_at(b, l, mat, el, displacement_gradient(b, l, el, u, P), ob, f_out, J_out);
+    element_forces_at(b, l, mat, el, kinematics(displacement_gradient(b, l, el, u, P)), ob, f_out, J_out);
 }
 
 /// Kernel 1, one element per lane: element nodal forces f_a = V0 · F S ∇X N_a
@@ -177,15 +176,18 @@ PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const E
 /// (1) Inputs: decoupled material, element data, u [m] SoA (3, P). Output: ep_out [N·m] (slot).
 /// kKeep: H_out [1] (AoSoA K=9) also receives the displacement gradient, which pass (3) then reads
 /// instead of gathering the displacements again (Dev::kKeepsAnpGradient).
+/// Values pass (1) keeps a slot for pass (3) (kKeep): its displacement gradient H (9) and J^(−2/3).
+inline constexpr int kAnpKept = 10;
 template <bool kKeep, class T, class Material>
 PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
                                 index_t P, T* ep_out, T* H_out) {
     const Mat3<T> H = displacement_gradient(b, l, el, u, P);
+    const Kinematics<T> k = kinematics(H);
     if constexpr (kKeep) {
         PLIANT_UNROLL
-        for (int k = 0; k < 9; ++k) H_out[aosoa(b, l, k, 9)] = H.a[k];
+        for (int i = 0; i < 9; ++i) H_out[aosoa(b, l, i, kAnpKept)] = H.a[i];
+        H_out[aosoa(b, l, 9, kAnpKept)] = k.j23;
     }
-    const Kinematics<T> k = kinematics(H);
     ep_out[aosoa(b, l, 0, 1)] = el.vol[aosoa(b, l, 0, 1)] * mat.pressure(k);
 }
 
@@ -224,8 +226,8 @@ PLIANT_HD void element_forces_anp(index_t b, int l, const Material& mat, const E
     if constexpr (kKept) {
         Mat3<T> Hk;
         PLIANT_UNROLL
-        for (int k = 0; k < 9; ++k) Hk.a[k] = H[aosoa(b, l, k, 9)];
-        element_forces_at(b, l, ap, el, Hk, b, f_out, J_out);
+        for (int i = 0; i < 9; ++i) Hk.a[i] = H[aosoa(b, l, i, kAnpKept)];
+        element_forces_at(b, l, ap, el, kinematics(Hk, H[aosoa(b, l, 9, kAnpKept)]), b, f_out, J_out);
     } else {
         element_forces(b, l, ap, el, u, P, f_out, J_out);
     }

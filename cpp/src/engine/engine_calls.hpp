@@ -20,7 +20,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);
     node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
     const bool smoothed = m.smoothing == StrainSmoothing::Edge;
-    H_anp_ = DeviceBuffer<T, Dev>(dev_, Dev::kKeepsAnpGradient && m.anp && !smoothed ? 9 * S : 0);
+    H_anp_ = DeviceBuffer<T, Dev>(dev_, Dev::kKeepsAnpGradient && m.anp && !smoothed ? kAnpKept * S : 0);
     H_elem_ = DeviceBuffer<T, Dev>(dev_, smoothed ? 9 * S : 0);
     Hbar_ = DeviceBuffer<T, Dev>(dev_, 9 * static_cast<std::size_t>(m.n_edges));
     P_edge_ = DeviceBuffer<T, Dev>(dev_, 9 * static_cast<std::size_t>(m.n_edges));
