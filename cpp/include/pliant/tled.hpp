@@ -93,8 +93,8 @@ PLIANT_HD void store_forces(index_t b, int l, const ElementData<T>& el, const Ma
     }
 }
 
-/// Kernel 1 (element_forces, below) from the displacement gradient H [1] of slot (b, l), written
-/// as block ob of f_out and J_out (store_forces).
+/// Kernel 1 (element_forces, below) from the kinematics k of slot (b, l), written as block ob of
+/// f_out and J_out (store_forces).
 template <class T, class Material>
 PLIANT_HD void element_forces_at(index_t b, int l, const Material& mat, const ElementData<T>& el,
                                  const Kinematics<T>& k, index_t ob, T* f_out, T* J_out) {
@@ -168,16 +168,19 @@ PLIANT_HD void add_damping_forces(index_t b, int l, const Material& mat, const E
     store_forces<true>(b, l, el, mul(F, Sd), b, f_inout);
 }
 
+/// Values T4ANP's pass (1) keeps a slot for pass (3) (kKeep): its displacement gradient H (9) and
+/// J^(−2/3).
+inline constexpr int kAnpKept = 10;
+
 /// Average nodal pressure tetrahedron (T4ANP; Bonet & Burton 1998, Commun. Numer. Meth. Eng.
 /// 14:437; Joldes, Wittek & Miller 2009, Commun. Numer. Meth. Eng. 25:827), three passes per step:
 /// (1) element_pressure: V0 p(J) per element; (2) nodal_pressure: p̄_a = Σ V0 p / Σ V0 over the
 /// elements of node a; (3) element_forces with p̄ = ¼ Σ p̄_a of the element's corners in place of
 /// its own pressure. Volumetric locking of nearly incompressible tissue is much reduced.
 /// (1) Inputs: decoupled material, element data, u [m] SoA (3, P). Output: ep_out [N·m] (slot).
-/// kKeep: H_out [1] (AoSoA K=9) also receives the displacement gradient, which pass (3) then reads
-/// instead of gathering the displacements again (Dev::kKeepsAnpGradient).
-/// Values pass (1) keeps a slot for pass (3) (kKeep): its displacement gradient H (9) and J^(−2/3).
-inline constexpr int kAnpKept = 10;
+/// kKeep: H_out (AoSoA K = kAnpKept) also receives the displacement gradient [1] and J^(−2/3),
+/// which pass (3) then reads instead of gathering the displacements again and computing J^(−2/3)
+/// (Dev::kKeepsAnpGradient).
 template <bool kKeep, class T, class Material>
 PLIANT_HD void element_pressure(index_t b, int l, const Material& mat, const ElementData<T>& el, const T* u,
                                 index_t P, T* ep_out, T* H_out) {

@@ -88,7 +88,7 @@ struct DeviceView {
     const RigidTool* tools;
     const double *keys, *grips;  // keyframes, grasping tools' close/open times
     T *u[3], *du[3], *q, *f_elem, *J, *elem_p, *node_p, *f_node[2], *cnext, *pf;
-    T* H_anp;  // T4ANP: displacement gradients of pass (1) for pass (3), AoSoA K=9 (Dev::kKeepsAnpGradient)
+    T* H_anp;  // T4ANP: pass (1)'s gradients and J^(−2/3) for pass (3), AoSoA K=kAnpKept (kKeepsAnpGradient)
     Scalars<T>* sc;
     Pose *pose0, *pose1;
     double *cforce, *chunk, *hist, *fcon, *partial;

@@ -7,8 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from .files import read_meshio
-from .vtk_grid import is_vtk_grid, read_vtk_grid
+from .vtk_grid import read_meshio_or_grid
 
 
 # Cells of lower dimension that volume-mesh files carry beside their tets (boundary faces, edges,
@@ -32,12 +31,7 @@ def read_volume_mesh_sets(
     surfaces, curves and points by their names (a physical surface "fixed": the nodes of its
     triangles)."""
     path = Path(path)
-    try:
-        mesh = read_meshio(path, "volume mesh")
-    except MeshError:
-        if not is_vtk_grid(path):
-            raise
-        mesh = read_vtk_grid(path)  # a legacy VTK grid with attributes meshio does not know
+    mesh = read_meshio_or_grid(path, "volume mesh")
     other = sorted({c.type for c in mesh.cells} - {"tetra"} - SURFACE_CELLS)
     if other:
         counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}" for t in other)

@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import MeshError
 from .vtk_legacy import Reader, cells, count, dataset_of, open_legacy, skip_field
 
-__all__ = ["is_vtk_grid", "read_vtk_grid"]
+__all__ = ["is_vtk_grid", "read_vtk_grid", "read_meshio_or_grid"]
 
 # VTK cell type ids → meshio's names and their point counts (vtkCellType.h).
 CELL_NAMES = {
@@ -144,3 +144,16 @@ def read_vtk_grid(path):
     blocks, spans = _blocks(found, types)
     cell_data = {name: [v[b:e] for b, e in spans] for name, v in scalars.items() if len(v) == len(found)}
     return meshio.Mesh(points, blocks, cell_data=cell_data)
+
+
+def read_meshio_or_grid(path, what: str):
+    """meshio.read(path) (read_meshio: failures as a MeshError naming the file), and where meshio
+    fails on a legacy VTK UNSTRUCTURED_GRID, read_vtk_grid. what: the mesh's kind, for the error."""
+    from .files import read_meshio
+
+    try:
+        return read_meshio(path, what)
+    except MeshError:
+        if not is_vtk_grid(path):
+            raise
+        return read_vtk_grid(path)  # a legacy VTK grid with attributes meshio does not know

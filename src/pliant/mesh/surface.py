@@ -55,15 +55,9 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
             "vtkPolyDataWriter), .stl, .ply, .obj or .off surface"
         )
     else:
-        from ..io.files import read_meshio
-        from ..io.vtk_grid import is_vtk_grid, read_vtk_grid
+        from ..io.vtk_grid import read_meshio_or_grid
 
-        try:
-            m = read_meshio(path, "surface mesh")
-        except MeshError:
-            if not is_vtk_grid(path):
-                raise
-            m = read_vtk_grid(path)  # a legacy VTK grid with attributes meshio does not know
+        m = read_meshio_or_grid(path, "surface mesh")
         tris = [c.data for c in m.cells if c.type == "triangle"]
         quads = [c.data for c in m.cells if c.type == "quad"]
         parts = tris + [q[:, [0, 1, 2]] for q in quads] + [q[:, [0, 2, 3]] for q in quads]
