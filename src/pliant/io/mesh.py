@@ -102,8 +102,8 @@ def _node_sets(mesh) -> dict[str, np.ndarray]:
     Abaqus NSET)."""
     low = [i for i, c in enumerate(mesh.cells) if c.type in SURFACE_CELLS]
     sets: dict[str, np.ndarray] = {}
-    for key in ("gmsh:physical", "CellEntityIds", "medit:ref"):
-        if key not in mesh.cell_data or not low:
+    for key in ("gmsh:physical", "CellEntityIds", "medit:ref") if low else ():
+        if key not in mesh.cell_data:
             continue
         tagged: dict[int, list[np.ndarray]] = {}
         for i in low:

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import MeshError
 from .vtk_legacy import Reader, cells, count, dataset_of, open_legacy, skip_field
+from .vtk_legacy import points as read_points
 
 __all__ = ["is_vtk_grid", "read_vtk_grid", "read_meshio_or_grid"]
 
@@ -107,10 +108,7 @@ def read_vtk_grid(path):
                 raise r.fail(f"{key}: expected '{key} n'")
             n_data, in_cells = count(r, words[1], key), key == "CELL_DATA"
         elif key == "POINTS":
-            if len(words) < 3:
-                raise r.fail("POINTS: expected 'POINTS n type'")
-            n = count(r, words[1], "POINTS")
-            points = r.array(binary, 3 * n, words[2], "POINTS").astype(float).reshape(n, 3)
+            points = read_points(r, binary, words)
         elif key == "CELLS":
             found = cells(r, binary, words, modern)
         elif key == "CELL_TYPES":
@@ -126,13 +124,12 @@ def read_vtk_grid(path):
         raise MeshError(f"{path}: {len(found)} CELLS but {len(types)} CELL_TYPES")
     if not np.all(np.isfinite(points)):
         raise MeshError(f"{path}: POINTS: point {int(np.nonzero(~np.isfinite(points))[0][0])} is not finite")
-    for k, c in enumerate(found):
+    for k, (c, t) in enumerate(zip(found, types)):
         if len(c) and (c.min() < 0 or c.max() >= len(points)):
             bad = int(c[(c < 0) | (c >= len(points))][0])
             raise MeshError(
                 f"{path}: CELLS: cell {k} refers to point {bad}; the file has {len(points)} points"
             )
-    for k, (c, t) in enumerate(zip(found, types)):
         if int(t) not in CELL_NAMES:
             kinds = ", ".join(f"{i} ({n})" for i, (n, _) in CELL_NAMES.items())
             raise MeshError(

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import MeshError
 
-__all__ = ["TYPES", "Reader", "cells", "count", "dataset_of", "open_legacy", "skip_field"]
+__all__ = ["TYPES", "Reader", "cells", "count", "dataset_of", "open_legacy", "points", "skip_field"]
 
 # Legacy VTK data type names → numpy dtypes (BINARY data are big-endian).
 TYPES = {
@@ -154,6 +154,14 @@ def skip_field(reader: Reader, binary: bool, words: list[str]) -> None:
             raise reader.fail("FIELD: expected an array 'name components tuples type'")
         comps, tuples = count(reader, head[1], "FIELD"), count(reader, head[2], "FIELD")
         reader.array(binary, comps * tuples, head[3], f"FIELD array {head[0]}")
+
+
+def points(reader: Reader, binary: bool, words: list[str]) -> np.ndarray:
+    """A POINTS section ``POINTS n type``: its n points [file units] as (n, 3) float64."""
+    if len(words) < 3:
+        raise reader.fail("POINTS: expected 'POINTS n type'")
+    n = count(reader, words[1], "POINTS")
+    return reader.array(binary, 3 * n, words[2], "POINTS").astype(float).reshape(n, 3)
 
 
 def dataset_of(path) -> str | None:

@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from .vtk_legacy import cells, count, dataset_of, open_legacy, skip_field
+from .vtk_legacy import cells, dataset_of, open_legacy, skip_field
+from .vtk_legacy import points as read_points
 
 __all__ = ["is_vtk_polydata", "read_vtk_polydata"]
 
@@ -54,10 +55,7 @@ def read_vtk_polydata(path) -> tuple[np.ndarray, np.ndarray]:
         elif key == "FIELD":
             skip_field(r, binary, words)
         elif key == "POINTS":
-            if len(words) < 3:
-                raise r.fail("POINTS: expected 'POINTS n type'")
-            n = count(r, words[1], "POINTS")
-            points = r.array(binary, 3 * n, words[2], "POINTS").astype(float).reshape(n, 3)
+            points = read_points(r, binary, words)
         elif key in _CELLS:
             found = cells(r, binary, words, modern)
             if key in ("POLYGONS", "TRIANGLE_STRIPS"):
