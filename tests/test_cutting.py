@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import math
+
 import numpy as np
 import pytest
 from scipy.sparse import coo_matrix
@@ -354,6 +356,16 @@ def test_the_stable_step_after_a_cut_is_the_exact_one_of_a_lone_element(dtype):
     # 2e-3: Lanczos stops at a relative tolerance of 1e-3; float32 force differences add ~1e-4.
     assert stable_step(m, m.state()) == pytest.approx(2 / w, rel=2e-3)
     assert 2 / w < 0.7 * m.dt_critical  # why a lone element needs this: h/c overestimates it
+    # With three nodes fixed one node vibrates: 3 DOFs (Lanczos cannot take k = 1 of so few; the
+    # whole matrix is solved), its K the free node's block of the same K.
+    b.fix([0, 1, 2])
+    m = b.finalize(dtype)
+    w = np.sqrt(np.linalg.eigvalsh(V * (B.T @ D @ B)[9:, 9:] / (rho * V / 4)).max())
+    assert stable_step(m, m.state()) == pytest.approx(2 / w, rel=2e-3)
+    b.fix([3])  # nothing left to vibrate: any step is stable
+    m = b.finalize(dtype)
+    assert stable_step(m, m.state()) == math.inf
+    pl.Simulation(m, dt=10 * m.dt_critical).run(steps=3)
 
 
 @pytest.mark.parametrize("kind", ["viscoelastic", "t4anp"])

@@ -3,6 +3,8 @@
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import re
+
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -194,7 +196,7 @@ def test_an_ignored_material_names_its_element_set(tmp_path):
 @pytest.mark.parametrize(
     "kwargs, name",
     [
-        (dict(elements_type="H8"), "Elements Type=H8"),
+        (dict(elements_type="H20"), "Elements Type=H20"),
         (
             dict(material='<Material Type="HGO"><ElasticParams NumParams="2">1 2</ElasticParams></Material>'),
             "Material Type=HGO",
@@ -329,13 +331,22 @@ def test_contact_cylinder_and_probe_geometry(tmp_path):
     np.testing.assert_allclose(probe.signed_distance(moved, 0.025), [0.0, 0.0], atol=1e-5)
 
 
-def test_h8_cannot_be_ignored_into_garbage(tmp_path):
-    """Eight-node connectivity cannot be read as tetrahedra: --ignore does not make it run."""
+def test_tets_given_as_h8_are_refused_not_run(tmp_path):
+    """Tetrahedra listed under Type="H8" (eight indices taken as a hexahedron): the cells they
+    make are not hexahedra, and the split into tetrahedra names the first such element rather than
+    running garbage; --ignore cannot skip an element type."""
     *_, xml = _cube_xml(elements_type="H8")
     p = tmp_path / "h8.xml"
     p.write_text(xml)
-    with pytest.raises(NiftySimError, match="Elements Type=H8"):
+    with pytest.raises(NiftySimError, match=r"\[Elements\]: <Elements NumEls=\d+> but \d+ elements listed"):
         load_niftysim(p, ignore=("Elements Type=H8",))
+    p.write_text(re.sub(r' NumEls="\d+"', "", xml))
+    with pytest.raises(NiftySimError, match=r"\[Elements\]: element \d+ \(hexahedron\): split into"):
+        load_niftysim(p, ignore=("Elements Type=H8",))
+    *_, xml = _cube_xml(elements_type="H20")
+    p.write_text(xml)
+    with pytest.raises(NiftySimError, match="Elements Type=H20"):
+        load_niftysim(p, ignore=("Elements Type=H20",))
 
 
 def test_ramphold_reaches_its_value_at_a_tenth_of_the_total_time(tmp_path):

@@ -3,23 +3,38 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import MeshError
+from ..mesh.split import SPLIT_CELLS, split_cells
 from .vtk_grid import read_meshio_or_grid
 
 
 # Cells of lower dimension that volume-mesh files carry beside their tets (boundary faces, edges,
 # points): not simulated, and not an error.
 SURFACE_CELLS = {"vertex", "line", "line3", "triangle", "triangle6", "quad", "quad8", "quad9"}
+# Cells simulated: tetrahedra, and the linear cells split into them.
+VOLUME_CELLS = {"tetra", *SPLIT_CELLS}
+
+
+class VolumeMeshFile(NamedTuple):
+    """A volume mesh file's contents (read_volume_mesh_file)."""
+
+    nodes: np.ndarray  # [file units] (N, 3)
+    tets: np.ndarray  # (M, 4): the file's tetrahedra and its other cells' (pliant.mesh.split), in file order
+    element_sets: dict[str, np.ndarray]  # {name: tet indices}
+    node_sets: dict[str, np.ndarray]  # {name: node indices}
+    split: dict[str, int]  # {"hexahedron": cells, ...}: the file's cells split into tetrahedra
 
 
 def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """Read a tetrahedral mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
+    """Read a volume mesh. Returns nodes [file units] (N, 3), tets (M, 4) and element sets
     {name: element indices} from cell data named like 'gmsh:physical' or 'CellEntityIds' (and a
-    gmsh file's physical volumes by their names)."""
-    return read_volume_mesh_sets(path)[:3]
+    gmsh file's physical volumes by their names). Linear hexahedra, wedges and pyramids are split
+    into tetrahedra (read_volume_mesh_file)."""
+    return read_volume_mesh_file(path)[:3]
 
 
 def read_volume_mesh_sets(
@@ -30,28 +45,62 @@ def read_volume_mesh_sets(
     by their tag, 'gmsh:physical=5', 'CellEntityIds=3', 'medit:ref=2', and a gmsh file's physical
     surfaces, curves and points by their names (a physical surface "fixed": the nodes of its
     triangles)."""
+    return read_volume_mesh_file(path)[:4]
+
+
+def read_volume_mesh_file(path) -> VolumeMeshFile:
+    """read_volume_mesh_sets's nodes, tets, element sets and node sets, and how many of the file's
+    cells of each kind were split into tetrahedra. A file's linear hexahedra, wedges and pyramids
+    become 6, 3 and 2 tetrahedra each, conforming across shared faces (pliant.mesh.split); an
+    element set holds the tetrahedra of its cells. Quadratic and other cells are refused by name."""
     path = Path(path)
     mesh = read_meshio_or_grid(path, "volume mesh")
-    other = sorted({c.type for c in mesh.cells} - {"tetra"} - SURFACE_CELLS)
+    other = sorted({c.type for c in mesh.cells} - VOLUME_CELLS - SURFACE_CELLS)
     if other:
         counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}" for t in other)
         raise MeshError(
-            f"{path}: has {counts} cells; pliant simulates linear tetrahedra only "
-            "(convert the mesh, e.g. re-mesh its surface with pliant mesh "
-            "tetrahedralize)"
+            f"{path}: has {counts} cells; pliant simulates linear tetrahedra (and splits linear "
+            "hexahedra, wedges and pyramids into them; convert the mesh, e.g. re-mesh its surface "
+            "with pliant mesh tetrahedralize)"
         )
-    blocks = [(i, c) for i, c in enumerate(mesh.cells) if c.type == "tetra"]
+    blocks = [(i, c) for i, c in enumerate(mesh.cells) if c.type in VOLUME_CELLS]
     if not blocks:
         kinds = sorted({c.type for c in mesh.cells}) or ["none"]
         raise MeshError(
-            f"{path}: no linear tetrahedra (cell types: {', '.join(kinds)}); expected "
-            "'tetra' cells (surface meshes go through the mesh pipeline)"
+            f"{path}: no volume cells (cell types: {', '.join(kinds)}); expected 'tetra' cells (or "
+            "linear hexahedra, wedges, pyramids; surface meshes go through the mesh pipeline)"
         )
-    tets = np.concatenate([c.data for _, c in blocks]).astype(np.int64)
     X = np.asarray(mesh.points, dtype=float)
     if X.ndim != 2 or X.shape[1] < 3:
         X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
-    return X[:, :3], tets, _element_sets(mesh, [i for i, _ in blocks]), _node_sets(mesh)
+    X = X[:, :3]
+    tets, owner, split = _volume_tets(path, mesh, X, blocks)
+    sets = {
+        k: np.nonzero(np.isin(owner, cells))[0]
+        for k, cells in _element_sets(mesh, [i for i, _ in blocks]).items()
+    }
+    return VolumeMeshFile(X, tets, sets, _node_sets(mesh), split)
+
+
+def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
+    """The tetrahedra (M, 4) of the volume cell blocks in file order, the volume cell (numbered
+    over the blocks) each comes from (M,), and the count of cells split per kind."""
+    first = np.cumsum([0] + [len(c.data) for c in mesh.cells])  # a block's first cell in the file
+    tets: list[np.ndarray] = []
+    owner: list[np.ndarray] = []
+    split: dict[str, int] = {}
+    n = 0
+    for i, c in blocks:
+        data = np.asarray(c.data, np.int64)
+        if c.type == "tetra":
+            t, o = data.reshape(-1, 4), np.arange(len(data))
+        else:
+            t, o = split_cells(X, c.type, data, what=f"{path}: cell", first=int(first[i]))
+            split[c.type] = split.get(c.type, 0) + len(data)
+        tets.append(t)
+        owner.append(o + n)
+        n += len(data)
+    return np.concatenate(tets), np.concatenate(owner), split
 
 
 def _element_sets(mesh, blocks: list[int]) -> dict[str, np.ndarray]:

@@ -1,5 +1,6 @@
-"""NiftySim model import (XML, T4 and T4ANP elements): nodes and elements (listed, or from an
-<MSHMesh> / <VTKMesh> file: niftysim_geometry.py), element sets with their
+"""NiftySim model import (XML; T4, T4ANP, and H8 split into tetrahedra: niftysim_elements.py):
+nodes and elements (listed, or from an <MSHMesh> / <VTKMesh> file: niftysim_geometry.py), element
+sets with their
 materials, Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
 analytical rigid contacts (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and
 motions), closed ContactSurfaces (fixed or moving, with SlvNodes), SubModels (merged into one model, with
@@ -214,17 +215,22 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         if child.tag not in _KNOWN_TOP:
             unsupported(child.tag, "not implemented in pliant")
 
-    X, T, etype = _mesh(root, f)
+    from .niftysim_elements import as_tets, h8_as_t4anp
+
+    X, E, etype = _mesh(root, f)
+    T, owner = as_tets(X, E, f, "Elements")  # owner: the model's element of each tet
     T = _reoriented(X, T, f, warnings)
-    dt, total, damping, default_rho, collide = _system_params(root, f, unsupported, warnings)
+    dt, total, damping, default_rho, collide = _system_params(root, f, unsupported, warnings, etype)
     b = ModelBuilder()
     with _named(f, "Elements"):
         b.add_mesh(X, T, source=f)
-    _submeshes(root, T, len(X), f, warnings)
+    _submeshes(root, T, owner, len(E), len(X), f, warnings)
     b.damping = damping
-    b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
     b.nodal_pressure_stabilization = 0.0  # NiftySim's T4ANP: the plain average
-    _element_sets(root, b, len(T), default_rho, f, unsupported)
+    _element_sets(root, b, owner, len(E), default_rho, f, unsupported)
+    b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
+    if etype == "H8":
+        b.nodal_pressure = h8_as_t4anp(b, len(E), len(T), f, warnings)
     shapes = {
         "RAMP": lambda: Ramp(total),
         "STEP": lambda: Step(0.0),
@@ -291,6 +297,7 @@ def _flatten(root, f: str):
 def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
     """<Nodes> (N, 3) and <Elements> (M, 4) with their counts checked, or the mesh of an <MSHMesh>
     or <VTKMesh> file (niftysim_geometry.py); the element type."""
+    from .niftysim_elements import ELEMENT_NODES
     from .niftysim_geometry import MESH_FILE_TAGS, mesh_file
 
     nodes_el = root.find("Nodes")
@@ -319,16 +326,20 @@ def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
             f"<Nodes NumNodes={nodes_el.get('NumNodes')}> but {len(X)} nodes listed", f, "Nodes"
         )
     etype = elems_el.get("Type")
-    if etype not in ("T4", "T4ANP"):  # other connectivities cannot be read as tetrahedra: not ignorable
+    if etype not in ELEMENT_NODES:  # other connectivities cannot be read: not ignorable
         raise NiftySimError(
-            f"unsupported NiftySim feature Elements Type={etype}: pliant has linear tetrahedra (T4) only",
+            f"unsupported NiftySim feature Elements Type={etype}: pliant imports T4, T4ANP and H8 "
+            "(split into tetrahedra)",
             f,
             "Elements",
         )
+    n = ELEMENT_NODES[etype]
     T = _numbers(elems_el, f, "Elements", np.int64)
-    if T.size % 4:
-        raise NiftySimError(f"<Elements>: {T.size} indices, not a multiple of 4", f, "Elements")
-    T = T.reshape(-1, 4)
+    if T.size % n:
+        raise NiftySimError(
+            f"<Elements Type={etype}>: {T.size} indices, not a multiple of {n}", f, "Elements"
+        )
+    T = T.reshape(-1, n)
     M = len(T)
     if "NumEls" in elems_el.attrib and _scalar(elems_el.get("NumEls"), f, "Elements NumEls", int, 0) != M:
         raise NiftySimError(
@@ -338,12 +349,14 @@ def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
     return X, T, etype
 
 
-def _submeshes(root, T: np.ndarray, n_nodes: int, f: str, warnings: list[str]) -> None:
+def _submeshes(
+    root, T: np.ndarray, owner: np.ndarray, M: int, n_nodes: int, f: str, warnings: list[str]
+) -> None:
     """<SubMesh>start end</SubMesh>: element ranges [start, end) naming the meshes of a model (as
-    ball_ball.xml's two balls). Checked (integers, 0 <= start < end <= element count, no overlap);
+    ball_ball.xml's two balls; elements as the model numbers them, the tets T coming from the
+    elements ``owner``). Checked (integers, 0 <= start < end <= element count, no overlap);
     pliant takes the bodies from the mesh's connectivity (body_labels), so a range that cuts
     through a connected body leaves a warning."""
-    M = len(T)
     ranges: list[tuple[int, int, str]] = []
     for k, sm in enumerate(root.findall("SubMesh")):
         key = f"SubMesh[{k}]"
@@ -364,7 +377,8 @@ def _submeshes(root, T: np.ndarray, n_nodes: int, f: str, warnings: list[str]) -
     if ranges:
         from ..contact.soft import body_labels
 
-        labels = body_labels(T, n_nodes)
+        labels = np.zeros(M, np.int64)
+        labels[owner] = body_labels(T, n_nodes)  # an element's tets are one body
         whole = np.bincount(labels)
         for a, e, key in ranges:
             part = np.bincount(labels[a:e], minlength=whole.size)
@@ -375,7 +389,7 @@ def _submeshes(root, T: np.ndarray, n_nodes: int, f: str, warnings: list[str]) -
                 )
 
 
-def _system_params(root, f: str, unsupported, warnings: list[str]):
+def _system_params(root, f: str, unsupported, warnings: list[str], etype: str):
     """<SystemParams>: time step [s], total time [s], damping [1/s], default density [kg/m³]."""
     sp = root.find("SystemParams")
     if sp is None:
@@ -401,7 +415,8 @@ def _system_params(root, f: str, unsupported, warnings: list[str]):
         for k in ("DoDeformableCollision", "DoSelfCollision")
     )
     if "HGKappa" in params:
-        warnings.append(f"{f}: HGKappa ignored (hourglass control applies to H8 elements only)")
+        why = "tetrahedra have no hourglass modes" if etype == "H8" else "it applies to H8 elements only"
+        warnings.append(f"{f}: HGKappa ignored (hourglass control; {why})")
 
     return dt, total, damping, default_rho, collide
 
@@ -439,8 +454,9 @@ def facets_facing(X: np.ndarray, B: np.ndarray, normal: np.ndarray, angle: float
     return B[cosang >= np.cos(np.radians(angle)) - 1e-12]
 
 
-def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupported) -> None:
-    """<ElementSet>s: a material and a density on listed (or all) elements."""
+def _element_sets(root, b: ModelBuilder, owner: np.ndarray, M: int, default_rho, f: str, unsupported) -> None:
+    """<ElementSet>s: a material and a density on listed (or all) of the model's M elements (the
+    tets of element e are those whose ``owner`` is e)."""
     covered = np.zeros(M, bool)
     for k, es in enumerate(root.findall("ElementSet")):
         key = f"ElementSet[{k}]"
@@ -490,7 +506,8 @@ def _element_sets(root, b: ModelBuilder, M: int, default_rho, f: str, unsupporte
                     f,
                     f"{key}/Material",
                 )
-            b.set_material(material, rho, elements=elems, name=key)
+            tets = elems if M == len(owner) else np.nonzero(np.isin(owner, elems))[0]
+            b.set_material(material, rho, elements=tets, name=key)
     if not covered.all():
         e = int(np.argmin(covered))
         raise NiftySimError(f"element {e} is in no <ElementSet>; expected every element in one (§3.4.1)", f)

@@ -38,12 +38,8 @@ def mesh_file(el, f: str) -> tuple[np.ndarray, np.ndarray, str]:
     folder."""
     key = el.tag
     etype = el.get("Type")
-    if etype == "H8":
-        raise NiftySimError(
-            f"unsupported NiftySim feature {key} Type=H8: pliant has linear tetrahedra (T4) only", f, key
-        )
-    if etype not in ("T4", "T4ANP"):
-        raise NiftySimError(f"<{key} Type={etype!r}>: expected T4 or T4ANP", f, key)
+    if etype not in ("T4", "T4ANP", "H8"):
+        raise NiftySimError(f"<{key} Type={etype!r}>: expected T4, T4ANP or H8", f, key)
     name = (el.text or "").strip()
     if not name:
         raise NiftySimError(f"<{key}> names no mesh file", f, key)
@@ -57,13 +53,30 @@ def mesh_file(el, f: str) -> tuple[np.ndarray, np.ndarray, str]:
             f,
             key,
         )
-    from .mesh import read_volume_mesh
-
     try:
-        X, T, _ = read_volume_mesh(path)
+        X, T = _file_cells(path, "hexahedron" if etype == "H8" else "tetra", f"<{key} Type={etype}>")
     except MeshError as e:
         raise NiftySimError(str(e), f, key) from None
     return _transformed(X, el, f, key), T, etype
+
+
+def _file_cells(path: Path, kind: str, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """A mesh file's nodes (N, 3) and its cells of ``kind`` (meshio's name), in file order: the
+    element numbering the model's sets use. A file whose volume cells are of another kind is
+    refused (NiftySim reads the type the model names)."""
+    from .mesh import SURFACE_CELLS
+    from .vtk_grid import read_meshio_or_grid
+
+    mesh = read_meshio_or_grid(path, "volume mesh")
+    other = sorted({c.type for c in mesh.cells} - {kind} - SURFACE_CELLS)
+    blocks = [np.asarray(c.data, np.int64) for c in mesh.cells if c.type == kind]
+    if other or not blocks:
+        found = ", ".join(sorted({c.type for c in mesh.cells})) or "none"
+        raise MeshError(f"{path}: cells {found}; {what} expects {kind} cells only")
+    X = np.asarray(mesh.points, float)
+    if X.ndim != 2 or X.shape[1] < 3:
+        X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
+    return X[:, :3], np.concatenate(blocks)
 
 
 def _transformed(X: np.ndarray, el, f: str, key: str) -> np.ndarray:
@@ -221,21 +234,36 @@ def surface_faces(c, X: np.ndarray, T: np.ndarray, f: str, key: str) -> tuple[np
     elif c.get("NumFaces") == "all":
         faces, orient = boundary_faces(T)[0], True
     else:
-        if c.get("FaceType", "Tri") != "Tri":
-            raise NiftySimError(f"FaceType={c.get('FaceType')!r}: T4 meshes have Tri faces", f, key)
+        kind = c.get("FaceType", "Tri")
+        if kind not in ("Tri", "Quad"):
+            raise NiftySimError(f"FaceType={kind!r}: expected Tri (T4 meshes) or Quad (H8 meshes)", f, key)
         fe = c.find("Faces")
         if fe is None:
             raise NiftySimError(f'{ctype} needs <Faces>, NumFaces="all" or SpecType="NORMAL"', f, key)
         faces = _numbers(fe, f, f"{key}/Faces", np.int64)
-        if faces.size % 3:
-            raise NiftySimError(f"<Faces>: {faces.size} indices, not a multiple of 3", f, key)
-        faces, orient = faces.reshape(-1, 3), False
+        corners = 3 if kind == "Tri" else 4
+        if faces.size % corners:
+            raise NiftySimError(
+                f"<Faces FaceType={kind}>: {faces.size} indices, not a multiple of {corners}", f, key
+            )
+        faces, orient = faces.reshape(-1, corners), False
         num = c.get("NumFaces")
         if num is not None and num.isdigit() and int(num) != len(faces):
             raise NiftySimError(f"NumFaces={num} but {len(faces)} faces listed", f, key)
+        if kind == "Quad":  # each as two triangles, cut as the tetrahedra beside it are
+            from .niftysim_elements import quads_as_triangles
+
+            faces = quads_as_triangles(faces)
     if len(faces) == 0:
         raise NiftySimError(f"{ctype}: no faces selected", f, key)
     return faces, orient
+
+
+def triangles_per_face(c) -> int:
+    """2 where a Pressure or Traction constraint lists quadrilateral faces (FaceType="Quad", H8
+    meshes: surface_faces gives two triangles for each, in order), else 1."""
+    listed = c.get("SpecType", "NODES") != "NORMAL" and c.get("NumFaces") != "all"
+    return 2 if listed and c.get("FaceType") == "Quad" else 1
 
 
 def surface_load(c, b, T: np.ndarray, shapes: dict, f: str, key: str, unsupported) -> None:
@@ -267,14 +295,16 @@ def surface_load(c, b, T: np.ndarray, shapes: dict, f: str, key: str, unsupporte
                 raise NiftySimError(f"<Magnitude>: expected one value, got {v.size}", f, f"{key}/{tag}")
             b.add_pressure(faces, float(v[0]), shapes[shape](), orient=orient)
             return
-        want = 3 if mtype == "UNIFORM" else 3 * len(faces)
+        per = triangles_per_face(c)
+        want = 3 if mtype == "UNIFORM" else 3 * len(faces) // per
         if v.size != want:
             raise NiftySimError(
                 f"<Magnitudes Type={mtype}>: {v.size} values; expected {want} (tx ty tz"
-                + (")" if mtype == "UNIFORM" else f" for each of the {len(faces)} faces)"),
+                + (")" if mtype == "UNIFORM" else f" for each of the {len(faces) // per} faces)"),
                 f,
                 f"{key}/{tag}",
             )
-        b.add_traction(faces, -v.reshape(-1, 3) if mtype == "DIFFORM" else -v, shapes[shape]())
+        t = -v.reshape(-1, 3).repeat(per, axis=0) if mtype == "DIFFORM" else -v
+        b.add_traction(faces, t, shapes[shape]())
     except InputError as e:
         raise NiftySimError(str(e), f, key) from None

@@ -21,7 +21,14 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from .niftysim import NiftySimError, _mesh, _numbers, element_set
-from .niftysim_geometry import MESH_FILE_TAGS, constraint_nodes, surface_faces, uses_node_shorthand
+from .niftysim_elements import as_tets
+from .niftysim_geometry import (
+    MESH_FILE_TAGS,
+    constraint_nodes,
+    surface_faces,
+    triangles_per_face,
+    uses_node_shorthand,
+)
 
 __all__ = ["flatten_submodels"]
 
@@ -63,8 +70,9 @@ def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
         T_all.append(node_map[T])
         for k, es in enumerate(sm.findall("ElementSet")):
             flat.append(_offset_set(es, len(T), first, f, f"{key}/ElementSet[{k}]"))
+        tets = as_tets(X, T, f, key)[0]  # an H8 sub-model's surfaces are those of its tetrahedra
         for k, c in enumerate(sm.findall("Constraint")):
-            flat.append(_mapped_constraint(c, node_map, X, T, f, f"{key}/Constraint[{k}]"))
+            flat.append(_mapped_constraint(c, node_map, X, tets, f, f"{key}/Constraint[{k}]"))
     nodes = ET.SubElement(flat, "Nodes", {"DOF": "3", "NumNodes": str(len(X_all))})
     nodes.text = "\n".join(" ".join(repr(float(v)) for v in x) for x in X_all)
     T = np.concatenate(T_all)
@@ -153,6 +161,15 @@ def _mapped_constraint(c: ET.Element, node_map, X, T, f: str, key: str) -> ET.El
 
     if c.get("Type") in ("Pressure", "Traction"):
         faces, _ = surface_faces(c, X, T, f, key)  # on the sub-model's own surface
+        per = triangles_per_face(c)
+        mag = out.find("Magnitudes")
+        if per > 1 and mag is not None and mag.get("Type") == "DIFFORM":  # a traction per triangle
+            v = _numbers(mag, f, f"{key}/Magnitudes")
+            m = ET.Element("Magnitudes", dict(mag.attrib))
+            t = v.reshape(-1, 3).repeat(per, axis=0) if v.size % 3 == 0 else v  # else named on import
+            m.text = " ".join(repr(float(x)) for x in t.ravel())
+            out.remove(mag)
+            out.append(m)
         for child in [e for e in out if e.tag in ("Normal", "RestrictTo")]:
             out.remove(child)
         fe = ET.SubElement(out, "Faces")

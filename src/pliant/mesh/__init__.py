@@ -1,10 +1,12 @@
 """Mesh pipeline: primitives, surfaces (read/write, check, repair, QEM simplification, Loop
-subdivision), tetrahedralization (fTetWild), quality, embedding of fine surfaces."""
+subdivision), tetrahedralization (fTetWild), hexahedra, wedges and pyramids split into
+tetrahedra, quality, embedding of fine surfaces."""
 
 from .embed import Embedding, embed_surface
 from .pipeline import default_edge_length, surface_to_tets
 from .primitives import box_tets, graded_coordinates, grid_tets, orient_positive
 from .quality import critical_time_steps, quality_summary, tet_quality
+from .split import split_cells, split_quads
 from .repair import check_surface, repair_surface, simplify, subdivide_loop
 from .surface import primitive_surface, read_surface, write_surface
 from .tetra import tetrahedralize
@@ -14,6 +16,8 @@ __all__ = [
     "grid_tets",
     "graded_coordinates",
     "orient_positive",
+    "split_cells",
+    "split_quads",
     "read_surface",
     "write_surface",
     "primitive_surface",

@@ -29,11 +29,21 @@ def _rotation(deg) -> np.ndarray:
     return R
 
 
+def _split_note(f, split: dict[str, int], tets: int) -> str:
+    """The note that a mesh file's hexahedra, wedges or pyramids were split into tetrahedra."""
+    plural = {"hexahedron": "hexahedra", "wedge": "wedges", "pyramid": "pyramids"}
+    cells = ", ".join(f"{n:,} {plural[kind] if n > 1 else kind}" for kind, n in split.items())
+    return (
+        f"{f}: {cells} split into tetrahedra (pliant.mesh.split; {tets:,} tets in all): pliant "
+        "simulates linear tetrahedra; with a nearly incompressible material set solver.nodal_pressure"
+    )
+
+
 def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh"):
     """The mesh of a [mesh] table (or of a [[body]] table: ``key`` names it in errors): nodes [m]
     (N, 3), tets (M, 4), and a mesh file's element sets and node sets (pliant.io.mesh)."""
     from .. import mesh as pm
-    from ..io.mesh import read_volume_mesh_sets
+    from ..io.mesh import read_volume_mesh_file
     from ..io.vtk_polydata import is_vtk_polydata
 
     check_keys(
@@ -119,7 +129,9 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                     scene.meta["embed_surface"] = [Ve, Fe]
                 scale = 1.0
             else:
-                X, T, sets, node_sets = read_volume_mesh_sets(f)
+                X, T, sets, node_sets, split = read_volume_mesh_file(f)
+                if split:
+                    scene.warnings.append(_split_note(f, split, len(T)))
         except MeshError as e:
             raise ctx.error(f"{key}.file", str(e)) from None
         scene.meta["mesh_source"] = str(f)

@@ -1,0 +1,120 @@
+"""Linear hexahedra, wedges and pyramids split into tetrahedra, conforming across shared faces.
+
+pliant's element is the linear tetrahedron. A cell with quadrilateral faces is split by the
+*pulling* triangulation from its vertex of smallest global index v (De Loera, Rambau & Santos,
+"Triangulations", Springer 2010, §4.3.2): one tetrahedron (v, a, b, c) for every triangle abc of
+the faces that do not contain v, each quadrilateral face cut along its diagonal through the face's
+vertex of smallest global index (Dompierre, Labbé, Vallet & Camarero 1999, "How to subdivide
+pyramids, prisms and hexahedra into tetrahedra", 8th International Meshing Roundtable). The faces
+that contain v are cut through v, which is their smallest vertex too, so every quadrilateral is
+cut by the same rule from both cells that share it: the tetrahedra of neighbouring cells meet on
+whole triangles, and a tetrahedron beside the cell meets its triangular faces as before. A
+hexahedron gives 6 tetrahedra, a wedge 3, a pyramid 2; a cell with repeated nodes (a wedge written
+as a hexahedron) drops the tetrahedra those make flat. For a convex cell every tetrahedron of the
+cone lies inside it with one orientation; a cell whose tetrahedra disagree in sign or have no
+volume is too distorted to split and is named in the error.
+
+Node orders are VTK's (meshio's, NiftySim's H8: the bottom face 0-1-2-3, then the top face 4-7
+above it; a wedge's triangles 0-1-2 and 3-4-5; a pyramid's base 0-1-2-3 and apex 4); either
+orientation of a cell is accepted and its tetrahedra come out positive."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import MeshError
+from .primitives import tet_volumes
+
+__all__ = ["SPLIT_CELLS", "split_cells", "split_quads"]
+
+# Faces of each cell kind by local node, wound outward for VTK's node order (a cell given in the
+# mirrored order has them all wound inward, and its tetrahedra all negative until turned over).
+SPLIT_CELLS: dict[str, tuple[int, tuple[tuple[int, ...], ...]]] = {
+    "hexahedron": (
+        8,
+        ((0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)),
+    ),
+    "wedge": (6, ((0, 1, 2), (3, 5, 4), (0, 3, 4, 1), (1, 4, 5, 2), (2, 5, 3, 0))),
+    "pyramid": (5, ((0, 3, 2, 1), (0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4))),
+}
+
+
+def split_cells(
+    nodes: np.ndarray, kind: str, cells: np.ndarray, what: str = "cell", first: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Tetrahedra of linear cells of one ``kind`` ("hexahedron", "wedge", "pyramid"; node orders in
+    the module's docstring). nodes [m] (N, 3), cells (M, n) node indices. Returns positively oriented
+    tets (K, 4), in cell order, and the cell of each (K,). Raises MeshError naming the first cell
+    (``what`` first + k) whose tetrahedra are flat or of mixed orientation."""
+    n, faces = SPLIT_CELLS[kind]
+    C = np.asarray(cells, np.int64).reshape(-1, n)
+    v = C.min(axis=1)
+    parts, owners, order = [], [], []
+    for f, face in enumerate(faces):
+        F = C[:, face]
+        keep = ~np.any(F == v[:, None], axis=1)  # faces through v add nothing to the cone
+        for t, tri in enumerate(_triangles(F)):
+            ok = keep & (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 2] != tri[:, 0])
+            rows = np.nonzero(ok)[0]
+            parts.append(np.column_stack([v[rows], tri[rows]]))
+            owners.append(rows)
+            order.append(np.full(rows.size, 2 * f + t))
+    owner = np.concatenate(owners)
+    rank = np.lexsort((np.concatenate(order), owner))  # cell by cell, faces in their listed order
+    tets, owner = np.concatenate(parts)[rank], owner[rank]
+    if C.size and (C.min() < 0 or C.max() >= len(nodes)):
+        return tets, owner  # indices beyond the nodes: the mesh's own check names them
+    _check_cells(nodes, C, tets, owner, kind, what, first)
+    flip = tet_volumes(nodes, tets) < 0
+    tets[flip, 2], tets[flip, 3] = tets[flip, 3].copy(), tets[flip, 2].copy()
+    return tets, owner
+
+
+def split_quads(Q: np.ndarray) -> np.ndarray:
+    """Triangles (2 F, 3) of quadrilaterals Q (F, 4), each cut along its diagonal through its
+    smallest node as split_cells cuts the faces of cells (in their winding; two a quad, in order)."""
+    t1, t2 = _triangles(np.asarray(Q, np.int64).reshape(-1, 4))
+    return np.stack([t1, t2], axis=1).reshape(-1, 3)
+
+
+def _triangles(F: np.ndarray) -> tuple[np.ndarray, ...]:
+    """A face's triangles (rows of F, (M, 3) or (M, 4)): a quadrilateral a-b-c-d cut along a–c
+    where a or c is its smallest node, else along b–d."""
+    if F.shape[1] == 3:
+        return (F,)
+    a, b, c, d = F.T
+    through_ac = np.minimum(a, c) < np.minimum(b, d)
+    t1 = np.where(through_ac[:, None], np.column_stack([a, b, c]), np.column_stack([b, c, d]))
+    t2 = np.where(through_ac[:, None], np.column_stack([a, c, d]), np.column_stack([b, d, a]))
+    return t1, t2
+
+
+def _check_cells(
+    nodes: np.ndarray, C: np.ndarray, tets: np.ndarray, owner: np.ndarray, kind: str, what: str, first: int
+) -> None:
+    """MeshError naming the first cell C[k] with no tetrahedron, a flat one, or tetrahedra of both
+    orientations (a cell too distorted, or not convex enough, to be split). Indices beyond the
+    nodes and non-finite coordinates are left to the mesh's own checks, which name them."""
+    m = len(C)
+    vol = tet_volumes(nodes, tets)
+    count = np.bincount(owner, minlength=m)
+    scale = np.zeros(m)
+    np.maximum.at(scale, owner, np.abs(vol))
+    pos = np.bincount(owner, weights=(vol > 0).astype(float), minlength=m)
+    flat = np.zeros(m, bool)
+    np.logical_or.at(flat, owner, ~(np.abs(vol) > 1e-12 * scale[owner]))
+    finite = np.bincount(owner, weights=(~np.isfinite(vol)).astype(float), minlength=m) == 0
+    bad = finite & ((count == 0) | flat | ((pos > 0) & (pos < count)))
+    if bad.any():
+        k = int(np.argmax(bad))
+        why = (
+            "all its nodes on too few distinct points"
+            if count[k] == 0
+            else "a flat tetrahedron"
+            if flat[k]
+            else "tetrahedra of both orientations (twisted or not convex)"
+        )
+        raise MeshError(
+            f"{what} {first + k} ({kind}): split into tetrahedra it gives {why}; expected a convex "
+            f"cell with its nodes in VTK order (nodes {[int(i) for i in C[k]]})"
+        )

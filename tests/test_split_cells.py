@@ -1,0 +1,226 @@
+"""Linear hexahedra, wedges and pyramids split into tetrahedra (pliant.mesh.split) and read from
+mesh files (pliant.io.read_volume_mesh_file).
+
+References: a file gmsh 4.15.2 wrote with all four cell kinds (its counts, and the volumes its
+MeshVolume plugin gave: tests/data/README.md); the volumes of unit cells in closed form; the
+patch test (u = A X gives zero force at every interior node and the closed-form stress in every
+element only if the tetrahedra of neighbouring cells meet on whole faces); the boundary of a
+box."""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import pliant as pl
+from pliant.cli import app
+from pliant.errors import MeshError
+from pliant.io import read_volume_mesh_file
+from pliant.mesh.primitives import tet_volumes
+from pliant.mesh.split import split_cells
+from pliant.mesh.topology import boundary_faces
+
+HYBRID = Path(__file__).parent / "data" / "gmsh415_hybrid_ascii41.msh"
+runner = CliRunner()
+
+UNIT = {
+    "hexahedron": (
+        np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1.0]]),
+        1.0,
+    ),
+    "wedge": (np.array([[0, 0, 0], [0, 1, 0], [1, 0, 0], [0, 0, 1], [0, 1, 1], [1, 0, 1.0]]), 0.5),
+    "pyramid": (np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, 1.0]]), 1 / 3),
+}
+MIRRORED = {"hexahedron": [4, 5, 6, 7, 0, 1, 2, 3], "wedge": [0, 2, 1, 3, 5, 4], "pyramid": [0, 3, 2, 1, 4]}
+
+
+@pytest.mark.parametrize("kind", sorted(UNIT))
+def test_a_cell_numbered_any_way_is_filled_by_positive_tetrahedra(kind):
+    """Every numbering of a unit cell's nodes (each local corner given each global index), in VTK's
+    orientation and mirrored: 6, 3 or 2 positive tetrahedra whose volumes sum to the cell's (closed
+    form; 1e-12 is round-off)."""
+    X, volume = UNIT[kind]
+    n = len(X)
+    for perm in itertools.permutations(range(n)):
+        p = np.array(perm)
+        Xp, cell = X[p], np.argsort(p)  # local corner i is global node cell[i], at X[i]
+        for c in (cell, cell[MIRRORED[kind]]):
+            T, owner = split_cells(Xp, kind, c[None, :])
+            v = tet_volumes(Xp, T)
+            assert len(T) == {8: 6, 6: 3, 5: 2}[n] and np.all(owner == 0)
+            assert v.min() > 0 and v.sum() == pytest.approx(volume, abs=1e-12)
+
+
+def test_a_wedge_written_as_a_hexahedron_with_repeated_nodes_is_the_wedge():
+    """Nodes 0 1 2 2 3 4 5 5 (a wedge some writers store as a hexahedron): the flat tetrahedra go,
+    the rest fill the wedge (volume 1/2), for every numbering."""
+    X, volume = UNIT["wedge"]
+    for perm in itertools.permutations(range(6)):
+        p = np.array(perm)
+        cell = np.argsort(p)[[0, 1, 2, 2, 3, 4, 5, 5]]
+        T, _ = split_cells(X[p], "hexahedron", cell[None, :])
+        assert tet_volumes(X[p], T).min() > 0
+        assert tet_volumes(X[p], T).sum() == pytest.approx(volume, abs=1e-12)
+
+
+def test_hexahedra_numbered_at_random_meet_on_whole_faces():
+    """A 4 × 4 × 4 grid of hexahedra, its interior nodes jittered by up to 8 % of a cell, its nodes
+    numbered at random and half of its cells mirrored: the tetrahedra's boundary is the box's 96
+    quads as 192 triangles
+    (a quad cut one way from one cell and the other way from its neighbour would add 4 triangles
+    inside), and they fill the box (volume 1 to round-off)."""
+    rng = np.random.default_rng(7)
+    n = 4
+    g = np.stack(np.meshgrid(*(np.linspace(0, 1, n + 1),) * 3, indexing="ij"), -1).reshape(-1, 3)
+    inner = np.all((g > 0) & (g < 1), axis=1)
+    idx = np.arange(len(g)).reshape((n + 1,) * 3)
+    corners = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+    H = np.array(
+        [
+            [idx[i + a, j + b, k + c] for a, b, c in corners]
+            for i, j, k in itertools.product(range(n), repeat=3)
+        ]
+    )
+    for _ in range(10):
+        perm = rng.permutation(len(g))
+        X = g[perm] + np.where(inner[perm, None], rng.uniform(-0.02, 0.02, g.shape), 0.0)
+        C = np.argsort(perm)[H]
+        flip = rng.random(len(C)) < 0.5
+        C[flip] = C[flip][:, MIRRORED["hexahedron"]]
+        T, owner = split_cells(X, "hexahedron", C)
+        assert len(T) == 6 * len(H) and np.array_equal(owner, np.repeat(np.arange(len(H)), 6))
+        assert tet_volumes(X, T).min() > 0
+        assert tet_volumes(X, T).sum() == pytest.approx(1.0, abs=1e-12)
+        assert len(boundary_faces(T)[0]) == 2 * 6 * n * n
+
+
+def test_gmsh_hybrid_mesh_of_every_cell_kind():
+    """gmsh's file: 144 hexahedra, 24 pyramids, 146 wedges and 528 tets become 528 + 6·144 + 2·24 +
+    3·146 = 1,878 tets; each physical group (an element set by name) holds 4.0e-6 m³ as gmsh's
+    MeshVolume says (1e-12 relative: round-off), and every boundary triangle lies on the L-shaped
+    body's outer faces, whose area is 3.6e-3 m² (closed form): the cells' tetrahedra meet each
+    other, and gmsh's own tets, on whole faces."""
+    m = read_volume_mesh_file(HYBRID)
+    assert m.split == {"hexahedron": 144, "pyramid": 24, "wedge": 146}
+    assert m.tets.shape == (1878, 4)
+    v = tet_volumes(m.nodes, m.tets)
+    assert v.min() > 0
+    for name in ("hexes", "tets", "wedges"):
+        assert v[m.element_sets[name]].sum() == pytest.approx(4.0e-6, rel=1e-12)
+    assert sum(s.size for k, s in m.element_sets.items() if not k.startswith("gmsh:")) == len(m.tets)
+    B = boundary_faces(m.tets)[0]
+    P = m.nodes[B]
+    c = P.mean(axis=1)
+    near = lambda a, b: np.abs(a - b) < 1e-12  # noqa: E731
+    outer = near(c[:, 0], 0) | near(c[:, 0], 0.04) | near(c[:, 1], 0) | near(c[:, 1], 0.02) | near(c[:, 2], 0)
+    outer |= near(c[:, 2], 0.02) & (c[:, 0] > 0.02) | near(c[:, 2], 0.01) & (c[:, 0] < 0.02)
+    outer |= near(c[:, 0], 0.02) & (c[:, 2] > 0.01)
+    assert outer.all()
+    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1).sum()
+    # bottom, the two tops, the sides y = 0 and y = 0.02, x = 0, x = 0.04, the step at x = 0.02
+    faces = [0.04 * 0.02, 0.02 * 0.02, 0.02 * 0.02, 2 * (0.04 * 0.01 + 0.02 * 0.01), 0.02 * 0.01, 0.02 * 0.02]
+    assert area == pytest.approx(sum(faces) + 0.02 * 0.01, rel=1e-12)
+
+
+def _cauchy_neo_hookean(F, mu, K):
+    """σ = μ J^(−5/3) dev(F Fᵀ) + K (J − 1) I of the decoupled Neo-Hookean, Voigt order."""
+    J = np.linalg.det(F)
+    b = F @ F.T
+    sig = mu * J ** (-5 / 3) * (b - np.trace(b) / 3 * np.eye(3)) + K * (J - 1) * np.eye(3)
+    return sig[[0, 1, 2, 0, 1, 0], [0, 1, 2, 1, 2, 2]]
+
+
+def _shuffled(tmp_path: Path, seed: int) -> Path:
+    """gmsh's hybrid mesh with its nodes numbered at random, as a .vtu."""
+    import meshio
+
+    mesh = meshio.read(HYBRID)
+    perm = np.random.default_rng(seed).permutation(len(mesh.points))
+    new = np.argsort(perm)  # old node i is new node new[i]
+    cells = [(c.type, new[c.data]) for c in mesh.cells if c.data.ndim == 2 and c.data.shape[1] >= 4]
+    path = tmp_path / f"shuffled{seed}.vtu"
+    meshio.write(path, meshio.Mesh(mesh.points[perm], cells))
+    return path
+
+
+@pytest.mark.parametrize("anp", [False, True])
+@pytest.mark.parametrize("numbering", ["gmsh", "random"])
+def test_patch_test_on_the_gmsh_hybrid_mesh(backend, anp, numbering, tmp_path):
+    """u = A X on gmsh's hybrid mesh, with its own node numbering and with one drawn at random:
+    the internal force vanishes at every node off the boundary and every element carries the
+    closed-form stress of F = I + A (a quad cut one way from one cell and the other way from its
+    neighbour leaves a force at its nodes). Tolerances: round-off of sums of O(100) terms of size
+    σ·h² in float64 (1e-10 relative)."""
+    m = read_volume_mesh_file(HYBRID if numbering == "gmsh" else _shuffled(tmp_path, 3))
+    material = pl.NeoHookean(E=3000.0, nu=0.45)
+    b = pl.ModelBuilder()
+    b.add_mesh(m.nodes, m.tets)
+    b.set_material(material, density=1000.0)
+    b.nodal_pressure = anp
+    model = b.finalize("float64", backend=backend)
+    A = np.array([[0.02, 0.01, -0.005], [0.003, -0.01, 0.012], [-0.008, 0.004, 0.015]])
+    s = model.state()
+    s.set_displacements(m.nodes @ A.T)
+    f = model.internal_forces(s)
+    on_boundary = np.zeros(len(m.nodes), bool)
+    on_boundary[boundary_faces(m.tets)[0]] = True
+    expected = _cauchy_neo_hookean(np.eye(3) + A, material.mu, material.K)
+    scale = np.abs(expected).max() * 0.004**2  # σ times a cell face [N]
+    assert (~on_boundary).sum() > 50
+    assert np.abs(f[~on_boundary]).max() < 1e-10 * scale
+    assert np.abs(model.element_results(s)["cauchy"] - expected).max() < 1e-10 * np.abs(expected).max()
+
+
+def test_a_twisted_hexahedron_is_named(tmp_path):
+    """A hexahedron whose top face is turned by 120° about its axis cannot be split into
+    tetrahedra of one orientation: MeshError naming the cell; `pliant mesh quality` exits 2 with it,
+    no traceback."""
+    import meshio
+
+    X, _ = UNIT["hexahedron"]
+    X = X.copy()
+    a = np.radians(120)
+    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    X[4:, :2] = (X[4:, :2] - 0.5) @ R.T + 0.5
+    good = X[:8] + [2, 0, 0]
+    pts = np.vstack([UNIT["hexahedron"][0], X, good])
+    cells = np.array([np.arange(8), np.arange(8, 16), np.arange(16, 24)])
+    path = tmp_path / "twisted.vtu"
+    meshio.write(path, meshio.Mesh(pts, [("hexahedron", cells)]))
+    with pytest.raises(MeshError, match=r"twisted\.vtu: cell 1 \(hexahedron\).*both orientations"):
+        read_volume_mesh_file(path)
+    r = runner.invoke(app, ["mesh", "quality", str(path)])
+    assert r.exit_code == 2 and "cell 1 (hexahedron)" in r.output and "Traceback" not in r.output
+
+
+@pytest.mark.filterwarnings("ignore:.*split into tetrahedra")  # the summary's warning, asserted
+def test_a_scene_on_a_hexahedral_mesh_file_says_it_was_split(tmp_path):
+    """A scene whose [mesh] file holds hexahedra runs, and its summary's warnings say how many
+    cells became how many tets; quadratic hexahedra are still refused by name (exit 2)."""
+    import meshio
+
+    X, T = read_volume_mesh_file(HYBRID)[:2]
+    hexes = [c.data for c in meshio.read(HYBRID).cells if c.type == "hexahedron"][0]
+    used = np.unique(hexes)
+    remap = np.full(len(X), -1)
+    remap[used] = np.arange(used.size)
+    meshio.write(tmp_path / "hexes.vtu", meshio.Mesh(X[used], [("hexahedron", remap[hexes])]))
+    (tmp_path / "s.toml").write_text(
+        '[mesh]\nfile = "hexes.vtu"\n'
+        '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
+        "[solver]\nduration = 0.002\ndt = 1e-4\n"
+        '[[constraint]]\ntype = "fix"\n'
+        "nodes = { plane = { point = [0.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0] } }\n"
+        '[[load]]\ntype = "gravity"\n'
+    )
+    r = runner.invoke(app, ["run", str(tmp_path / "s.toml"), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 0, r.output
+    import json
+
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["elements"] == 6 * len(hexes)
+    assert any("144 hexahedra split into tetrahedra" in w for w in summary["warnings"])
