@@ -23,6 +23,7 @@ from pliant.io.niftysim import load_niftysim
 from pliant.mesh.primitives import tet_volumes
 
 GUIDE = Path(__file__).resolve().parents[2] / "shared" / "niftysim" / "userguide.txt"
+BOX8 = Path(__file__).parent / "data" / "niftysim_box8.msh"  # NiftySim's own H8 test mesh
 runner = CliRunner()
 # Relative tolerance on a relaxed displacement: relax() stops at a residual of 1e-10 of the load.
 RELAXED = 1e-6
@@ -261,3 +262,44 @@ def test_h8_sub_models_merge_and_carry_their_quad_loads(tmp_path):
     assert end.sum() == 4
     expected = (_uniaxial_stretch(-10.0) - 1) * 0.06
     assert sim.displacements[end, 0].mean() == pytest.approx(expected, rel=RELAXED)
+
+
+def test_niftysims_box8_h8_mesh_file_stretches_homogeneously(tmp_path):
+    """NiftySim's box8.msh (12 hexahedra) as <MSHMesh Type="H8">, on rollers chosen by normal
+    (SpecType="NORMAL" on the split mesh's boundary facets), its +x face pulled 10 % of the box's
+    length: every node moves as the homogeneous stretch diag(λ, t, t), λ = 1.1 and t from σ22 = 0
+    of NH (closed form), to RELAXED of the largest displacement."""
+    import shutil
+
+    from scipy.optimize import brentq
+
+    shutil.copy(BOX8, tmp_path / "box8.msh")
+    L = 1 / 6 + 0.5
+
+    def on(normal, dof, kind="Fix", mag=""):
+        spec = f'SpecType="NORMAL"><Normal ToleranceAngle="10">{normal}</Normal>'
+        return f'<Constraint DOF="{dof}" Type="{kind}" LoadShape="RAMP" {spec}{mag}</Constraint>'
+
+    xml = (
+        '<?xml version="1.0"?><Model><MSHMesh Type="H8">box8.msh</MSHMesh><ElementSet Size="all">'
+        '<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>0'
+        "</ElementSet>"
+        + on("-1 0 0", 0)
+        + on("0 -1 0", 1)
+        + on("0 0 -1", 2)
+        + on("1 0 0", 0, "Disp", f'<Magnitudes Type="UNIFORM">{0.1 * L!r}</Magnitudes>')
+        + "<SystemParams><TimeStep>1e-3</TimeStep><TotalTime>0.5</TotalTime><DampingCoeff>20"
+        "</DampingCoeff><Density>1000</Density></SystemParams></Model>"
+    )
+    scene, model, sim = _relaxed(tmp_path, xml, "box8.xml")
+    assert model.nodal_pressure and len(model.tets) == 72
+    mu, K, lam = 1000.0, 20000.0, 1.1
+
+    def sigma22(t):
+        J = lam * t * t
+        return mu * J ** (-5 / 3) * (t * t - lam * lam) / 3 + K * (J - 1)
+
+    t = brentq(sigma22, 0.8, 1.0, xtol=1e-15)
+    X = model.reference_positions
+    expected = (X - X.min(axis=0)) * [lam - 1, t - 1, t - 1]
+    np.testing.assert_allclose(sim.displacements, expected, atol=RELAXED * 0.1 * L)
