@@ -551,3 +551,25 @@ def test_viscoelastic_nhv_and_tiv(tmp_path):
     p.write_text(text)
     with pytest.raises(NiftySimError, match="ViscoParams"):
         load_niftysim(p)
+
+
+def test_rom_off_runs_and_rom_on_is_refused_by_name(tmp_path):
+    """<ROM>0</ROM> (NiftySim's default: reduced order modelling off, as its models/cubehex10.xml
+    writes it) imports as the model without it, the same bits; <ROM>1</ROM> is refused by name
+    and can be skipped knowingly; a value that is not 0 or 1 is named."""
+    X, T, left, right, xml = _cube_xml()
+    runs = []
+    for rom in ("", "<ROM>0</ROM>"):
+        p = tmp_path / "rom.xml"
+        p.write_text(xml.replace("</SystemParams>", rom + "</SystemParams>"))
+        sim = pl.Simulation(load_niftysim(p).builder.finalize("float64"), dt=1e-4)
+        sim.run(steps=50)
+        runs.append(sim.displacements)
+    assert np.abs(runs[0]).max() > 0 and np.array_equal(runs[0], runs[1])
+    p.write_text(xml.replace("</SystemParams>", "<ROM>1</ROM></SystemParams>"))
+    with pytest.raises(NiftySimError, match=r"unsupported NiftySim feature SystemParams/ROM"):
+        load_niftysim(p)
+    assert any("SystemParams/ROM" in w for w in load_niftysim(p, ignore=("SystemParams/ROM",)).warnings)
+    p.write_text(xml.replace("</SystemParams>", "<ROM>on</ROM></SystemParams>"))
+    with pytest.raises(NiftySimError, match=r"\[SystemParams/ROM\].*expected an integer"):
+        load_niftysim(p)

@@ -54,6 +54,7 @@ _SYSTEM = {
     "HGKappa",
     "DoDeformableCollision",
     "DoSelfCollision",
+    "ROM",
 }
 
 
@@ -414,6 +415,9 @@ def _system_params(root, f: str, unsupported, warnings: list[str], etype: str):
         bool(_scalar(params.get(k, "0") or "0", f, f"SystemParams/{k}", int, 0, False))
         for k in ("DoDeformableCollision", "DoSelfCollision")
     )
+    rom = _scalar(params.get("ROM", "0") or "0", f, "SystemParams/ROM", int, 0, False)
+    if rom != 0:  # <ROM>0</ROM> is NiftySim's default, off (user guide §3.10.7)
+        unsupported("SystemParams/ROM", "reduced order modelling is not implemented in pliant; ROM 0 runs")
     if "HGKappa" in params:
         why = "tetrahedra have no hourglass modes" if etype == "H8" else "it applies to H8 elements only"
         warnings.append(f"{f}: HGKappa ignored (hourglass control; {why})")
