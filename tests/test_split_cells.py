@@ -10,6 +10,7 @@ box."""
 from __future__ import annotations
 
 import itertools
+import json
 from pathlib import Path
 
 import numpy as np
@@ -178,7 +179,7 @@ def test_patch_test_on_the_gmsh_hybrid_mesh(backend, anp, numbering, tmp_path):
 def test_a_twisted_hexahedron_is_named(tmp_path):
     """A hexahedron whose top face is turned by 120° about its axis cannot be split into
     tetrahedra of one orientation: MeshError naming the cell; `pliant mesh quality` exits 2 with it,
-    no traceback."""
+    no traceback; without it, the JSON report counts the 2 hexahedra split into 12 tets."""
     import meshio
 
     X, _ = UNIT["hexahedron"]
@@ -186,7 +187,7 @@ def test_a_twisted_hexahedron_is_named(tmp_path):
     a = np.radians(120)
     R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
     X[4:, :2] = (X[4:, :2] - 0.5) @ R.T + 0.5
-    good = X[:8] + [2, 0, 0]
+    good = UNIT["hexahedron"][0] + [2, 0, 0]
     pts = np.vstack([UNIT["hexahedron"][0], X, good])
     cells = np.array([np.arange(8), np.arange(8, 16), np.arange(16, 24)])
     path = tmp_path / "twisted.vtu"
@@ -195,6 +196,10 @@ def test_a_twisted_hexahedron_is_named(tmp_path):
         read_volume_mesh_file(path)
     r = runner.invoke(app, ["mesh", "quality", str(path)])
     assert r.exit_code == 2 and "cell 1 (hexahedron)" in r.output and "Traceback" not in r.output
+    meshio.write(path, meshio.Mesh(pts, [("hexahedron", cells[[0, 2]])]))
+    r = runner.invoke(app, ["mesh", "quality", "--json", str(path)])
+    assert r.exit_code == 0 and json.loads(r.output)["split_cells"] == {"hexahedron": 2}
+    assert json.loads(r.output)["tets"] == 12
 
 
 @pytest.mark.filterwarnings("ignore:.*split into tetrahedra")  # the summary's warning, asserted
@@ -219,8 +224,6 @@ def test_a_scene_on_a_hexahedral_mesh_file_says_it_was_split(tmp_path):
     )
     r = runner.invoke(app, ["run", str(tmp_path / "s.toml"), "-o", str(tmp_path / "out")])
     assert r.exit_code == 0, r.output
-    import json
-
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["elements"] == 6 * len(hexes)
     assert any("144 hexahedra split into tetrahedra" in w for w in summary["warnings"])

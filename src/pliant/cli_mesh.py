@@ -195,7 +195,7 @@ def quality_cmd(
 ):
     """Per-tet radius–edge ratio, dihedral angles, volume and critical time step: summary + PNG."""
     from .io import check_output_file
-    from .io.mesh import read_volume_mesh
+    from .io.mesh import read_volume_mesh_file
     from .materials import LinearElastic
     from .mesh import critical_time_steps, quality_summary, tet_quality
     from .mesh.quality import quality_histogram
@@ -206,16 +206,20 @@ def quality_cmd(
     for name, v in (("--E", E), ("--density", density)):
         if not (np.isfinite(v) and v > 0):
             raise InputError(f"{name} {v}: expected a finite value > 0 (SI units)")
-    X, T, _ = read_volume_mesh(inp)
+    X, T, _, _, split = read_volume_mesh_file(inp)
     q = tet_quality(X, T)
     dt = critical_time_steps(X, T, LinearElastic(E=E, nu=nu), density)
     s = quality_summary(q, dt)
     s["not_conforming"] = conformity_problem(X, T)  # None, or why the mesh cannot be simulated
+    s["split_cells"] = split  # {"hexahedron": n, ...}: the file's cells split into the tets
     if png:
         quality_histogram(png, q, dt)
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return
+    if split:
+        cells = ", ".join(f"{n:,} {kind}" for kind, n in split.items())
+        console.print(f"{inp}: cells split into tets (pliant.mesh.split): {cells}", markup=False)
     console.print(
         f"{inp}: {s['tets']:,} tets, {s['inverted']} inverted, {s['degenerate']} "
         f"degenerate (zero volume), {s['slivers_min_dihedral_below_5deg']} slivers (min "
