@@ -26,6 +26,7 @@ from pliant.mesh.split import split_cells
 from pliant.mesh.topology import boundary_faces
 
 HYBRID = Path(__file__).parent / "data" / "gmsh415_hybrid_ascii41.msh"
+TETRA10 = Path(__file__).parent / "data" / "gmsh415_box_tetra10_ascii22.msh"
 runner = CliRunner()
 
 UNIT = {
@@ -148,15 +149,55 @@ def _shuffled(tmp_path: Path, seed: int) -> Path:
     return path
 
 
+def test_a_quadratic_tet_is_its_eight_linear_ones():
+    """A tetra10 of a skew tet, its corners numbered every way (the mid-edge nodes following
+    them), which makes each of the octahedron's three diagonals the shortest in turn: 8 positive
+    tets through all 10 nodes whose volumes sum to the parent's (closed form; 1e-15 is round-off),
+    each a linear tet of an eighth of it (red refinement: all 8 have the same volume)."""
+    from pliant.mesh.split import refine_tetra10
+
+    P = np.array([[0, 0, 0], [1.0, 0.1, 0], [0.3, 1.2, 0], [0.2, 0.3, 0.9]])
+    volume = abs(np.linalg.det(P[1:] - P[0])) / 6
+    edges = [(0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3)]
+    used = set()
+    for perm in itertools.permutations(range(4)):
+        Q = P[list(perm)]
+        X = np.vstack([Q] + [(Q[a] + Q[b]) / 2 for a, b in edges])
+        T, owner = refine_tetra10(X, np.arange(10)[None, :])
+        v = tet_volumes(X, T)
+        assert len(T) == 8 and set(T.ravel()) == set(range(10)) and np.all(owner == 0)
+        np.testing.assert_allclose(v, volume / 8, rtol=1e-12)
+        inner = {tuple(sorted(t)) for t in T[4:].tolist()}
+        used.add(frozenset.intersection(*(frozenset(t) for t in inner)))  # the diagonal all 4 share
+    assert len(used) == 3
+
+
+def test_gmsh_quadratic_tets_become_eight_linear_tets_each():
+    """gmsh's order-2 mesh of a 0.03 × 0.02 × 0.01 box (88 tetra10, 205 nodes): 704 tets using
+    every node, filling the box (6.0e-6 m³ as gmsh's MeshVolume, 1e-12 relative), whose boundary
+    is the box's surface (area 2.2e-3 m², closed form: the faces of neighbouring cells meet)."""
+    m = read_volume_mesh_file(TETRA10)
+    assert m.split == {"tetra10": 88} and m.tets.shape == (704, 4)
+    assert np.unique(m.tets).size == len(m.nodes) == 205
+    v = tet_volumes(m.nodes, m.tets)
+    assert v.min() > 0 and v.sum() == pytest.approx(6.0e-6, rel=1e-12)
+    assert v[m.element_sets["body"]].sum() == pytest.approx(6.0e-6, rel=1e-12)
+    P = m.nodes[boundary_faces(m.tets)[0]]
+    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1).sum()
+    assert area == pytest.approx(2 * (0.03 * 0.02 + 0.03 * 0.01 + 0.02 * 0.01), rel=1e-12)
+
+
 @pytest.mark.parametrize("anp", [False, True])
-@pytest.mark.parametrize("numbering", ["gmsh", "random"])
+@pytest.mark.parametrize("numbering", ["gmsh", "random", "tetra10"])
 def test_patch_test_on_the_gmsh_hybrid_mesh(backend, anp, numbering, tmp_path):
-    """u = A X on gmsh's hybrid mesh, with its own node numbering and with one drawn at random:
+    """u = A X on gmsh's hybrid mesh, with its own node numbering and with one drawn at random, and
+    on gmsh's quadratic tets:
     the internal force vanishes at every node off the boundary and every element carries the
     closed-form stress of F = I + A (a quad cut one way from one cell and the other way from its
     neighbour leaves a force at its nodes). Tolerances: round-off of sums of O(100) terms of size
     σ·h² in float64 (1e-10 relative)."""
-    m = read_volume_mesh_file(HYBRID if numbering == "gmsh" else _shuffled(tmp_path, 3))
+    path = {"gmsh": HYBRID, "tetra10": TETRA10}.get(numbering) or _shuffled(tmp_path, 3)
+    m = read_volume_mesh_file(path)
     material = pl.NeoHookean(E=3000.0, nu=0.45)
     b = pl.ModelBuilder()
     b.add_mesh(m.nodes, m.tets)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import MeshError
-from ..mesh.split import SPLIT_CELLS, split_cells
+from ..mesh.split import SPLIT_CELLS, refine_tetra10, split_cells
 from .vtk_grid import read_meshio_or_grid
 
 
@@ -16,7 +17,7 @@ from .vtk_grid import read_meshio_or_grid
 # points): not simulated, and not an error.
 SURFACE_CELLS = {"vertex", "line", "line3", "triangle", "triangle6", "quad", "quad8", "quad9"}
 # Cells simulated: tetrahedra, and the linear cells split into them.
-VOLUME_CELLS = {"tetra", *SPLIT_CELLS}
+VOLUME_CELLS = {"tetra", "tetra10", *SPLIT_CELLS}
 
 
 class VolumeMeshFile(NamedTuple):
@@ -26,7 +27,7 @@ class VolumeMeshFile(NamedTuple):
     tets: np.ndarray  # (M, 4): the file's tetrahedra and its other cells' (pliant.mesh.split), in file order
     element_sets: dict[str, np.ndarray]  # {name: tet indices}
     node_sets: dict[str, np.ndarray]  # {name: node indices}
-    split: dict[str, int]  # {"hexahedron": cells, ...}: the file's cells split into tetrahedra
+    split: dict[str, int]  # {"hexahedron": cells, "tetra10": ...}: the file's cells split into tets
 
 
 def read_volume_mesh(path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
@@ -60,8 +61,8 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
         counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}" for t in other)
         raise MeshError(
             f"{path}: has {counts} cells; pliant simulates linear tetrahedra (and splits linear "
-            "hexahedra, wedges and pyramids into them; convert the mesh, e.g. re-mesh its surface "
-            "with pliant mesh tetrahedralize)"
+            "hexahedra, wedges, pyramids and quadratic tets into them; convert the mesh, e.g. "
+            "re-mesh its surface with pliant mesh tetrahedralize)"
         )
     blocks = [(i, c) for i, c in enumerate(mesh.cells) if c.type in VOLUME_CELLS]
     if not blocks:
@@ -95,7 +96,8 @@ def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
         if c.type == "tetra":
             t, o = data.reshape(-1, 4), np.arange(len(data))
         else:
-            t, o = split_cells(X, c.type, data, what=f"{path}: cell", first=int(first[i]))
+            cut = refine_tetra10 if c.type == "tetra10" else partial(split_cells, kind=c.type)
+            t, o = cut(X, cells=data, what=f"{path}: cell", first=int(first[i]))
             split[c.type] = split.get(c.type, 0) + len(data)
         tets.append(t)
         owner.append(o + n)

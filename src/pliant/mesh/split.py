@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import MeshError
 from .primitives import tet_volumes
 
-__all__ = ["SPLIT_CELLS", "split_cells", "split_quads"]
+__all__ = ["SPLIT_CELLS", "refine_tetra10", "split_cells", "split_quads"]
 
 # Faces of each cell kind by local node, wound outward for VTK's node order (a cell given in the
 # mirrored order has them all wound inward, and its tetrahedra all negative until turned over).
@@ -118,3 +118,41 @@ def _check_cells(
             f"{what} {first + k} ({kind}): split into tetrahedra it gives {why}; expected a convex "
             f"cell with its nodes in VTK order (nodes {[int(i) for i in C[k]]})"
         )
+
+
+# A quadratic tet's corners and mid-edge nodes (VTK's order, meshio's): 4 = (0, 1), 5 = (1, 2),
+# 6 = (0, 2), 7 = (0, 3), 8 = (1, 3), 9 = (2, 3). Its 8 linear tets: one at each corner, and the
+# inner octahedron cut along one of its three diagonals, each with its 4 other vertices in cyclic
+# order around it; every tet listed with the orientation of the cell (0, 1, 2, 3).
+_T10_CORNERS = ((0, 4, 6, 7), (4, 1, 5, 8), (6, 5, 2, 9), (7, 8, 9, 3))
+_T10_DIAGONALS = (((4, 9), (7, 8, 5, 6)), ((6, 8), (4, 5, 9, 7)), ((7, 5), (6, 9, 8, 4)))
+
+
+def refine_tetra10(nodes: np.ndarray, cells: np.ndarray, what: str = "cell", first: int = 0):
+    """The 8 linear tetrahedra of each quadratic tet (M, 10) through its mid-edge nodes (the red
+    refinement: Bey 1995, Computing 55:355), the inner octahedron cut along its shortest diagonal,
+    so every node of the file is used and a face meets its neighbour's in the same 4 triangles.
+    Returns positively oriented tets (8 M, 4), in cell order, and the cell of each; MeshError
+    naming the first cell (``what`` first + k) whose tetrahedra are flat or of both orientations
+    (mid-edge nodes far off their edges)."""
+    C = np.asarray(cells, np.int64).reshape(-1, 10)
+    X = np.asarray(nodes, float)
+    parts = [C[:, list(t)] for t in _T10_CORNERS]
+    if C.size and (C.min() < 0 or C.max() >= len(X)):
+        diagonal = np.zeros(len(C), np.int64)  # indices beyond the nodes: the mesh's check names them
+    else:
+        length = [np.linalg.norm(X[C[:, a]] - X[C[:, b]], axis=1) for (a, b), _ in _T10_DIAGONALS]
+        diagonal = np.argmin(np.column_stack(length), axis=1)
+    inner = np.zeros((len(C), 4, 4), np.int64)
+    for d, ((a, b), ring) in enumerate(_T10_DIAGONALS):
+        rows = diagonal == d
+        for i in range(4):
+            inner[rows, i] = C[rows][:, [a, b, ring[i], ring[(i + 1) % 4]]]
+    tets = np.concatenate([np.stack(parts, axis=1), inner], axis=1).reshape(-1, 4)
+    owner = np.repeat(np.arange(len(C)), 8)
+    if C.size and (C.min() < 0 or C.max() >= len(X)):
+        return tets, owner
+    _check_cells(X, C, tets, owner, "tetra10", what, first)
+    flip = tet_volumes(X, tets) < 0
+    tets[flip, 2], tets[flip, 3] = tets[flip, 3].copy(), tets[flip, 2].copy()
+    return tets, owner

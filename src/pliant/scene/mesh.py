@@ -31,7 +31,7 @@ def _rotation(deg) -> np.ndarray:
 
 def _split_note(f, split: dict[str, int], tets: int) -> str:
     """The note that a mesh file's hexahedra, wedges or pyramids were split into tetrahedra."""
-    plural = {"hexahedron": "hexahedra", "wedge": "wedges", "pyramid": "pyramids"}
+    plural = {"hexahedron": "hexahedra", "wedge": "wedges", "pyramid": "pyramids", "tetra10": "tetra10"}
     cells = ", ".join(f"{n:,} {plural[kind] if n > 1 else kind}" for kind, n in split.items())
     return (
         f"{f}: {cells} split into tetrahedra (pliant.mesh.split; {tets:,} tets in all): pliant "
