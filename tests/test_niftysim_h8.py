@@ -303,3 +303,31 @@ def test_niftysims_box8_h8_mesh_file_stretches_homogeneously(tmp_path):
     X = model.reference_positions
     expected = (X - X.min(axis=0)) * [lam - 1, t - 1, t - 1]
     np.testing.assert_allclose(sim.displacements, expected, atol=RELAXED * 0.1 * L)
+
+
+def test_an_h8_time_step_too_large_for_the_split_tets_is_divided(tmp_path):
+    """NiftySim's TimeStep suits its hexahedra; their tetrahedra can need a smaller one. `pliant
+    run` divides it by the least integer k that is stable (the exact 2/ω_max check of the solver),
+    keeps the output at NiftySim's times (Freq × TimeStep) and says so. The solver itself still
+    refuses TimeStep and TimeStep / (k − 1), and takes TimeStep / k (k is the least)."""
+    import json
+
+    xml, X = _bar_xml(material="LE")
+    big = xml.replace("<TimeStep>2e-5</TimeStep>", "<TimeStep>0.004</TimeStep>")
+    big = big.replace("</SystemParams>", '</SystemParams><Output Freq="10"><Variable>U</Variable></Output>')
+    p = tmp_path / "big.xml"
+    p.write_text(big)
+    r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    said = [w for w in s["warnings"] if "each step runs as" in w]
+    assert len(said) == 1
+    k = int(re.search(r"runs as (\d+) steps", said[0]).group(1))
+    assert k >= 2 and s["dt"] == pytest.approx(0.004 / k, rel=1e-12) and s["steps"] == 50 * k
+    assert s["frames"] == 6  # t = 0, 0.04, ..., 0.2 s: NiftySim's output times
+    scene = load_niftysim(p)
+    model = scene.builder.finalize("float64")
+    for refused in {0.004, 0.004 / (k - 1)}:
+        with pytest.raises(pl.errors.TimeStepError):
+            pl.Simulation(model, dt=refused)
+    pl.Simulation(model, dt=0.004 / k).run(steps=5)

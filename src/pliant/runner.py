@@ -28,6 +28,23 @@ def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
     return max(1, math.ceil(total_steps / scene.frames))
 
 
+def _divided_step(scene: Scene, model, dt: float) -> float:
+    """dt / k for the least k that is stable, the output every k times as many steps (the same
+    frame times), and a warning that says so: for a scene whose step was chosen for other elements
+    (scene.meta["dt_divides"], its reason: a NiftySim H8 model split into tetrahedra)."""
+    from .tled.solver import stable_substeps
+
+    k = stable_substeps(model, dt)
+    if k > 1:
+        if scene.output_every:
+            scene.output_every *= k
+        scene.warnings.append(
+            f"{scene.source}: TimeStep {dt:.4g} s exceeds the stable step of the {scene.meta['dt_divides']}; "
+            f"each step runs as {k} steps of {dt / k:.4g} s (outputs at the same times)"
+        )
+    return dt / k
+
+
 def build(scene: Scene, threads: int | None = None, backend: str | None = None, allow_unstable: bool = False):
     """The scene's model and solver. Input errors name the scene file (the builder knows only the
     mesh's source); a duration of more than MAX_STEPS steps is refused here, before any work."""
@@ -37,9 +54,12 @@ def build(scene: Scene, threads: int | None = None, backend: str | None = None, 
             threads=scene.threads if threads is None else threads,
             backend=backend or scene.backend,
         )
+        dt = scene.dt
+        if dt is not None and scene.meta.get("dt_divides") and not allow_unstable:
+            dt = _divided_step(scene, model, dt)
         solver = Solver(
             model,
-            dt=scene.dt,
+            dt=dt,
             safety=scene.safety,
             allow_unstable=allow_unstable,
             check_every=scene.check_every,

@@ -50,6 +50,16 @@ EXACT_CHECK_FRACTION = 0.8
 EXACT_MARGIN = 0.99
 
 
+def stable_substeps(model, dt: float) -> int:
+    """The least k for which dt / k is a step the solver accepts (1 where dt is): for a model
+    whose time step was chosen for other elements (a NiftySim H8 model split into tetrahedra)."""
+    try:
+        _stable_limit(model, dt)
+        return 1
+    except TimeStepError:
+        return max(2, math.ceil(dt / (EXACT_MARGIN * model._stable_step) * (1 + 1e-12)))
+
+
 def _stable_limit(model, dt: float) -> float:
     """The largest step [s] a solver accepts, given the one asked for (TimeStepError above it): the
     element estimate for a step at most EXACT_CHECK_FRACTION of it (the default is 0.8 of it);
