@@ -179,9 +179,26 @@ NIFTY_HOSTILE = HOSTILE + [
 ]
 
 
+def _h8_bar() -> str:
+    """An H8 model: the bar of tests/test_niftysim_h8.py, two element sets, an end pressure on a
+    Quad face, HGKappa."""
+    from test_niftysim_h8 import _bar_xml, _end_face
+
+    q = " ".join(str(v) for v in _end_face())
+    load = (
+        '<Constraint Type="Pressure" LoadShape="RAMP" NumFaces="1" FaceType="Quad">'
+        f"<Faces>{q}</Faces><Magnitude>10</Magnitude></Constraint>"
+    )
+    sets = [(np.arange(3), "NH", "1000 20000"), (np.arange(3, 6), "LE", "3000 0.3")]
+    return _bar_xml(load=load, sets=sets)[0]
+
+
+H8_BAR = _h8_bar()
+
+
 @st.composite
-def niftysim_texts(draw):
-    root = ET.fromstring(CUBE)
+def niftysim_texts(draw, base: str = CUBE):
+    root = ET.fromstring(base)
     elems = list(root.iter())
     for _ in range(draw(st.integers(1, 3))):
         el = draw(st.sampled_from(elems))
@@ -204,6 +221,13 @@ def niftysim_texts(draw):
 @BUDGET
 @given(niftysim_texts())
 def test_niftysim_files_load_or_fail_by_name(text):
+    _loads_or_fails_by_name(load_niftysim, _write(text, ".xml"))
+
+
+@BUDGET
+@given(niftysim_texts(H8_BAR))
+def test_niftysim_h8_files_load_or_fail_by_name(text):
+    """H8 models (split into tetrahedra, Quad faces, element sets mapped), mutated."""
     _loads_or_fails_by_name(load_niftysim, _write(text, ".xml"))
 
 
@@ -318,9 +342,16 @@ def polydata_bytes(draw):
 
 
 _DATA = Path(__file__).parent / "data"
+_HEX_GRID = (  # two hexahedra, a wedge, a pyramid and a quadratic tet: the cells split into tets
+    b"# vtk DataFile Version 4.2\nh\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 12 float\n"
+    b"0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1 2 0 0 2 1 0 2 0 1 2 1 1\n"
+    b"CELLS 5 44\n8 0 1 2 3 4 5 6 7\n8 1 8 9 2 5 10 11 6\n6 1 8 9 5 10 11\n5 0 1 2 3 4\n"
+    b"10 0 1 3 4 1 2 3 4 5 6\nCELL_TYPES 5\n12 12 13 14 24\n"
+)
 _GRIDS = [
     (_DATA / "vtk93_grid_bin51.vtk").read_bytes(),
     (_DATA / "vtk93_grid_ascii42.vtk").read_bytes()[:4000],
+    _HEX_GRID,
 ]
 _GRID_WORDS = [b" ", b"\n", b"-1", b"99999999", b"nan", b"CELL_DATA 3\n", b"NORMALS n float\n", b"METADATA\n"]
 

@@ -331,3 +331,7 @@ def test_an_h8_time_step_too_large_for_the_split_tets_is_divided(tmp_path):
         with pytest.raises(pl.errors.TimeStepError):
             pl.Simulation(model, dt=refused)
     pl.Simulation(model, dt=0.004 / k).run(steps=5)
+    # A step no count of steps could divide (a fuzzed file's 1e308 s): refused as it was, exit 2.
+    p.write_text(big.replace("<TimeStep>0.004</TimeStep>", "<TimeStep>1e308</TimeStep>"))
+    r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "out2")])
+    assert r.exit_code == 2 and "exceeds the stable time step" in r.output, r.output

@@ -57,7 +57,10 @@ def stable_substeps(model, dt: float) -> int:
         _stable_limit(model, dt)
         return 1
     except TimeStepError:
-        return max(2, math.ceil(dt / (EXACT_MARGIN * model._stable_step) * (1 + 1e-12)))
+        ratio = dt / (EXACT_MARGIN * model._stable_step) * (1 + 1e-12)
+        if not ratio <= MAX_STEPS:  # no step count would do: the step itself is the error
+            raise
+        return max(2, math.ceil(ratio))
 
 
 def _stable_limit(model, dt: float) -> float:
