@@ -7,6 +7,7 @@ import json
 import math
 import time
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -26,6 +27,18 @@ def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
     if scene.output_interval:
         return max(1, int(round(min(scene.output_interval / dt, MAX_STEPS))))
     return max(1, math.ceil(total_steps / scene.frames))
+
+
+def write_niftysim_u(path: Path, frames: list[np.ndarray]) -> None:
+    """NiftySim's U.txt (tledSolutionWriter): a row per DOF (x, y, z of node 0 first), a column per
+    output frame after the first, displacements [m] to 9 digits. pliant's frame k is at k·Freq·Δt,
+    NiftySim's one step later (docs/scenes.md)."""
+    import io
+
+    text = io.StringIO()
+    if frames:
+        np.savetxt(text, np.stack([u.reshape(-1) for u in frames], axis=1), fmt="%.9g")
+    atomic_write_text(path, text.getvalue())
 
 
 def _divided_step(scene: Scene, model, dt: float) -> float:
@@ -157,6 +170,8 @@ def run_scene(
 
         cutter = Cutter(list(scene.blades), embedding=embedding)
     writer.write(state)
+    u_frames: list[np.ndarray] = []  # NiftySim's U.txt: the displacements of each frame after the first
+    keep_u = out is not None and scene.meta.get("niftysim_u")
     build_s = time.perf_counter() - t_build
     summary = {
         "pliant": __version__,
@@ -200,6 +215,8 @@ def run_scene(
                     f"quasi-static solve stopped at residual {info.residual:.3g} (tolerance {scene.tol:g})"
                 )
             writer.write(state)
+            if keep_u:
+                u_frames.append(state.displacements.copy())
         else:
             every = _frame_steps(scene, solver.dt, total)
             if scene.meta.get("frames_given") and scene.frames > total:
@@ -236,6 +253,8 @@ def run_scene(
                     done += n
                     if done % every == 0 or done == total:
                         writer.write(state)
+                        if keep_u:
+                            u_frames.append(state.displacements.copy())
                     el = time.perf_counter() - t0
                     bar.update(task, completed=done, t=state.time, rate=done / max(el, 1e-9))
     except KeyboardInterrupt:
@@ -291,6 +310,9 @@ def run_scene(
             if out is not None:
                 atomic_write_text(out / "tools.json", json.dumps(hist))
                 summary["files"].append("tools.json")
+        if keep_u:
+            write_niftysim_u(out / "U.txt", u_frames)
+            summary["files"].append("U.txt")
         if inspect is not None and np.all(np.isfinite(u)):
             summary.update(inspect(model, solver, state))
         if out is None:

@@ -252,9 +252,10 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     if deformable or self_collide:  # NiftySim's mesh-based contact is frictionless
         b.set_soft_contact(friction=0.0, pairs=None if deformable else [], self_contact=self_collide)
 
-    out_every = None
+    out_every, variables = None, []
     for o in root.findall("Output"):
         out_every = _scalar(o.get("Freq"), f, "Output Freq", int, 1, False)
+        variables += [(v.text or "").strip() for v in o.findall("Variable")]
     scene = Scene(
         f,
         b,
@@ -267,6 +268,14 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         warnings=warnings,
     )
     scene.meta["mesh_source"] = f
+    if "U" in variables:  # NiftySim's U.txt beside the frames (runner.py)
+        scene.meta["niftysim_u"] = True
+    other = sorted(set(variables) - {"U"})
+    if other:
+        warnings.append(
+            f"{f}: <Output> Variable {', '.join(other)} not written as NiftySim's text files (pliant writes "
+            "U.txt; each frame holds stresses and strains: fields cauchy, green_strain)"
+        )
     if etype == "H8":  # NiftySim's step suits its hexahedra; the split mesh's may be smaller
         scene.meta["dt_divides"] = "H8 elements split into tetrahedra"
     return scene
