@@ -310,7 +310,7 @@ def run_scene(
             if out is not None:
                 atomic_write_text(out / "tools.json", json.dumps(hist))
                 summary["files"].append("tools.json")
-        if keep_u:
+        if keep_u and out is not None:
             write_niftysim_u(out / "U.txt", u_frames)
             summary["files"].append("U.txt")
         if inspect is not None and np.all(np.isfinite(u)):
