@@ -64,8 +64,9 @@ def split_cells(
     tets, owner = np.concatenate(parts)[rank], owner[rank]
     if C.size and (C.min() < 0 or C.max() >= len(nodes)):
         return tets, owner  # indices beyond the nodes: the mesh's own check names them
-    _check_cells(nodes, C, tets, owner, kind, what, first)
-    flip = tet_volumes(nodes, tets) < 0
+    vol = tet_volumes(nodes, tets)
+    _check_cells(vol, C, owner, kind, what, first)
+    flip = vol < 0
     tets[flip, 2], tets[flip, 3] = tets[flip, 3].copy(), tets[flip, 2].copy()
     return tets, owner
 
@@ -89,20 +90,20 @@ def _triangles(F: np.ndarray) -> tuple[np.ndarray, ...]:
     return t1, t2
 
 
-def _check_cells(
-    nodes: np.ndarray, C: np.ndarray, tets: np.ndarray, owner: np.ndarray, kind: str, what: str, first: int
-) -> None:
+def _check_cells(vol: np.ndarray, C: np.ndarray, owner: np.ndarray, kind: str, what: str, first: int) -> None:
     """MeshError naming the first cell C[k] with no tetrahedron, a flat one, or tetrahedra of both
-    orientations (a cell too distorted, or not convex enough, to be split). Indices beyond the
-    nodes and non-finite coordinates are left to the mesh's own checks, which name them."""
+    orientations (a cell too distorted, or not convex enough, to be split), from the signed volumes
+    ``vol`` of its tets (``owner``: the cell of each, sorted). Non-finite coordinates are left to
+    the mesh's own checks, which name them."""
     m = len(C)
-    vol = tet_volumes(nodes, tets)
     count = np.bincount(owner, minlength=m)
+    has = count > 0
+    starts = np.cumsum(count) - count  # owner is sorted: each cell's tets are one run
     scale = np.zeros(m)
-    np.maximum.at(scale, owner, np.abs(vol))
+    if has.any():
+        scale[has] = np.maximum.reduceat(np.abs(vol), starts[has])
     pos = np.bincount(owner, weights=(vol > 0).astype(float), minlength=m)
-    flat = np.zeros(m, bool)
-    np.logical_or.at(flat, owner, ~(np.abs(vol) > 1e-12 * scale[owner]))
+    flat = np.bincount(owner, weights=~(np.abs(vol) > 1e-12 * scale[owner]), minlength=m) > 0
     finite = np.bincount(owner, weights=(~np.isfinite(vol)).astype(float), minlength=m) == 0
     bad = finite & ((count == 0) | flat | ((pos > 0) & (pos < count)))
     if bad.any():
@@ -152,7 +153,8 @@ def refine_tetra10(nodes: np.ndarray, cells: np.ndarray, what: str = "cell", fir
     owner = np.repeat(np.arange(len(C)), 8)
     if C.size and (C.min() < 0 or C.max() >= len(X)):
         return tets, owner
-    _check_cells(X, C, tets, owner, "tetra10", what, first)
-    flip = tet_volumes(X, tets) < 0
+    vol = tet_volumes(X, tets)
+    _check_cells(vol, C, owner, "tetra10", what, first)
+    flip = vol < 0
     tets[flip, 2], tets[flip, 3] = tets[flip, 3].copy(), tets[flip, 2].copy()
     return tets, owner
