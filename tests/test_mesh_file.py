@@ -168,3 +168,32 @@ def test_abaqus_element_and_node_sets():
         assert v[sets[side]].sum() == pytest.approx(0.02 * 0.02 * 0.01, rel=1e-12)
     assert np.all(X[T[sets["left"]]].mean(axis=1)[:, 0] < 0.02)
     np.testing.assert_array_equal(nodes["fixed"], np.nonzero(X[:, 0] == 0.0)[0])
+
+
+def test_abaqus_c3d8_hexahedra_with_their_sets(tmp_path):
+    """gmsh's Abaqus .inp of a transfinite 0.04 × 0.01 × 0.01 box of 8 C3D8 (2 × 2 × 2) (ELSET
+    "block", NSET "fixed" on x = 0): the hexahedra become 48 tets filling the box (1e-12 relative),
+    "block" holds them all, "fixed" is the nodes on x = 0; a scene fixing the set runs to the same
+    bits as one fixing the plane x = 0."""
+    m = pl.io.read_volume_mesh_file(DATA / "gmsh415_hex_box.inp")
+    assert m.split == {"hexahedron": 8} and m.tets.shape == (48, 4)
+    v = pl.mesh.primitives.tet_volumes(m.nodes, m.tets)
+    assert v.min() > 0 and v[m.element_sets["block"]].sum() == pytest.approx(0.04 * 0.01 * 0.01, rel=1e-12)
+    np.testing.assert_array_equal(m.node_sets["fixed"], np.nonzero(m.nodes[:, 0] == 0.0)[0])
+
+    def run(nodes: str, out: str):
+        p = tmp_path / f"{out}.toml"
+        p.write_text(
+            f'[mesh]\nfile = "{DATA / "gmsh415_hex_box.inp"}"\n'
+            '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
+            'region = { set = "block" }\n'
+            '[solver]\nduration = 0.004\ndt = 1e-5\ndtype = "float64"\n'
+            f'[[constraint]]\ntype = "fix"\nnodes = {nodes}\n[[load]]\ntype = "gravity"\n'
+        )
+        result = CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / out)])
+        assert result.exit_code == 0, result.output
+        return meshio_last_displacement(tmp_path / out)
+
+    ua = run('{ set = "fixed" }', "a")
+    assert np.abs(ua).max() > 0
+    assert np.array_equal(ua, run("{ plane = { point = [0.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0] } }", "b"))
