@@ -130,15 +130,7 @@ def test_a_scene_fixes_a_gmsh_surface_by_name(tmp_path):
     bit, after 400 steps under gravity; an unknown node set is refused listing the file's."""
 
     def run(nodes: str, out: str):
-        p = tmp_path / f"{out}.toml"
-        p.write_text(
-            f'[mesh]\nfile = "{DATA / GMSH_BOXES[1]}"\n'
-            '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
-            '[solver]\nduration = 0.004\ndt = 1e-5\ndtype = "float64"\n'
-            f'[[constraint]]\ntype = "fix"\nnodes = {nodes}\n[[load]]\ntype = "gravity"\n'
-        )
-        result = CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / out)])
-        return result, tmp_path / out
+        return _sag(tmp_path, DATA / GMSH_BOXES[1], nodes, out)
 
     by_set, a = run('{ set = "fixed" }', "a")
     by_plane, b = run("{ plane = { point = [0.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0] } }", "b")
@@ -147,6 +139,20 @@ def test_a_scene_fixes_a_gmsh_surface_by_name(tmp_path):
     assert np.abs(ua).max() > 0 and np.array_equal(ua, meshio_last_displacement(b))
     bad, _ = run('{ set = "free" }', "c")
     assert bad.exit_code == 2 and "unknown node set 'free'" in bad.output and "fixed" in bad.output
+
+
+def _sag(tmp_path: Path, mesh: Path, nodes: str, out: str, material: str = ""):
+    """`pliant run` of the mesh file under gravity for 4 ms (float64), the nodes ``nodes`` fixed:
+    the CLI's result and the output folder."""
+    p = tmp_path / f"{out}.toml"
+    p.write_text(
+        f'[mesh]\nfile = "{mesh}"\n'
+        '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
+        + material
+        + '[solver]\nduration = 0.004\ndt = 1e-5\ndtype = "float64"\n'
+        f'[[constraint]]\ntype = "fix"\nnodes = {nodes}\n[[load]]\ntype = "gravity"\n'
+    )
+    return CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / out)]), tmp_path / out
 
 
 def meshio_last_displacement(out: Path) -> np.ndarray:
@@ -182,17 +188,11 @@ def test_abaqus_c3d8_hexahedra_with_their_sets(tmp_path):
     np.testing.assert_array_equal(m.node_sets["fixed"], np.nonzero(m.nodes[:, 0] == 0.0)[0])
 
     def run(nodes: str, out: str):
-        p = tmp_path / f"{out}.toml"
-        p.write_text(
-            f'[mesh]\nfile = "{DATA / "gmsh415_hex_box.inp"}"\n'
-            '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
-            'region = { set = "block" }\n'
-            '[solver]\nduration = 0.004\ndt = 1e-5\ndtype = "float64"\n'
-            f'[[constraint]]\ntype = "fix"\nnodes = {nodes}\n[[load]]\ntype = "gravity"\n'
+        result, folder = _sag(
+            tmp_path, DATA / "gmsh415_hex_box.inp", nodes, out, 'region = { set = "block" }\n'
         )
-        result = CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / out)])
         assert result.exit_code == 0, result.output
-        return meshio_last_displacement(tmp_path / out)
+        return meshio_last_displacement(folder)
 
     ua = run('{ set = "fixed" }', "a")
     assert np.abs(ua).max() > 0
