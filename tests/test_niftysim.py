@@ -606,3 +606,47 @@ def test_output_variable_u_writes_niftysims_u_txt(tmp_path):
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert "U.txt" in summary["files"]
     assert any("Variable F not written" in w for w in summary["warnings"])
+
+
+def test_deformable_friction_coefficient_is_the_soft_contacts_friction(tmp_path):
+    """<DeformableFrictionCoefficient> (NiftySim's Coulomb coefficient of its deformable contact
+    surface) becomes the soft contact's friction, static and kinetic alike: the same bits over
+    ball_ball's 1 s as the model given that friction through the API, and other bits than
+    frictionless; without deformable contact it is named as having no effect; the contact offsets
+    NiftySim's method has (ContactSafetyMargin, RateConstraintDistance) are refused by name."""
+    xml = BALLS.read_text()
+    p = tmp_path / "mu.xml"
+    p.write_text(
+        xml.replace(
+            "<DoDeformableCollision>",
+            "<DeformableFrictionCoefficient>0.4</DeformableFrictionCoefficient><DoDeformableCollision>",
+            1,
+        )
+    )
+    sc = load_niftysim(p)
+    c = sc.builder.soft_contact
+    assert (c.pairs, c.self_contact, c.mu_s, c.mu_k) == (None, False, 0.4, 0.4)
+    runs = []
+    for b in (sc.builder, load_niftysim(BALLS).builder):
+        if b is not sc.builder:
+            b.set_soft_contact(friction=0.4)
+        sim = pl.Simulation(b.finalize("float32"), dt=sc.dt)
+        sim.run(steps=10000)
+        runs.append(sim.displacements)
+    assert np.array_equal(runs[0], runs[1])
+    frictionless = pl.Simulation(load_niftysim(BALLS).builder.finalize("float32"), dt=sc.dt)
+    frictionless.run(steps=10000)
+    assert not np.array_equal(runs[0], frictionless.displacements)
+    off = xml.replace("\n      1\n    </DoDeformableCollision>", "0</DoDeformableCollision>")
+    p.write_text(
+        off.replace(
+            "<DoDeformableCollision>",
+            "<DeformableFrictionCoefficient>0.4</DeformableFrictionCoefficient><DoDeformableCollision>",
+            1,
+        )
+    )
+    assert any("DeformableFrictionCoefficient ignored" in w for w in load_niftysim(p).warnings)
+    for k in ("ContactSafetyMargin", "RateConstraintDistance"):
+        p.write_text(xml.replace("<DoDeformableCollision>", f"<{k}>0.001</{k}><DoDeformableCollision>", 1))
+        with pytest.raises(NiftySimError, match=f"unsupported NiftySim feature SystemParams/{k}"):
+            load_niftysim(p)

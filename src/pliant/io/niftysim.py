@@ -46,16 +46,6 @@ _KNOWN_TOP = {
     "MSHMesh",
     "VTKMesh",
 }
-_SYSTEM = {
-    "TimeStep",
-    "TotalTime",
-    "DampingCoeff",
-    "Density",
-    "HGKappa",
-    "DoDeformableCollision",
-    "DoSelfCollision",
-    "ROM",
-}
 
 
 # NiftySim user guide v2.4, App. A.1: material code → (pliant class, parameters in file order).
@@ -217,11 +207,12 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
             unsupported(child.tag, "not implemented in pliant")
 
     from .niftysim_elements import as_tets, h8_as_t4anp
+    from .niftysim_system import system_params
 
     X, E, etype = _mesh(root, f)
     T, owner = as_tets(X, E, f, "Elements")  # owner: the model's element of each tet
     T = _reoriented(X, T, f, warnings)
-    dt, total, damping, default_rho, collide = _system_params(root, f, unsupported, warnings, etype)
+    dt, total, damping, default_rho, collide = system_params(root, f, unsupported, warnings, etype)
     b = ModelBuilder()
     with _named(f, "Elements"):
         b.add_mesh(X, T, source=f)
@@ -248,9 +239,14 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         _rigid_contacts(root, b, total, f, unsupported, warnings)
     with _named(f, "ContactSurface"):
         _rigid_surfaces(root, b, path, total, f, unsupported)
-    deformable, self_collide = collide
-    if deformable or self_collide:  # NiftySim's mesh-based contact is frictionless
-        b.set_soft_contact(friction=0.0, pairs=None if deformable else [], self_contact=self_collide)
+    deformable, self_collide, mu = collide
+    if deformable or self_collide:  # frictionless unless <DeformableFrictionCoefficient> says
+        b.set_soft_contact(friction=mu, pairs=None if deformable else [], self_contact=self_collide)
+    elif mu:
+        warnings.append(
+            f"{f}: DeformableFrictionCoefficient ignored: the model turns on no deformable contact "
+            "(DoDeformableCollision, DoSelfCollision)"
+        )
 
     out_every, variables = None, []
     for o in root.findall("Output"):
@@ -399,41 +395,6 @@ def _submeshes(
                     f"{f}: {key} (elements {a} to {e - 1}) holds part of a body connected beyond it; "
                     "pliant's bodies are the mesh's connected parts"
                 )
-
-
-def _system_params(root, f: str, unsupported, warnings: list[str], etype: str):
-    """<SystemParams>: time step [s], total time [s], damping [1/s], default density [kg/m³]."""
-    sp = root.find("SystemParams")
-    if sp is None:
-        raise NiftySimError("missing <SystemParams>", f)
-    params = {}
-    for c in sp:
-        if c.tag not in _SYSTEM:
-            unsupported(f"SystemParams/{c.tag}", "not implemented in pliant")
-            continue
-        params[c.tag] = (c.text or "").strip()
-    for req in ("TimeStep", "TotalTime", "DampingCoeff"):
-        if req not in params:
-            raise NiftySimError(f"<SystemParams> lacks <{req}>", f, f"SystemParams/{req}")
-    dt = _scalar(params["TimeStep"], f, "SystemParams/TimeStep", float, 0.0)
-    total = _scalar(params["TotalTime"], f, "SystemParams/TotalTime", float, 0.0)
-    damping = _scalar(params["DampingCoeff"], f, "SystemParams/DampingCoeff", float, 0.0, False)
-    default_rho = (
-        _scalar(params["Density"], f, "SystemParams/Density", float, 0.0) if "Density" in params else None
-    )
-    # Mesh-based contact (user guide §3.9.2): between the deformable bodies, and of each with itself.
-    collide = tuple(
-        bool(_scalar(params.get(k, "0") or "0", f, f"SystemParams/{k}", int, 0, False))
-        for k in ("DoDeformableCollision", "DoSelfCollision")
-    )
-    rom = _scalar(params.get("ROM", "0") or "0", f, "SystemParams/ROM", int, 0, False)
-    if rom != 0:  # <ROM>0</ROM> is NiftySim's default, off (user guide §3.10.7)
-        unsupported("SystemParams/ROM", "reduced order modelling is not implemented in pliant; ROM 0 runs")
-    if "HGKappa" in params:
-        why = "tetrahedra have no hourglass modes" if etype == "H8" else "it applies to H8 elements only"
-        warnings.append(f"{f}: HGKappa ignored (hourglass control; {why})")
-
-    return dt, total, damping, default_rho, collide
 
 
 def element_set(es, M: int, f: str, key: str) -> np.ndarray:
