@@ -650,3 +650,29 @@ def test_deformable_friction_coefficient_is_the_soft_contacts_friction(tmp_path)
         p.write_text(xml.replace("<DoDeformableCollision>", f"<{k}>0.001</{k}><DoDeformableCollision>", 1))
         with pytest.raises(NiftySimError, match=f"unsupported NiftySim feature SystemParams/{k}"):
             load_niftysim(p)
+
+
+def test_niftysims_contact_search_settings_are_accepted_as_having_no_physics(tmp_path):
+    """<BVType> (AABB or OBB) and <DoMultiPassContacts> choose how NiftySim finds and resolves its
+    contacts: the model imports with a warning naming each and runs to the same bits as without
+    them (300 steps); a BVType NiftySim does not know is named."""
+    xml = BALLS.read_text()
+    p = tmp_path / "bv.xml"
+    p.write_text(
+        xml.replace(
+            "<DoDeformableCollision>",
+            "<BVType>OBB</BVType><DoMultiPassContacts>1</DoMultiPassContacts><DoDeformableCollision>",
+            1,
+        )
+    )
+    sc = load_niftysim(p)
+    assert sum("ignored (how NiftySim searches" in w for w in sc.warnings) == 2
+    runs = []
+    for b in (sc.builder, load_niftysim(BALLS).builder):
+        sim = pl.Simulation(b.finalize("float32"), dt=sc.dt)
+        sim.run(steps=300)
+        runs.append(sim.displacements)
+    assert np.array_equal(runs[0], runs[1])
+    p.write_text(xml.replace("<DoDeformableCollision>", "<BVType>KDOP</BVType><DoDeformableCollision>", 1))
+    with pytest.raises(NiftySimError, match=r"\[SystemParams/BVType\].*expected AABB or OBB"):
+        load_niftysim(p)

@@ -19,6 +19,8 @@ SYSTEM = {
     "DeformableFrictionCoefficient",
     "ContactSafetyMargin",
     "RateConstraintDistance",
+    "BVType",
+    "DoMultiPassContacts",
 }
 
 
@@ -61,6 +63,18 @@ def system_params(root, f: str, unsupported, warnings: list[str], etype: str):
     rom = _scalar(params.get("ROM", "0") or "0", f, "SystemParams/ROM", int, 0, False)
     if rom != 0:  # <ROM>0</ROM> is NiftySim's default, off (user guide §3.10.7)
         unsupported("SystemParams/ROM", "reduced order modelling is not implemented in pliant; ROM 0 runs")
+    # How NiftySim searches and resolves its contacts (tledModel::GetBoundingVolumeType,
+    # DoMultiPassContactHandling; also <DoDeformableCollision Type="MultiPass">): no physics of
+    # their own; pliant's contact has its broad phase and two sweeps a step (docs/contact.md).
+    if params.get("BVType", "AABB") not in ("AABB", "OBB"):
+        raise NiftySimError(
+            f"<BVType> = {params['BVType'][:40]!r}: expected AABB or OBB", f, "SystemParams/BVType"
+        )
+    for k in ("BVType", "DoMultiPassContacts"):
+        if k in params:
+            warnings.append(
+                f"{f}: {k} ignored (how NiftySim searches its contacts; pliant's contact has its own)"
+            )
     if "HGKappa" in params:
         why = "tetrahedra have no hourglass modes" if etype == "H8" else "it applies to H8 elements only"
         warnings.append(f"{f}: HGKappa ignored (hourglass control; {why})")
