@@ -25,6 +25,8 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
         "uniaxial stress",
         "patch test",
         "simple shear",
+        "hexahedra split",
+        "NiftySim H8 (user guide §3.1)",
         "cantilever bending",
         "Lamé sphere (T4ANP)",
         "damped decay",

@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -364,3 +365,39 @@ def bent_beam_tip(alpha, n=4, slenderness=20, nodal_pressure=False, increments=1
     sim.relax(at_time=1.0, tol=1e-8, increments=increments, max_steps=2_000_000)
     u = sim.displacements[tip]
     return float(-u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
+
+
+# The NiftySim user guide's first model (§3.1): one H8 cube of 0.1 m, NH (μ = 1052, K = 52249 Pa),
+# its x = 0.1 face pulled 0.03 m along x (POLY345 over 1 s) with x held at x = 0 and y, z held at
+# every node; damping 5, density 1000, Δt = 0.01 s.
+GUIDE_H8 = """<?xml version="1.0" encoding="utf-8"?>
+<Model>
+  <Nodes DOF="3" NumNodes="8">0 0 0 0.1 0 0 0.1 0.1 0 0 0.1 0 0 0 0.1 0.1 0 0.1 0.1 0.1 0.1 0 0.1 0.1</Nodes>
+  <Elements NumEls="1" Type="H8">0 1 2 3 4 5 6 7</Elements>
+  <ElementSet Size="1"><Material Type="NH"><ElasticParams NumParams="2">1052 52249</ElasticParams>
+    </Material>0</ElementSet>
+  <Constraint DOF="0" LoadShape="POLY345" NumNodes="4" Type="Disp"><Nodes>1 2 5 6</Nodes>
+    <Magnitudes Type="UNIFORM">0.03</Magnitudes></Constraint>
+  <Constraint DOF="0" NumNodes="4" Type="Fix"><Nodes>0 3 4 7</Nodes></Constraint>
+  <Constraint DOF="1" NumNodes="8" Type="Fix"><Nodes>0 1 2 3 4 5 6 7</Nodes></Constraint>
+  <Constraint DOF="2" NumNodes="8" Type="Fix"><Nodes>0 1 2 3 4 5 6 7</Nodes></Constraint>
+  <SystemParams><TimeStep>0.01</TimeStep><TotalTime>1</TotalTime><DampingCoeff>5</DampingCoeff>
+    <HGKappa>0.075</HGKappa><Density>1000</Density></SystemParams>
+</Model>
+"""
+
+
+def guide_h8_stress() -> np.ndarray:
+    """σ_xx [Pa] of each tet (6,) of GUIDE_H8 imported (split into tetrahedra) and run to its end."""
+    import tempfile
+
+    from ..io.niftysim import load_niftysim
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "guide_h8.xml"
+        path.write_text(GUIDE_H8)
+        scene = load_niftysim(path)
+    model = scene.builder.finalize("float64")
+    sim = Simulation(model, dt=scene.dt)
+    sim.run(until=scene.duration)
+    return model.element_results(sim.state)["cauchy"][:, 0]
