@@ -331,6 +331,12 @@ def test_an_h8_time_step_too_large_for_the_split_tets_is_divided(tmp_path):
         with pytest.raises(pl.errors.TimeStepError):
             pl.Simulation(model, dt=refused)
     pl.Simulation(model, dt=0.004 / k).run(steps=5)
+    # The viewer asks as `pliant run` does, once per scene however often it resets.
+    from pliant.runner import scene_step
+
+    scene = load_niftysim(p)
+    assert scene_step(scene, model) == scene_step(scene, model) == pytest.approx(0.004 / k, rel=1e-12)
+    assert sum("each step runs as" in w for w in scene.warnings) == 1 and scene.output_every == 10 * k
     # A step no count of steps could divide (a fuzzed file's 1e308 s): refused as it was, exit 2.
     p.write_text(big.replace("<TimeStep>0.004</TimeStep>", "<TimeStep>1e308</TimeStep>"))
     r = runner.invoke(app, ["run", str(p), "-o", str(tmp_path / "out2")])

@@ -41,13 +41,19 @@ def write_niftysim_u(path: Path, frames: list[np.ndarray]) -> None:
     atomic_write_text(path, text.getvalue())
 
 
-def _divided_step(scene: Scene, model, dt: float) -> float:
-    """dt / k for the least k that is stable, the output every k times as many steps (the same
-    frame times), and a warning that says so: for a scene whose step was chosen for other elements
-    (scene.meta["dt_divides"], its reason: a NiftySim H8 model split into tetrahedra)."""
+def scene_step(scene: Scene, model) -> float | None:
+    """The step [s] a run of the scene takes on ``model``: scene.dt, or for a scene whose step was
+    chosen for other elements (scene.meta["dt_divides"], its reason: a NiftySim H8 model split into
+    tetrahedra) dt / k for the least k that is stable, the output every k times as many steps (the
+    same frame times), with a warning that says so. None: the solver's own (safety × critical)."""
     from .tled.solver import stable_substeps
 
-    k = stable_substeps(model, dt)
+    dt = scene.dt
+    if dt is None or not scene.meta.get("dt_divides"):
+        return dt
+    if "dt_divided_by" in scene.meta:  # decided once per scene (a viewer's reset asks again)
+        return dt / scene.meta["dt_divided_by"]
+    k = scene.meta["dt_divided_by"] = stable_substeps(model, dt)
     if k > 1:
         if scene.output_every:
             scene.output_every *= k
@@ -67,9 +73,7 @@ def build(scene: Scene, threads: int | None = None, backend: str | None = None, 
             threads=scene.threads if threads is None else threads,
             backend=backend or scene.backend,
         )
-        dt = scene.dt
-        if dt is not None and scene.meta.get("dt_divides") and not allow_unstable:
-            dt = _divided_step(scene, model, dt)
+        dt = scene.dt if allow_unstable else scene_step(scene, model)
         solver = Solver(
             model,
             dt=dt,

@@ -77,7 +77,10 @@ class LiveViewer:
         auto = max(1, min(_auto_threads(scene.builder.n_elements), _core.max_threads() - 1))
         self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads or auto)  # at reset
         # An interactive session may run for hours: keep the last 100,000 steps of tool forces.
-        self.sim = Simulation(self.model, dt=scene.dt, safety=scene.safety, history_steps=100_000)
+        from ..runner import scene_step
+
+        dt = scene_step(scene, self.model)  # a NiftySim H8 model's step divided as `pliant run` does
+        self.sim = Simulation(self.model, dt=dt, safety=scene.safety, history_steps=100_000)
         for blade in scene.blades:  # blades cut as the simulation runs (sim.model then changes)
             self.sim.add_blade(blade)
         self._solver0 = self.sim.solver
