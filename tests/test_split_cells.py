@@ -27,6 +27,7 @@ from pliant.mesh.topology import boundary_faces
 
 HYBRID = Path(__file__).parent / "data" / "gmsh415_hybrid_ascii41.msh"
 TETRA10 = Path(__file__).parent / "data" / "gmsh415_box_tetra10_ascii22.msh"
+HEX20 = Path(__file__).parent / "data" / "gmsh415_box_hex20_ascii41.msh"
 runner = CliRunner()
 
 UNIT = {
@@ -268,3 +269,35 @@ def test_a_scene_on_a_hexahedral_mesh_file_says_it_was_split(tmp_path):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["elements"] == 6 * len(hexes)
     assert any("144 hexahedra split into tetrahedra" in w for w in summary["warnings"])
+
+
+@pytest.mark.filterwarnings("ignore:.*split into tetrahedra")  # the summary's warning, asserted
+def test_quadratic_hexahedra_are_taken_by_their_corners(tmp_path):
+    """gmsh's incomplete order-2 box (8 hexahedron20, 81 nodes; its x = 0 face the physical
+    surface "fixed" of quad8): linearized by their 8 corners and split, 48 tets on the 27 corner
+    nodes (the 54 mid-edge nodes left out: no element uses them), filling the box (6e-6 m³, closed
+    form); "fixed" renumbered to the 9 corners on x = 0; a scene fixing it runs and says so."""
+    import meshio
+
+    raw = meshio.read(HEX20)
+    (cells,) = [c.data for c in raw.cells if c.type == "hexahedron20"]
+    m = read_volume_mesh_file(HEX20)
+    assert m.split == {"hexahedron20": 8} and m.tets.shape == (48, 4)
+    assert len(m.nodes) == 27 and np.unique(m.tets).size == 27
+    corners = {tuple(p) for p in raw.points[np.unique(cells[:, :8])]}
+    assert {tuple(p) for p in m.nodes} == corners
+    v = tet_volumes(m.nodes, m.tets)
+    assert v.min() > 0 and v.sum() == pytest.approx(0.03 * 0.02 * 0.01, rel=1e-12)
+    np.testing.assert_array_equal(m.node_sets["fixed"], np.nonzero(m.nodes[:, 0] == 0.0)[0])
+    assert m.node_sets["fixed"].size == 9
+    (tmp_path / "s.toml").write_text(
+        f'[mesh]\nfile = "{HEX20}"\n'
+        '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
+        '[solver]\nduration = 0.002\ndt = 1e-4\n[[constraint]]\ntype = "fix"\nnodes = { set = "fixed" }\n'
+        '[[load]]\ntype = "gravity"\n'
+    )
+    r = runner.invoke(app, ["run", str(tmp_path / "s.toml"), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 0, r.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["nodes"] == 27
+    assert any("hexahedron20 by their corners, mid-edge nodes dropped" in w for w in summary["warnings"])

@@ -16,8 +16,17 @@ from .vtk_grid import read_meshio_or_grid
 # Cells of lower dimension that volume-mesh files carry beside their tets (boundary faces, edges,
 # points): not simulated, and not an error.
 SURFACE_CELLS = {"vertex", "line", "line3", "triangle", "triangle6", "quad", "quad8", "quad9"}
-# Cells simulated: tetrahedra, and the linear cells split into them.
-VOLUME_CELLS = {"tetra", "tetra10", *SPLIT_CELLS}
+# Quadratic cells taken by their corners (VTK's order lists them first): kind → (linear kind, corners).
+LINEARIZED = {
+    "hexahedron20": ("hexahedron", 8),
+    "hexahedron27": ("hexahedron", 8),
+    "wedge15": ("wedge", 6),
+    "wedge18": ("wedge", 6),
+    "pyramid13": ("pyramid", 5),
+    "pyramid14": ("pyramid", 5),
+}
+# Cells simulated: tetrahedra, and the cells split into them.
+VOLUME_CELLS = {"tetra", "tetra10", *SPLIT_CELLS, *LINEARIZED}
 
 
 class VolumeMeshFile(NamedTuple):
@@ -52,15 +61,18 @@ def read_volume_mesh_sets(
 def read_volume_mesh_file(path) -> VolumeMeshFile:
     """read_volume_mesh_sets's nodes, tets, element sets and node sets, and how many of the file's
     cells of each kind were split into tetrahedra. A file's linear hexahedra, wedges and pyramids
-    become 6, 3 and 2 tetrahedra each, conforming across shared faces (pliant.mesh.split); an
-    element set holds the tetrahedra of its cells. Quadratic and other cells are refused by name."""
+    become 6, 3 and 2 tetrahedra each, conforming across shared faces (pliant.mesh.split); its
+    quadratic tets (tetra10) the 8 linear ones through their mid-edge nodes; its quadratic
+    hexahedra, wedges and pyramids (Abaqus C3D20, gmsh's incomplete order 2) are linearized, their
+    mid-edge nodes dropped (and the nodes no element uses then left out, node sets renumbered),
+    and split. An element set holds the tetrahedra of its cells. Other cells are refused by name."""
     path = Path(path)
     mesh = read_meshio_or_grid(path, "volume mesh")
     other = sorted({c.type for c in mesh.cells} - VOLUME_CELLS - SURFACE_CELLS)
     if other:
         counts = ", ".join(f"{sum(len(c.data) for c in mesh.cells if c.type == t)} {t}" for t in other)
         raise MeshError(
-            f"{path}: has {counts} cells; pliant simulates linear tetrahedra (and splits linear "
+            f"{path}: has {counts} cells; pliant simulates linear tetrahedra (and splits "
             "hexahedra, wedges, pyramids and quadratic tets into them; convert the mesh, e.g. "
             "re-mesh its surface with pliant mesh tetrahedralize)"
         )
@@ -80,7 +92,15 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
         k: np.nonzero(np.isin(owner, cells))[0]
         for k, cells in _element_sets(mesh, [i for i, _ in blocks]).items()
     }
-    return VolumeMeshFile(X, tets, sets, _node_sets(mesh), split)
+    node_sets = _node_sets(mesh)
+    inside = tets.size == 0 or (tets.min() >= 0 and tets.max() < len(X))  # else the builder names them
+    if set(split) & set(LINEARIZED) and inside:  # mid-edge nodes dropped: keep the nodes tets use
+        used = np.unique(tets)
+        new = np.full(len(X), -1)
+        new[used] = np.arange(used.size)
+        X, tets = X[used], new[tets]
+        node_sets = {k: new[v[new[v] >= 0]] for k, v in node_sets.items() if np.any(new[v] >= 0)}
+    return VolumeMeshFile(X, tets, sets, node_sets, split)
 
 
 def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
@@ -96,8 +116,9 @@ def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
         if c.type == "tetra":
             t, o = data.reshape(-1, 4), np.arange(len(data))
         else:
-            cut = refine_tetra10 if c.type == "tetra10" else partial(split_cells, kind=c.type)
-            t, o = cut(X, cells=data, what=f"{path}: cell", first=int(first[i]))
+            kind, corners = LINEARIZED.get(c.type, (c.type, data.shape[1]))
+            cut = refine_tetra10 if kind == "tetra10" else partial(split_cells, kind=kind)
+            t, o = cut(X, cells=data[:, :corners], what=f"{path}: cell", first=int(first[i]))
             split[c.type] = split.get(c.type, 0) + len(data)
         tets.append(t)
         owner.append(o + n)

@@ -30,12 +30,16 @@ def _rotation(deg) -> np.ndarray:
 
 
 def _split_note(f, split: dict[str, int], tets: int) -> str:
-    """The note that a mesh file's hexahedra, wedges or pyramids were split into tetrahedra."""
-    plural = {"hexahedron": "hexahedra", "wedge": "wedges", "pyramid": "pyramids", "tetra10": "tetra10"}
-    cells = ", ".join(f"{n:,} {plural[kind] if n > 1 else kind}" for kind, n in split.items())
+    """The note that a mesh file's cells other than linear tets were split into tetrahedra."""
+    from ..io.mesh import LINEARIZED
+
+    plural = {"hexahedron": "hexahedra", "wedge": "wedges", "pyramid": "pyramids"}
+    cells = ", ".join(f"{n:,} {plural.get(kind, kind) if n > 1 else kind}" for kind, n in split.items())
+    quadratic = sorted(set(split) & set(LINEARIZED))
+    by_corners = f"; the {', '.join(quadratic)} by their corners, mid-edge nodes dropped" if quadratic else ""
     return (
-        f"{f}: {cells} split into tetrahedra (pliant.mesh.split; {tets:,} tets in all): pliant "
-        "simulates linear tetrahedra; with a nearly incompressible material set solver.nodal_pressure"
+        f"{f}: {cells} split into tetrahedra (pliant.mesh.split; {tets:,} tets in all{by_corners}): "
+        "pliant simulates linear tetrahedra; with a nearly incompressible material set solver.nodal_pressure"
     )
 
 
