@@ -172,3 +172,52 @@ def test_submodels_of_two_element_types_are_refused(tmp_path):
     )
     with pytest.raises(NiftySimError, match="one element type"):
         load_niftysim(f)
+
+
+def test_membranes_are_refused_by_name_and_skipped_as_one_feature(tmp_path):
+    """<ShellElements> with its <ShellElementSet> (NiftySim's membranes and shells, models/
+    box_membrane.xml; a membrane-only sub-model with NumEls="0", testing/data/two_cubes_sheet.xml):
+    refused naming ShellElements, in the model or in a sub-model; --ignore ShellElements skips both
+    tags with one warning, and the solid runs (the sheet's nodes left without an element)."""
+    X, T = pl.mesh.box_tets((0.02, 0.02, 0.02), (1, 1, 1))
+    sheet = np.array([[0, 0, 0.03], [0.02, 0, 0.03], [0, 0.02, 0.03]])
+    fmt = lambda a: " ".join(str(v) for v in np.ravel(a).tolist())  # noqa: E731
+    nh = '<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>'
+    shell = (
+        '<ShellElements Type="T3">0 1 2</ShellElements><ShellElementSet Size="all">'
+        '<Material Type="Linear"><ElasticParams NumParams="2">1000 0.3</ElasticParams>'
+        "<Density>10</Density><Thickness>0.001</Thickness></Material>0</ShellElementSet>"
+    )
+    system = (
+        "<SystemParams><TimeStep>1e-4</TimeStep><TotalTime>0.002</TotalTime><DampingCoeff>10"
+        "</DampingCoeff><Density>1000</Density></SystemParams>"
+    )
+    cube = (
+        f'<Nodes DOF="3" NumNodes="{len(X)}">{fmt(X)}</Nodes>'
+        f'<Elements NumEls="{len(T)}" Type="T4">{fmt(T)}</Elements>'
+    )
+    base = fmt(np.nonzero(X[:, 2] == 0)[0])
+    fixed = f'<Constraint DOF="all" Type="Fix" NumNodes="4"><Nodes>{base}</Nodes></Constraint>'
+    gravity = (
+        '<Constraint Type="Gravity" LoadShape="STEP" NumNodes="all"><AccelerationMagnitude>9.81'
+        "</AccelerationMagnitude><AccelerationDirection>0 0 -1</AccelerationDirection></Constraint>"
+    )
+    solid = f'{cube}<ElementSet Size="all">{nh}0</ElementSet>{fixed}'
+    whole = f'<?xml version="1.0"?><Model>{solid}{gravity}{shell}{system}</Model>'
+    subs = (
+        f'<?xml version="1.0"?><Model><SubModel>{solid}</SubModel><SubModel><Nodes DOF="3" '
+        f'NumNodes="3">{fmt(sheet)}</Nodes><Elements NumEls="0" Type="T4"></Elements>'
+        f'<ElementSet Size="all">{nh}0</ElementSet>{shell}</SubModel>{system}</Model>'
+    )
+    for name, xml in (("whole.xml", whole), ("subs.xml", subs)):
+        p = tmp_path / name
+        p.write_text(xml)
+        with pytest.raises(
+            NiftySimError, match="unsupported NiftySim feature ShellElements: membrane and shell"
+        ):
+            load_niftysim(p)
+        sc = load_niftysim(p, ignore=("ShellElements",))
+        assert sum("ShellElements" in w for w in sc.warnings) == 1
+        sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
+        sim.run(steps=5)
+        assert np.isfinite(sim.displacements).all()

@@ -203,7 +203,15 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
 
     root = _flatten(root, f)
     for child in root:
-        if child.tag not in _KNOWN_TOP:
+        if child.tag == "ShellElementSet" and "ShellElements" in ignore:
+            continue  # the membrane's material goes with the membrane, one warning for both
+        if child.tag in ("ShellElements", "ShellElementSet"):
+            unsupported(
+                "ShellElements",
+                "membrane and shell elements (<ShellElements> with its <ShellElementSet>) are not "
+                "implemented in pliant; skipping them runs the solid alone",
+            )
+        elif child.tag not in _KNOWN_TOP:
             unsupported(child.tag, "not implemented in pliant")
 
     from .niftysim_elements import as_tets, h8_as_t4anp
@@ -349,7 +357,10 @@ def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:
         )
     T = T.reshape(-1, n)
     M = len(T)
-    if "NumEls" in elems_el.attrib and _scalar(elems_el.get("NumEls"), f, "Elements NumEls", int, 0) != M:
+    if (
+        "NumEls" in elems_el.attrib
+        and _scalar(elems_el.get("NumEls"), f, "Elements NumEls", int, 0, False) != M
+    ):
         raise NiftySimError(
             f"<Elements NumEls={elems_el.get('NumEls')}> but {M} elements listed", f, "Elements"
         )

@@ -52,6 +52,9 @@ def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
     for i, sm in enumerate(subs):
         key = f"SubModel[{i}]"
         for child in sm:
+            if child.tag in ("ShellElements", "ShellElementSet"):  # refused (or skipped) as the model's are
+                flat.append(copy.deepcopy(child))
+                continue
             if child.tag not in _SUB_CHILDREN:
                 raise NiftySimError(
                     f"<{child.tag}> in a sub-model: NiftySim reads a sub-model's mesh, element "
