@@ -608,21 +608,25 @@ def test_output_variable_u_writes_niftysims_u_txt(tmp_path):
     assert any("Variable F not written" in w for w in summary["warnings"])
 
 
+def _balls_with(tmp_path, extra: str, name: str = "balls.xml", deformable: bool = True) -> Path:
+    """ball_ball.xml with ``extra`` SystemParams (and DoDeformableCollision 0 if not
+    ``deformable``), written to tmp_path/name."""
+    xml = BALLS.read_text()
+    if not deformable:
+        xml = xml.replace("\n      1\n    </DoDeformableCollision>", "0</DoDeformableCollision>")
+    p = tmp_path / name
+    p.write_text(xml.replace("<DoDeformableCollision>", extra + "<DoDeformableCollision>", 1))
+    return p
+
+
 def test_deformable_friction_coefficient_is_the_soft_contacts_friction(tmp_path):
     """<DeformableFrictionCoefficient> (NiftySim's Coulomb coefficient of its deformable contact
     surface) becomes the soft contact's friction, static and kinetic alike: the same bits over
     ball_ball's 1 s as the model given that friction through the API, and other bits than
     frictionless; without deformable contact it is named as having no effect; the contact offsets
     NiftySim's method has (ContactSafetyMargin, RateConstraintDistance) are refused by name."""
-    xml = BALLS.read_text()
-    p = tmp_path / "mu.xml"
-    p.write_text(
-        xml.replace(
-            "<DoDeformableCollision>",
-            "<DeformableFrictionCoefficient>0.4</DeformableFrictionCoefficient><DoDeformableCollision>",
-            1,
-        )
-    )
+    mu = "<DeformableFrictionCoefficient>0.4</DeformableFrictionCoefficient>"
+    p = _balls_with(tmp_path, mu)
     sc = load_niftysim(p)
     c = sc.builder.soft_contact
     assert (c.pairs, c.self_contact, c.mu_s, c.mu_k) == (None, False, 0.4, 0.4)
@@ -637,17 +641,10 @@ def test_deformable_friction_coefficient_is_the_soft_contacts_friction(tmp_path)
     frictionless = pl.Simulation(load_niftysim(BALLS).builder.finalize("float32"), dt=sc.dt)
     frictionless.run(steps=10000)
     assert not np.array_equal(runs[0], frictionless.displacements)
-    off = xml.replace("\n      1\n    </DoDeformableCollision>", "0</DoDeformableCollision>")
-    p.write_text(
-        off.replace(
-            "<DoDeformableCollision>",
-            "<DeformableFrictionCoefficient>0.4</DeformableFrictionCoefficient><DoDeformableCollision>",
-            1,
-        )
-    )
+    p = _balls_with(tmp_path, mu, deformable=False)
     assert any("DeformableFrictionCoefficient ignored" in w for w in load_niftysim(p).warnings)
     for k in ("ContactSafetyMargin", "RateConstraintDistance"):
-        p.write_text(xml.replace("<DoDeformableCollision>", f"<{k}>0.001</{k}><DoDeformableCollision>", 1))
+        p = _balls_with(tmp_path, f"<{k}>0.001</{k}>")
         with pytest.raises(NiftySimError, match=f"unsupported NiftySim feature SystemParams/{k}"):
             load_niftysim(p)
 
@@ -656,15 +653,7 @@ def test_niftysims_contact_search_settings_are_accepted_as_having_no_physics(tmp
     """<BVType> (AABB or OBB) and <DoMultiPassContacts> choose how NiftySim finds and resolves its
     contacts: the model imports with a warning naming each and runs to the same bits as without
     them (300 steps); a BVType NiftySim does not know is named."""
-    xml = BALLS.read_text()
-    p = tmp_path / "bv.xml"
-    p.write_text(
-        xml.replace(
-            "<DoDeformableCollision>",
-            "<BVType>OBB</BVType><DoMultiPassContacts>1</DoMultiPassContacts><DoDeformableCollision>",
-            1,
-        )
-    )
+    p = _balls_with(tmp_path, "<BVType>OBB</BVType><DoMultiPassContacts>1</DoMultiPassContacts>")
     sc = load_niftysim(p)
     assert sum("ignored (how NiftySim searches" in w for w in sc.warnings) == 2
     runs = []
@@ -673,6 +662,6 @@ def test_niftysims_contact_search_settings_are_accepted_as_having_no_physics(tmp
         sim.run(steps=300)
         runs.append(sim.displacements)
     assert np.array_equal(runs[0], runs[1])
-    p.write_text(xml.replace("<DoDeformableCollision>", "<BVType>KDOP</BVType><DoDeformableCollision>", 1))
+    p = _balls_with(tmp_path, "<BVType>KDOP</BVType>")
     with pytest.raises(NiftySimError, match=r"\[SystemParams/BVType\].*expected AABB or OBB"):
         load_niftysim(p)

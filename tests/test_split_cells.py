@@ -244,6 +244,20 @@ def test_a_twisted_hexahedron_is_named(tmp_path):
     assert json.loads(r.output)["tets"] == 12
 
 
+def _sagging(tmp_path: Path, mesh: Path, fixed: str) -> dict:
+    """`pliant run` of the mesh file for 2 ms under gravity, the nodes ``fixed`` held (a scene's
+    node selection): its summary."""
+    (tmp_path / "s.toml").write_text(
+        f'[mesh]\nfile = "{mesh}"\n'
+        '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
+        "[solver]\nduration = 0.002\ndt = 1e-4\n"
+        f'[[constraint]]\ntype = "fix"\nnodes = {fixed}\n[[load]]\ntype = "gravity"\n'
+    )
+    r = runner.invoke(app, ["run", str(tmp_path / "s.toml"), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 0, r.output
+    return json.loads((tmp_path / "out" / "summary.json").read_text())
+
+
 @pytest.mark.filterwarnings("ignore:.*split into tetrahedra")  # the summary's warning, asserted
 def test_a_scene_on_a_hexahedral_mesh_file_says_it_was_split(tmp_path):
     """A scene whose [mesh] file holds hexahedra runs, and its summary's warnings say how many
@@ -256,17 +270,9 @@ def test_a_scene_on_a_hexahedral_mesh_file_says_it_was_split(tmp_path):
     remap = np.full(len(X), -1)
     remap[used] = np.arange(used.size)
     meshio.write(tmp_path / "hexes.vtu", meshio.Mesh(X[used], [("hexahedron", remap[hexes])]))
-    (tmp_path / "s.toml").write_text(
-        '[mesh]\nfile = "hexes.vtu"\n'
-        '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
-        "[solver]\nduration = 0.002\ndt = 1e-4\n"
-        '[[constraint]]\ntype = "fix"\n'
-        "nodes = { plane = { point = [0.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0] } }\n"
-        '[[load]]\ntype = "gravity"\n'
+    summary = _sagging(
+        tmp_path, tmp_path / "hexes.vtu", "{ plane = { point = [0.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0] } }"
     )
-    r = runner.invoke(app, ["run", str(tmp_path / "s.toml"), "-o", str(tmp_path / "out")])
-    assert r.exit_code == 0, r.output
-    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["elements"] == 6 * len(hexes)
     assert any("144 hexahedra split into tetrahedra" in w for w in summary["warnings"])
 
@@ -290,14 +296,6 @@ def test_quadratic_hexahedra_are_taken_by_their_corners(tmp_path):
     assert v.min() > 0 and v.sum() == pytest.approx(0.03 * 0.02 * 0.01, rel=1e-12)
     np.testing.assert_array_equal(m.node_sets["fixed"], np.nonzero(m.nodes[:, 0] == 0.0)[0])
     assert m.node_sets["fixed"].size == 9
-    (tmp_path / "s.toml").write_text(
-        f'[mesh]\nfile = "{HEX20}"\n'
-        '[[material]]\ntype = "neo-hookean"\nE = 3000.0\nnu = 0.45\ndensity = 1000.0\n'
-        '[solver]\nduration = 0.002\ndt = 1e-4\n[[constraint]]\ntype = "fix"\nnodes = { set = "fixed" }\n'
-        '[[load]]\ntype = "gravity"\n'
-    )
-    r = runner.invoke(app, ["run", str(tmp_path / "s.toml"), "-o", str(tmp_path / "out")])
-    assert r.exit_code == 0, r.output
-    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    summary = _sagging(tmp_path, HEX20, '{ set = "fixed" }')
     assert summary["nodes"] == 27
     assert any("hexahedron20 by their corners, mid-edge nodes dropped" in w for w in summary["warnings"])

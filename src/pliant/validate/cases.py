@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..materials import LinearElastic, NeoHookean
+from ..materials import LinearElastic
 from ..tled import Simulation
 from . import models
 from .references import (
@@ -201,37 +201,24 @@ def damping(quick: bool) -> tuple[list[Check], dict]:
     return rows, {}
 
 
+def _patch_check(case: str, quantity: str, error: float) -> Check:
+    """A patch test's row: the interior displacement error over γ, at most 1e-7."""
+    return Check(
+        case, quantity, error, 1e-7, "1", "relaxation residual 1e-10 times the size of u", kind="at most"
+    )
+
+
 def patch_and_shear(quick: bool) -> tuple[list[Check], dict]:
     """Patch test: simple shear u = γ Y e_x imposed on the boundary of a jittered cube is
     reproduced inside, and the decoupled Neo-Hookean shear stress is σ_xy = μγ exactly (J = 1)."""
     from .. import mesh
-    from ..tled import ModelBuilder, Ramp
 
     X, T = mesh.box_tets((1.0, 1.0, 1.0), (4, 4, 4), jitter=0.3, seed=3)
     gamma, mu = 0.2, 1.0e3
-    u_exact = np.zeros_like(X)
-    u_exact[:, 0] = gamma * X[:, 1]
-    b = ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(NeoHookean(mu=mu, K=50 * mu), density=1000.0)
-    boundary = np.nonzero(np.any((X < 1e-9) | (X > 1 - 1e-9), axis=1))[0]
-    b.prescribe(boundary, u_exact[boundary], "xyz", curve=Ramp(1.0))
-    model = b.finalize("float64")
-    sim = Simulation(model)
-    sim.relax(tol=1e-10, increments=2)
-    inside = np.setdiff1d(np.arange(len(X)), boundary)
-    err = float(np.abs(sim.displacements[inside] - u_exact[inside]).max())
+    model, sim, err = models.sheared_unit_cube(X, T, gamma, mu)
     sig = model.element_results(sim.state)["cauchy"]
     return [
-        Check(
-            "patch test",
-            "interior displacement error / γ",
-            err / gamma,
-            1e-7,
-            "1",
-            "relaxation residual 1e-10 times the size of u",
-            kind="at most",
-        ),
+        _patch_check("patch test", "interior displacement error / γ", err / gamma),
         Check(
             "simple shear",
             "mean σ_xy (μγ for Neo-Hookean)",
@@ -251,7 +238,6 @@ def hexahedra(quick: bool) -> tuple[list[Check], dict]:
     cube stretched 30 % with y and z held (F = diag(1.3, 1, 1)), carries the decoupled
     Neo-Hookean's σ_xx in every tet."""
     from ..mesh.split import split_cells
-    from ..tled import ModelBuilder, Ramp
 
     rng = np.random.default_rng(5)
     n = 4
@@ -265,30 +251,16 @@ def hexahedra(quick: bool) -> tuple[list[Check], dict]:
     cells = np.indices((n,) * 3).reshape(3, -1).T
     H = new[np.stack([at[tuple((cells + c).T)] for c in corners], axis=1)]
     T, _ = split_cells(X, "hexahedron", H)
-    gamma, mu = 0.2, 1.0e3
-    u_exact = np.zeros_like(X)
-    u_exact[:, 0] = gamma * X[:, 1]
-    b = ModelBuilder()
-    b.add_mesh(X, T)
-    b.set_material(NeoHookean(mu=mu, K=50 * mu), density=1000.0)
-    boundary = np.nonzero(np.any((X < 1e-9) | (X > 1 - 1e-9), axis=1))[0]
-    b.prescribe(boundary, u_exact[boundary], "xyz", curve=Ramp(1.0))
-    sim = Simulation(b.finalize("float64"))
-    sim.relax(tol=1e-10, increments=2)
-    inside = np.setdiff1d(np.arange(len(X)), boundary)
-    err = float(np.abs(sim.displacements[inside] - u_exact[inside]).max())
+    gamma = 0.2
+    err = models.sheared_unit_cube(X, T, gamma, 1.0e3)[2]
     sigma = models.guide_h8_stress()
     J, mu_g, K_g = 1.3, 1052.0, 52249.0  # the user guide's NH
     sxx = mu_g * J ** (-5 / 3) * (1.69 - (1.69 + 2) / 3) + K_g * (J - 1)
     return [
-        Check(
+        _patch_check(
             "hexahedra split",
             "interior displacement error / γ, 384 tets of 64 randomly numbered hexahedra",
             err / gamma,
-            1e-7,
-            "1",
-            "relaxation residual 1e-10 times the size of u",
-            kind="at most",
         ),
         Check(
             "NiftySim H8 (user guide §3.1)",

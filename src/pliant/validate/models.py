@@ -367,6 +367,26 @@ def bent_beam_tip(alpha, n=4, slenderness=20, nodal_pressure=False, increments=1
     return float(-u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
 
 
+def sheared_unit_cube(X: np.ndarray, T: np.ndarray, gamma: float, mu: float):
+    """Simple shear u = γ Y e_x prescribed on the boundary of a unit-cube mesh (nodes X [m], tets
+    T), decoupled Neo-Hookean (μ [Pa], K = 50 μ), relaxed in float64: (model, simulation, the
+    largest interior displacement error [m] from the affine field)."""
+    from ..materials import NeoHookean
+
+    u_exact = np.zeros_like(X)
+    u_exact[:, 0] = gamma * X[:, 1]
+    b = ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(NeoHookean(mu=mu, K=50 * mu), density=1000.0)
+    boundary = np.nonzero(np.any((X < 1e-9) | (X > 1 - 1e-9), axis=1))[0]
+    b.prescribe(boundary, u_exact[boundary], "xyz", curve=Ramp(1.0))
+    model = b.finalize("float64")
+    sim = Simulation(model)
+    sim.relax(tol=1e-10, increments=2)
+    inside = np.setdiff1d(np.arange(len(X)), boundary)
+    return model, sim, float(np.abs(sim.displacements[inside] - u_exact[inside]).max())
+
+
 # The NiftySim user guide's first model (§3.1): one H8 cube of 0.1 m, NH (μ = 1052, K = 52249 Pa),
 # its x = 0.1 face pulled 0.03 m along x (POLY345 over 1 s) with x held at x = 0 and y, z held at
 # every node; damping 5, density 1000, Δt = 0.01 s.
