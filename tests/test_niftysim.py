@@ -575,11 +575,13 @@ def test_rom_off_runs_and_rom_on_is_refused_by_name(tmp_path):
         load_niftysim(p)
 
 
-def test_output_variable_u_writes_niftysims_u_txt(tmp_path):
-    """<Output Freq="100"><Variable>U</Variable><Variable>F</Variable></Output>: `pliant run` writes
-    OUT/U.txt as NiftySim lays it out (a row per DOF, x y z of node 0 first; a column per frame
-    after the first), equal to the displacements of the frames' .vtu files (read with meshio, to
-    the 9 digits written); F, which pliant does not write, is named in a warning."""
+def test_output_variables_u_and_f_write_niftysims_text_files(tmp_path):
+    """<Output Freq="100"><Variable>U</Variable><Variable>F</Variable><Variable>S</Variable>:
+    `pliant run` writes OUT/U.txt and OUT/F.txt as NiftySim lays them out (a row per DOF, x y z of
+    node 0 first; a column per frame after the first): U equal to the displacements of the frames'
+    .vtu files (read with meshio; 1e-8: the 9 digits written), F to the internal forces a fresh
+    float64 import of the model computes from them (1e-6: the run's float32 arithmetic); S, which
+    pliant does not write, is named in a warning."""
     import json
 
     import meshio
@@ -588,24 +590,28 @@ def test_output_variable_u_writes_niftysims_u_txt(tmp_path):
     from pliant.cli import app
 
     X, T, left, right, xml = _cube_xml()
-    xml = xml.replace(
-        "</SystemParams>",
-        '</SystemParams><Output Freq="100"><Variable>U</Variable><Variable>F</Variable></Output>',
-    )
+    out = '<Output Freq="100"><Variable>U</Variable><Variable>F</Variable><Variable>S</Variable></Output>'
+    xml = xml.replace("</SystemParams>", "</SystemParams>" + out)
     p = tmp_path / "out.xml"
     p.write_text(xml)
     r = CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / "o")])
     assert r.exit_code == 0, r.output
     U = np.loadtxt(tmp_path / "o" / "U.txt", ndmin=2)
+    F = np.loadtxt(tmp_path / "o" / "F.txt", ndmin=2)
     frames = sorted((tmp_path / "o").glob("frame_*.vtu"))
-    assert U.shape == (3 * len(X), len(frames) - 1) == (3 * len(X), 5)  # 0.05 s / (100 × 1e-4 s)
+    assert U.shape == F.shape == (3 * len(X), len(frames) - 1) == (3 * len(X), 5)  # 0.05 s / (100 × 1e-4 s)
+    model = load_niftysim(p).builder.finalize("float64")
+    s = model.state()
     for k, f in enumerate(frames[1:]):
         u = meshio.read(f).point_data["displacement"]
         np.testing.assert_allclose(U[:, k], u.reshape(-1), rtol=1e-8, atol=1e-8 * np.abs(u).max())
-    assert np.abs(U[:, -1]).max() > 1e-3
+        s.set_displacements(u)
+        fint = model.internal_forces(s).reshape(-1)
+        np.testing.assert_allclose(F[:, k], fint, rtol=1e-6, atol=1e-6 * np.abs(fint).max())
+    assert np.abs(U[:, -1]).max() > 1e-3 and np.abs(F[:, -1]).max() > 0
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
-    assert "U.txt" in summary["files"]
-    assert any("Variable F not written" in w for w in summary["warnings"])
+    assert {"U.txt", "F.txt"} <= set(summary["files"])
+    assert any("Variable S not written" in w for w in summary["warnings"])
 
 
 def _balls_with(tmp_path, extra: str, name: str = "balls.xml", deformable: bool = True) -> Path:

@@ -29,9 +29,16 @@ def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
     return max(1, math.ceil(total_steps / scene.frames))
 
 
-def write_niftysim_u(path: Path, frames: list[np.ndarray]) -> None:
-    """NiftySim's U.txt (tledSolutionWriter): a row per DOF (x, y, z of node 0 first), a column per
-    output frame after the first, displacements [m] to 9 digits. pliant's frame k is at k·Freq·Δt,
+# NiftySim's nodal outputs (tledSolutionWriter): <Variable> → what each frame keeps, (N, 3).
+NIFTYSIM_OUTPUTS = {
+    "U": lambda model, state: state.displacements.copy(),  # displacements [m]
+    "F": lambda model, state: model.internal_forces(state),  # internal nodal forces [N]
+}
+
+
+def write_niftysim_text(path: Path, frames: list[np.ndarray]) -> None:
+    """NiftySim's U.txt or F.txt (tledSolutionWriter): a row per DOF (x, y, z of node 0 first), a
+    column per output frame after the first, to 9 digits. pliant's frame k is at k·Freq·Δt,
     NiftySim's one step later (docs/scenes.md)."""
     import io
 
@@ -174,8 +181,10 @@ def run_scene(
 
         cutter = Cutter(list(scene.blades), embedding=embedding)
     writer.write(state)
-    u_frames: list[np.ndarray] = []  # NiftySim's U.txt: the displacements of each frame after the first
-    keep_u = out is not None and scene.meta.get("niftysim_u")
+    # NiftySim's U.txt, F.txt: each frame's nodal values after the first
+    texts: dict[str, list[np.ndarray]] = {v: [] for v in scene.meta.get("niftysim_outputs", ())}
+    if out is None:
+        texts = {}
     build_s = time.perf_counter() - t_build
     summary = {
         "pliant": __version__,
@@ -219,8 +228,8 @@ def run_scene(
                     f"quasi-static solve stopped at residual {info.residual:.3g} (tolerance {scene.tol:g})"
                 )
             writer.write(state)
-            if keep_u:
-                u_frames.append(state.displacements.copy())
+            for v, kept in texts.items():
+                kept.append(NIFTYSIM_OUTPUTS[v](model, state))
         else:
             every = _frame_steps(scene, solver.dt, total)
             if scene.meta.get("frames_given") and scene.frames > total:
@@ -257,8 +266,8 @@ def run_scene(
                     done += n
                     if done % every == 0 or done == total:
                         writer.write(state)
-                        if keep_u:
-                            u_frames.append(state.displacements.copy())
+                        for v, kept in texts.items():
+                            kept.append(NIFTYSIM_OUTPUTS[v](model, state))
                     el = time.perf_counter() - t0
                     bar.update(task, completed=done, t=state.time, rate=done / max(el, 1e-9))
     except KeyboardInterrupt:
@@ -314,9 +323,10 @@ def run_scene(
             if out is not None:
                 atomic_write_text(out / "tools.json", json.dumps(hist))
                 summary["files"].append("tools.json")
-        if keep_u and out is not None:
-            write_niftysim_u(out / "U.txt", u_frames)
-            summary["files"].append("U.txt")
+        for v, kept in texts.items():
+            if out is not None:
+                write_niftysim_text(out / f"{v}.txt", kept)
+                summary["files"].append(f"{v}.txt")
         if inspect is not None and np.all(np.isfinite(u)):
             summary.update(inspect(model, solver, state))
         if out is None:

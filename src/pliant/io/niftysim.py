@@ -272,13 +272,14 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         warnings=warnings,
     )
     scene.meta["mesh_source"] = f
-    if "U" in variables:  # NiftySim's U.txt beside the frames (runner.py)
-        scene.meta["niftysim_u"] = True
-    other = sorted(set(variables) - {"U"})
+    written = [v for v in ("U", "F") if v in variables]  # NiftySim's U.txt, F.txt (runner.py)
+    if written:
+        scene.meta["niftysim_outputs"] = written
+    other = sorted(set(variables) - {"U", "F"})
     if other:
         warnings.append(
             f"{f}: <Output> Variable {', '.join(other)} not written as NiftySim's text files (pliant writes "
-            "U.txt; each frame holds stresses and strains: fields cauchy, green_strain)"
+            "U.txt and F.txt; each frame holds stresses and strains: fields cauchy, green_strain)"
         )
     if etype == "H8":  # NiftySim's step suits its hexahedra; the split mesh's may be smaller
         scene.meta["dt_divides"] = "H8 elements split into tetrahedra"
