@@ -483,6 +483,17 @@ def test_extreme_values_are_refused_in_one_line(tmp_path, patch, words):
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), *words)
 
 
+def test_a_mesh_file_cell_beyond_its_nodes_is_named(tmp_path):
+    """A cell of a volume mesh file that refers to a node the file does not have (meshio reads it
+    as it is): `pliant mesh quality` crashed with an IndexError (exit 3); now the file, the cell,
+    its kind and the node are named, exit 2, for tets and for the cells split into them."""
+    X = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1.0]])
+    for kind, cell, node in (("tetra", [0, 1, 3, 99], 99), ("hexahedron", [0, 1, 2, 3, 4, 5, 6, -1], -1)):
+        p = tmp_path / f"{kind}.vtu"
+        meshio.write(p, meshio.Mesh(X, [(kind, np.array([cell]))]))
+        refused(cli("mesh", "quality", p), str(p), f"cell 0 ({kind}) refers to node {node}", "8 nodes")
+
+
 def test_volume_meshes_with_other_cells_are_refused(tmp_path):
     """Cells beside tets were dropped silently: the run simulated a part of the body. Linear
     hexahedra are split into tetrahedra now (pliant.mesh.split), quadratic ones by their corners;

@@ -113,6 +113,14 @@ def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
     n = 0
     for i, c in blocks:
         data = np.asarray(c.data, np.int64)
+        bad = np.nonzero(np.any((data < 0) | (data >= len(X)), axis=1))[0]
+        if bad.size:  # meshio reads such files as they are
+            k = int(bad[0])
+            node = int(data[k][(data[k] < 0) | (data[k] >= len(X))][0])
+            raise MeshError(
+                f"{path}: cell {int(first[i]) + k} ({c.type}) refers to node {node}; the file has "
+                f"{len(X)} nodes (expected 0 <= index < {len(X)})"
+            )
         if c.type == "tetra":
             t, o = data.reshape(-1, 4), np.arange(len(data))
         else:
