@@ -182,9 +182,9 @@ def run_scene(
         cutter = Cutter(list(scene.blades), embedding=embedding)
     writer.write(state)
     # NiftySim's U.txt, F.txt: each frame's nodal values after the first
-    texts: dict[str, list[np.ndarray]] = {v: [] for v in scene.meta.get("niftysim_outputs", ())}
-    if out is None:
-        texts = {}
+    texts: dict[str, list[np.ndarray]] = {
+        v: [] for v in scene.meta.get("niftysim_outputs", ()) if out is not None
+    }
     build_s = time.perf_counter() - t_build
     summary = {
         "pliant": __version__,

@@ -83,24 +83,28 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
             f"{path}: no volume cells (cell types: {', '.join(kinds)}); expected 'tetra' cells (or "
             "linear hexahedra, wedges, pyramids; surface meshes go through the mesh pipeline)"
         )
-    X = np.asarray(mesh.points, dtype=float)
-    if X.ndim != 2 or X.shape[1] < 3:
-        X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
-    X = X[:, :3]
+    X = mesh_points(mesh)
     tets, owner, split = _volume_tets(path, mesh, X, blocks)
     sets = {
         k: np.nonzero(np.isin(owner, cells))[0]
         for k, cells in _element_sets(mesh, [i for i, _ in blocks]).items()
     }
     node_sets = _node_sets(mesh)
-    inside = tets.size == 0 or (tets.min() >= 0 and tets.max() < len(X))  # else the builder names them
-    if set(split) & set(LINEARIZED) and inside:  # mid-edge nodes dropped: keep the nodes tets use
+    if set(split) & set(LINEARIZED):  # mid-edge nodes dropped: keep the nodes the tets use
         used = np.unique(tets)
         new = np.full(len(X), -1)
         new[used] = np.arange(used.size)
         X, tets = X[used], new[tets]
         node_sets = {k: new[v[new[v] >= 0]] for k, v in node_sets.items() if np.any(new[v] >= 0)}
     return VolumeMeshFile(X, tets, sets, node_sets, split)
+
+
+def mesh_points(mesh) -> np.ndarray:
+    """A meshio mesh's points as (N, 3) floats [file units] (2-D points get z = 0)."""
+    X = np.asarray(mesh.points, dtype=float)
+    if X.ndim != 2 or X.shape[1] < 3:
+        X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
+    return X[:, :3]
 
 
 def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):

@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MeshError
-from ..mesh.split import split_cells, split_quads
+from ..mesh.split import split_cells
 from .niftysim import NiftySimError
 
-__all__ = ["ELEMENT_NODES", "as_tets", "h8_as_t4anp", "quads_as_triangles"]
+__all__ = ["ELEMENT_NODES", "as_tets", "h8_as_t4anp"]
 
 # Nodes per element of each <Elements Type>.
 ELEMENT_NODES = {"T4": 4, "T4ANP": 4, "H8": 8}
@@ -31,11 +31,6 @@ def as_tets(X: np.ndarray, E: np.ndarray, f: str, key: str) -> tuple[np.ndarray,
         return split_cells(X, "hexahedron", E, what="element")
     except MeshError as e:
         raise NiftySimError(str(e), f, key) from None
-
-
-def quads_as_triangles(Q: np.ndarray) -> np.ndarray:
-    """The triangles (2 F, 3) of H8 faces Q (F, 4), each cut as the elements beside it are."""
-    return split_quads(np.asarray(Q, np.int64))
 
 
 def h8_as_t4anp(b, hexahedra: int, tets: int, f: str, warnings: list[str]) -> bool:

@@ -64,7 +64,7 @@ def _file_cells(path: Path, kind: str, what: str) -> tuple[np.ndarray, np.ndarra
     """A mesh file's nodes (N, 3) and its cells of ``kind`` (meshio's name), in file order: the
     element numbering the model's sets use. A file whose volume cells are of another kind is
     refused (NiftySim reads the type the model names)."""
-    from .mesh import SURFACE_CELLS
+    from .mesh import SURFACE_CELLS, mesh_points
     from .vtk_grid import read_meshio_or_grid
 
     mesh = read_meshio_or_grid(path, "volume mesh")
@@ -73,10 +73,7 @@ def _file_cells(path: Path, kind: str, what: str) -> tuple[np.ndarray, np.ndarra
     if other or not blocks:
         found = ", ".join(sorted({c.type for c in mesh.cells})) or "none"
         raise MeshError(f"{path}: cells {found}; {what} expects {kind} cells only")
-    X = np.asarray(mesh.points, float)
-    if X.ndim != 2 or X.shape[1] < 3:
-        X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
-    return X[:, :3], np.concatenate(blocks)
+    return mesh_points(mesh), np.concatenate(blocks)
 
 
 def _transformed(X: np.ndarray, el, f: str, key: str) -> np.ndarray:
@@ -251,9 +248,9 @@ def surface_faces(c, X: np.ndarray, T: np.ndarray, f: str, key: str) -> tuple[np
         if num is not None and num.isdigit() and int(num) != len(faces):
             raise NiftySimError(f"NumFaces={num} but {len(faces)} faces listed", f, key)
         if kind == "Quad":  # each as two triangles, cut as the tetrahedra beside it are
-            from .niftysim_elements import quads_as_triangles
+            from ..mesh.split import split_quads
 
-            faces = quads_as_triangles(faces)
+            faces = split_quads(faces)
     if len(faces) == 0:
         raise NiftySimError(f"{ctype}: no faces selected", f, key)
     return faces, orient
