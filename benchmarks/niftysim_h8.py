@@ -12,7 +12,6 @@ nodal ‖u − u_NiftySim‖ over the largest ‖u_NiftySim‖. Prints figures; 
 from __future__ import annotations
 
 import argparse
-import itertools
 import subprocess
 import tempfile
 from pathlib import Path
@@ -21,6 +20,7 @@ import numpy as np
 
 import pliant as pl
 from pliant.io.niftysim import load_niftysim
+from pliant.mesh.primitives import grid_hexahedra
 from pliant.tled.solver import stable_substeps
 
 L = 0.1  # cube edge [m]
@@ -28,13 +28,7 @@ L = 0.1  # cube edge [m]
 
 def cube_model(n: int, path: Path) -> np.ndarray:
     """Writes the n³ H8 model; returns its nodes [m] (N, 3)."""
-    xs = np.linspace(0, L, n + 1)
-    X = np.array(list(itertools.product(xs, xs, xs)))
-    idx = np.arange(len(X)).reshape(n + 1, n + 1, n + 1)
-    corners = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
-    H = [
-        [idx[i + a, j + b, k + c] for a, b, c in corners] for i, j, k in itertools.product(range(n), repeat=3)
-    ]
+    X, H = grid_hexahedra(*(np.linspace(0, L, n + 1),) * 3)
     x0, x1 = np.nonzero(X[:, 0] < 1e-9)[0], np.nonzero(X[:, 0] > L - 1e-9)[0]
     ends = np.concatenate([x0, x1])
 

@@ -299,3 +299,21 @@ def test_quadratic_hexahedra_are_taken_by_their_corners(tmp_path):
     summary = _sagging(tmp_path, HEX20, '{ set = "fixed" }')
     assert summary["nodes"] == 27
     assert any("hexahedron20 by their corners, mid-edge nodes dropped" in w for w in summary["warnings"])
+
+
+def test_grid_hexahedra_are_in_vtk_order_and_fill_their_box():
+    """grid_hexahedra on graded lines: every cell's corners are its grid box's in VTK's order (the
+    unit cube's pattern, closed form), and the cells split into tets fill the box (its volume,
+    1e-12 relative: round-off)."""
+    from pliant.mesh.primitives import grid_hexahedra
+
+    xs, ys, zs = [0, 0.1, 0.3], [0, 0.2, 0.25, 0.5], [0, 0.4]
+    X, H = grid_hexahedra(xs, ys, zs)
+    assert H.shape == (2 * 3 * 1, 8)
+    unit, _ = UNIT["hexahedron"]
+    for cell in H:
+        P = X[cell]
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        np.testing.assert_array_equal(P, lo + unit * (hi - lo))
+    T, _ = split_cells(X, "hexahedron", H)
+    assert tet_volumes(X, T).sum() == pytest.approx(0.3 * 0.5 * 0.4, rel=1e-12)

@@ -26,11 +26,9 @@ def orient_positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     return T
 
 
-def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
-    """Tensor-product mesh on the coordinate lines xs, ys, zs [m] (each strictly increasing, at
-    least 2 values): every cell is split into 6 tetrahedra (Kuhn triangulation, conforming). Use it
-    for graded meshes, e.g. fine near a contact and growing geometrically away from it. Returns
-    nodes (N, 3) [m] and positively oriented tets (6·(nx−1)(ny−1)(nz−1), 4)."""
+def _grid(xs, ys, zs):
+    """Nodes (N, 3) [m] of the tensor grid on xs, ys, zs (checked: at least 2 finite, strictly
+    increasing coordinates each), their index by (i, j, k), and each cell's lowest corner i, j, k."""
     g = []
     for name, c in zip("xyz", (xs, ys, zs)):
         c = np.asarray(c, float)
@@ -43,6 +41,15 @@ def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
     X = np.stack(np.meshgrid(*g, indexing="ij"), axis=-1).reshape(-1, 3)
     idx = np.arange(X.shape[0]).reshape(nx + 1, ny + 1, nz + 1)
     i, j, k = (a.ravel() for a in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij"))
+    return X, idx, (i, j, k)
+
+
+def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
+    """Tensor-product mesh on the coordinate lines xs, ys, zs [m] (each strictly increasing, at
+    least 2 values): every cell is split into 6 tetrahedra (Kuhn triangulation, conforming). Use it
+    for graded meshes, e.g. fine near a contact and growing geometrically away from it. Returns
+    nodes (N, 3) [m] and positively oriented tets (6·(nx−1)(ny−1)(nz−1), 4)."""
+    X, idx, (i, j, k) = _grid(xs, ys, zs)
     tets = []
     for perm in itertools.permutations(range(3)):
         corner = np.zeros((3, i.size), dtype=np.int64)
@@ -52,6 +59,15 @@ def grid_tets(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
             path.append(idx[i + corner[0], j + corner[1], k + corner[2]])
         tets.append(np.stack(path, axis=1))
     return X, orient_positive(X, np.concatenate(tets))
+
+
+def grid_hexahedra(xs, ys, zs) -> tuple[np.ndarray, np.ndarray]:
+    """The tensor grid of :func:`grid_tets` as hexahedra: nodes (N, 3) [m] and cells (M, 8) in VTK's
+    node order (the bottom face counter-clockwise seen from above, then the top face above it), for
+    pliant.mesh.split and NiftySim's H8."""
+    X, idx, (i, j, k) = _grid(xs, ys, zs)
+    corners = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+    return X, np.stack([idx[i + a, j + b, k + c] for a, b, c in corners], axis=1)
 
 
 def graded_coordinates(h: float, fine_to: float, ratio: float, length: float) -> np.ndarray:

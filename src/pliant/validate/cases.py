@@ -237,19 +237,15 @@ def hexahedra(quick: bool) -> tuple[list[Check], dict]:
     differently by two neighbours would not be); and the NiftySim user guide's first model, one H8
     cube stretched 30 % with y and z held (F = diag(1.3, 1, 1)), carries the decoupled
     Neo-Hookean's σ_xx in every tet."""
+    from ..mesh.primitives import grid_hexahedra
     from ..mesh.split import split_cells
 
     rng = np.random.default_rng(5)
-    n = 4
-    g = np.stack(np.meshgrid(*(np.linspace(0, 1, n + 1),) * 3, indexing="ij"), -1).reshape(-1, 3)
+    g, H = grid_hexahedra(*(np.linspace(0, 1, 5),) * 3)
     inner = np.all((g > 1e-9) & (g < 1 - 1e-9), axis=1)
     X = g + np.where(inner[:, None], rng.uniform(-0.05, 0.05, g.shape), 0.0)  # 20 % of a cell
     perm = rng.permutation(len(X))
-    X, new = X[perm], np.argsort(perm)
-    at = np.arange(len(g)).reshape((n + 1,) * 3)
-    corners = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
-    cells = np.indices((n,) * 3).reshape(3, -1).T
-    H = new[np.stack([at[tuple((cells + c).T)] for c in corners], axis=1)]
+    X, H = X[perm], np.argsort(perm)[H]
     T, _ = split_cells(X, "hexahedron", H)
     gamma = 0.2
     err = models.sheared_unit_cube(X, T, gamma, 1.0e3)[2]
