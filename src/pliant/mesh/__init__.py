@@ -4,7 +4,7 @@ tetrahedra, quality, embedding of fine surfaces."""
 
 from .embed import Embedding, embed_surface
 from .pipeline import default_edge_length, surface_to_tets
-from .primitives import box_tets, graded_coordinates, grid_tets, orient_positive
+from .primitives import box_tets, graded_coordinates, grid_hexahedra, grid_tets, orient_positive
 from .quality import critical_time_steps, quality_summary, tet_quality
 from .split import split_cells, split_quads
 from .repair import check_surface, repair_surface, simplify, subdivide_loop
@@ -14,6 +14,7 @@ from .tetra import tetrahedralize
 __all__ = [
     "box_tets",
     "grid_tets",
+    "grid_hexahedra",
     "graded_coordinates",
     "orient_positive",
     "split_cells",

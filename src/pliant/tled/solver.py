@@ -52,27 +52,21 @@ EXACT_MARGIN = 0.99
 
 def stable_substeps(model, dt: float) -> int:
     """The least k for which dt / k is a step the solver accepts (1 where dt is): for a model
-    whose time step was chosen for other elements (a NiftySim H8 model split into tetrahedra)."""
-    try:
-        _stable_limit(model, dt)
+    whose time step was chosen for other elements (a NiftySim H8 model split into tetrahedra). A
+    step no count of steps could divide is refused as the solver refuses it (TimeStepError)."""
+    if dt <= EXACT_CHECK_FRACTION * model.dt_critical or dt <= _exact_limit(model):
         return 1
-    except TimeStepError:
-        ratio = dt / (EXACT_MARGIN * model._stable_step) * (1 + 1e-12)
-        if not ratio <= MAX_STEPS:  # no step count would do: the step itself is the error
-            raise
-        return max(2, math.ceil(ratio))
+    ratio = dt / _exact_limit(model) * (1 + 1e-12)
+    if not ratio <= MAX_STEPS:
+        _stable_limit(model, dt)  # raises, naming the stable step
+    return max(2, math.ceil(ratio))
 
 
-def _stable_limit(model, dt: float) -> float:
-    """The largest step [s] a solver accepts, given the one asked for (TimeStepError above it): the
-    element estimate for a step at most EXACT_CHECK_FRACTION of it (the default is 0.8 of it);
-    above that, EXACT_MARGIN of the mesh's own stable step 2/ω_max about the reference state
+def _exact_limit(model) -> float:
+    """EXACT_MARGIN of the mesh's own stable step 2/ω_max about the reference state
     (pliant.cutting.stability: Lanczos on M⁻¹K, K from the engine's internal forces, β damping
-    included), which is below the estimate on regular meshes and far above it on meshes with
-    slivers (their nodes carry their neighbours' mass)."""
-    if dt <= EXACT_CHECK_FRACTION * model.dt_critical:
-        return model.dt_critical
-    if model._stable_step is None:  # once per model: every solver of it asks the same
+    included), computed once per model: every solver of it asks the same."""
+    if model._stable_step is None:
         from ..cutting.stability import stable_step
 
         exact = model
@@ -81,7 +75,17 @@ def _stable_limit(model, dt: float) -> float:
         if model.dtype != np.float64:
             exact = model.rebuilt("float64")
         model._stable_step = stable_step(exact, exact.state())
-    limit = EXACT_MARGIN * model._stable_step
+    return EXACT_MARGIN * model._stable_step
+
+
+def _stable_limit(model, dt: float) -> float:
+    """The largest step [s] a solver accepts, given the one asked for (TimeStepError above it): the
+    element estimate for a step at most EXACT_CHECK_FRACTION of it (the default is 0.8 of it);
+    above that, the exact limit (_exact_limit), which is below the estimate on regular meshes and
+    far above it on meshes with slivers (their nodes carry their neighbours' mass)."""
+    if dt <= EXACT_CHECK_FRACTION * model.dt_critical:
+        return model.dt_critical
+    limit = _exact_limit(model)
     if dt > limit:
         raise TimeStepError(
             f"dt = {dt:.4g} s exceeds the stable time step {limit:.4g} s of this mesh (0.99 of 2/ω_max, "
