@@ -174,11 +174,12 @@ def test_submodels_of_two_element_types_are_refused(tmp_path):
         load_niftysim(f)
 
 
-def test_membranes_are_refused_by_name_and_skipped_as_one_feature(tmp_path):
-    """<ShellElements> with its <ShellElementSet> (NiftySim's membranes and shells, models/
-    box_membrane.xml; a membrane-only sub-model with NumEls="0", testing/data/two_cubes_sheet.xml):
-    refused naming ShellElements, in the model or in a sub-model; --ignore ShellElements skips both
-    tags with one warning, and the solid runs (the sheet's nodes left without an element)."""
+def test_membranes_in_a_sub_model_are_refused_by_name_and_skipped_as_one_feature(tmp_path):
+    """<ShellElements> with its <ShellElementSet> (NiftySim's membranes, models/box_membrane.xml; a
+    membrane-only sub-model with NumEls="0", testing/data/two_cubes_sheet.xml): the model's own are
+    imported (tests/test_niftysim_membranes.py), a sub-model's are refused naming ShellElements
+    (their numbers are the sub-model's); --ignore ShellElements skips both tags with one warning,
+    and the solid runs (the sheet's nodes left without an element)."""
     X, T = pl.mesh.box_tets((0.02, 0.02, 0.02), (1, 1, 1))
     sheet = np.array([[0, 0, 0.03], [0.02, 0, 0.03], [0, 0.02, 0.03]])
     fmt = lambda a: " ".join(str(v) for v in np.ravel(a).tolist())  # noqa: E731
@@ -212,11 +213,15 @@ def test_membranes_are_refused_by_name_and_skipped_as_one_feature(tmp_path):
     for name, xml in (("whole.xml", whole), ("subs.xml", subs)):
         p = tmp_path / name
         p.write_text(xml)
-        with pytest.raises(
-            NiftySimError, match="unsupported NiftySim feature ShellElements: membrane and shell"
-        ):
-            load_niftysim(p)
+        if name == "whole.xml":
+            assert load_niftysim(p).builder.n_membranes == 1
+        else:
+            with pytest.raises(
+                NiftySimError, match="unsupported NiftySim feature ShellElements: membranes in a <SubModel>"
+            ):
+                load_niftysim(p)
         sc = load_niftysim(p, ignore=("ShellElements",))
+        assert sc.builder.n_membranes == 0
         assert sum("ShellElements" in w for w in sc.warnings) == 1
         sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
         sim.run(steps=5)

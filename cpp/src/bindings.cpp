@@ -213,7 +213,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<std::vector<double>> tool_grips, std::vector<double> tool_reach,
                std::vector<index_t> soft_nodes, std::vector<index_t> soft_label,
                std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
-               std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads) {
+               std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads,
+               std::vector<index_t> mem_nodes, std::vector<int> mem_kind, std::vector<double> mem_params) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -256,6 +257,9 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.soft_labels = soft_labels;
                 in.soft_mu = std::move(soft_mu);
                 in.soft_skin = soft_skin;
+                in.mem_nodes = std::move(mem_nodes);
+                in.mem_kind = std::move(mem_kind);
+                in.mem_params = std::move(mem_params);
                 for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                     RigidTool t{};
                     t.kind = static_cast<ToolKind>(tool_kind[k]);
@@ -285,13 +289,16 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "press_nodes"_a, "press_value"_a, "press_curve"_a, "press_traction"_a, "anp"_a, "group_visco"_a,
             "stiffness_damping"_a, "anp_stabilization"_a, "anp_shear_stabilization"_a, "tool_grips"_a,
             "tool_reach"_a, "soft_nodes"_a, "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a,
-            "soft_mu"_a, "soft_skin"_a, "smoothing"_a, "threads"_a)
+            "soft_mu"_a, "soft_skin"_a, "smoothing"_a, "threads"_a, "mem_nodes"_a = std::vector<index_t>{},
+            "mem_kind"_a = std::vector<int>{}, "mem_params"_a = std::vector<double>{})
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
         .def_prop_ro("n_edges", [](const E& e) { return e.model.n_edges; })
         .def_prop_ro("dt_critical", [](const E& e) { return e.model.dt_critical; })
         .def_prop_ro("dt_critical_element", [](const E& e) { return e.model.dt_critical_elem; })
+        .def_prop_ro("dt_critical_membrane", [](const E& e) { return e.model.dt_critical_membrane; })
+        .def("membrane_critical_steps", [](const E& e) { return e.model.mem_dt; })
         .def_prop_ro("bytes", [](const E& e) { return e.model.bytes(); })
         .def_prop_ro("threads", [](const E& e) { return e.threads; })
         .def("new_state",
@@ -448,6 +455,10 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
         .value("Polynomial", MaterialKind::Polynomial)
         .value("ArrudaBoyce", MaterialKind::ArrudaBoyce)
         .value("TransverselyIsotropic", MaterialKind::TransverselyIsotropic);
+    nb::enum_<MembraneKind>(m, "MembraneKind", nb::is_arithmetic(),
+                            "Membrane constitutive models (membrane.hpp).")
+        .value("StVenantKirchhoff", MembraneKind::StVenantKirchhoff)
+        .value("NeoHookean", MembraneKind::NeoHookean);
     nb::enum_<StrainSmoothing>(m, "StrainSmoothing", nb::is_arithmetic(),
                                "Where the strain of linear tetrahedra is constant.")
         .value("Element", StrainSmoothing::Element, "per element: plain linear tetrahedra (T4)")

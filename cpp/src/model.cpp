@@ -18,7 +18,8 @@ Model<T>::Model(const ModelInput& in) {
     n_pad = (n_nodes + kLanes - 1) / kLanes * kLanes;
     n_elems = in.n_elems;
     build_groups(in);
-    const NodeSums sums = build_elements(in);
+    NodeSums sums = build_elements(in);
+    build_membranes(in, sums);
     build_masses(in, sums);
     build_incidence(sums.count);
     build_smoothing(in);
@@ -115,6 +116,77 @@ typename Model<T>::NodeSums Model<T>::build_elements(const ModelInput& in) {
         begin = end;
     }
     return sums;
+}
+
+/// Membrane triangles (membrane.hpp): reference tangents, inverse metric and moduli times the
+/// reference area; each corner's lumped mass ρ h A0 / 3 and relaxation stiffness; each membrane's
+/// critical step, its smallest altitude over the plane-stress wave speed √(M / ρ), M = E / (1 − ν²)
+/// (St Venant–Kirchhoff) or 4 μ (incompressible Neo-Hookean: E = 3 μ, ν = ½), which may lower
+/// dt_critical; the node → corner incidence (ordered by membrane: a fixed summation order).
+template <class T>
+void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
+    const index_t nm = static_cast<index_t>(in.mem_kind.size());
+    if (in.mem_nodes.size() != 3 * static_cast<std::size_t>(nm) ||
+        in.mem_params.size() != 4 * static_cast<std::size_t>(nm))
+        throw std::invalid_argument("membranes: expected 3 nodes and 4 parameters per membrane");
+    mem_nodes = in.mem_nodes;
+    mem_kind.assign(in.mem_kind.begin(), in.mem_kind.end());
+    mem_geom.assign(static_cast<std::size_t>(kMembraneValues) * nm, T(0));
+    mem_dt.assign(nm, 0.0);
+    std::vector<index_t> count(static_cast<std::size_t>(n_nodes) + 1, 0);
+    for (index_t m = 0; m < nm; ++m) {
+        const double* p = &in.mem_params[4 * static_cast<std::size_t>(m)];
+        const double h = p[0], rho = p[1];
+        const bool nh = in.mem_kind[m] == static_cast<int>(MembraneKind::NeoHookean);
+        const bool ok = h > 0.0 && rho > 0.0 && std::isfinite(h * rho) && p[2] > 0.0 && std::isfinite(p[2]) &&
+                        (nh || (p[3] > -1.0 && p[3] <= 0.5));
+        if (!ok || (!nh && in.mem_kind[m] != static_cast<int>(MembraneKind::StVenantKirchhoff)))
+            throw std::invalid_argument("membrane " + std::to_string(m) +
+                                        ": kind or parameters out of range");
+        for (int a = 0; a < 3; ++a)
+            if (in.mem_nodes[3 * m + a] < 0 || in.mem_nodes[3 * m + a] >= n_nodes)
+                throw std::invalid_argument("membrane " + std::to_string(m) +
+                                            " refers to a node out of range");
+        double G[2][3], X0[3];
+        for (int d = 0; d < 3; ++d) X0[d] = in.X[3 * in.mem_nodes[3 * m] + d];
+        for (int i = 0; i < 2; ++i)
+            for (int d = 0; d < 3; ++d) G[i][d] = in.X[3 * in.mem_nodes[3 * m + 1 + i] + d] - X0[d];
+        double g11 = 0.0, g22 = 0.0, g12 = 0.0, e3 = 0.0;
+        for (int d = 0; d < 3; ++d)
+            g11 += G[0][d] * G[0][d], g22 += G[1][d] * G[1][d], g12 += G[0][d] * G[1][d];
+        for (int d = 0; d < 3; ++d) e3 += (G[1][d] - G[0][d]) * (G[1][d] - G[0][d]);
+        const double det = g11 * g22 - g12 * g12;
+        const double longest = std::sqrt(std::max({g11, g22, e3}));
+        if (!(det > 1e-16 * longest * longest * longest * longest))
+            throw std::invalid_argument("membrane " + std::to_string(m) + " is degenerate (zero area)");
+        const double area = 0.5 * std::sqrt(det), alt = 2.0 * area / longest;
+        T* q = &mem_geom[static_cast<std::size_t>(kMembraneValues) * m];
+        for (int i = 0; i < 2; ++i)
+            for (int d = 0; d < 3; ++d) q[3 * i + d] = T(G[i][d]);
+        q[6] = T(g22 / det), q[7] = T(g11 / det), q[8] = T(-g12 / det);
+        const double E = p[2], nu = p[3];
+        const double mu = nh ? E : E / (2.0 * (1.0 + nu)), lam = nh ? 0.0 : E * nu / (1.0 - nu * nu);
+        q[9] = T(area * h * (nh ? mu : lam)), q[10] = T(nh ? 0.0 : area * h * mu);
+        const double modulus = nh ? 4.0 * mu : lam + 2.0 * mu;
+        const double dt_m = alt / std::sqrt(modulus / rho);
+        mem_dt[m] = dt_m;
+        if (dt_critical_elem < 0 || dt_m < dt_critical) {
+            dt_critical = dt_m;
+            dt_critical_membrane = m;
+        }
+        for (int a = 0; a < 3; ++a) {
+            const index_t n = in.mem_nodes[3 * m + a];
+            sums.mass[n] += rho * h * area / 3.0;
+            sums.stiff[n] += modulus * h * area / (alt * alt) / 3.0;  // ρ' Δt_c⁻² as an element's
+            ++count[n + 1];
+        }
+    }
+    for (index_t n = 0; n < n_nodes; ++n) count[n + 1] += count[n];
+    mem_offsets.assign(count.begin(), count.end());
+    mem_index.assign(static_cast<std::size_t>(count[n_nodes]), 0);
+    std::vector<index_t> fill(count.begin(), count.end() - 1);
+    for (index_t m = 0; m < nm; ++m)
+        for (int a = 0; a < 3; ++a) mem_index[fill[in.mem_nodes[3 * m + a]]++] = 3 * m + a;
 }
 
 /// Lumped and relaxation masses; nodal volumes for T4ANP (which needs decoupled, elastic groups).

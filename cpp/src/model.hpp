@@ -64,6 +64,11 @@ struct ModelInput {
     double anp_stabilization = 0.0;      // T4ANP: fraction γ of the element's own pressure
     bool anp_shear = false;              // T4ANP: γ = μ/K of each group's material (anp_shear_gamma)
     StrainSmoothing smoothing = StrainSmoothing::Element;  // per element, or edge-smoothed (ES-FEM-T4)
+    // Membrane triangles (membrane.hpp): 3 nodes each, MembraneKind each, and per membrane its
+    // thickness h [m], density ρ [kg/m³] and two moduli (E [Pa], ν; or μ [Pa], 0).
+    std::vector<index_t> mem_nodes;
+    std::vector<int> mem_kind;
+    std::vector<double> mem_params;  // 4 per membrane: h, ρ, p1, p2
     // Contact between deformable surfaces (soft_contact.hpp): its surface nodes (engine nodes) with
     // their body labels, its triangles (3 surface-node indices each, outward), the pair table
     // (labels × labels, pair index or −1), μs and μk per pair, the Verlet skin [m].
@@ -99,6 +104,13 @@ struct Model {
     int visco_terms = 0;             // max Prony terms of any group: the State's q holds 6 each
     std::vector<T> node_volume;      // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     std::vector<index_t> inc_slot;   // T4ANP only: each incidence's element slot b·kLanes + l
+    // Membranes (membrane.hpp): node → corner CSR (3 m + corner), nodes, kinds, kMembraneValues each;
+    // per membrane its altitude over its wave speed [s] (host, reports); the membrane that limits
+    // dt_critical, or −1 (an element does).
+    std::vector<index_t> mem_offsets, mem_index, mem_nodes, mem_kind;
+    std::vector<T> mem_geom;
+    std::vector<double> mem_dt;
+    index_t dt_critical_membrane = -1;
     // Edge-smoothed strain (smoothing.hpp): per edge its elements (CSR, slots ascending) and weights,
     // its group; per slot its six edges (AoSoA K=6); per group its first edge (G + 1 entries).
     StrainSmoothing smoothing = StrainSmoothing::Element;
@@ -137,13 +149,22 @@ struct Model {
         return smoothing == StrainSmoothing::Edge ? static_cast<std::size_t>(n_edges)
                                                   : static_cast<std::size_t>(n_blocks) * kLanes;
     }
+    MembraneData<T> membranes() const {
+        return {static_cast<index_t>(mem_kind.size()),
+                mem_offsets.data(),
+                mem_index.data(),
+                mem_nodes.data(),
+                mem_kind.data(),
+                mem_geom.data()};
+    }
     ElementData<T> elements() const { return {elem_nodes.data(), elem_grad.data(), elem_vol.data()}; }
     /// Node data with the physical masses, or with the dynamic-relaxation masses if `relax`.
     NodeData<T> nodes(bool relax = false) const {
         return {inc_offsets.data(),   inc_index.data(),   relax ? relax_inv_mass.data() : inv_mass.data(),
                 load_patterns.data(), n_load_patterns,    pface_offsets.data(),
                 pface_index.data(),   press_nodes.data(), press_edges.data(),
-                press_value.data(),   press_slot.data(),  press_traction.data()};
+                press_value.data(),   press_slot.data(),  press_traction.data(),
+                membranes()};
     }
     /// Curve factors at time t [s], one per curve.
     void curve_factors(double t, T* out) const {
@@ -162,6 +183,7 @@ private:
     // The constructor's steps, in order.
     void build_groups(const ModelInput& in);
     NodeSums build_elements(const ModelInput& in);
+    void build_membranes(const ModelInput& in, NodeSums& sums);
     void build_masses(const ModelInput& in, const NodeSums& sums);
     void build_incidence(std::vector<index_t> count);
     void build_smoothing(const ModelInput& in);

@@ -17,6 +17,7 @@
 #include <cmath>
 
 #include "materials.hpp"
+#include "membrane.hpp"
 
 namespace pliant {
 
@@ -314,6 +315,7 @@ struct NodeData {
     const T* press_value;
     const index_t* press_slot;
     const T* press_traction;  // traction t [Pa] per face (3 each; zero: none), on the current area
+    MembraneData<T> mem;      // membrane triangles (membrane.hpp): internal forces gathered per node
 };
 
 /// External force [N] of follower pressure and surface traction on node n: Σ over its faces
@@ -402,13 +404,13 @@ PLIANT_HD void gather_forces(index_t n, const NodeData<T>& nd, const T* f_elem, 
 }
 
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
-/// bitwise reproducible), then u⁺ = u + du⁺, du⁺ = (γ2 − 1) du + γ1 M⁻¹(r − f) (central differences:
-/// u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻ with du = u − u⁻), r = load patterns + follower pressure and
-/// surface traction at u. du is the last step's increment as computed, before u was rounded to T (plus
-/// the correction where a contact moved u⁺ since: contact_node, soft_pass; u⁺ − u where a constraint
-/// set it: apply_constraint), so
-/// the rounding of u (half a unit in its last place) does not enter the velocity and grow with every
-/// step (docs/engine.md, "Precision of float32 runs with small steps").
+/// bitwise reproducible), add its membrane corners' forces (membrane_force), then u⁺ = u + du⁺,
+/// du⁺ = (γ2 − 1) du + γ1 M⁻¹(r − f) (central differences: u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻ with
+/// du = u − u⁻), r = load patterns + follower pressure and surface traction at u. du is the last
+/// step's increment as computed, before u was rounded to T (plus the correction where a contact moved
+/// u⁺ since: contact_node, soft_pass; u⁺ − u where a constraint set it: apply_constraint), so the
+/// rounding of u (half a unit in its last place) does not enter the velocity and grow with every step
+/// (docs/engine.md, "Precision of float32 runs with small steps").
 /// Inputs: node data, element forces, load-pattern factors, u and du [m] SoA (3, P).
 /// Outputs: u_out and du_out [m]; f_node_out [N] (internal force per node, may be null).
 template <class T>
@@ -417,6 +419,7 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
                            T* f_node_out) {
     T f[3];
     gather_forces(n, nd, f_elem, f);
+    if (nd.mem.count) membrane_force(n, nd.mem, u, P, f);
     const T w = it.g1 * nd.inv_mass[n];
     T r[3];
     pressure_force(n, nd, pattern_factors, u, P, r);

@@ -71,9 +71,10 @@ template <class T, class Dev>
 struct ModelBuffers {
     DeviceBuffer<index_t, Dev> elem_nodes, elem_id, block_group, inc_off, inc_idx, inc_slot, pcurve, co, cdof,
         ccurve, cnodes, cbits, pf_off, pf_idx, pnodes, pslot, snodes, sbits, slabel, stris, spair, svtri_off,
-        svtri, sedges, stri_edge, edge_off, edge_slot, edge_group, elem_edges;
+        svtri, sedges, stri_edge, edge_off, edge_slot, edge_group, elem_edges, mem_off, mem_idx, mem_nodes,
+        mem_kind;
     DeviceBuffer<T, Dev> edge_w, elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
-        patterns, cval, pedges, pvalue, ptraction, node_vol;
+        patterns, cval, pedges, pvalue, ptraction, node_vol, mem_geom;
     DeviceBuffer<LoadCurve, Dev> curves;
     DeviceBuffer<double, Dev> tt, tv, X, grid, stri_h;
 
@@ -100,6 +101,8 @@ struct ModelBuffers {
         svtri = I(m.soft_vtri), sedges = I(m.soft_edges), stri_edge = I(m.soft_tri_edge);
         edge_off = I(m.edge_off), edge_slot = I(m.edge_slot), edge_group = I(m.edge_group);
         elem_edges = I(m.elem_edges), edge_w = R(m.edge_w);
+        mem_off = I(m.mem_offsets), mem_idx = I(m.mem_index), mem_nodes = I(m.mem_nodes);
+        mem_kind = I(m.mem_kind), mem_geom = R(m.mem_geom);
     }
 };
 

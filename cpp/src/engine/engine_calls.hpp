@@ -152,9 +152,20 @@ void Engine<T, Dev>::refresh_view() {
     v.block_group = mb_.block_group.data();
     v.mats = d_mats_.data();
     v.prony = d_prony_.data();
-    v.nodes = {mb_.inc_off.data(), mb_.inc_idx.data(), mb_.inv_mass.data(), mb_.patterns.data(),
-               m.n_load_patterns,  mb_.pf_off.data(),  mb_.pf_idx.data(),   mb_.pnodes.data(),
-               mb_.pedges.data(),  mb_.pvalue.data(),  mb_.pslot.data(),    mb_.ptraction.data()};
+    v.nodes = {mb_.inc_off.data(),
+               mb_.inc_idx.data(),
+               mb_.inv_mass.data(),
+               mb_.patterns.data(),
+               m.n_load_patterns,
+               mb_.pf_off.data(),
+               mb_.pf_idx.data(),
+               mb_.pnodes.data(),
+               mb_.pedges.data(),
+               mb_.pvalue.data(),
+               mb_.pslot.data(),
+               mb_.ptraction.data(),
+               {static_cast<index_t>(m.mem_kind.size()), mb_.mem_off.data(), mb_.mem_idx.data(),
+                mb_.mem_nodes.data(), mb_.mem_kind.data(), mb_.mem_geom.data()}};
     v.relax_nodes = v.nodes;
     v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
     v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();

@@ -1,7 +1,7 @@
 """NiftySim model import (XML; T4, T4ANP, and H8 split into tetrahedra: niftysim_elements.py):
 nodes and elements (listed, or from an <MSHMesh> / <VTKMesh> file: niftysim_geometry.py), element
-sets with their
-materials, Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
+sets with their materials, membranes (<ShellElements> with their <ShellElementSet>s:
+niftysim_membranes.py), Fix / Disp / Force / Gravity / Pressure constraints with their load shapes, the
 analytical rigid contacts (ContactPlate, ContactCylinder, ContactUSProbe, with their SlvNodes and
 motions), closed ContactSurfaces (fixed or moving, with SlvNodes), SubModels (merged into one model, with
 SubModelNodeMergerDistance: niftysim_submodels.py), Output frequency and SystemParams. Anything
@@ -45,6 +45,8 @@ _KNOWN_TOP = {
     "ContactSurface",
     "MSHMesh",
     "VTKMesh",
+    "ShellElements",
+    "ShellElementSet",
 }
 
 
@@ -203,16 +205,11 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
 
     root = _flatten(root, f)
     for child in root:
-        if child.tag == "ShellElementSet" and "ShellElements" in ignore:
-            continue  # the membrane's material goes with the membrane, one warning for both
-        if child.tag in ("ShellElements", "ShellElementSet"):
-            unsupported(
-                "ShellElements",
-                "membrane and shell elements (<ShellElements> with its <ShellElementSet>) are not "
-                "implemented in pliant; skipping them runs the solid alone",
-            )
-        elif child.tag not in _KNOWN_TOP:
+        if child.tag not in _KNOWN_TOP:
             unsupported(child.tag, "not implemented in pliant")
+    skip_membranes = "ShellElements" in ignore and root.find("ShellElements") is not None
+    if skip_membranes:
+        warnings.append(f"{f}: ignored ShellElements as asked (--ignore ShellElements): the solid runs alone")
 
     from .niftysim_elements import as_tets, h8_as_t4anp
     from .niftysim_system import system_params
@@ -228,6 +225,10 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     b.damping = damping
     b.nodal_pressure_stabilization = 0.0  # NiftySim's T4ANP: the plain average
     _element_sets(root, b, owner, len(E), default_rho, f, unsupported)
+    if not skip_membranes:
+        from .niftysim_membranes import add_membranes
+
+        add_membranes(root, b, T, f, unsupported, warnings)
     b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
     if etype == "H8":
         b.nodal_pressure = h8_as_t4anp(b, len(E), len(T), f, warnings)

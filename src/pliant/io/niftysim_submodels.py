@@ -22,6 +22,7 @@ import numpy as np
 
 from .niftysim import NiftySimError, _mesh, _numbers, element_set
 from .niftysim_elements import as_tets
+from .niftysim_membranes import SUBMODEL_MARK
 from .niftysim_geometry import (
     MESH_FILE_TAGS,
     constraint_nodes,
@@ -52,8 +53,10 @@ def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
     for i, sm in enumerate(subs):
         key = f"SubModel[{i}]"
         for child in sm:
-            if child.tag in ("ShellElements", "ShellElementSet"):  # refused (or skipped) as the model's are
-                flat.append(copy.deepcopy(child))
+            if child.tag in ("ShellElements", "ShellElementSet"):  # refused, or skipped (niftysim_membranes)
+                marked = copy.deepcopy(child)
+                marked.set(SUBMODEL_MARK, key)
+                flat.append(marked)
                 continue
             if child.tag not in _SUB_CHILDREN:
                 raise NiftySimError(

@@ -16,6 +16,9 @@ Polynomial                 Σ Cij (Ī1 − 3)^i (Ī2 − 3)^j, i + j ≤ 2, + K/
 ArrudaBoyce                μ Σ Ci/λm^(2i−2) (Ī1^i − 3^i) + K/2 ((J²−1)/2 − ln J) ("AB")  mu, lambda_m, K
 TransverselyIsotropic      μ/2 (Ī1 − 3) + η/2 (Ī4 − 1)² + K/2 (J − 1)², Ī4 = a·C̄a ("TI")  mu, K, eta, a
 =========================  ==========================================================  ==============
+
+Membrane materials (``StVKMembrane``, ``NeoHookeanMembrane``: ModelBuilder.add_membrane) are in
+:mod:`pliant.materials.membrane`.
 """
 
 from .hyperelastic import (
@@ -30,6 +33,7 @@ from .hyperelastic import (
     TransverselyIsotropic,
     lame_from_young,
 )
+from .membrane import MembraneMaterial, NeoHookeanMembrane, StVKMembrane
 from .viscoelastic import Viscoelastic
 
 __all__ = [
@@ -44,4 +48,7 @@ __all__ = [
     "TransverselyIsotropic",
     "Viscoelastic",
     "lame_from_young",
+    "MembraneMaterial",
+    "StVKMembrane",
+    "NeoHookeanMembrane",
 ]

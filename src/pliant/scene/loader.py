@@ -21,6 +21,7 @@ from ..tled.solver import MAX_INCREMENTS
 from ..job import Scene
 from ..cutting.cut import check_cuttable
 from .bodies import load_bodies, set_contact
+from .membranes import add_membranes
 from .keys import apply_overrides
 from .schema import Ctx, SceneError, check_keys, vector
 from .tools import make_tool
@@ -113,6 +114,7 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
             "output": "table",
             "body": "list",
             "contact": "table",
+            "membrane": "list",
         },
         ("mesh", "material"),
     )
@@ -121,6 +123,7 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     _solver_settings(ctx, data.get("solver", {}), scene)
     X, T, sets, names, scene.node_sets = load_bodies(ctx, data, path.parent, scene, b)
     _materials(ctx, data["material"], b, X, T, sets)
+    add_membranes(ctx, data.get("membrane", []), b, X, T, scene.node_sets)
     if "contact" in data:
         set_contact(ctx, data["contact"], b, sets, names)
     _constraints(ctx, data.get("constraint", []), b, X, T, scene)

@@ -17,6 +17,7 @@ from .. import _core
 from ..checks import shown
 from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
 from ..materials import Material
+from ..materials.membrane import MembraneMaterial
 from ..memory import MODEL_BYTES_PER_TET, require_memory
 from ..mesh.topology import conformity_problem
 from .curves import Constant, LoadCurve
@@ -94,6 +95,7 @@ class ModelBuilder:
         self._forces: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._tractions: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []  # add_traction
+        self._membranes: list[tuple[np.ndarray, MembraneMaterial]] = []  # add_membrane
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
         self._node_gravity: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []  # add_gravity
         self.tools: list = []  # rigid tools (pliant.contact)
@@ -307,6 +309,42 @@ class ModelBuilder:
             )
         self._tractions.append((F, t, curve or Constant()))
 
+    def add_membrane(self, faces, material: MembraneMaterial):
+        """Membrane triangles ``faces`` (F, 3) (user node ids) of ``material``
+        (pliant.StVKMembrane or pliant.NeoHookeanMembrane, with its thickness and density): each a
+        Total Lagrangian constant-strain triangle that carries in-plane stress only, on the mesh's
+        surface (a capsule, a wall) or anywhere between its nodes. Its mass ρ h A0 / 3 adds to each
+        corner's, its wave speed may lower the critical time step (docs/engine.md, "Membranes").
+        The winding does not matter."""
+        if not isinstance(material, MembraneMaterial):
+            raise MaterialError(
+                f"add_membrane: material {shown(material)}; expected pliant.StVKMembrane or "
+                "pliant.NeoHookeanMembrane"
+            )
+        F = np.asarray(faces)
+        if F.ndim != 2 or F.shape[1] != 3 or F.shape[0] == 0 or not np.issubdtype(F.dtype, np.integer):
+            raise InputError(f"add_membrane: faces shape {F.shape}; expected (F, 3) node ids")
+        F = self._node_ids(F.ravel(), "add_membrane faces").reshape(-1, 3)
+        X = self.nodes[F]
+        cross = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        area2 = np.sqrt((cross**2).sum(-1))
+        longest = np.sqrt(((X - X[:, [1, 2, 0]]) ** 2).sum(-1)).max(axis=1)
+        flat = np.nonzero(~(area2 > 1e-8 * longest**2))[0]
+        if flat.size:
+            i = int(flat[0])
+            raise DegenerateElementError(
+                f"{self.source}: membrane {self.n_membranes + i} (nodes {F[i].tolist()}) is "
+                f"degenerate: area {0.5 * area2[i]:.3e} m^2 for longest edge {longest[i]:.3e} m; "
+                "expected three distinct, non-collinear nodes",
+                self.n_membranes + i,
+            )
+        self._membranes.append((F, material))
+
+    @property
+    def n_membranes(self) -> int:
+        """Membrane triangles added so far (add_membrane)."""
+        return sum(len(F) for F, _ in self._membranes)
+
     def set_gravity(self, g=(0.0, 0.0, -9.81), curve: LoadCurve | None = None):
         """Body acceleration g [m/s²] applied to every node as m_a·g, scaled by ``curve``."""
         gv = np.asarray(g, dtype=float).ravel()
@@ -376,6 +414,7 @@ class ModelBuilder:
         b = copy.copy(self)
         b.sets, b._forces, b._pressures = list(self.sets), list(self._forces), list(self._pressures)
         b._node_gravity, b._tractions = list(self._node_gravity), list(self._tractions)
+        b._membranes = list(self._membranes)
         b._cons, b.tools, b.tool_nodes = dict(self._cons), list(self.tools), list(self.tool_nodes)
         return b
 
@@ -384,8 +423,8 @@ class ModelBuilder:
         elements over the old nodes and the new ones, ``parent`` (K,) the node each new node
         (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints and
         node-set memberships (tools' and add_gravity's nodes); point forces stay on the parent
-        (their total is unchanged); each pressure or traction face moves to the copies its element
-        now uses."""
+        (their total is unchanged); each pressure, traction or membrane face moves to the copies its
+        element now uses."""
         parent = np.asarray(parent, np.int64)
         tets = np.asarray(tets, np.int64)
         b = self.snapshot()
@@ -409,7 +448,7 @@ class ModelBuilder:
             (np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]])), g, c)
             for s, g, c in self._node_gravity
         ]
-        if self._pressures or self._tractions:
+        if self._pressures or self._tractions or self._membranes:
             from ..cutting.split import LOCAL_FACES
 
             owner = {  # face → its element (a boundary face has one)
@@ -419,6 +458,7 @@ class ModelBuilder:
             }
             b._pressures = [(self._moved_faces(F, tets, owner), p, c) for F, p, c in self._pressures]
             b._tractions = [(self._moved_faces(F, tets, owner), t, c) for F, t, c in self._tractions]
+            b._membranes = [(self._moved_faces(F, tets, owner), m) for F, m in self._membranes]
         return b
 
     def _moved_faces(self, F: np.ndarray, tets: np.ndarray, owner: dict) -> np.ndarray:

@@ -31,6 +31,16 @@ def _lumped_mass(n_nodes: int, T: np.ndarray, volume: np.ndarray, density: np.nd
     return np.bincount(T.ravel(), np.repeat(density * volume / 4.0, 4), minlength=n_nodes)
 
 
+def _membrane_mass(n_nodes: int, X: np.ndarray, F: np.ndarray, materials: list) -> np.ndarray:
+    """Lumped nodal masses [kg] (n_nodes,) of membrane triangles F (K, 3) over positions X [m]: a
+    third of each one's ρ h A0 to each corner, as the engine's (materials: one per triangle)."""
+    if not len(F):
+        return np.zeros(n_nodes)
+    area = 0.5 * np.linalg.norm(np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]), axis=1)
+    rho_h = np.array([m.density * m.thickness for m in materials])
+    return np.bincount(F.ravel(), np.repeat(rho_h * area / 3.0, 3), minlength=n_nodes)
+
+
 def _morton_order(points: np.ndarray) -> np.ndarray:
     """Permutation sorting points (n, 3) along a 3-D Morton (Z-order) curve, 10 bits per axis."""
     lo, hi = points.min(axis=0), points.max(axis=0)
@@ -180,8 +190,10 @@ class Model:
     :class:`~pliant.tled.builder.ModelBuilder`).
 
     Attributes: ``n_nodes``, ``n_elements``, ``dtype``, ``damping`` α [1/s],
-    ``stiffness_damping`` β [s], ``dt_critical`` [s] (smallest h_min/c_d over elements, reduced for
-    β by the factor √(1 + ξ²) − ξ, ξ = β/(h_min/c_d)), ``dt_critical_element`` (user element index),
+    ``stiffness_damping`` β [s], ``dt_critical`` [s] (smallest h_min/c_d over elements and
+    membranes, reduced for β by the factor √(1 + ξ²) − ξ, ξ = β/(h_min/c_d)), ``dt_critical_element``
+    (user element index), ``dt_critical_membrane`` (the membrane that sets it, or −1),
+    ``n_membranes``,
     ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,), ``nodal_pressure``
     (T4ANP on) and ``nodal_pressure_stabilization`` (as the builder had it); with soft contact,
     ``bodies`` (body of each element, (M,); else None) and ``contact_pairs`` (the pairs of bodies
@@ -217,8 +229,14 @@ class Model:
         elem_order = np.lexsort((rank, owner))  # engine element i is user element elem_order[i]
         group_end = np.cumsum(np.bincount(owner[elem_order], minlength=len(self.sets)))
         keep = np.diff(np.concatenate([[0], group_end])) > 0
-        # Node order: first use in element order; orphan nodes last.
-        flat = T[elem_order].ravel()
+        # Node order: first use in element order, then in membrane order; orphan nodes last.
+        mem_F = (
+            np.concatenate([F for F, _ in builder._membranes])
+            if builder._membranes
+            else np.zeros((0, 3), np.int64)
+        )
+        mem_mat = [m for F, m in builder._membranes for _ in range(len(F))]
+        flat = np.concatenate([T[elem_order].ravel(), mem_F.ravel()])
         _, first = np.unique(flat, return_index=True)
         used = flat[np.sort(first)]
         orphans = np.setdiff1d(np.arange(N), used)
@@ -251,7 +269,7 @@ class Model:
         if builder._node_gravity:  # add_gravity: m_a g on its nodes, m_a = Σ ρ V0 / 4 as the engine's
             m_a = _lumped_mass(
                 N, T, np.asarray(geometry[0], float), np.array([s.density for s in self.sets])[owner]
-            )
+            ) + _membrane_mass(N, X, mem_F, mem_mat)
             for ids, g, c in builder._node_gravity:
                 R = pattern_of.setdefault(cid(c), np.zeros((N, 3)))
                 np.add.at(R, node_rank[ids], m_a[ids, None] * g)
@@ -373,6 +391,9 @@ class Model:
                 tool_reach=[float(t.reach) for t in self.tools],
                 **soft,
                 smoothing=strain_smoothing(builder.strain_smoothing),
+                mem_nodes=[int(v) for v in node_rank[mem_F].ravel()],
+                mem_kind=[int(m.kind) for m in mem_mat],
+                mem_params=[v for m in mem_mat for v in (m.thickness, m.density, *m.params)],
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on
@@ -389,10 +410,21 @@ class Model:
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
         self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
+        # The membrane (add order) whose own step is dt_critical's, or −1 where an element's is.
+        self.dt_critical_membrane = int(self._engine.dt_critical_membrane)
+        self.n_membranes = len(mem_mat)
         _warn_slow_element(builder.source, steps, np.asarray(geometry[1], float))
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)
         self.constrained = held
+
+    @property
+    def dt_critical_limiter(self) -> str:
+        """What sets dt_critical: "element E" or "membrane K" (user numbering, membranes in the order
+        add_membrane took them)."""
+        if self.dt_critical_membrane >= 0:
+            return f"membrane {self.dt_critical_membrane}"
+        return f"element {self.dt_critical_element}"
 
     def rebuilt(self, dtype: str) -> "Model":
         """This model built again from its builder at ``dtype`` ("float32" or "float64"), on as many

@@ -78,6 +78,16 @@ def _exact_limit(model) -> float:
     return EXACT_MARGIN * model._stable_step
 
 
+def _default_limit(model) -> float:
+    """The step [s] a solver takes by default, before its safety factor: the element estimate, or
+    where a membrane sets that estimate the exact limit (_exact_limit), if larger: a membrane's own
+    estimate counts its own mass alone, while its corners carry the solid's too (docs/engine.md,
+    "Membranes": a 3 MPa capsule on a 4 kPa box, 6.8e-5 s against 3.4e-4 s)."""
+    if model.dt_critical_membrane < 0:
+        return model.dt_critical
+    return max(model.dt_critical, _exact_limit(model))
+
+
 def _stable_limit(model, dt: float) -> float:
     """The largest step [s] a solver accepts, given the one asked for (TimeStepError above it): the
     element estimate for a step at most EXACT_CHECK_FRACTION of it (the default is 0.8 of it);
@@ -90,7 +100,7 @@ def _stable_limit(model, dt: float) -> float:
         raise TimeStepError(
             f"dt = {dt:.4g} s exceeds the stable time step {limit:.4g} s of this mesh (0.99 of 2/ω_max, "
             f"its highest frequency; the element estimate, smallest altitude / dilatational wave speed "
-            f"of element {model.dt_critical_element}, is {model.dt_critical:.4g} s); use a smaller dt, "
+            f"of {model.dt_critical_limiter}, is {model.dt_critical:.4g} s); use a smaller dt, "
             "or force it with allow_unstable=True (pliant run --allow-unstable)"
         )
     return limit
@@ -105,7 +115,8 @@ def _check_model(model, who: str) -> None:
 class Solver:
     """Explicit solver for a :class:`Model`.
 
-    dt: time step [s]; default ``safety × model.dt_critical``. A dt above 0.8 of that estimate is
+    dt: time step [s]; default ``safety × model.dt_critical`` (where a membrane sets that estimate,
+    safety × the exact limit 2/ω_max if larger: see _default_limit). A dt above 0.8 of the estimate is
     checked against the mesh's own stable step 2/ω_max and refused above 0.99 of it
     (:class:`TimeStepError`) unless ``allow_unstable=True``. damping: α [1/s], default the model's.
     check_every: steps between stability checks (NaN, J ≤ 0, blow-up). backend: where it runs,
@@ -137,7 +148,7 @@ class Solver:
         if not (0 < safety <= 1):
             raise InputError(f"safety = {shown(safety)}; expected 0 < safety <= 1")
         if dt is None:
-            dt = safety * model.dt_critical
+            dt = safety * _default_limit(model)
         dt = float(dt)
         if not math.isfinite(dt) or dt <= 0:
             raise TimeStepError(f"dt = {shown(dt)}; expected a finite time step > 0 [s]")

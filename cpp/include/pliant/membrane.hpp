@@ -1,0 +1,124 @@
+// pliant — membrane triangles: Total Lagrangian constant-strain triangles that carry in-plane
+// stress only, laid on a solid's surface (an organ's capsule, a vessel's wall) or between its
+// nodes. Header-only, host and device. A membrane's force on a node is computed by that node's
+// thread in the node pass (membrane_force), as the follower pressure is (pressure_force): no
+// scatter, the same bits on every device and thread count.
+//
+// Convected coordinates (Bonet & Wood, Nonlinear Continuum Mechanics for FEA, 2nd ed., §5.6 for
+// the membrane kinematics; Bonet, Wood, Mahaney & Heywood 2000, CMAME 190:579, for the
+// incompressible Neo-Hookean membrane): a triangle X = X0 + ξ1 (X1 − X0) + ξ2 (X2 − X0) has
+// tangent vectors G_i = ∂X/∂ξi (reference) and g_i = G_i + ∂u/∂ξi (current), metrics G_ij = G_i·G_j
+// and g_ij = g_i·g_j, Green strain E_ij = (g_ij − G_ij)/2 and contravariant 2nd Piola–Kirchhoff
+// stress resultants S^ij [N/m] (stress times the reference thickness). Corner a's internal force
+// is f_a = A0 S^ij g_i ∂N_a/∂ξj with ∂N/∂ξ = (−1, −1), (1, 0), (0, 1) for corners 0, 1, 2 and A0
+// the reference area (the energy A0 h W(E) differentiated by x_a).
+#pragma once
+
+#include <cmath>
+
+#include "config.hpp"
+
+namespace pliant {
+
+/// Membrane constitutive models (the kinds bound to Python as MembraneKind).
+enum class MembraneKind : int {
+    /// Plane-stress St Venant–Kirchhoff: S = h (λ' tr(E) I + 2 μ E), λ' = E ν / (1 − ν²) (the
+    /// plane-stress Lamé constant), μ = E / (2 (1 + ν)). Linear elasticity at small strain, objective
+    /// under any rotation (NiftySim's "Linear" membrane at small displacement).
+    StVenantKirchhoff = 0,
+    /// Incompressible Neo-Hookean (Bonet et al. 2000, eq. 18; NiftySim's "NeoHookean" membrane):
+    /// S^ij = μ h (G^ij − (det G / det g) g^ij), the thickness stretch λ3² = det G / det g.
+    NeoHookean = 1,
+};
+
+/// Values per membrane in MembraneData::geom: reference tangents G_1, G_2 [m] (6), the inverse
+/// reference metric G^11, G^22, G^12 [1/m²] (3), and two coefficients (A0 h λ', A0 h μ) [N·m] for
+/// StVenantKirchhoff, (A0 h μ, 0) for NeoHookean.
+constexpr int kMembraneValues = 11;
+
+/// Node → membrane corners (CSR over nodes: offsets N + 1, index holds 3 m + corner), and per
+/// membrane its nodes (3), kind and kMembraneValues values. count == 0: no membranes.
+template <class T>
+struct MembraneData {
+    index_t count;
+    const index_t* offsets;
+    const index_t* index;
+    const index_t* nodes;
+    const index_t* kind;
+    const T* geom;
+};
+
+/// Contravariant stress resultants times A0, S^11, S^22, S^12 [N·m], of membrane m at current
+/// tangents g1, g2 with displacement differences d1 = u1 − u0, d2 = u2 − u0 [m]: the Green strain
+/// is formed from the differences, E_ij = (G_i·d_j + d_i·G_j + d_i·d_j)/2, so that small strains keep
+/// their digits in float32 (as displacement_gradient keeps H apart from I).
+template <class T>
+PLIANT_HD void membrane_stress(MembraneKind kind, const T* q, const T g1[3], const T g2[3], const T d1[3],
+                               const T d2[3], T S[3]) {
+    const T *G1 = q, *G2 = q + 3;
+    const T Gi11 = q[6], Gi22 = q[7], Gi12 = q[8];
+    T E11 = T(0), E22 = T(0), E12 = T(0);
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) {
+        E11 += G1[d] * d1[d] + T(0.5) * d1[d] * d1[d];
+        E22 += G2[d] * d2[d] + T(0.5) * d2[d] * d2[d];
+        E12 += T(0.5) * (G1[d] * d2[d] + d1[d] * G2[d] + d1[d] * d2[d]);
+    }
+    if (kind == MembraneKind::NeoHookean) {
+        // det g / det G from the metrics; g^ij = cofactor / det g.
+        T G11 = T(0), G22 = T(0), G12 = T(0), g11 = T(0), g22 = T(0), g12 = T(0);
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) {
+            G11 += G1[d] * G1[d], G22 += G2[d] * G2[d], G12 += G1[d] * G2[d];
+            g11 += g1[d] * g1[d], g22 += g2[d] * g2[d], g12 += g1[d] * g2[d];
+        }
+        const T detG = G11 * G22 - G12 * G12, detg = g11 * g22 - g12 * g12;
+        const T r = detG / (detg * detg);  // (det G / det g) · (1 / det g) for the cofactors
+        S[0] = q[9] * (Gi11 - r * g22);
+        S[1] = q[9] * (Gi22 - r * g11);
+        S[2] = q[9] * (Gi12 + r * g12);
+        return;
+    }
+    // Plane-stress St Venant–Kirchhoff in convected components: S^ij = λ' (G^kl E_kl) G^ij +
+    // 2 μ G^ik E_kl G^lj.
+    const T trE = Gi11 * E11 + Gi22 * E22 + T(2) * Gi12 * E12;
+    // M = G⁻¹ E (mixed), then M G⁻¹.
+    const T m11 = Gi11 * E11 + Gi12 * E12, m12 = Gi11 * E12 + Gi12 * E22;
+    const T m21 = Gi12 * E11 + Gi22 * E12, m22 = Gi12 * E12 + Gi22 * E22;
+    const T lam = q[9], two_mu = T(2) * q[10];
+    S[0] = lam * trE * Gi11 + two_mu * (m11 * Gi11 + m12 * Gi12);
+    S[1] = lam * trE * Gi22 + two_mu * (m21 * Gi12 + m22 * Gi22);
+    S[2] = lam * trE * Gi12 + two_mu * (m11 * Gi12 + m12 * Gi22);
+}
+
+/// Internal force [N] of node n's membrane corners, added to f (3): for each corner a of membrane
+/// m, A0 S^ij g_i ∂N_a/∂ξj (see the header), the corners in the order the model lists them.
+/// Inputs: membrane data, u [m] SoA (3, P). Output: f [N] (3), added to.
+template <class T>
+PLIANT_HD void membrane_force(index_t n, const MembraneData<T>& md, const T* u, index_t P, T f[3]) {
+    const index_t end = md.offsets[n + 1];
+    for (index_t k = md.offsets[n]; k < end; ++k) {
+        const index_t m = md.index[k] / 3;
+        const int corner = static_cast<int>(md.index[k] - 3 * m);
+        const index_t a = md.nodes[3 * m], b = md.nodes[3 * m + 1], c = md.nodes[3 * m + 2];
+        const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
+        T d1[3], d2[3], g1[3], g2[3];
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) {
+            const T ua = u[d * P + a];
+            d1[d] = u[d * P + b] - ua;
+            d2[d] = u[d * P + c] - ua;
+            g1[d] = q[d] + d1[d];
+            g2[d] = q[3 + d] + d2[d];
+        }
+        T S[3];
+        membrane_stress(static_cast<MembraneKind>(md.kind[m]), q, g1, g2, d1, d2, S);
+        // w_i = S^ij ∂N_a/∂ξj: corner 0 (−1, −1), 1 (1, 0), 2 (0, 1).
+        const T w1 = corner == 0 ? -(S[0] + S[2]) : corner == 1 ? S[0] : S[2];
+        const T w2 = corner == 0 ? -(S[2] + S[1]) : corner == 1 ? S[2] : S[1];
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) f[d] += w1 * g1[d] + w2 * g2[d];
+    }
+}
+
+}  // namespace pliant

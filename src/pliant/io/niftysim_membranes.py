@@ -1,0 +1,198 @@
+"""NiftySim membranes (user guide v2.4 §3.6; tledModel::GetShellMaterial): <ShellElements> —
+triangles listed (Type="T3"), quadrilaterals listed (Type="Q4", each split in two along its
+diagonal through its smallest node) or the solid mesh's whole boundary (Type="SURFACE") — and
+their <ShellElementSet>s, each a set of them (listed, Size="all", or Size consecutive ones from
+the one listed) with a <Material>: "Linear" (E ν; pliant's StVKMembrane, NiftySim's geometrically
+linear membrane at small displacement) or "NeoHookean" (μ; NeoHookeanMembrane, the same
+incompressible membrane), with <Density> and <Thickness>. Shells with bending stiffness
+("LinearShell", "LinearThickShell": NiftySim's rotation-free shells) are refused by name."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..materials.membrane import NeoHookeanMembrane, StVKMembrane
+from ..mesh.split import split_quads
+from ..mesh.topology import boundary_faces
+from ..tled import ModelBuilder
+
+__all__ = ["add_membranes", "SUBMODEL_MARK"]
+
+# Set on a <ShellElements> or <ShellElementSet> a sub-model held (niftysim_submodels.py): its node
+# and facet numbers are the sub-model's own, which the merge does not renumber.
+SUBMODEL_MARK = "pliant-submodel"
+
+
+def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, warnings: list[str]) -> None:
+    """The model's membranes onto the builder ``b`` (its tets T (M, 4) give SURFACE's facets);
+    ``unsupported(name, why)`` refuses (or, when ignored, skips) a feature by name."""
+    from .niftysim import NiftySimError
+
+    shells, sets = root.findall("ShellElements"), root.findall("ShellElementSet")
+    if not shells and not sets:
+        return
+    if any(el.get(SUBMODEL_MARK) for el in shells + sets):
+        unsupported(
+            "ShellElements",
+            "membranes in a <SubModel> are not imported (their numbers are the sub-model's); "
+            "skipping them runs the solids alone",
+        )
+        return
+    if len(shells) != 1 or not sets:
+        raise NiftySimError(
+            f"{len(shells)} <ShellElements> and {len(sets)} <ShellElementSet>: expected one "
+            "<ShellElements> and at least one <ShellElementSet> (the membranes' materials)",
+            f,
+            "ShellElements",
+        )
+    faces, per_listed = _facets(shells[0], T, b.n_nodes, f)
+    owner = np.full(len(faces), -1, np.int64)
+    for k, es in enumerate(sets):
+        key = f"ShellElementSet[{k}]"
+        material = _material(es, f, key, unsupported, warnings)
+        listed = _set_members(es, len(faces) // per_listed, shells[0], f, key)
+        members = (per_listed * listed[:, None] + np.arange(per_listed)).ravel()
+        clash = members[owner[members] >= 0]
+        if clash.size:
+            raise NiftySimError(
+                f"shell element {int(clash[0]) // per_listed} is also in ShellElementSet[{owner[clash[0]]}]; "
+                "expected each in one set",
+                f,
+                key,
+            )
+        owner[members] = k
+        if material is not None:
+            from .niftysim import _named
+
+            with _named(f, key):
+                b.add_membrane(faces[members], material)
+            if isinstance(material, StVKMembrane):
+                warnings.append(_linear_note(f, key, b.nodes, faces[members], material.thickness))
+    if np.any(owner < 0):
+        raise NiftySimError(
+            f"shell element {int(np.argmax(owner < 0)) // per_listed} is in no <ShellElementSet>: "
+            "expected a material for every membrane",
+            f,
+            "ShellElementSet",
+        )
+
+
+def _linear_note(f: str, key: str, X: np.ndarray, F: np.ndarray, h: float) -> str:
+    """The warning for a set of NiftySim "Linear" membranes: NiftySim's forces for them
+    (tledElementMembraneSimpleLinear::ComputeForces on the CPU, _ComputeForces on the GPU) multiply
+    the stress by neither the facet's area A nor the thickness h, as its NeoHookean membrane's do, so
+    its Linear membranes are 1/(A h) [1/m³] times stiffer than their E and h say; pliant's are as
+    written (docs/scenes.md: on models/box_membrane.xml, E × 1/(A h) reproduces NiftySim's result)."""
+    area = 0.5 * np.linalg.norm(np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]), axis=1)
+    scale = 1.0 / (area * h)
+    return (
+        f"{f}: {key}: NiftySim's Linear membranes are 1/(A h) times stiffer than their E and h say "
+        f"(its forces leave out the facet's area A and thickness h): here {scale.min():.4g} to "
+        f"{scale.max():.4g}; pliant's are as written, so results differ from NiftySim's (multiply E by "
+        "that factor to reproduce them)"
+    )
+
+
+def _facets(el, T: np.ndarray, n_nodes: int, f: str) -> tuple[np.ndarray, int]:
+    """The membrane triangles (F, 3) of <ShellElements>, and how many triangles each listed
+    facet became (2 for Q4)."""
+    from .niftysim import NiftySimError, _numbers
+
+    kind = el.get("Type", el.get("type"))  # NiftySim's own models write type="SURFACE"
+    if kind == "SURFACE":
+        if (el.text or "").strip():
+            raise NiftySimError(
+                'Type="SURFACE" takes the mesh\'s boundary: expected no facets listed', f, "ShellElements"
+            )
+        return boundary_faces(T)[0], 1
+    if kind not in ("T3", "Q4"):
+        raise NiftySimError(f"<ShellElements Type={kind!r}>: expected T3, Q4 or SURFACE", f, "ShellElements")
+    width = 3 if kind == "T3" else 4
+    v = _numbers(el, f, "ShellElements", np.int64)
+    if v.size == 0 or v.size % width:
+        raise NiftySimError(
+            f"<ShellElements Type={kind}> holds {v.size} node numbers; expected {width} per facet",
+            f,
+            "ShellElements",
+        )
+    F = v.reshape(-1, width)
+    declared = el.get("NumEls")
+    if declared is not None and declared.strip() != str(len(F)):
+        raise NiftySimError(
+            f'<ShellElements NumEls="{declared[:20]}"> lists {len(F)} facets; expected as many as it '
+            "declares",
+            f,
+            "ShellElements",
+        )
+    bad = np.nonzero((F < 0) | (F >= n_nodes))
+    if bad[0].size:
+        i, j = int(bad[0][0]), int(bad[1][0])
+        raise NiftySimError(
+            f"shell element {i} refers to node {int(F[i, j])}; the model has nodes 0..{n_nodes - 1}",
+            f,
+            "ShellElements",
+        )
+    return (F, 1) if kind == "T3" else (split_quads(F), 2)
+
+
+def _set_members(es, n: int, shells, f: str, key: str) -> np.ndarray:
+    """The listed facets of a <ShellElementSet> among n (element_set's forms)."""
+    from .niftysim import NiftySimError, element_set
+
+    members = element_set(es, n, f, key)
+    kind = shells.get("Type", shells.get("type"))
+    if kind == "SURFACE" and es.get("Size", "") != "all":
+        raise NiftySimError(
+            'with <ShellElements Type="SURFACE"> the facets come in no fixed order (user guide §3.6.1): '
+            'expected Size="all"',
+            f,
+            key,
+        )
+    return np.asarray(members, np.int64)
+
+
+def _material(es, f: str, key: str, unsupported, warnings: list[str]):
+    """The membrane material of a <ShellElementSet>, or None where an unsupported one is ignored."""
+    from .niftysim import NiftySimError, _numbers, _scalar, _named
+
+    m = es.find("Material")
+    if m is None:
+        raise NiftySimError("<ShellElementSet> without <Material>", f, key)
+    mtype = m.get("Type")
+    if mtype in ("LinearShell", "LinearThickShell"):
+        unsupported(
+            f"ShellElementSet Material Type={mtype}",
+            "shells with bending stiffness (NiftySim's rotation-free shell triangles) are not implemented; "
+            "skipping the set leaves its facets without a membrane",
+        )
+        warnings.append(f"{f}: {key}: its shell elements skipped (no membrane)")
+        return None
+    if mtype not in ("Linear", "NeoHookean"):
+        raise NiftySimError(
+            f"<Material Type={mtype!r}> in a shell element set: expected Linear, NeoHookean (membranes) or "
+            "LinearShell, LinearThickShell (shells, not implemented)",
+            f,
+            f"{key}/Material",
+        )
+    sheet = {}
+    for name in ("Density", "Thickness"):
+        child = m.find(name)
+        if child is None:
+            raise NiftySimError(
+                f"<{name}> is missing: a membrane needs its density and thickness", f, f"{key}/Material"
+            )
+        sheet[name] = _scalar(child.text, f, f"{key}/Material/{name}", float, 0.0)
+    ep = m.find("ElasticParams")  # NiftySim reads the <Material>'s own text; the solids' form too
+    vals = _numbers(m if ep is None else ep, f, f"{key}/Material")
+    want = 2 if mtype == "Linear" else 1
+    if vals.size != want:
+        names = "E, nu" if mtype == "Linear" else "mu"
+        raise NiftySimError(
+            f"{mtype} takes {want} parameter(s) ({names}); got {vals.size}", f, f"{key}/Material"
+        )
+    if es.find("ClampedNodes") is not None:
+        warnings.append(f"{f}: {key}: <ClampedNodes> ignored: a membrane has no bending to clamp")
+    with _named(f, f"{key}/Material"):
+        if mtype == "Linear":
+            return StVKMembrane(vals[0], vals[1], sheet["Thickness"], sheet["Density"])
+        return NeoHookeanMembrane(vals[0], sheet["Thickness"], sheet["Density"])

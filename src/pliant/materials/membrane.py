@@ -1,0 +1,121 @@
+"""Membrane materials (SI units): the in-plane response of membrane triangles, with their
+thickness h [m] and density ρ [kg/m³] (ModelBuilder.add_membrane). The stress functions live once,
+in C++ (``cpp/include/pliant/membrane.hpp``), shared by every backend.
+
+=====================  =========================================================  ==============
+class                  2nd Piola–Kirchhoff stress S (per reference thickness)       parameters
+=====================  =========================================================  ==============
+StVKMembrane           λ' tr(E) I + 2 μ E, λ' = E ν / (1 − ν²), plane stress         E, nu
+                       (NiftySim's "Linear" membrane at small displacement)
+NeoHookeanMembrane     μ (I − C33 C⁻¹), C33 = 1 / det C: incompressible             mu
+                       (Bonet et al. 2000; NiftySim's "NeoHookean" membrane)
+=====================  =========================================================  ==============
+"""
+
+from __future__ import annotations
+
+import math
+
+from .. import _core
+from ..checks import shown
+from ..errors import MaterialError
+
+__all__ = ["MembraneMaterial", "StVKMembrane", "NeoHookeanMembrane"]
+
+
+def _finite_positive(cls: str, name: str, value, unit: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not math.isfinite(v) or v <= 0.0:
+        raise MaterialError(f"{cls}: {name} = {shown(value)}; expected a finite value > 0 [{unit}]")
+    return v
+
+
+class MembraneMaterial:
+    """Base class: ``kind`` (engine code, :class:`pliant._core.MembraneKind`), ``thickness`` h [m],
+    ``density`` ρ [kg/m³] and ``params`` (two moduli, as the engine reads them)."""
+
+    kind: _core.MembraneKind
+    thickness: float
+    density: float
+
+    def _set_sheet(self, thickness, density) -> None:
+        cls = type(self).__name__
+        self.thickness = _finite_positive(cls, "thickness", thickness, "m")
+        self.density = _finite_positive(cls, "density", density, "kg/m^3")
+
+    @property
+    def params(self) -> tuple[float, float]:
+        raise NotImplementedError
+
+    @property
+    def wave_modulus(self) -> float:
+        """In-plane P-wave modulus at small strain [Pa]: E/(1 − ν²), or 4μ when incompressible
+        (the modulus in the membrane's stable time step)."""
+        raise NotImplementedError
+
+    def _key(self):
+        return (type(self), self.params, self.thickness, self.density)
+
+    def __eq__(self, other):
+        return isinstance(other, MembraneMaterial) and self._key() == other._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
+
+class StVKMembrane(MembraneMaterial):
+    """Plane-stress St Venant–Kirchhoff membrane: S = λ' tr(E) I + 2 μ E in the membrane's plane,
+    λ' = E ν/(1 − ν²) the plane-stress Lamé constant, μ = E/(2(1 + ν)) (Bonet & Wood, 2nd ed., §6.6
+    for plane stress; E the in-plane Green strain). Young's modulus ``E`` [Pa], Poisson's ratio
+    ``nu`` (−1 < ν ≤ 0.5), ``thickness`` [m], ``density`` [kg/m³]."""
+
+    kind = _core.MembraneKind.StVenantKirchhoff
+
+    def __init__(self, E, nu, thickness, density):
+        self.E = _finite_positive("StVKMembrane", "E", E, "Pa")
+        try:
+            self.nu = float(nu)
+        except (TypeError, ValueError):
+            self.nu = math.nan
+        if not math.isfinite(self.nu) or not -1.0 < self.nu <= 0.5:
+            raise MaterialError(f"StVKMembrane: nu = {shown(nu)}; expected -1 < nu <= 0.5")
+        self._set_sheet(thickness, density)
+
+    @property
+    def params(self) -> tuple[float, float]:
+        return (self.E, self.nu)
+
+    @property
+    def wave_modulus(self) -> float:
+        return self.E / (1.0 - self.nu**2)
+
+    def __repr__(self):
+        sheet = f"thickness={self.thickness:g}, density={self.density:g}"
+        return f"StVKMembrane(E={self.E:g}, nu={self.nu:g}, {sheet})"
+
+
+class NeoHookeanMembrane(MembraneMaterial):
+    """Incompressible Neo-Hookean membrane: W = μ/2 (tr C + 1/det C − 3) per reference volume,
+    C the in-plane right Cauchy–Green tensor, the thickness stretch λ3 = 1/√det C; S = μ (I − C⁻¹/det C)
+    (Bonet, Wood, Mahaney & Heywood 2000, CMAME 190:579, eq. 18). Shear modulus ``mu`` [Pa],
+    ``thickness`` [m], ``density`` [kg/m³]."""
+
+    kind = _core.MembraneKind.NeoHookean
+
+    def __init__(self, mu, thickness, density):
+        self.mu = _finite_positive("NeoHookeanMembrane", "mu", mu, "Pa")
+        self._set_sheet(thickness, density)
+
+    @property
+    def params(self) -> tuple[float, float]:
+        return (self.mu, 0.0)
+
+    @property
+    def wave_modulus(self) -> float:
+        return 4.0 * self.mu
+
+    def __repr__(self):
+        return f"NeoHookeanMembrane(mu={self.mu:g}, thickness={self.thickness:g}, density={self.density:g})"

@@ -1,0 +1,62 @@
+"""The [[membrane]] tables of a scene: membrane triangles on the mesh's boundary (an organ's
+capsule, a vessel's wall), each table a material with its thickness [m] and density [kg/m³] on the
+boundary triangles whose three nodes are all selected (``nodes``; the whole boundary without it).
+
+    [[membrane]]
+    type = "neo-hookean"        # or "st-venant-kirchhoff" (E, nu)
+    mu = 2e4                    # [Pa]
+    thickness = 1e-4            # [m]
+    density = 1100.0            # [kg/m^3]
+    nodes = { box = [[-1, -1, 0.01], [1, 1, 1]] }
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..materials.membrane import NeoHookeanMembrane, StVKMembrane
+from ..mesh.topology import boundary_faces
+from ..tled import ModelBuilder
+from .schema import Ctx, check_keys
+from .select import select_nodes
+
+__all__ = ["add_membranes", "MEMBRANES"]
+
+# Scene type → (class, its parameters besides thickness and density, in the constructor's order).
+MEMBRANES = {
+    "neo-hookean": (NeoHookeanMembrane, ("mu",)),
+    "st-venant-kirchhoff": (StVKMembrane, ("E", "nu")),
+}
+
+
+def add_membranes(ctx: Ctx, tables: list, b: ModelBuilder, X, T, node_sets) -> None:
+    """Each [[membrane]] table onto the builder, its errors naming the table's key and line."""
+    if not isinstance(tables, list):
+        raise ctx.error("membrane", "expected [[membrane]] tables")
+    B, _ = boundary_faces(T)
+    for i, m in enumerate(tables):
+        p = f"membrane[{i}]"
+        allowed = {"type": "str", "E": "number", "nu": "number", "mu": "number", "thickness": "number"}
+        allowed |= {"density": "number", "nodes": "table"}
+        check_keys(ctx, m, p, allowed, ("type", "thickness", "density"))
+        if m["type"] not in MEMBRANES:
+            raise ctx.error(
+                f"{p}.type", f"unknown membrane {m['type']!r}; expected one of {', '.join(MEMBRANES)}"
+            )
+        cls, params = MEMBRANES[m["type"]]
+        given = set(m) - {"type", "thickness", "density", "nodes"}
+        if given != set(params):
+            raise ctx.error(
+                p, f"{m['type']} takes ({', '.join(params)}); got ({', '.join(sorted(given)) or 'nothing'})"
+            )
+        faces = B
+        if "nodes" in m:
+            ids = select_nodes(ctx, m["nodes"], f"{p}.nodes", X, T, node_sets)
+            faces = B[np.all(np.isin(B, ids), axis=1)]
+            if len(faces) == 0:
+                raise ctx.error(
+                    f"{p}.nodes",
+                    f"the {ids.size} selected nodes hold no whole boundary triangle: select a surface patch",
+                )
+        with ctx.under(p):
+            b.add_membrane(faces, cls(*[m[k] for k in params], m["thickness"], m["density"]))

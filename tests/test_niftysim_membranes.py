@@ -1,0 +1,205 @@
+"""NiftySim membranes (<ShellElements> with <ShellElementSet>, user guide v2.4 §3.6;
+pliant.io.niftysim_membranes): an H8 bar wrapped in Linear membranes (listed as quadrilaterals and
+as triangles) stretched to the uniaxial closed form of both; SURFACE's facets and their mass; the
+file's mistakes named."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_niftysim_h8 import _bar_xml
+
+import pliant as pl
+from pliant.io.niftysim import NiftySimError, load_niftysim
+from pliant.mesh.topology import boundary_faces
+
+L, A = 0.06, 0.01  # the bar of _bar_xml: 0.06 × 0.01 × 0.01 m, 6 hexahedra along x
+nums = lambda a: " ".join(str(v) for v in np.ravel(a))  # noqa: E731
+
+
+def _long_faces(n=6) -> np.ndarray:
+    """The bar's four long faces as quadrilaterals (4 n, 4) over _bar_xml's nodes 4i + 2j + k."""
+    node = lambda i, j, k: 4 * i + 2 * j + k  # noqa: E731
+    Q = []
+    for i in range(n):
+        Q += [
+            [node(i, 0, 0), node(i + 1, 0, 0), node(i + 1, 0, 1), node(i, 0, 1)],  # y = 0
+            [node(i, 1, 0), node(i, 1, 1), node(i + 1, 1, 1), node(i + 1, 1, 0)],  # y = A
+            [node(i, 0, 0), node(i, 1, 0), node(i + 1, 1, 0), node(i + 1, 0, 0)],  # z = 0
+            [node(i, 0, 1), node(i + 1, 0, 1), node(i + 1, 1, 1), node(i, 1, 1)],  # z = A
+        ]
+    return np.array(Q)
+
+
+def _shells(kind: str, facets: np.ndarray, material: str, sets: str | None = None) -> str:
+    sets = sets or f'<ShellElementSet Size="all">{material}</ShellElementSet>'
+    listed = nums(facets) if kind != "SURFACE" else ""
+    return f'<ShellElements Type="{kind}">{listed}</ShellElements>{sets}'
+
+
+LINEAR = '<Material Type="Linear">6000 0.3<Density>900</Density><Thickness>0.0005</Thickness></Material>'
+
+
+def _stretched_bar(tmp_path, shells: str, stretch=1.1):
+    """_bar_xml's LE bar (E = 3 kPa, ν = 0.3, on rollers) with ``shells``, its end x = L moved to
+    ``stretch`` L, relaxed; returns the model, simulation and the end's nodes."""
+    xml, X = _bar_xml(material="LE")
+    end = np.nonzero(np.abs(X[:, 0] - L) < 1e-12)[0]
+    disp = (
+        f'<Constraint DOF="0" Type="Disp" NumNodes="{len(end)}" LoadShape="RAMP"><Nodes>{nums(end)}</Nodes>'
+        f'<Magnitudes Type="UNIFORM">{(stretch - 1) * L!r}</Magnitudes></Constraint>'
+    )
+    xml = xml.replace("<SystemParams>", disp + shells + "<SystemParams>")
+    p = tmp_path / "bar.xml"
+    p.write_text(xml)
+    scene = load_niftysim(p)
+    model = scene.builder.finalize("float64")
+    sim = pl.Simulation(model, dt=scene.dt)
+    sim.run(until=scene.duration)
+    sim.relax(tol=1e-10, max_steps=200_000)
+    return model, sim, end
+
+
+@pytest.mark.parametrize("kind", ["Q4", "T3"])
+def test_a_bar_wrapped_in_linear_membranes_stretches_as_its_closed_form(tmp_path, kind):
+    """NiftySim's LE (St Venant–Kirchhoff) bar and Linear membranes of the same ν on its four long
+    faces contract alike, so a 10 % stretch stays homogeneous and the end's pull is
+    λ E_xx (E A² + E_m h 4 A) (uniaxial stress in Green strain for both; the membranes carry 80 % of
+    it). Q4 facets are split in two; T3 lists the same triangles. Relaxed to 1e-10: 1e-6."""
+    Q = _long_faces()
+    facets = Q if kind == "Q4" else pl.mesh.split.split_quads(Q)
+    model, sim, end = _stretched_bar(tmp_path, _shells(kind, facets, LINEAR))
+    assert model.n_membranes == 2 * len(Q)
+    lam = 1.1
+    Exx = (lam**2 - 1) / 2
+    expected = lam * Exx * (3000.0 * A * A + 6000.0 * 0.0005 * 4 * A)
+    pull = model.internal_forces(sim.state)[end, 0].sum()
+    assert pull == pytest.approx(expected, rel=1e-6)
+    lateral = np.sqrt(1 - 2 * 0.3 * Exx)
+    X = model.reference_positions
+    np.testing.assert_allclose(sim.displacements[:, 1], (lateral - 1) * X[:, 1], atol=1e-6 * A)
+
+
+def test_surface_membranes_cover_the_boundary_and_add_their_mass(tmp_path):
+    """Type="SURFACE" wraps the whole boundary of the split mesh (its triangles); the model's mass is
+    the bar's ρ V plus ρ h times the bar's surface area, 4 L A + 2 A²."""
+    xml, X = _bar_xml()
+    nh = '<Material Type="NeoHookean">500<Density>800</Density><Thickness>0.001</Thickness></Material>'
+    xml = xml.replace("<SystemParams>", _shells("SURFACE", np.zeros(0), nh) + "<SystemParams>")
+    p = tmp_path / "surface.xml"
+    p.write_text(xml)
+    model = load_niftysim(p).builder.finalize("float64")
+    assert model.n_membranes == len(boundary_faces(model.tets)[0])
+    expected = 1000.0 * L * A * A + 800.0 * 0.001 * (4 * L * A + 2 * A * A)
+    assert model.mass.sum() == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "shells, match",
+    [
+        (
+            _shells(
+                "T3",
+                [0, 1, 2],
+                '<Material Type="LinearShell">1 0.3 1 0.3<Density>1</Density>'
+                "<Thickness>1</Thickness></Material>",
+            ),
+            "unsupported NiftySim feature ShellElementSet Material Type=LinearShell: shells with bending",
+        ),
+        (
+            _shells(
+                "T3",
+                [0, 1, 2],
+                '<Material Type="NeoHookean"><Density>10</Density><Thickness>1</Thickness></Material>',
+            ),
+            r"NeoHookean takes 1 parameter\(s\) \(mu\); got 0",
+        ),
+        (
+            _shells("T3", [0, 1, 2], '<Material Type="Linear">1 0.3<Density>1</Density></Material>'),
+            "<Thickness> is missing",
+        ),
+        (_shells("T3", [0, 1, 99], LINEAR), "shell element 0 refers to node 99"),
+        (_shells("T3", [0, 1], LINEAR), "holds 2 node numbers; expected 3 per facet"),
+        (
+            _shells(
+                "T3", [0, 1, 2, 0, 2, 3], LINEAR, f'<ShellElementSet Size="1">{LINEAR}0</ShellElementSet>'
+            ),
+            "shell element 1 is in no <ShellElementSet>",
+        ),
+        (
+            _shells(
+                "SURFACE", np.zeros(0), LINEAR, f'<ShellElementSet Size="2">{LINEAR}0 1</ShellElementSet>'
+            ),
+            'the facets come in no fixed order .*expected Size="all"',
+        ),
+        (
+            _shells(
+                "T3",
+                [0, 1, 2],
+                '<Material Type="Linear">1 0.7<Density>1</Density><Thickness>1</Thickness></Material>',
+            ),
+            "nu = 0.7; expected -1 < nu <= 0.5",
+        ),
+        (_shells("T3", [0, 1, 1], LINEAR), "membrane 0 .* is degenerate"),
+        (_shells("Q8", [0, 1, 2], LINEAR), "expected T3, Q4 or SURFACE"),
+    ],
+)
+def test_membrane_mistakes_are_named(tmp_path, shells, match):
+    """Each mistake in a model's membranes is a NiftySimError naming the file, the element and what
+    was expected."""
+    xml, _ = _bar_xml()
+    p = tmp_path / "bad.xml"
+    p.write_text(xml.replace("<SystemParams>", shells + "<SystemParams>"))
+    with pytest.raises(NiftySimError, match=match) as e:
+        load_niftysim(p)
+    assert str(p) in str(e.value)
+
+
+def test_an_ignored_shell_set_runs_the_solid_alone(tmp_path):
+    """--ignore for a LinearShell set skips its facets with a warning; the bar runs."""
+    xml, _ = _bar_xml()
+    shell = '<Material Type="LinearShell">1 0.3 1 0.3<Density>1</Density><Thickness>1</Thickness></Material>'
+    p = tmp_path / "shell.xml"
+    p.write_text(xml.replace("<SystemParams>", _shells("T3", [0, 1, 2], shell) + "<SystemParams>"))
+    sc = load_niftysim(p, ignore=("ShellElementSet Material Type=LinearShell",))
+    assert sc.builder.n_membranes == 0 and any("no membrane" in w for w in sc.warnings)
+
+
+def test_niftysims_membrane_example_runs_as_niftysim_ran_it(tmp_path):
+    """NiftySim's models/box_membrane_nonlin.xml (an NH box wrapped in its whole surface of
+    NeoHookean membranes, μ = 500 Pa, h = 0.05 m, pushed 0.27 m by nodal forces over 1 s) against
+    the U.txt NiftySim itself wrote for it (tests/data/README.md). pliant's frame k is one step
+    before NiftySim's (docs/scenes.md), so each frame may differ by one step's motion, estimated as
+    a hundredth (100 steps a frame) of NiftySim's motion since its frame before, plus 0.5 % of its
+    largest displacement (measured beyond the step: 0.09–0.31 % at frames 1–9, float32 both; the
+    first frame, where the motion grows as t³ and the estimate is poor, is left out)."""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    data = Path(__file__).parent / "data"
+    out = tmp_path / "out"
+    r = CliRunner().invoke(app, ["run", str(data / "niftysim_box_membrane_nonlin.xml"), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    mine = np.loadtxt(out / "U.txt")
+    theirs = np.loadtxt(data / "niftysim_box_membrane_nonlin_U.txt")
+    assert mine.shape == theirs.shape == (3 * 555, 10)
+    for k in range(1, 10):
+        a, b = theirs[:, k].reshape(-1, 3), mine[:, k].reshape(-1, 3)
+        one_step = np.linalg.norm(a - theirs[:, k - 1].reshape(-1, 3), axis=1).max() / 100
+        scale = np.linalg.norm(a, axis=1).max()
+        assert np.linalg.norm(a - b, axis=1).max() < one_step + 0.005 * scale, k
+
+
+def test_linear_membranes_warn_of_niftysims_missing_area_and_thickness(tmp_path):
+    """NiftySim's Linear membranes leave the facet's area A and thickness h out of their forces
+    (tledElementMembraneSimpleLinear::ComputeForces): the import says by how much NiftySim's differ,
+    1/(A h) — for the bar's long-face triangles A = 0.01²/2 m², h = 0.5 mm: 4e7 m⁻³."""
+    xml, _ = _bar_xml()
+    p = tmp_path / "linear.xml"
+    p.write_text(xml.replace("<SystemParams>", _shells("Q4", _long_faces(), LINEAR) + "<SystemParams>"))
+    warnings = load_niftysim(p).warnings
+    factor = f"{1 / (0.5 * A * A * 0.0005):.4g}"
+    assert any(f"here {factor} to {factor}" in w and "NiftySim's Linear membranes" in w for w in warnings)
