@@ -231,6 +231,33 @@ def test_niftysim_h8_files_load_or_fail_by_name(text):
     _loads_or_fails_by_name(load_niftysim, _write(text, ".xml"))
 
 
+def _membrane_bar() -> str:
+    """The H8 bar with membranes: its long faces listed as Q4 in two <ShellElementSet>s, a Linear
+    one (listed) and a NeoHookean one (Size consecutive from the first)."""
+    from test_niftysim_h8 import _bar_xml
+    from test_niftysim_membranes import _long_faces
+
+    Q = " ".join(str(v) for v in _long_faces().ravel())
+    shells = (
+        f'<ShellElements Type="Q4" NumEls="24">{Q}</ShellElements>'
+        '<ShellElementSet Size="12"><Material Type="Linear">6000 0.3<Density>900</Density>'
+        "<Thickness>0.0005</Thickness></Material>" + " ".join(map(str, range(12))) + "</ShellElementSet>"
+        '<ShellElementSet Size="12"><Material Type="NeoHookean">500<Density>900</Density>'
+        "<Thickness>0.001</Thickness></Material>12</ShellElementSet>"
+    )
+    return _bar_xml()[0].replace("<SystemParams>", shells + "<SystemParams>")
+
+
+MEMBRANE_BAR = _membrane_bar()
+
+
+@BUDGET
+@given(niftysim_texts(MEMBRANE_BAR))
+def test_niftysim_membrane_files_load_or_fail_by_name(text):
+    """Models with membranes (<ShellElements>, <ShellElementSet>s of both materials), mutated."""
+    _loads_or_fails_by_name(load_niftysim, _write(text, ".xml"))
+
+
 # --- mesh files ---------------------------------------------------------------------------------
 OBJ = (
     "".join(f"v {x} {y} {z}\n" for x, y, z in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)])

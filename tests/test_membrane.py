@@ -4,6 +4,8 @@ forms: the stress resultants of a homogeneous in-plane stretch (Neo-Hookean memb
 the membrane's own stable step, and a solid bar wrapped in membranes stretched to equilibrium
 against the uniaxial closed form of both, on every backend."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -306,3 +308,50 @@ def test_a_capsule_on_a_solid_steps_at_the_whole_models_stable_step():
     s = m.state()
     solver.run(s, steps=500)
     assert np.abs(s.displacements).max() < 0.02
+
+
+@pytest.mark.parametrize(
+    "faces, material, error, text",
+    [
+        ([[0, 1, 2.5]], MATERIALS["stvk"], pl.InputError, "expected (F, 3) integer node ids"),
+        ([[0, 1, 999]], MATERIALS["stvk"], pl.InputError, "node 999 out of range"),
+        (
+            [[0, 1, 1]],
+            MATERIALS["stvk"],
+            pl.DegenerateElementError,
+            "membrane 0 (nodes [0, 1, 1]) is degenerate",
+        ),
+        (
+            [[0, 1, 5]],
+            "rubber",
+            pl.MaterialError,
+            "expected pliant.StVKMembrane or pliant.NeoHookeanMembrane",
+        ),
+        (
+            [[0, 1, 5]],
+            pl.StVKMembrane(E=1e300, nu=0.3, thickness=1e300, density=1e300),
+            pl.MaterialError,
+            "mass or stiffness overflows",
+        ),
+    ],
+)
+def test_add_membrane_mistakes_are_named(faces, material, error, text):
+    X, T = _box()
+    b = _builder(X, T)
+    with pytest.raises(error) as e:
+        b.add_membrane(faces, material)
+    assert text in str(e.value)
+
+
+@pytest.mark.parametrize(
+    "cls, kwargs, text",
+    [
+        (pl.NeoHookeanMembrane, dict(mu=float("nan"), thickness=1e-3, density=1e3), "mu = nan"),
+        (pl.StVKMembrane, dict(E=1e3, nu=0.6, thickness=1e-3, density=1e3), "expected -1 < nu <= 0.5"),
+        (pl.StVKMembrane, dict(E=1e3, nu=0.3, thickness=0, density=1e3), "thickness = 0"),
+        (pl.NeoHookeanMembrane, dict(mu=1e3, thickness=1e-3, density="x"), "density = 'x'"),
+    ],
+)
+def test_membrane_material_mistakes_are_named(cls, kwargs, text):
+    with pytest.raises(pl.MaterialError, match=re.escape(text)):
+        cls(**kwargs)

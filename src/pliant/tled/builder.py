@@ -323,7 +323,10 @@ class ModelBuilder:
             )
         F = np.asarray(faces)
         if F.ndim != 2 or F.shape[1] != 3 or F.shape[0] == 0 or not np.issubdtype(F.dtype, np.integer):
-            raise InputError(f"add_membrane: faces shape {F.shape}; expected (F, 3) node ids")
+            raise InputError(
+                f"add_membrane: faces of shape {F.shape}, dtype {F.dtype}; expected (F, 3) integer node "
+                "ids, F >= 1"
+            )
         F = self._node_ids(F.ravel(), "add_membrane faces").reshape(-1, 3)
         X = self.nodes[F]
         cross = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
@@ -337,6 +340,12 @@ class ModelBuilder:
                 f"degenerate: area {0.5 * area2[i]:.3e} m^2 for longest edge {longest[i]:.3e} m; "
                 "expected three distinct, non-collinear nodes",
                 self.n_membranes + i,
+            )
+        mass = 0.5 * float(area2.max()) * material.thickness * material.density
+        if not (math.isfinite(mass) and math.isfinite(material.wave_modulus * material.thickness)):
+            raise MaterialError(
+                f"add_membrane: {material!r} on triangles of up to {0.5 * area2.max():.3g} m^2: its mass "
+                "or stiffness overflows; expected SI units (m, kg/m^3, Pa)"
             )
         self._membranes.append((F, material))
 
