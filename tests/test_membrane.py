@@ -355,3 +355,50 @@ def test_add_membrane_mistakes_are_named(faces, material, error, text):
 def test_membrane_material_mistakes_are_named(cls, kwargs, text):
     with pytest.raises(pl.MaterialError, match=re.escape(text)):
         cls(**kwargs)
+
+
+def _sheet(n=4):
+    """A 1 m square sheet in the plane z = 0 of n × n squares, each cut into two triangles."""
+    xs = np.linspace(0, 1, n + 1)
+    X = np.array([[x, y, 0.0] for x in xs for y in xs])
+    idx = lambda i, j: i * (n + 1) + j  # noqa: E731
+    F = []
+    for i in range(n):
+        for j in range(n):
+            F += [
+                [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)],
+                [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)],
+            ]
+    return X, np.array(F)
+
+
+@pytest.mark.parametrize("kind", sorted(MATERIALS))
+def test_a_sheet_of_membranes_alone_stretches_as_its_closed_form(kind, backend):
+    """Membranes without a solid (add_mesh with no tets): a square sheet on rollers at x = 0, its
+    edge x = 1 moved 30 %, sides free, held in its plane: uniaxial membrane stress, so the width
+    contracts to √(1 − 2 ν E_xx) (plane-stress St Venant–Kirchhoff) or λ^(−1/2) (incompressible
+    Neo-Hookean), and the pull is W P11 (P11 = λ S11: h E E_xx, or μ h (λ − λ⁻²)). Relaxed to 1e-10 in
+    float64, the stretch in ten increments: 1e-6."""
+    X, F = _sheet()
+    material = MATERIALS[kind]
+    b = pl.ModelBuilder()
+    b.add_mesh(X, np.zeros((0, 4), int))
+    b.add_membrane(F, material)
+    left, right = np.nonzero(X[:, 0] == 0)[0], np.nonzero(X[:, 0] == 1)[0]
+    lam = 1.3
+    b.fix(left, "x")
+    b.fix([0], "y")
+    b.fix(np.arange(len(X)), "z")
+    b.prescribe(right, lam - 1, "x", curve=pl.Ramp(1.0))
+    m = b.finalize("float64", backend=backend)
+    assert m.n_elements == 0 and m.dt_critical_element == -1 and m.dt_critical_membrane >= 0
+    sim = pl.Simulation(m)
+    assert sim.relax(tol=1e-10, increments=10).converged  # the edge moved in ten loads
+    Exx = (lam**2 - 1) / 2
+    if kind == "stvk":
+        width, pull = np.sqrt(1 - 2 * material.nu * Exx), lam * material.thickness * material.E * Exx
+    else:
+        width, pull = lam**-0.5, material.mu * material.thickness * (lam - lam**-2)
+    u = sim.displacements
+    np.testing.assert_allclose(u[:, 1], (width - 1) * X[:, 1], atol=1e-6 * (1 - width))
+    np.testing.assert_allclose(m.internal_forces(sim.state)[right, 0].sum(), pull, rtol=1e-6)

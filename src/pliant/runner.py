@@ -109,12 +109,13 @@ def total_steps(duration: float, dt: float) -> int:
 
 def body_measures(model, state, res: dict, nodes=slice(None), elements=slice(None)) -> dict:
     """A run's closing figures, of the whole model or of one body of a batch (its node and element
-    ranges): max displacement [m], max von Mises [Pa], kinetic energy ½ Σ m v² [J] (half-step
-    velocity) and strain energy Σ V0 W [J]. ``res``: ``model.element_results(state)``."""
+    ranges): max displacement [m], max von Mises [Pa] of the tets (0 without), kinetic energy
+    ½ Σ m v² [J] (half-step velocity) and strain energy Σ V0 W [J] of the tets (not the
+    membranes'). ``res``: ``model.element_results(state)``."""
     u, v = state.displacements[nodes], state.velocities[nodes]
     return {
         "max_displacement": float(np.linalg.norm(u, axis=1).max()),
-        "max_von_mises": float(res["von_mises"][elements].max()),
+        "max_von_mises": float(res["von_mises"][elements].max(initial=0.0)),  # 0: membranes alone
         "kinetic_energy": float(0.5 * np.sum(model.mass[nodes, None] * v * v)),
         "strain_energy": float(np.dot(model.element_volumes()[elements], res["energy_density"][elements])),
     }
@@ -291,15 +292,21 @@ def run_scene(
             if scene.png and out is not None:
                 from .view import render_png
 
-                surface = None
+                surface, field, label = None, res["von_mises"], "von Mises stress [Pa]"
                 if embedding is not None:  # the fine surface, as the viewer and surface.pvd show
                     Pe = embedding.positions(model.tets, state.positions)
                     surface = (Pe, embedding.faces, embedding.tet[embedding.faces[:, 0]])
+                elif not model.n_elements:  # membranes alone: each coloured by its mean displacement
+                    F = model.membrane_faces
+                    surface = (state.positions, F, np.arange(len(F)))
+                    field = np.linalg.norm(u, axis=1)[F].mean(axis=1)
+                    label = "displacement [m]"
                 render_png(
                     out / "result.png",
                     state.positions,
                     model.tets,
-                    res["von_mises"],
+                    field,
+                    label=label,
                     title=f"{scene.title[:200]}: t = {state.time:.4g} s",
                     surface=surface,
                 )

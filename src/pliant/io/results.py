@@ -3,6 +3,8 @@ temporary name and renamed into place, so a crash or Ctrl-C never leaves a trunc
 
 from __future__ import annotations
 
+import numpy as np
+
 from pathlib import Path
 
 from .files import atomic_write, atomic_write_text, deferred_interrupt, make_output_dir
@@ -57,11 +59,17 @@ class ResultWriter:
             "cauchy": res["cauchy"],
             "green_strain": res["green_strain"],
         }
+        # Tets with their fields; membranes (if any) as triangles, their element fields NaN (they
+        # are the tets' measures); a model of membranes alone has no tet block.
+        blocks = [("tetra", model.tets, lambda v: v)] if len(model.tets) else []
+        if model.n_membranes:
+            nan = lambda v: np.full((model.n_membranes, *np.shape(v)[1:]), np.nan)  # noqa: E731
+            blocks.append(("triangle", model.membrane_faces, nan))
         mesh = meshio.Mesh(
             model.reference_positions,
-            [("tetra", model.tets)],
+            [(kind, cells) for kind, cells, _ in blocks],
             point_data=point,
-            cell_data={k: [v] for k, v in cell_src.items() if k in f},
+            cell_data={k: [fill(v) for _, _, fill in blocks] for k, v in cell_src.items() if k in f},
         )
         # Ctrl-C is held from the first file of the frame to the last index, so that result.pvd
         # always lists exactly the frames on disk.

@@ -105,7 +105,8 @@ class ModelBuilder:
 
     # --- mesh -------------------------------------------------------------------------------
     def add_mesh(self, nodes, tets, source: str | None = None) -> np.ndarray:
-        """Append nodes [m] (N, 3) and tetrahedra (M, 4) (indices into these nodes, 0-based).
+        """Append nodes [m] (N, 3) and tetrahedra (M, 4) (indices into these nodes, 0-based; M may be
+        0, nodes alone, for a sheet of membranes: add_membrane).
 
         Returns the global indices of the new elements."""
         src = source or self.source
@@ -121,8 +122,10 @@ class ModelBuilder:
         if not np.all(np.isfinite(X)):
             node = int(np.argwhere(~np.isfinite(X))[0, 0])
             raise MeshError(f"{src}: node {node} has a non-finite coordinate {X[node].tolist()}")
-        if T.ndim != 2 or T.shape[1] != 4 or T.shape[0] == 0:
-            raise MeshError(f"{src}: tetrahedra have shape {T.shape}; expected (M, 4) with M >= 1")
+        if T.size == 0:  # nodes alone: a sheet of membranes (add_membrane)
+            T = np.zeros((0, 4), np.int64)
+        if T.ndim != 2 or T.shape[1] != 4:
+            raise MeshError(f"{src}: tetrahedra have shape {T.shape}; expected (M, 4)")
         if not (np.issubdtype(T.dtype, np.integer) or np.issubdtype(T.dtype, np.floating)):
             raise MeshError(f"{src}: tetrahedron indices of type {T.dtype}; expected integers")
         if not np.issubdtype(T.dtype, np.integer):
@@ -493,8 +496,8 @@ class ModelBuilder:
         without a GPU or a CUDA build raises BackendError."""
         from .model import Model, check_backend
 
-        if self.n_elements == 0:
-            raise MeshError(f"{self.source}: no tetrahedra; add a mesh before finalize()")
+        if self.n_elements == 0 and not self._membranes:
+            raise MeshError(f"{self.source}: no tetrahedra and no membranes; add a mesh before finalize()")
         require_memory(
             self.n_elements, MODEL_BYTES_PER_TET, f"{self.source}: a model of {self.n_elements:,} tets"
         )
@@ -552,7 +555,7 @@ class ModelBuilder:
                 "expected; scale the mesh)"
             )
         edges = X[T32[:, [1, 2, 3, 2, 3, 3]]] - X[T32[:, [0, 0, 0, 1, 1, 2]]]
-        lmax = np.sqrt((edges**2).sum(-1)).max(axis=1)
+        lmax = np.sqrt((edges**2).sum(-1)).max(axis=1, initial=0.0)
         cube = lmax**3  # an element whose four nodes coincide has no edge: 0, flagged below
         rel = np.divide(vol, cube, out=np.zeros_like(vol), where=cube > 0)
         degenerate = np.nonzero(np.abs(rel) < 1e-8)[0]

@@ -41,8 +41,17 @@ def _membrane_mass(n_nodes: int, X: np.ndarray, F: np.ndarray, materials: list) 
     return np.bincount(F.ravel(), np.repeat(rho_h * area / 3.0, 3), minlength=n_nodes)
 
 
+def _membrane_altitudes(X: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Smallest altitude [m] of each membrane triangle F (K, 3) over positions X: 2 A / longest edge."""
+    P = X[F]
+    area2 = np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    return area2 / np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(axis=1, initial=0.0)
+
+
 def _morton_order(points: np.ndarray) -> np.ndarray:
     """Permutation sorting points (n, 3) along a 3-D Morton (Z-order) curve, 10 bits per axis."""
+    if not len(points):
+        return np.zeros(0, np.int64)
     lo, hi = points.min(axis=0), points.max(axis=0)
     q = ((points - lo) / np.maximum(hi - lo, 1e-300) * 1023).astype(np.uint64)
     code = np.zeros(len(points), dtype=np.uint64)
@@ -86,6 +95,8 @@ def _warn_slow_element(source: str, dt: np.ndarray, altitude: np.ndarray) -> Non
     user order) is SLOW_ELEMENT_FACTOR or more times below the median element's: that one element
     multiplies the steps of every run (a sliver from a mesher, a node jittered almost onto a face).
     ``altitude``: smallest altitude per element [m], for the message."""
+    if not dt.size:  # membranes alone
+        return
     worst = int(np.argmin(dt))
     if not dt[worst] > 0:  # degenerate elements are refused before (finalize)
         return
@@ -192,8 +203,8 @@ class Model:
     Attributes: ``n_nodes``, ``n_elements``, ``dtype``, ``damping`` α [1/s],
     ``stiffness_damping`` β [s], ``dt_critical`` [s] (smallest h_min/c_d over elements and
     membranes, reduced for β by the factor √(1 + ξ²) − ξ, ξ = β/(h_min/c_d)), ``dt_critical_element``
-    (user element index), ``dt_critical_membrane`` (the membrane that sets it, or −1),
-    ``n_membranes``,
+    (user element index; −1 without tets), ``dt_critical_membrane`` (the membrane that sets it, or
+    −1), ``n_membranes`` and ``membrane_faces`` (K, 3),
     ``reference_positions`` [m] (N, 3), ``tets`` (M, 4), ``mass`` [kg] (N,), ``nodal_pressure``
     (T4ANP on) and ``nodal_pressure_stabilization`` (as the builder had it); with soft contact,
     ``bodies`` (body of each element, (M,); else None) and ``contact_pairs`` (the pairs of bodies
@@ -408,11 +419,14 @@ class Model:
         self.dt_critical = _damped_critical_step(float(self._engine.dt_critical), self.stiffness_damping)
         self._stable_step: float | None = None  # 2/ω_max with β, when a solver first needs it
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
-        self.min_altitude = float(np.min(geometry[1]))  # smallest element altitude [m]
-        self.dt_critical_element = int(elem_order[self._engine.dt_critical_element])
+        # smallest element (or membrane) altitude [m]
+        self.min_altitude = float(np.min(np.concatenate([geometry[1], _membrane_altitudes(X, mem_F)])))
+        limit = int(self._engine.dt_critical_element)  # −1: no tets (membranes alone)
+        self.dt_critical_element = int(elem_order[limit]) if limit >= 0 else -1
         # The membrane (add order) whose own step is dt_critical's, or −1 where an element's is.
         self.dt_critical_membrane = int(self._engine.dt_critical_membrane)
         self.n_membranes = len(mem_mat)
+        self.membrane_faces = mem_F.copy()  # (K, 3) user node ids, in add_membrane's order
         _warn_slow_element(builder.source, steps, np.asarray(geometry[1], float))
         self.mass = self.to_user_nodes(self._engine.mass().astype(float))
         self.last_load_time = max(c.end_time for c in curves)

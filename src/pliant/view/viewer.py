@@ -76,6 +76,11 @@ class LiveViewer:
         # the capacity dipping to 0.7x while a frame is drawn; docs/viewer.md).
         auto = max(1, min(_auto_threads(scene.builder.n_elements), _core.max_threads() - 1))
         self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads or auto)  # at reset
+        if not self.model.n_elements:
+            raise InputError(
+                f"{scene.source}: membranes alone ({self.model.n_membranes} triangles, no tetrahedra): the "
+                "viewer shows tet meshes; run it (pliant run) and open result.pvd in ParaView"
+            )
         # An interactive session may run for hours: keep the last 100,000 steps of tool forces.
         from ..runner import scene_step
 
@@ -400,6 +405,11 @@ class PlaybackViewer:
         if missing:
             raise InputError(f"{pvd}: lists {missing[0].name}, which is not in {out}")
         first = read_meshio(self.files[0], "result frame")
+        if "tetra" not in first.cells_dict and "triangle" in first.cells_dict:
+            raise InputError(
+                f"{self.files[0]}: membranes alone, no tetrahedra: the viewer draws tet meshes; open "
+                f"{pvd.name} in ParaView"
+            )
         if "tetra" not in first.cells_dict:
             raise InputError(f"{self.files[0]}: no tetrahedra; expected a pliant result frame")
         self.X, self._tets = first.points, first.cells_dict["tetra"]
