@@ -402,3 +402,25 @@ def test_a_sheet_of_membranes_alone_stretches_as_its_closed_form(kind, backend):
     u = sim.displacements
     np.testing.assert_allclose(u[:, 1], (width - 1) * X[:, 1], atol=1e-6 * (1 - width))
     np.testing.assert_allclose(m.internal_forces(sim.state)[right, 0].sum(), pull, rtol=1e-6)
+
+
+def test_a_tool_meets_a_sheet_of_membranes_alone():
+    """A rigid sphere pushed down through a sheet of membranes alone (pinned at its four corners):
+    the sheet's nodes are contact nodes as a solid's boundary nodes are, so none ends up inside the
+    sphere (within the contact's tolerance, 1e-6 of its radius) and the sheet is carried down."""
+    X, F = _sheet(8)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, np.zeros((0, 4), int))
+    b.add_membrane(F, pl.NeoHookeanMembrane(mu=1e4, thickness=1e-3, density=1e3))
+    corners = np.nonzero(np.isin(X[:, 0], (0, 1)) & np.isin(X[:, 1], (0, 1)))[0]
+    b.fix(corners)
+    r = 0.15
+    b.add_tool(pl.contact.Sphere(radius=r).at(0.0, (0.5, 0.5, r + 0.01)).at(0.5, (0.5, 0.5, r - 0.1)))
+    b.damping = 20.0
+    m = b.finalize("float64")
+    sim = pl.Simulation(m)
+    sim.run(until=0.5)
+    x = sim.state.positions
+    centre = np.array([0.5, 0.5, r - 0.1])
+    assert np.linalg.norm(x - centre, axis=1).min() > r * (1 - 1e-6)
+    assert x[:, 2].min() < -0.05  # carried down, not passed through

@@ -320,7 +320,7 @@ class Model:
             from ..mesh.topology import boundary_nodes
 
             n_cons = np.bincount(np.array([n for n, _ in self._cons_user], np.int64), minlength=X.shape[0])
-            surface = boundary_nodes(T)
+            surface = np.union1d(boundary_nodes(T), mem_F.ravel())  # membranes' nodes meet tools too
             restricted = [s for s in builder.tool_nodes if s is not None]
             cand = np.unique(np.concatenate([surface, *restricted])).astype(np.int64)
             cn = cand[n_cons[cand] < 3]
