@@ -421,10 +421,34 @@ def hertz_soft(quick: bool) -> tuple[list[Check], dict]:
     return rows, {}
 
 
+def membranes(quick: bool) -> tuple[list[Check], dict]:
+    """Membranes alone (docs/engine.md, "Membranes"): a sheet stretched to λ in uniaxial membrane
+    stress contracts to λ^(−1/2) (incompressible Neo-Hookean, λ = 1.5; Bonet et al. 2000) or
+    √(1 − 2 ν E_xx) (plane-stress St Venant–Kirchhoff, λ = 1.3, E_xx the Green strain; it stiffens
+    in tension, and 1.4 no longer relaxes at the small-strain step) and pulls with the resultant
+    times its width: μ h (λ − λ⁻²), or λ h E E_xx."""
+    h = 1e-3
+    why = "homogeneous: exact up to the relaxation's 1e-10"
+    rows = []
+    for kind, lam in (("neo-hookean", 1.5), ("st-venant-kirchhoff", 1.3)):
+        Exx = (lam**2 - 1) / 2
+        width, pull = (
+            (lam**-0.5, 1e3 * h * (lam - lam**-2))
+            if kind == "neo-hookean"
+            else (math.sqrt(1 - 2 * 0.3 * Exx), lam * h * 3e3 * Exx)
+        )
+        w, f = models.membrane_sheet(kind, lam)
+        what = f"{kind} sheet stretched {lam - 1:.0%}"
+        rows.append(Check("membranes", f"{what}: width", w, width, "1", why, 1e-6))
+        rows.append(Check("membranes", f"{what}: pull", f, pull, "N", why, 1e-6))
+    return rows, {}
+
+
 CASES = {
     "uniaxial": uniaxial,
     "patch": patch_and_shear,
     "hexahedra": hexahedra,
+    "membranes": membranes,
     "cantilever": cantilever,
     "lame": lame_sphere,
     "damping": damping,

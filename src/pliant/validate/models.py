@@ -421,3 +421,43 @@ def guide_h8_stress() -> np.ndarray:
     sim = Simulation(model, dt=scene.dt)
     sim.run(until=scene.duration)
     return model.element_results(sim.state)["cauchy"][:, 0]
+
+
+def membrane_sheet(kind: str, stretch: float, n: int = 6) -> tuple[float, float]:
+    """A 1 m square sheet of membrane triangles alone (n × n squares, each cut in two), in the plane
+    z = 0: x = 0 on rollers, the edge x = 1 moved to ``stretch`` in ten increments, the sides free,
+    held in its plane, relaxed (float64). ``kind``: "neo-hookean" (μ = 1 kPa) or
+    "st-venant-kirchhoff" (E = 3 kPa, ν = 0.3), h = 1 mm. Returns the width's stretch (at the side
+    y = 1, mean) and the pull on the moved edge [N]."""
+    from .. import NeoHookeanMembrane, StVKMembrane
+    from ..tled import ModelBuilder, Ramp
+
+    xs = np.linspace(0.0, 1.0, n + 1)
+    X = np.array([[x, y, 0.0] for x in xs for y in xs])
+    node = lambda i, j: i * (n + 1) + j  # noqa: E731
+    F = [
+        tri
+        for i in range(n)
+        for j in range(n)
+        for tri in (
+            [node(i, j), node(i + 1, j), node(i + 1, j + 1)],
+            [node(i, j), node(i + 1, j + 1), node(i, j + 1)],
+        )
+    ]
+    material = (
+        NeoHookeanMembrane(1e3, 1e-3, 1e3) if kind == "neo-hookean" else StVKMembrane(3e3, 0.3, 1e-3, 1e3)
+    )
+    b = ModelBuilder()
+    b.add_mesh(X, np.zeros((0, 4), np.int64), source=f"membrane sheet ({kind})")
+    b.add_membrane(np.array(F), material)
+    left, right = np.nonzero(X[:, 0] == 0)[0], np.nonzero(X[:, 0] == 1)[0]
+    b.fix(left, "x")
+    b.fix([0], "y")
+    b.fix(np.arange(len(X)), "z")
+    b.prescribe(right, stretch - 1.0, "x", curve=Ramp(1.0))
+    model = b.finalize("float64")
+    sim = Simulation(model)
+    sim.relax(tol=1e-10, increments=10)
+    side = X[:, 1] == 1
+    width = 1.0 + float(sim.displacements[side, 1].mean())
+    return width, float(model.internal_forces(sim.state)[right, 0].sum())
