@@ -378,7 +378,8 @@ def test_a_sheet_of_membranes_alone_stretches_as_its_closed_form(kind, backend):
     edge x = 1 moved 30 %, sides free, held in its plane: uniaxial membrane stress, so the width
     contracts to √(1 − 2 ν E_xx) (plane-stress St Venant–Kirchhoff) or λ^(−1/2) (incompressible
     Neo-Hookean), and the pull is W P11 (P11 = λ S11: h E E_xx, or μ h (λ − λ⁻²)). Relaxed to 1e-10 in
-    float64, the stretch in ten increments: 1e-6."""
+    float64, the stretch in ten increments: 1e-6. Model.membrane_results: the area ratio λ × width and
+    the Cauchy resultant pull / width along x, to 1e-6."""
     X, F = _sheet()
     material = MATERIALS[kind]
     b = pl.ModelBuilder()
@@ -402,6 +403,13 @@ def test_a_sheet_of_membranes_alone_stretches_as_its_closed_form(kind, backend):
     u = sim.displacements
     np.testing.assert_allclose(u[:, 1], (width - 1) * X[:, 1], atol=1e-6 * (1 - width))
     np.testing.assert_allclose(m.internal_forces(sim.state)[right, 0].sum(), pull, rtol=1e-6)
+    # Every membrane's area grows by λ × width; its Cauchy resultant is the pull over the current
+    # width (force per current length), along x alone.
+    r = m.membrane_results(sim.state)
+    np.testing.assert_allclose(r["area_ratio"], lam * width, rtol=1e-6)
+    np.testing.assert_allclose(r["tension"][:, 0], pull / width, rtol=1e-6)
+    np.testing.assert_allclose(r["max_tension"], pull / width, rtol=1e-6)
+    assert np.abs(r["tension"][:, 1:]).max() < 1e-6 * pull
 
 
 def test_a_tool_meets_a_sheet_of_membranes_alone():

@@ -186,6 +186,13 @@ def test_niftysims_membrane_example_runs_as_niftysim_ran_it(tmp_path):
     mine = np.loadtxt(out / "U.txt")
     theirs = np.loadtxt(data / "niftysim_box_membrane_nonlin_U.txt")
     assert mine.shape == theirs.shape == (3 * 555, 10)
+    import meshio
+
+    frame = meshio.read(sorted(out.glob("frame_*.vtu"))[-1])  # the tets and the membranes, each with theirs
+    assert [c.type for c in frame.cells] == ["tetra", "triangle"]
+    von_mises, tension = frame.cell_data["von_mises"], frame.cell_data["membrane_max_tension"]
+    assert np.isfinite(von_mises[0]).all() and np.isnan(von_mises[1]).all()
+    assert np.isnan(tension[0]).all() and np.isfinite(tension[1]).all()
     for k in range(1, 10):
         a, b = theirs[:, k].reshape(-1, 3), mine[:, k].reshape(-1, 3)
         one_step = np.linalg.norm(a - theirs[:, k - 1].reshape(-1, 3), axis=1).max() / 100
@@ -229,6 +236,8 @@ def test_niftysims_membrane_only_test_model_runs_as_niftysim_ran_it(tmp_path):
         assert np.linalg.norm(a - b, axis=1).max() < one_step + 0.005 * np.linalg.norm(a, axis=1).max(), k
     frame = meshio.read(sorted(out.glob("frame_*.vtu"))[-1])
     assert [c.type for c in frame.cells] == ["triangle"] and len(frame.cells[0].data) == 198
+    tension = frame.cell_data["membrane_max_tension"][0]  # closed-form values: tests/test_membrane.py
+    assert tension.shape == (198,) and np.isfinite(tension).all() and np.median(tension) > 0
     assert (out / "result.png").stat().st_size > 0
     view = CliRunner().invoke(app, ["view", str(model)])
     assert view.exit_code == 2 and "membranes alone (198 triangles, no tetrahedra)" in view.output

@@ -414,6 +414,17 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                  return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(c.tool), {n}),
                                        to_numpy(std::move(c.force), {n, 3}));
              })
+        .def("membrane_measures",
+             [](const B& e, const S& s) {
+                 // Per membrane (model order): J_s and the Cauchy resultant (membrane_measures).
+                 const Model<T>& m = e.engine->model;
+                 const MembraneData<T> md = m.membranes();
+                 const index_t P = static_cast<index_t>(s.s.u.size() / 3);
+                 std::vector<T> out(7 * static_cast<std::size_t>(md.count));
+                 for (index_t k = 0; k < md.count; ++k)
+                     membrane_measures(k, md, s.s.u.data(), P, &out[7 * k]);
+                 return to_numpy(std::move(out), {size_t(md.count), 7});
+             })
         .def("internal_forces", [](B& e, const S& s) {
             std::vector<T> f = e->internal_forces(s.s);
             return to_numpy(gather_nodes(f, e.engine->model.n_nodes, e.engine->model.n_pad),

@@ -121,4 +121,36 @@ PLIANT_HD void membrane_force(index_t n, const MembraneData<T>& md, const T* u, 
     }
 }
 
+/// Output measures of membrane m (not on the stepping path): its area stretch J_s = √(det g / det G)
+/// and its Cauchy stress resultant t = J_s⁻¹ S^ij g_i ⊗ g_j [N/m] (the force per current length of a
+/// cut through it), out[0] = J_s, out[1..6] = t as xx, yy, zz, xy, yz, xz. u [m] SoA (3, P).
+template <class T>
+PLIANT_HD void membrane_measures(index_t m, const MembraneData<T>& md, const T* u, index_t P, T out[7]) {
+    const index_t a = md.nodes[3 * m], b = md.nodes[3 * m + 1], c = md.nodes[3 * m + 2];
+    const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
+    T d1[3], d2[3], g1[3], g2[3];
+    for (int d = 0; d < 3; ++d) {
+        const T ua = u[d * P + a];
+        d1[d] = u[d * P + b] - ua, d2[d] = u[d * P + c] - ua;
+        g1[d] = q[d] + d1[d], g2[d] = q[3 + d] + d2[d];
+    }
+    T S[3];  // times A0 (the coefficients hold it): divided out below
+    membrane_stress(static_cast<MembraneKind>(md.kind[m]), q, g1, g2, d1, d2, S);
+    T G11 = T(0), G22 = T(0), G12 = T(0), g11 = T(0), g22 = T(0), g12 = T(0);
+    for (int d = 0; d < 3; ++d) {
+        G11 += q[d] * q[d], G22 += q[3 + d] * q[3 + d], G12 += q[d] * q[3 + d];
+        g11 += g1[d] * g1[d], g22 += g2[d] * g2[d], g12 += g1[d] * g2[d];
+    }
+    const T detG = G11 * G22 - G12 * G12;
+    const T Js = std::sqrt((g11 * g22 - g12 * g12) / detG);
+    const T w = T(1) / (Js * T(0.5) * std::sqrt(detG));  // 1 / (J_s A0)
+    const int ij[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {0, 2}};
+    out[0] = Js;
+    for (int k = 0; k < 6; ++k) {
+        const int i = ij[k][0], j = ij[k][1];
+        out[1 + k] =
+            w * (S[0] * g1[i] * g1[j] + S[1] * g2[i] * g2[j] + S[2] * (g1[i] * g2[j] + g2[i] * g1[j]));
+    }
+}
+
 }  // namespace pliant

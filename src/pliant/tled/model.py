@@ -579,6 +579,21 @@ class Model:
         )
         return out
 
+    def membrane_results(self, state: "State") -> dict[str, np.ndarray]:
+        """Per membrane (add_membrane's order): ``area_ratio`` A/A0 (K,); ``tension``, the Cauchy
+        stress resultant [N/m] (K, 6) as xx, yy, zz, xy, yz, xz (the force per current length of a
+        cut through the membrane, in its plane); ``max_tension`` [N/m] (K,), its larger in-plane
+        principal value (negative: compressed both ways) (cpp/include/pliant/membrane.hpp,
+        membrane_measures)."""
+        r = np.asarray(self._results().membrane_measures(state._s), dtype=float).reshape(-1, 7)
+        t = r[:, 1:]
+        # t has the membrane's normal as a null vector: its in-plane principal values are the roots of
+        # λ² − tr λ + I2 (I2 the sum of its principal 2 × 2 minors).
+        tr = t[:, 0] + t[:, 1] + t[:, 2]
+        i2 = t[:, 0] * t[:, 1] + t[:, 1] * t[:, 2] + t[:, 2] * t[:, 0] - (t[:, 3:] ** 2).sum(axis=1)
+        top = 0.5 * tr + np.sqrt(np.maximum(0.25 * tr**2 - i2, 0.0))
+        return {"area_ratio": r[:, 0], "tension": t, "max_tension": top}
+
     def element_volumes(self) -> np.ndarray:
         """Reference volume V0 [m³] per element (M,)."""
         return self._volumes.copy()
