@@ -25,8 +25,7 @@ from .membranes import add_membranes
 from .keys import apply_overrides
 from .schema import Ctx, SceneError, check_keys, vector
 from .tools import make_tool
-from ..mesh.topology import boundary_faces
-from .select import select_elements, select_nodes
+from .select import select_elements, select_faces, select_nodes
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -429,14 +428,7 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
                 f"a '{ld['type']}' load needs '{key}' {unit} and 'nodes' (the boundary "
                 "triangles whose three nodes are all selected)",
             )
-        ids = select_nodes(ctx, ld["nodes"], f"{p}.nodes", X, T, scene.node_sets)
-        B, _ = boundary_faces(T)
-        faces = B[np.all(np.isin(B, ids), axis=1)]
-        if len(faces) == 0:
-            raise ctx.error(
-                f"{p}.nodes",
-                f"the {ids.size} selected nodes hold no whole boundary triangle: select a surface patch",
-            )
+        faces = select_faces(ctx, ld["nodes"], f"{p}.nodes", X, T, scene.node_sets)
         if ld["type"] == "pressure":
             b.add_pressure(faces, float(ld["value"]), curve)
         else:

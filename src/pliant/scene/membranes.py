@@ -12,13 +12,12 @@ boundary triangles whose three nodes are all selected (``nodes``; the whole boun
 
 from __future__ import annotations
 
-import numpy as np
 
 from ..materials.membrane import NeoHookeanMembrane, StVKMembrane
 from ..mesh.topology import boundary_faces
 from ..tled import ModelBuilder
 from .schema import Ctx, check_keys
-from .select import select_nodes
+from .select import select_faces
 
 __all__ = ["add_membranes", "MEMBRANES"]
 
@@ -33,7 +32,6 @@ def add_membranes(ctx: Ctx, tables: list, b: ModelBuilder, X, T, node_sets) -> N
     """Each [[membrane]] table onto the builder, its errors naming the table's key and line."""
     if not isinstance(tables, list):
         raise ctx.error("membrane", "expected [[membrane]] tables")
-    B, _ = boundary_faces(T)
     for i, m in enumerate(tables):
         p = f"membrane[{i}]"
         allowed = {"type": "str", "E": "number", "nu": "number", "mu": "number", "thickness": "number"}
@@ -49,14 +47,10 @@ def add_membranes(ctx: Ctx, tables: list, b: ModelBuilder, X, T, node_sets) -> N
             raise ctx.error(
                 p, f"{m['type']} takes ({', '.join(params)}); got ({', '.join(sorted(given)) or 'nothing'})"
             )
-        faces = B
-        if "nodes" in m:
-            ids = select_nodes(ctx, m["nodes"], f"{p}.nodes", X, T, node_sets)
-            faces = B[np.all(np.isin(B, ids), axis=1)]
-            if len(faces) == 0:
-                raise ctx.error(
-                    f"{p}.nodes",
-                    f"the {ids.size} selected nodes hold no whole boundary triangle: select a surface patch",
-                )
+        faces = (
+            select_faces(ctx, m["nodes"], f"{p}.nodes", X, T, node_sets)
+            if "nodes" in m
+            else boundary_faces(T)[0]
+        )
         with ctx.under(p):
             b.add_membrane(faces, cls(*[m[k] for k in params], m["thickness"], m["density"]))

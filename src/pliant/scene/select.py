@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mesh.topology import boundary_nodes
+from ..mesh.topology import boundary_faces, boundary_nodes
 from .schema import Ctx, check_keys, vector
 
 _KEYS = {
@@ -133,3 +133,18 @@ def select_elements(
     if ids.size == 0:
         raise ctx.error(path, "selects no element")
     return ids
+
+
+def select_faces(
+    ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray, sets: dict[str, np.ndarray] | None = None
+) -> np.ndarray:
+    """The boundary triangles (F, 3) whose three nodes ``spec`` selects (select_nodes); none is an
+    error naming the key (pressure and traction loads, membranes)."""
+    ids = select_nodes(ctx, spec, path, nodes, tets, sets)
+    B, _ = boundary_faces(tets)
+    faces = B[np.all(np.isin(B, ids), axis=1)]
+    if len(faces) == 0:
+        raise ctx.error(
+            path, f"the {ids.size} selected nodes hold no whole boundary triangle: select a surface patch"
+        )
+    return faces
