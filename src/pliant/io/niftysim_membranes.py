@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..materials.membrane import NeoHookeanMembrane, StVKMembrane
+from ..mesh.primitives import triangle_measures
 from ..mesh.split import split_quads
 from ..mesh.topology import boundary_faces
 from ..tled import ModelBuilder
@@ -45,12 +46,13 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
             f,
             "ShellElements",
         )
-    faces, per_listed = _facets(shells[0], T, b.n_nodes, f)
+    kind = shells[0].get("Type", shells[0].get("type"))  # NiftySim's own models write type="SURFACE"
+    faces, per_listed = _facets(shells[0], kind, T, b.n_nodes, f)
     owner = np.full(len(faces), -1, np.int64)
     for k, es in enumerate(sets):
         key = f"ShellElementSet[{k}]"
         material = _material(es, f, key, unsupported, warnings)
-        listed = _set_members(es, len(faces) // per_listed, shells[0], f, key)
+        listed = _set_members(es, len(faces) // per_listed, kind, f, key)
         members = (per_listed * listed[:, None] + np.arange(per_listed)).ravel()
         clash = members[owner[members] >= 0]
         if clash.size:
@@ -83,7 +85,7 @@ def _linear_note(f: str, key: str, X: np.ndarray, F: np.ndarray, h: float) -> st
     the stress by neither the facet's area A nor the thickness h, as its NeoHookean membrane's do, so
     its Linear membranes are 1/(A h) [1/m³] times stiffer than their E and h say; pliant's are as
     written (docs/scenes.md: on models/box_membrane.xml, E × 1/(A h) reproduces NiftySim's result)."""
-    area = 0.5 * np.linalg.norm(np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]), axis=1)
+    area = triangle_measures(X, F)[0]
     scale = 1.0 / (area * h)
     return (
         f"{f}: {key}: NiftySim's Linear membranes are 1/(A h) times stiffer than their E and h say "
@@ -93,12 +95,11 @@ def _linear_note(f: str, key: str, X: np.ndarray, F: np.ndarray, h: float) -> st
     )
 
 
-def _facets(el, T: np.ndarray, n_nodes: int, f: str) -> tuple[np.ndarray, int]:
+def _facets(el, kind: str | None, T: np.ndarray, n_nodes: int, f: str) -> tuple[np.ndarray, int]:
     """The membrane triangles (F, 3) of <ShellElements>, and how many triangles each listed
     facet became (2 for Q4)."""
     from .niftysim import NiftySimError, _numbers
 
-    kind = el.get("Type", el.get("type"))  # NiftySim's own models write type="SURFACE"
     if kind == "SURFACE":
         if (el.text or "").strip():
             raise NiftySimError(
@@ -135,12 +136,11 @@ def _facets(el, T: np.ndarray, n_nodes: int, f: str) -> tuple[np.ndarray, int]:
     return (F, 1) if kind == "T3" else (split_quads(F), 2)
 
 
-def _set_members(es, n: int, shells, f: str, key: str) -> np.ndarray:
+def _set_members(es, n: int, kind: str | None, f: str, key: str) -> np.ndarray:
     """The listed facets of a <ShellElementSet> among n (element_set's forms)."""
     from .niftysim import NiftySimError, element_set
 
     members = element_set(es, n, f, key)
-    kind = shells.get("Type", shells.get("type"))
     if kind == "SURFACE" and es.get("Size", "") != "all":
         raise NiftySimError(
             'with <ShellElements Type="SURFACE"> the facets come in no fixed order (user guide §3.6.1): '

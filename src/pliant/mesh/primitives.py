@@ -18,6 +18,13 @@ def tet_volumes(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0]) / 6.0
 
 
+def triangle_measures(nodes: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Area [m²] and longest edge [m] of each triangle ``faces`` (F, 3) over ``nodes`` (N, 3)."""
+    P = np.asarray(nodes, float)[np.asarray(faces)]
+    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    return area, np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(axis=1, initial=0.0)
+
+
 def orient_positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """Return tets (M, 4) with corners 2 and 3 swapped where det[X1−X0, X2−X0, X3−X0] < 0."""
     T = np.array(tets, dtype=np.int64)

@@ -19,6 +19,7 @@ from ..errors import DegenerateElementError, InputError, InvertedElementError, M
 from ..materials import Material
 from ..materials.membrane import MembraneMaterial
 from ..memory import MODEL_BYTES_PER_TET, require_memory
+from ..mesh.primitives import triangle_measures
 from ..mesh.topology import conformity_problem
 from .curves import Constant, LoadCurve
 from .anp import ANP_STABILIZATION, anp_stabilization
@@ -331,23 +332,20 @@ class ModelBuilder:
                 "ids, F >= 1"
             )
         F = self._node_ids(F.ravel(), "add_membrane faces").reshape(-1, 3)
-        X = self.nodes[F]
-        cross = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
-        area2 = np.sqrt((cross**2).sum(-1))
-        longest = np.sqrt(((X - X[:, [1, 2, 0]]) ** 2).sum(-1)).max(axis=1)
-        flat = np.nonzero(~(area2 > 1e-8 * longest**2))[0]
+        area, longest = triangle_measures(self.nodes, F)
+        flat = np.nonzero(~(2 * area > 1e-8 * longest**2))[0]
         if flat.size:
             i = int(flat[0])
             raise DegenerateElementError(
                 f"{self.source}: membrane {self.n_membranes + i} (nodes {F[i].tolist()}) is "
-                f"degenerate: area {0.5 * area2[i]:.3e} m^2 for longest edge {longest[i]:.3e} m; "
+                f"degenerate: area {area[i]:.3e} m^2 for longest edge {longest[i]:.3e} m; "
                 "expected three distinct, non-collinear nodes",
                 self.n_membranes + i,
             )
-        mass = 0.5 * float(area2.max()) * material.thickness * material.density
+        mass = float(area.max()) * material.thickness * material.density
         if not (math.isfinite(mass) and math.isfinite(material.wave_modulus * material.thickness)):
             raise MaterialError(
-                f"add_membrane: {material!r} on triangles of up to {0.5 * area2.max():.3g} m^2: its mass "
+                f"add_membrane: {material!r} on triangles of up to {area.max():.3g} m^2: its mass "
                 "or stiffness overflows; expected SI units (m, kg/m^3, Pa)"
             )
         self._membranes.append((F, material))

@@ -20,6 +20,7 @@ from ..contact.soft import engine_surface, no_surface
 from ..errors import InputError, MaterialError, MeshError, PliantWarning
 from .curves import Constant, LoadCurve
 from .anp import anp_stabilization
+from ..mesh.primitives import triangle_measures
 from .smoothing import strain_smoothing
 
 __all__ = ["Model", "State"]
@@ -36,16 +37,15 @@ def _membrane_mass(n_nodes: int, X: np.ndarray, F: np.ndarray, materials: list) 
     third of each one's ρ h A0 to each corner, as the engine's (materials: one per triangle)."""
     if not len(F):
         return np.zeros(n_nodes)
-    area = 0.5 * np.linalg.norm(np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]), axis=1)
+    area = triangle_measures(X, F)[0]
     rho_h = np.array([m.density * m.thickness for m in materials])
     return np.bincount(F.ravel(), np.repeat(rho_h * area / 3.0, 3), minlength=n_nodes)
 
 
 def _membrane_altitudes(X: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Smallest altitude [m] of each membrane triangle F (K, 3) over positions X: 2 A / longest edge."""
-    P = X[F]
-    area2 = np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
-    return area2 / np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(axis=1, initial=0.0)
+    area, longest = triangle_measures(X, F)
+    return 2 * area / longest
 
 
 def _morton_order(points: np.ndarray) -> np.ndarray:
