@@ -362,12 +362,13 @@ class LiveViewer:
                 ctrl.position, ctrl.wxyz = tuple(p), tuple(quat_from_matrix(R))  # follow keyframes
 
     def serve(self, duration: float | None = None):
-        """Run the simulation thread and the drawing loop (until Ctrl-C or ``duration`` [s])."""
+        """Run the simulation thread and the drawing loop (until Ctrl-C, :meth:`stop` or
+        ``duration`` [s])."""
         sim_thread = threading.Thread(target=self._simulate, daemon=True)
         sim_thread.start()
         end = None if duration is None else time.perf_counter() + duration
         try:
-            while end is None or time.perf_counter() < end:
+            while not self.stop_event.is_set() and (end is None or time.perf_counter() < end):
                 self.draw()
                 time.sleep(0.05)
         finally:
