@@ -243,3 +243,65 @@ def test_niftysims_membrane_only_test_model_runs_as_niftysim_ran_it(tmp_path):
     assert view.exit_code == 2 and "membranes alone (198 triangles, no tetrahedra)" in view.output
     view = CliRunner().invoke(app, ["view", str(out)])
     assert view.exit_code == 2 and "membranes alone, no tetrahedra" in view.output
+
+
+def test_a_sub_models_surface_membranes_run_as_niftysim_ran_them(tmp_path):
+    """tests/data/niftysim_box_submodels.xml: box_membrane_nonlin.xml as the second of two
+    sub-models, after a fixed cube wrapped in its own SURFACE membranes, against the U.txt NiftySim
+    wrote for it: the merged node numbering (the cube's 8 nodes first), each sub-model's surface
+    as its membranes, the box's constraints mapped. Each frame within one step's motion plus 0.5 %
+    of NiftySim's largest displacement, as for the model written whole above (measured 0.28 % at
+    the end); the cube's nodes do not move."""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    data = Path(__file__).parent / "data"
+    sc = load_niftysim(data / "niftysim_box_submodels.xml")
+    cube_surface = 12  # a cube of 6 tets: two triangles a face
+    assert sc.builder.n_membranes == cube_surface + len(
+        boundary_faces(load_niftysim(data / "niftysim_box_membrane_nonlin.xml").builder.tets)[0]
+    )
+    out = tmp_path / "out"
+    r = CliRunner().invoke(app, ["run", str(data / "niftysim_box_submodels.xml"), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    mine, theirs = np.loadtxt(out / "U.txt"), np.loadtxt(data / "niftysim_box_submodels_U.txt")
+    assert mine.shape == theirs.shape == (3 * (8 + 555), 10)
+    assert not mine[:24].any()
+    for k in range(1, 10):
+        a, b = theirs[:, k].reshape(-1, 3), mine[:, k].reshape(-1, 3)
+        one_step = np.linalg.norm(a - theirs[:, k - 1].reshape(-1, 3), axis=1).max() / 100
+        scale = np.linalg.norm(a, axis=1).max()
+        assert np.linalg.norm(a - b, axis=1).max() < one_step + 0.005 * scale, k
+
+
+def test_deformable_contact_with_free_membranes_is_refused_by_name(tmp_path):
+    """NiftySim's deformable contact holds its membranes (two_cubes_sheet.xml drops two cubes onto
+    a sheet); pliant's soft contact is between tets' boundaries, so a membrane sheet off the solid
+    would let bodies pass through it: refused naming MembraneContact; ignored, it runs with a
+    warning from the builder. Membranes on the solid's own surface (SURFACE) are no such case."""
+    X, T = pl.mesh.box_tets((0.02, 0.02, 0.02), (1, 1, 1))
+    sheet = np.array([[0, 0, 0.03], [0.02, 0, 0.03], [0, 0.02, 0.03]])
+    nh = '<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>'
+    neo = '<Material Type="NeoHookean">500<Density>10</Density><Thickness>0.001</Thickness></Material>'
+    system = (
+        "<SystemParams><TimeStep>1e-4</TimeStep><TotalTime>0.001</TotalTime><DampingCoeff>10"
+        "</DampingCoeff><Density>1000</Density><DoDeformableCollision>1</DoDeformableCollision></SystemParams>"
+    )
+
+    def model(nodes, shells):
+        return (
+            f'<Model><Nodes DOF="3" NumNodes="{len(nodes)}">{nums(nodes)}</Nodes>'
+            f'<Elements NumEls="{len(T)}" Type="T4">{nums(T)}</Elements><ElementSet Size="all">{nh}'
+            f"</ElementSet>{shells}{system}</Model>"
+        )
+
+    p = tmp_path / "sheet.xml"
+    p.write_text(model(np.vstack([X, sheet]), _shells("T3", [[8, 9, 10]], neo)))
+    with pytest.raises(NiftySimError, match="MembraneContact: 1 membrane"):
+        load_niftysim(p)
+    sc = load_niftysim(p, ignore=("MembraneContact",))
+    with pytest.warns(pl.PliantWarning, match="1 membrane.*take no part in soft contact"):
+        sc.builder.finalize("float64")
+    p.write_text(model(X, _shells("SURFACE", [], neo)))
+    assert load_niftysim(p).builder.n_membranes == 12

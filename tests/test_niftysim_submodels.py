@@ -174,55 +174,114 @@ def test_submodels_of_two_element_types_are_refused(tmp_path):
         load_niftysim(f)
 
 
-def test_membranes_in_a_sub_model_are_refused_by_name_and_skipped_as_one_feature(tmp_path):
-    """<ShellElements> with its <ShellElementSet> (NiftySim's membranes, models/box_membrane.xml; a
-    membrane-only sub-model with NumEls="0", testing/data/two_cubes_sheet.xml): the model's own are
-    imported (tests/test_niftysim_membranes.py), a sub-model's are refused naming ShellElements
-    (their numbers are the sub-model's); --ignore ShellElements skips both tags with one warning,
-    and the solid runs (the sheet's nodes left without an element)."""
-    X, T = pl.mesh.box_tets((0.02, 0.02, 0.02), (1, 1, 1))
-    sheet = np.array([[0, 0, 0.03], [0.02, 0, 0.03], [0, 0.02, 0.03]])
-    fmt = lambda a: " ".join(str(v) for v in np.ravel(a).tolist())  # noqa: E731
-    nh = '<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>'
-    shell = (
-        '<ShellElements Type="T3">0 1 2</ShellElements><ShellElementSet Size="all">'
-        '<Material Type="Linear"><ElasticParams NumParams="2">1000 0.3</ElasticParams>'
-        "<Density>10</Density><Thickness>0.001</Thickness></Material>0</ShellElementSet>"
+def _shells(kind, facets, mu, listed=None):
+    """<ShellElements> of ``kind`` with ``facets`` and one NeoHookean set (μ [Pa]) of them all, or
+    of those ``listed``."""
+    members = 'Size="all">' if listed is None else f'Size="{len(listed)}">{_ints(listed)}'
+    return (
+        f'<ShellElements Type="{kind}" NumEls="{len(facets)}">{_ints(facets)}</ShellElements>'
+        f'<ShellElementSet {members}<Material Type="NeoHookean">{mu}<Density>10</Density>'
+        "<Thickness>0.001</Thickness></Material></ShellElementSet>"
     )
+
+
+def _sheet(x0):
+    """Two sheets' worth of nodes: a 2 × 2 cm square at height 3 cm from x = x0 (4 nodes)."""
+    return np.array([[0, 0, 0.03], [0.02, 0, 0.03], [0.02, 0.02, 0.03], [0, 0.02, 0.03]]) + [x0, 0, 0]
+
+
+def test_membranes_of_sub_models_are_the_model_written_whole(tmp_path):
+    """<ShellElements> with their <ShellElementSet>s in sub-models (NiftySim's two_cubes_sheet.xml
+    has a membrane-only sub-model, NumEls="0"): a cube, a sheet of two T3 triangles of one material
+    and a sheet of one Q4 facet of another, as three sub-models, are the model written whole — its
+    nodes, its membranes (the second sheet's set offset past the first's triangles, the Q4 split as
+    the whole model splits it) and its displacements under gravity, to the bit. --ignore
+    ShellElements skips them with one warning, and the solid runs alone."""
+    X, T = pl.mesh.box_tets((0.02, 0.02, 0.02), (1, 1, 1))
+    n = len(X)
+    nh = '<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>'
+    base = np.nonzero(X[:, 2] == 0)[0]
+    edge = lambda off: _ints(off + np.array([0, 3]))  # noqa: E731  each sheet held at its x = x0 edge
+    fix = lambda ids: f'<Constraint DOF="all" Type="Fix" NumNodes="2"><Nodes>{ids}</Nodes></Constraint>'  # noqa: E731
     system = (
         "<SystemParams><TimeStep>1e-4</TimeStep><TotalTime>0.002</TotalTime><DampingCoeff>10"
         "</DampingCoeff><Density>1000</Density></SystemParams>"
     )
-    cube = (
-        f'<Nodes DOF="3" NumNodes="{len(X)}">{fmt(X)}</Nodes>'
-        f'<Elements NumEls="{len(T)}" Type="T4">{fmt(T)}</Elements>'
-    )
-    base = fmt(np.nonzero(X[:, 2] == 0)[0])
-    fixed = f'<Constraint DOF="all" Type="Fix" NumNodes="4"><Nodes>{base}</Nodes></Constraint>'
     gravity = (
         '<Constraint Type="Gravity" LoadShape="STEP" NumNodes="all"><AccelerationMagnitude>9.81'
         "</AccelerationMagnitude><AccelerationDirection>0 0 -1</AccelerationDirection></Constraint>"
     )
-    solid = f'{cube}<ElementSet Size="all">{nh}0</ElementSet>{fixed}'
-    whole = f'<?xml version="1.0"?><Model>{solid}{gravity}{shell}{system}</Model>'
-    subs = (
-        f'<?xml version="1.0"?><Model><SubModel>{solid}</SubModel><SubModel><Nodes DOF="3" '
-        f'NumNodes="3">{fmt(sheet)}</Nodes><Elements NumEls="0" Type="T4"></Elements>'
-        f'<ElementSet Size="all">{nh}0</ElementSet>{shell}</SubModel>{system}</Model>'
+    tri, quad = np.array([[0, 1, 2], [0, 2, 3]]), np.array([[0, 1, 2, 3]])
+    cube = f'{_mesh(X, T)}<ElementSet Size="all">{nh}</ElementSet>{_fix(base)}'
+    sheets = np.vstack([_sheet(0.05), _sheet(0.1)])
+    whole_X = np.vstack([X, sheets])
+    whole = (
+        f"<Model>{_mesh(whole_X, T)}"
+        f'<ElementSet Size="all">{nh}</ElementSet>{_fix(base)}{fix(edge(n))}{fix(edge(n + 4))}{gravity}'
+        f'<ShellElements Type="T3" NumEls="4">{_ints(np.vstack([tri + n, tri + n + 4]))}'
+        "</ShellElements>"
+        '<ShellElementSet Size="2">0 1<Material Type="NeoHookean">500<Density>10</Density><Thickness>0.001'
+        "</Thickness></Material></ShellElementSet>"
+        '<ShellElementSet Size="2">2 3<Material Type="NeoHookean">800<Density>10</Density><Thickness>0.001'
+        f"</Thickness></Material></ShellElementSet>{system}</Model>"
     )
+    no_tets = '<Elements NumEls="0" Type="T4"></Elements>'
+    sheet = lambda x0: f'<Nodes DOF="3" NumNodes="4">{_nodes(_sheet(x0))}</Nodes>{no_tets}'  # noqa: E731
+    subs = (
+        f"<Model><SubModel>{cube}</SubModel>"
+        f'<SubModel>{sheet(0.05)}<ElementSet Size="all">{nh}</ElementSet>{fix(edge(0))}'
+        f"{_shells('T3', tri, 500, listed=[0, 1])}</SubModel>"
+        f'<SubModel>{sheet(0.1)}<ElementSet Size="all">{nh}</ElementSet>{fix(edge(0))}'
+        f"{_shells('Q4', quad, 800)}</SubModel>{gravity}{system}</Model>"
+    )
+    runs = {}
     for name, xml in (("whole.xml", whole), ("subs.xml", subs)):
         p = tmp_path / name
         p.write_text(xml)
-        if name == "whole.xml":
-            assert load_niftysim(p).builder.n_membranes == 1
-        else:
-            with pytest.raises(
-                NiftySimError, match="unsupported NiftySim feature ShellElements: membranes in a <SubModel>"
-            ):
-                load_niftysim(p)
-        sc = load_niftysim(p, ignore=("ShellElements",))
-        assert sc.builder.n_membranes == 0
-        assert sum("ShellElements" in w for w in sc.warnings) == 1
+        sc = load_niftysim(p)
+        assert sc.builder.n_membranes == 4 and sc.builder.n_nodes == n + 8
         sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
-        sim.run(steps=5)
-        assert np.isfinite(sim.displacements).all()
+        sim.run(steps=20)
+        runs[name] = sim.displacements
+    assert np.array_equal(runs["whole.xml"], runs["subs.xml"])
+    assert np.abs(runs["subs.xml"][n:, 2]).max() > 1e-6  # the sheets sag
+    sc = load_niftysim(tmp_path / "subs.xml", ignore=("ShellElements",))
+    assert sc.builder.n_membranes == 0
+    assert sum("ShellElements" in w for w in sc.warnings) == 1
+    sim = pl.Simulation(sc.builder.finalize("float64"), dt=sc.dt)
+    sim.run(steps=5)
+    assert np.isfinite(sim.displacements).all()
+
+
+@pytest.mark.parametrize(
+    "shells, key, message",
+    [
+        ('<ShellElements Type="T3">0 1 2</ShellElements>', "SubModel[1]/ShellElements", "expected one"),
+        (_shells("T3", [[0, 1, 9]], 500), "SubModel[1]/ShellElements", "refers to node 9"),
+        (_shells("T4", [[0, 1, 2]], 500), "SubModel[1]/ShellElements", "expected T3, Q4 or SURFACE"),
+        (
+            _shells("T3", [[0, 1, 2]], 500, listed=[3]),
+            "SubModel[1]/ShellElementSet[0]",
+            r"out of range 0\.\.0",
+        ),
+    ],
+)
+def test_a_sub_models_bad_membranes_are_named(tmp_path, shells, key, message):
+    X, T = pl.mesh.box_tets((0.02, 0.02, 0.02), (1, 1, 1))
+    nh = '<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>'
+    xml = (
+        f'<Model><SubModel>{_mesh(X, T)}<ElementSet Size="all">{nh}</ElementSet></SubModel>'
+        f'<SubModel><Nodes DOF="3" NumNodes="4">{_nodes(_sheet(0.05))}</Nodes>'
+        f'<Elements NumEls="0" Type="T4"></Elements><ElementSet Size="all">{nh}</ElementSet>{shells}'
+        f"</SubModel>{SYSTEM}</Model>"
+    )
+    p = tmp_path / "bad.xml"
+    p.write_text(xml)
+    with pytest.raises(NiftySimError, match=message) as e:
+        load_niftysim(p)
+    assert e.value.key == key
+    # the model's own membranes beside a sub-model's: one place expected
+    p.write_text(xml.replace("<SubModel>", _shells("T3", [[0, 1, 2]], 500) + "<SubModel>", 1))
+    if "expected one" not in message:
+        with pytest.raises(NiftySimError, match="in the model and in a sub-model"):
+            load_niftysim(p)

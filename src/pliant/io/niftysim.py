@@ -203,11 +203,12 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
             f"unsupported NiftySim feature {name}: {why}; pass --ignore {name} to skip it knowingly", f, name
         )
 
-    root = _flatten(root, f)
+    # The model's membranes or its sub-models' (which the merge below reads unless skipped).
+    skip_membranes = "ShellElements" in ignore and root.find(".//ShellElements") is not None
+    root = _flatten(root, f, not skip_membranes)
     for child in root:
         if child.tag not in _KNOWN_TOP:
             unsupported(child.tag, "not implemented in pliant")
-    skip_membranes = "ShellElements" in ignore and root.find("ShellElements") is not None
     if skip_membranes:
         warnings.append(f"{f}: ignored ShellElements as asked (--ignore ShellElements): the solid runs alone")
 
@@ -250,6 +251,14 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         _rigid_surfaces(root, b, path, total, f, unsupported)
     deformable, self_collide, mu = collide
     if deformable or self_collide:  # frictionless unless <DeformableFrictionCoefficient> says
+        free = b.free_membranes()
+        if free.size:  # NiftySim's contact holds them (tledDeformableMembraneContactSurface)
+            unsupported(
+                "MembraneContact",
+                f"{free.size} membrane(s) off the solid's surface would take part in NiftySim's deformable "
+                "contact; pliant's soft contact is between tets' boundaries, so bodies would pass through "
+                "them; skipping it runs the model with those membranes out of contact",
+            )
         b.set_soft_contact(friction=mu, pairs=None if deformable else [], self_contact=self_collide)
     elif mu:
         warnings.append(
@@ -305,11 +314,12 @@ def _reoriented(X: np.ndarray, T: np.ndarray, f: str, warnings: list[str]) -> np
     return turned
 
 
-def _flatten(root, f: str):
-    """The model with its <SubModel>s merged into one (niftysim_submodels.py)."""
+def _flatten(root, f: str, membranes: bool):
+    """The model with its <SubModel>s merged into one (niftysim_submodels.py), their membranes
+    too unless ``membranes`` is False."""
     from .niftysim_submodels import flatten_submodels
 
-    return flatten_submodels(root, f)
+    return flatten_submodels(root, f, membranes)
 
 
 def _mesh(root, f: str) -> tuple[np.ndarray, np.ndarray, str]:

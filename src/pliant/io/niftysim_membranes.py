@@ -5,9 +5,14 @@ their <ShellElementSet>s, each a set of them (listed, Size="all", or Size consec
 the one listed) with a <Material>: "Linear" (E ν; pliant's StVKMembrane, NiftySim's geometrically
 linear membrane at small displacement) or "NeoHookean" (μ; NeoHookeanMembrane, the same
 incompressible membrane), with <Density> and <Thickness>. Shells with bending stiffness
-("LinearShell", "LinearThickShell": NiftySim's rotation-free shells) are refused by name."""
+("LinearShell", "LinearThickShell": NiftySim's rotation-free shells) are refused by name.
+A <SubModel>'s membranes join the merged model (submodel_membranes, as tledSubModelManager does):
+its facets in the merged node numbering, its sets offset to the merged facets."""
 
 from __future__ import annotations
+
+import copy
+import xml.etree.ElementTree as ET
 
 import numpy as np
 
@@ -17,11 +22,11 @@ from ..mesh.split import split_quads
 from ..mesh.topology import boundary_faces
 from ..tled import ModelBuilder
 
-__all__ = ["add_membranes", "SUBMODEL_MARK"]
+__all__ = ["add_membranes", "submodel_membranes"]
 
-# Set on a <ShellElements> or <ShellElementSet> a sub-model held (niftysim_submodels.py): its node
-# and facet numbers are the sub-model's own, which the merge does not renumber.
-SUBMODEL_MARK = "pliant-submodel"
+# Set on a <ShellElementSet> the sub-model merge wrote (submodel_membranes): where it came from, for
+# the messages.
+ORIGIN = "pliant-origin"
 
 
 def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, warnings: list[str]) -> None:
@@ -31,13 +36,6 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
 
     shells, sets = root.findall("ShellElements"), root.findall("ShellElementSet")
     if not shells and not sets:
-        return
-    if any(el.get(SUBMODEL_MARK) for el in shells + sets):
-        unsupported(
-            "ShellElements",
-            "membranes in a <SubModel> are not imported (their numbers are the sub-model's); "
-            "skipping them runs the solids alone",
-        )
         return
     if len(shells) != 1 or not sets:
         raise NiftySimError(
@@ -50,7 +48,7 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
     faces, per_listed = _facets(shells[0], kind, T, b.n_nodes, f)
     owner = np.full(len(faces), -1, np.int64)
     for k, es in enumerate(sets):
-        key = f"ShellElementSet[{k}]"
+        key = es.get(ORIGIN, f"ShellElementSet[{k}]")
         material = _material(es, f, key, unsupported, warnings)
         listed = _set_members(es, len(faces) // per_listed, kind, f, key)
         members = (per_listed * listed[:, None] + np.arange(per_listed)).ravel()
@@ -95,26 +93,28 @@ def _linear_note(f: str, key: str, X: np.ndarray, F: np.ndarray, h: float) -> st
     )
 
 
-def _facets(el, kind: str | None, T: np.ndarray, n_nodes: int, f: str) -> tuple[np.ndarray, int]:
-    """The membrane triangles (F, 3) of <ShellElements>, and how many triangles each listed
+def _facets(
+    el, kind: str | None, T: np.ndarray, n_nodes: int, f: str, key: str = "ShellElements", node_map=None
+) -> tuple[np.ndarray, int]:
+    """The membrane triangles (F, 3) of <ShellElements> (its node numbers through ``node_map``,
+    a sub-model's into the merged model's, where given), and how many triangles each listed
     facet became (2 for Q4)."""
     from .niftysim import NiftySimError, _numbers
 
+    mapped = (lambda F: F) if node_map is None else (lambda F: np.asarray(node_map)[F])
     if kind == "SURFACE":
         if (el.text or "").strip():
             raise NiftySimError(
-                'Type="SURFACE" takes the mesh\'s boundary: expected no facets listed', f, "ShellElements"
+                'Type="SURFACE" takes the mesh\'s boundary: expected no facets listed', f, key
             )
-        return boundary_faces(T)[0], 1
+        return mapped(boundary_faces(T)[0]), 1
     if kind not in ("T3", "Q4"):
-        raise NiftySimError(f"<ShellElements Type={kind!r}>: expected T3, Q4 or SURFACE", f, "ShellElements")
+        raise NiftySimError(f"<ShellElements Type={kind!r}>: expected T3, Q4 or SURFACE", f, key)
     width = 3 if kind == "T3" else 4
-    v = _numbers(el, f, "ShellElements", np.int64)
+    v = _numbers(el, f, key, np.int64)
     if v.size == 0 or v.size % width:
         raise NiftySimError(
-            f"<ShellElements Type={kind}> holds {v.size} node numbers; expected {width} per facet",
-            f,
-            "ShellElements",
+            f"<ShellElements Type={kind}> holds {v.size} node numbers; expected {width} per facet", f, key
         )
     F = v.reshape(-1, width)
     declared = el.get("NumEls")
@@ -123,17 +123,52 @@ def _facets(el, kind: str | None, T: np.ndarray, n_nodes: int, f: str) -> tuple[
             f'<ShellElements NumEls="{declared[:20]}"> lists {len(F)} facets; expected as many as it '
             "declares",
             f,
-            "ShellElements",
+            key,
         )
     bad = np.nonzero((F < 0) | (F >= n_nodes))
     if bad[0].size:
         i, j = int(bad[0][0]), int(bad[1][0])
         raise NiftySimError(
-            f"shell element {i} refers to node {int(F[i, j])}; the model has nodes 0..{n_nodes - 1}",
-            f,
-            "ShellElements",
+            f"shell element {i} refers to node {int(F[i, j])}; the model has nodes 0..{n_nodes - 1}", f, key
         )
-    return (F, 1) if kind == "T3" else (split_quads(F), 2)
+    return (mapped(F), 1) if kind == "T3" else (split_quads(mapped(F)), 2)
+
+
+def submodel_membranes(sm, node_map, T: np.ndarray, first: int, f: str, key: str):
+    """Sub-model ``sm``'s membranes in the merged model: its triangles (F, 3) in the merged node
+    numbering (``node_map``: its node → the model's; T (M, 4): its tets, for SURFACE), and its
+    <ShellElementSet>s as sets of merged triangles from ``first`` on (listed, Size the count),
+    each marked with where it came from. None where it has no membranes. As tledSubModelManager
+    merges them into one list of facets; Q4 facets are split after the merge's renumbering (as a
+    model written whole splits them), and sub-models of different facet kinds merge too (NiftySim
+    refuses that)."""
+    from .niftysim import NiftySimError
+
+    shells, sets = sm.findall("ShellElements"), sm.findall("ShellElementSet")
+    if not shells and not sets:
+        return None
+    if len(shells) != 1 or not sets:
+        raise NiftySimError(
+            f"{len(shells)} <ShellElements> and {len(sets)} <ShellElementSet>: expected one "
+            "<ShellElements> and at least one <ShellElementSet> (the membranes' materials)",
+            f,
+            f"{key}/ShellElements",
+        )
+    kind = shells[0].get("Type", shells[0].get("type"))
+    faces, per = _facets(shells[0], kind, T, len(node_map), f, f"{key}/ShellElements", node_map)
+    out = []
+    for k, es in enumerate(sets):
+        where = f"{key}/ShellElementSet[{k}]"
+        listed = _set_members(es, len(faces) // per, kind, f, where)
+        members = first + (per * listed[:, None] + np.arange(per)).ravel()
+        merged = ET.Element("ShellElementSet", {**es.attrib, "Size": str(members.size), ORIGIN: where})
+        merged.text = " ".join(str(int(m)) for m in members)
+        for child in es:  # its material; the facets are merged.text now
+            c = copy.copy(child)
+            c.tail = None
+            merged.append(c)
+        out.append(merged)
+    return faces, out
 
 
 def _set_members(es, n: int, kind: str | None, f: str, key: str) -> np.ndarray:

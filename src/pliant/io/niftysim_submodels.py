@@ -7,7 +7,9 @@ after the model's own element sets and constraints (which refer to the merged me
 nodes chosen by normal, "all" or a start index are resolved on the sub-model's own mesh. With
 <SubModelNodeMergerDistance> d, each node of a later sub-mesh is the first node already in the
 mesh closer than d [m], if there is one (meshes assembled from blocks share their interface
-nodes). A sub-model's <SystemParams> is ignored.
+nodes). A sub-model's membranes (<ShellElements> with its <ShellElementSet>s) join the model's
+list of membrane triangles after the earlier sub-models' (niftysim_membranes.submodel_membranes).
+A sub-model's <SystemParams> is ignored.
 
 The result is an ordinary <Model> element: the importer reads it as it reads any model, with its
 checks and messages (the sub-models named in them by their index)."""
@@ -22,7 +24,7 @@ import numpy as np
 
 from .niftysim import NiftySimError, _mesh, _numbers, element_set
 from .niftysim_elements import as_tets
-from .niftysim_membranes import SUBMODEL_MARK
+from .niftysim_membranes import submodel_membranes
 from .niftysim_geometry import (
     MESH_FILE_TAGS,
     constraint_nodes,
@@ -36,12 +38,20 @@ __all__ = ["flatten_submodels"]
 _SUB_CHILDREN = {"Nodes", "Elements", *MESH_FILE_TAGS, "ElementSet", "Constraint", "SystemParams"}
 
 
-def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
-    """``root`` with its sub-models merged (``root`` itself if it has none); errors name the file
-    ``f`` and the sub-model."""
+def flatten_submodels(root: ET.Element, f: str, membranes: bool = True) -> ET.Element:
+    """``root`` with its sub-models merged (``root`` itself if it has none), their membranes left
+    out if not ``membranes``; errors name the file ``f`` and the sub-model."""
     subs = root.findall("SubModel")
     if not subs:
         return root
+    own = root.find("ShellElements")
+    if membranes and own is not None and any(sm.find("ShellElements") is not None for sm in subs):
+        raise NiftySimError(
+            "<ShellElements> in the model and in a sub-model: expected the membranes in one place "
+            "(NiftySim takes a sub-model's)",
+            f,
+            "ShellElements",
+        )
     d = _merge_distance(root, f)
     flat = ET.Element("Model", root.attrib)
     for child in root:
@@ -50,13 +60,11 @@ def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
     X_all = np.zeros((0, 3))
     T_all: list[np.ndarray] = []
     etype = None
+    shell_faces: list[np.ndarray] = []
     for i, sm in enumerate(subs):
         key = f"SubModel[{i}]"
         for child in sm:
-            if child.tag in ("ShellElements", "ShellElementSet"):  # refused, or skipped (niftysim_membranes)
-                marked = copy.deepcopy(child)
-                marked.set(SUBMODEL_MARK, key)
-                flat.append(marked)
+            if child.tag in ("ShellElements", "ShellElementSet"):  # below, or skipped
                 continue
             if child.tag not in _SUB_CHILDREN:
                 raise NiftySimError(
@@ -79,11 +87,21 @@ def flatten_submodels(root: ET.Element, f: str) -> ET.Element:
         tets = as_tets(X, T, f, key)[0]  # an H8 sub-model's surfaces are those of its tetrahedra
         for k, c in enumerate(sm.findall("Constraint")):
             flat.append(_mapped_constraint(c, node_map, X, tets, f, f"{key}/Constraint[{k}]"))
+        sheet = (
+            submodel_membranes(sm, node_map, tets, sum(map(len, shell_faces)), f, key) if membranes else None
+        )
+        if sheet is not None:
+            shell_faces.append(sheet[0])
+            flat.extend(sheet[1])
     nodes = ET.SubElement(flat, "Nodes", {"DOF": "3", "NumNodes": str(len(X_all))})
     nodes.text = "\n".join(" ".join(repr(float(v)) for v in x) for x in X_all)
     T = np.concatenate(T_all)
     elements = ET.SubElement(flat, "Elements", {"Type": str(etype), "NumEls": str(len(T))})
     elements.text = "\n".join(" ".join(str(int(v)) for v in t) for t in T)
+    if shell_faces:
+        F = np.concatenate(shell_faces)
+        shells = ET.SubElement(flat, "ShellElements", {"Type": "T3", "NumEls": str(len(F))})
+        shells.text = "\n".join(" ".join(str(int(v)) for v in t) for t in F)
     return flat
 
 

@@ -9,13 +9,21 @@ from __future__ import annotations
 
 import copy
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import _core
 from ..checks import shown
-from ..errors import DegenerateElementError, InputError, InvertedElementError, MaterialError, MeshError
+from ..errors import (
+    DegenerateElementError,
+    InputError,
+    InvertedElementError,
+    MaterialError,
+    MeshError,
+    PliantWarning,
+)
 from ..materials import Material
 from ..materials.membrane import MembraneMaterial
 from ..memory import MODEL_BYTES_PER_TET, require_memory
@@ -485,6 +493,27 @@ class ModelBuilder:
             moved.append([int(tets[e, j]) for j in local])
         return np.array(moved, np.int64).reshape(-1, 3)
 
+    def free_membranes(self) -> np.ndarray:
+        """Indices of the membranes with a node that no tet uses (a sheet of its own, not a skin on
+        a solid): soft contact, whose surfaces are the tets' boundaries, does not see them."""
+        if not self._membranes:
+            return np.zeros(0, np.int64)
+        F = np.concatenate([F for F, _ in self._membranes])
+        return np.nonzero(~np.isin(F, self.tets).all(axis=1))[0]
+
+    def _warn_membranes_out_of_contact(self):
+        if self.soft_contact is None or self.n_elements == 0:
+            return
+        free = self.free_membranes()
+        if free.size:
+            warnings.warn(
+                PliantWarning(
+                    f"{self.source}: {free.size} membrane(s) off the tets (first: {int(free[0])}) take no "
+                    "part in soft contact, whose surfaces are the tets' boundaries: bodies pass through them"
+                ),
+                stacklevel=3,
+            )
+
     # --- finalize ---------------------------------------------------------------------------
     def finalize(self, dtype="float32", threads: int | None = None, backend: str = "cpu", device: int = 0):
         """Validate everything and build the static Model (engine arrays in a cache-friendly order).
@@ -501,6 +530,7 @@ class ModelBuilder:
                 f"{self.source}: soft contact between membranes alone: contact surfaces are the tets' "
                 "boundaries, and this model has no tets"
             )
+        self._warn_membranes_out_of_contact()
         require_memory(
             self.n_elements, MODEL_BYTES_PER_TET, f"{self.source}: a model of {self.n_elements:,} tets"
         )
