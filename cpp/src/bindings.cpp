@@ -416,14 +416,16 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
              })
         .def("membrane_measures",
              [](const B& e, const S& s) {
-                 // Per membrane (model order): J_s and the Cauchy resultant (membrane_measures).
+                 // Per membrane (model order): J_s, the Cauchy resultant and the strain energy
+                 // (membrane_measures).
                  const Model<T>& m = e.engine->model;
                  const MembraneData<T> md = m.membranes();
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);
-                 std::vector<T> out(7 * static_cast<std::size_t>(md.count));
+                 constexpr std::size_t w = kMembraneMeasures;
+                 std::vector<T> out(w * static_cast<std::size_t>(md.count));
                  for (index_t k = 0; k < md.count; ++k)
-                     membrane_measures(k, md, s.s.u.data(), P, &out[7 * k]);
-                 return to_numpy(std::move(out), {size_t(md.count), 7});
+                     membrane_measures(k, md, s.s.u.data(), P, &out[w * k]);
+                 return to_numpy(std::move(out), {size_t(md.count), w});
              })
         .def("internal_forces", [](B& e, const S& s) {
             std::vector<T> f = e->internal_forces(s.s);

@@ -110,15 +110,25 @@ def total_steps(duration: float, dt: float) -> int:
 def body_measures(model, state, res: dict, nodes=slice(None), elements=slice(None)) -> dict:
     """A run's closing figures, of the whole model or of one body of a batch (its node and element
     ranges): max displacement [m], max von Mises [Pa] of the tets (0 without), kinetic energy
-    ½ Σ m v² [J] (half-step velocity) and strain energy Σ V0 W [J] of the tets (not the
-    membranes'). ``res``: ``model.element_results(state)``."""
+    ½ Σ m v² [J] (half-step velocity) and strain energy [J], Σ V0 W of the tets and Σ A0 h W of
+    the membranes. ``res``: ``model.element_results(state)``."""
     u, v = state.displacements[nodes], state.velocities[nodes]
+    tets = float(np.dot(model.element_volumes()[elements], res["energy_density"][elements]))
     return {
         "max_displacement": float(np.linalg.norm(u, axis=1).max()),
         "max_von_mises": float(res["von_mises"][elements].max(initial=0.0)),  # 0: membranes alone
         "kinetic_energy": float(0.5 * np.sum(model.mass[nodes, None] * v * v)),
-        "strain_energy": float(np.dot(model.element_volumes()[elements], res["energy_density"][elements])),
+        "strain_energy": tets + _membrane_energy(model, state, nodes),
     }
+
+
+def _membrane_energy(model, state, nodes: slice) -> float:
+    """Σ A0 h W [J] of the membranes whose nodes lie in the node range ``nodes`` (a body's)."""
+    if not model.n_membranes:
+        return 0.0
+    lo, hi, _ = nodes.indices(model.n_nodes)
+    first = model.membrane_faces[:, 0]
+    return float(model.membrane_results(state)["energy"][(first >= lo) & (first < hi)].sum())
 
 
 def _extra_args(e: Exception) -> tuple:

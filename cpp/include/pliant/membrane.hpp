@@ -91,6 +91,48 @@ PLIANT_HD void membrane_stress(MembraneKind kind, const T* q, const T g1[3], con
     S[2] = lam * trE * Gi12 + two_mu * (m11 * Gi12 + m12 * Gi22);
 }
 
+/// Membrane m's displacement differences d1 = u1 − u0, d2 = u2 − u0 [m] and current tangents
+/// g_i = G_i + d_i [m] (3 each), from u [m] SoA (3, P).
+template <class T>
+PLIANT_HD void membrane_tangents(index_t m, const MembraneData<T>& md, const T* u, index_t P, T d1[3],
+                                 T d2[3], T g1[3], T g2[3]) {
+    const index_t a = md.nodes[3 * m], b = md.nodes[3 * m + 1], c = md.nodes[3 * m + 2];
+    const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) {
+        const T ua = u[d * P + a];
+        d1[d] = u[d * P + b] - ua;
+        d2[d] = u[d * P + c] - ua;
+        g1[d] = q[d] + d1[d];
+        g2[d] = q[3 + d] + d2[d];
+    }
+}
+
+/// Strain energy A0 h W [J] of a membrane with values q (kMembraneValues) and displacement
+/// differences d1, d2 [m] — the potential whose derivative membrane_stress is (S^ij = 2 ∂W/∂g_ij),
+/// in the mixed strain M = G⁻¹E (tr M = G^ij E_ij, det M = det E / det G): StVenantKirchhoff
+/// W h = λ'/2 tr(M)² + μ tr(M²) (Bonet & Wood §5.6); NeoHookean W h = μ/2 (G^ij g_ij + det G /
+/// det g − 3) (Bonet et al. 2000, the energy of eq. 18's stress, λ3² = det G / det g), which with
+/// det g / det G = 1 + 2 tr M + 4 det M is 2 μ (tr(M)² − det M + 2 tr M det M) / (1 + 2 tr M +
+/// 4 det M): second order in the strain term by term, so small strains keep their digits in float32.
+template <class T>
+PLIANT_HD T membrane_energy(MembraneKind kind, const T* q, const T d1[3], const T d2[3]) {
+    const T *G1 = q, *G2 = q + 3;
+    const T Gi11 = q[6], Gi22 = q[7], Gi12 = q[8];
+    T E11 = T(0), E22 = T(0), E12 = T(0);
+    for (int d = 0; d < 3; ++d) {
+        E11 += G1[d] * d1[d] + T(0.5) * d1[d] * d1[d];
+        E22 += G2[d] * d2[d] + T(0.5) * d2[d] * d2[d];
+        E12 += T(0.5) * (G1[d] * d2[d] + d1[d] * G2[d] + d1[d] * d2[d]);
+    }
+    const T m11 = Gi11 * E11 + Gi12 * E12, m12 = Gi11 * E12 + Gi12 * E22;
+    const T m21 = Gi12 * E11 + Gi22 * E12, m22 = Gi12 * E12 + Gi22 * E22;
+    const T tr = m11 + m22, det = m11 * m22 - m12 * m21;
+    if (kind == MembraneKind::NeoHookean)
+        return T(2) * q[9] * (tr * tr - det + T(2) * tr * det) / (T(1) + T(2) * tr + T(4) * det);
+    return T(0.5) * q[9] * tr * tr + q[10] * (m11 * m11 + m22 * m22 + T(2) * m12 * m21);
+}
+
 /// Internal force [N] of node n's membrane corners, added to f (3): for each corner a of membrane
 /// m, A0 S^ij g_i ∂N_a/∂ξj (see the header), the corners in the order the model lists them.
 /// Inputs: membrane data, u [m] SoA (3, P). Output: f [N] (3), added to.
@@ -100,17 +142,9 @@ PLIANT_HD void membrane_force(index_t n, const MembraneData<T>& md, const T* u, 
     for (index_t k = md.offsets[n]; k < end; ++k) {
         const index_t m = md.index[k] / 3;
         const int corner = static_cast<int>(md.index[k] - 3 * m);
-        const index_t a = md.nodes[3 * m], b = md.nodes[3 * m + 1], c = md.nodes[3 * m + 2];
         const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
         T d1[3], d2[3], g1[3], g2[3];
-        PLIANT_UNROLL
-        for (int d = 0; d < 3; ++d) {
-            const T ua = u[d * P + a];
-            d1[d] = u[d * P + b] - ua;
-            d2[d] = u[d * P + c] - ua;
-            g1[d] = q[d] + d1[d];
-            g2[d] = q[3 + d] + d2[d];
-        }
+        membrane_tangents(m, md, u, P, d1, d2, g1, g2);
         T S[3];
         membrane_stress(static_cast<MembraneKind>(md.kind[m]), q, g1, g2, d1, d2, S);
         // w_i = S^ij ∂N_a/∂ξj: corner 0 (−1, −1), 1 (1, 0), 2 (0, 1).
@@ -121,19 +155,19 @@ PLIANT_HD void membrane_force(index_t n, const MembraneData<T>& md, const T* u, 
     }
 }
 
-/// Output measures of membrane m (not on the stepping path): its area stretch J_s = √(det g / det G)
-/// and its Cauchy stress resultant t = J_s⁻¹ S^ij g_i ⊗ g_j [N/m] (the force per current length of a
-/// cut through it), out[0] = J_s, out[1..6] = t as xx, yy, zz, xy, yz, xz. u [m] SoA (3, P).
+/// Values membrane_measures gives per membrane.
+constexpr int kMembraneMeasures = 8;
+
+/// Output measures of membrane m (not on the stepping path): its area stretch J_s = √(det g / det G),
+/// its Cauchy stress resultant t = J_s⁻¹ S^ij g_i ⊗ g_j [N/m] (the force per current length of a
+/// cut through it) and its strain energy A0 h W [J] (membrane_energy): out[0] = J_s, out[1..6] = t
+/// as xx, yy, zz, xy, yz, xz, out[7] the energy. u [m] SoA (3, P).
 template <class T>
-PLIANT_HD void membrane_measures(index_t m, const MembraneData<T>& md, const T* u, index_t P, T out[7]) {
-    const index_t a = md.nodes[3 * m], b = md.nodes[3 * m + 1], c = md.nodes[3 * m + 2];
+PLIANT_HD void membrane_measures(index_t m, const MembraneData<T>& md, const T* u, index_t P,
+                                 T out[kMembraneMeasures]) {
     const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
     T d1[3], d2[3], g1[3], g2[3];
-    for (int d = 0; d < 3; ++d) {
-        const T ua = u[d * P + a];
-        d1[d] = u[d * P + b] - ua, d2[d] = u[d * P + c] - ua;
-        g1[d] = q[d] + d1[d], g2[d] = q[3 + d] + d2[d];
-    }
+    membrane_tangents(m, md, u, P, d1, d2, g1, g2);
     T S[3];  // times A0 (the coefficients hold it): divided out below
     membrane_stress(static_cast<MembraneKind>(md.kind[m]), q, g1, g2, d1, d2, S);
     T G11 = T(0), G22 = T(0), G12 = T(0), g11 = T(0), g22 = T(0), g12 = T(0);
@@ -151,6 +185,7 @@ PLIANT_HD void membrane_measures(index_t m, const MembraneData<T>& md, const T* 
         out[1 + k] =
             w * (S[0] * g1[i] * g1[j] + S[1] * g2[i] * g2[j] + S[2] * (g1[i] * g2[j] + g2[i] * g1[j]));
     }
+    out[7] = membrane_energy(static_cast<MembraneKind>(md.kind[m]), q, d1, d2);
 }
 
 }  // namespace pliant

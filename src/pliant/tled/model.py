@@ -583,16 +583,16 @@ class Model:
         """Per membrane (add_membrane's order): ``area_ratio`` A/A0 (K,); ``tension``, the Cauchy
         stress resultant [N/m] (K, 6) as xx, yy, zz, xy, yz, xz (the force per current length of a
         cut through the membrane, in its plane); ``max_tension`` [N/m] (K,), its larger in-plane
-        principal value (negative: compressed both ways) (cpp/include/pliant/membrane.hpp,
-        membrane_measures)."""
-        r = np.asarray(self._results().membrane_measures(state._s), dtype=float).reshape(-1, 7)
-        t = r[:, 1:]
+        principal value (negative: compressed both ways); ``energy``, its strain energy A0 h W [J]
+        (K,) (cpp/include/pliant/membrane.hpp, membrane_measures)."""
+        r = np.asarray(self._results().membrane_measures(state._s), dtype=float)
+        t = r[:, 1:7]
         # t has the membrane's normal as a null vector: its in-plane principal values are the roots of
         # λ² − tr λ + I2 (I2 the sum of its principal 2 × 2 minors).
         tr = t[:, 0] + t[:, 1] + t[:, 2]
         i2 = t[:, 0] * t[:, 1] + t[:, 1] * t[:, 2] + t[:, 2] * t[:, 0] - (t[:, 3:] ** 2).sum(axis=1)
         top = 0.5 * tr + np.sqrt(np.maximum(0.25 * tr**2 - i2, 0.0))
-        return {"area_ratio": r[:, 0], "tension": t, "max_tension": top}
+        return {"area_ratio": r[:, 0], "tension": t, "max_tension": top, "energy": r[:, 7]}
 
     def element_volumes(self) -> np.ndarray:
         """Reference volume V0 [m³] per element (M,)."""
@@ -604,8 +604,9 @@ class Model:
         return self.to_user_nodes(np.asarray(self._results().internal_forces(state._s), dtype=float))
 
     def strain_energy(self, state: "State") -> float:
-        """Total strain energy Σ V0 W [J]."""
-        return float(np.dot(self.element_volumes(), self.element_results(state)["energy_density"]))
+        """Total strain energy [J]: Σ V0 W of the tets and Σ A0 h W of the membranes."""
+        tets = float(np.dot(self.element_volumes(), self.element_results(state)["energy_density"]))
+        return tets + (float(self.membrane_results(state)["energy"].sum()) if self.n_membranes else 0.0)
 
     def kinetic_energy(self, state: "State") -> float:
         """½ Σ m v² [J] with the half-step velocity of the state."""
