@@ -33,6 +33,17 @@ def _long_faces(n=6) -> np.ndarray:
     return np.array(Q)
 
 
+def _assert_frames_follow(mine: np.ndarray, theirs: np.ndarray, steps_a_frame: int) -> None:
+    """pliant's U.txt frames (3N, frames) against NiftySim's from the second on: each within one
+    step's motion (pliant's frame k is one step before NiftySim's, docs/scenes.md), estimated as
+    NiftySim's motion since its frame before over the steps a frame, plus 0.5 % of NiftySim's
+    largest displacement at that frame."""
+    for k in range(1, theirs.shape[1]):
+        a, b = theirs[:, k].reshape(-1, 3), mine[:, k].reshape(-1, 3)
+        one_step = np.linalg.norm(a - theirs[:, k - 1].reshape(-1, 3), axis=1).max() / steps_a_frame
+        assert np.linalg.norm(a - b, axis=1).max() < one_step + 0.005 * np.linalg.norm(a, axis=1).max(), k
+
+
 def _shells(kind: str, facets: np.ndarray, material: str, sets: str | None = None) -> str:
     sets = sets or f'<ShellElementSet Size="all">{material}</ShellElementSet>'
     listed = nums(facets) if kind != "SURFACE" else ""
@@ -193,11 +204,7 @@ def test_niftysims_membrane_example_runs_as_niftysim_ran_it(tmp_path):
     von_mises, tension = frame.cell_data["von_mises"], frame.cell_data["membrane_max_tension"]
     assert np.isfinite(von_mises[0]).all() and np.isnan(von_mises[1]).all()
     assert np.isnan(tension[0]).all() and np.isfinite(tension[1]).all()
-    for k in range(1, 10):
-        a, b = theirs[:, k].reshape(-1, 3), mine[:, k].reshape(-1, 3)
-        one_step = np.linalg.norm(a - theirs[:, k - 1].reshape(-1, 3), axis=1).max() / 100
-        scale = np.linalg.norm(a, axis=1).max()
-        assert np.linalg.norm(a - b, axis=1).max() < one_step + 0.005 * scale, k
+    _assert_frames_follow(mine, theirs, steps_a_frame=100)
 
 
 def test_linear_membranes_warn_of_niftysims_missing_area_and_thickness(tmp_path):
@@ -230,10 +237,7 @@ def test_niftysims_membrane_only_test_model_runs_as_niftysim_ran_it(tmp_path):
     assert r.exit_code == 0, r.output
     mine, theirs = np.loadtxt(out / "U.txt"), np.loadtxt(data / f"{model.stem}_U.txt")
     assert mine.shape == theirs.shape == (360, 10)
-    for k in range(1, 10):
-        a, b = theirs[:, k].reshape(-1, 3), mine[:, k].reshape(-1, 3)
-        one_step = np.linalg.norm(a - theirs[:, k - 1].reshape(-1, 3), axis=1).max() / 400
-        assert np.linalg.norm(a - b, axis=1).max() < one_step + 0.005 * np.linalg.norm(a, axis=1).max(), k
+    _assert_frames_follow(mine, theirs, steps_a_frame=400)
     frame = meshio.read(sorted(out.glob("frame_*.vtu"))[-1])
     assert [c.type for c in frame.cells] == ["triangle"] and len(frame.cells[0].data) == 198
     tension = frame.cell_data["membrane_max_tension"][0]  # closed-form values: tests/test_membrane.py
@@ -250,7 +254,7 @@ def test_a_sub_models_surface_membranes_run_as_niftysim_ran_them(tmp_path):
     sub-models, after a fixed cube wrapped in its own SURFACE membranes, against the U.txt NiftySim
     wrote for it: the merged node numbering (the cube's 8 nodes first), each sub-model's surface
     as its membranes, the box's constraints mapped. Each frame within one step's motion plus 0.5 %
-    of NiftySim's largest displacement, as for the model written whole above (measured 0.28 % at
+    of NiftySim's largest displacement, as for the model written whole above (measured 0.30 % at
     the end); the cube's nodes do not move."""
     from typer.testing import CliRunner
 
@@ -268,11 +272,7 @@ def test_a_sub_models_surface_membranes_run_as_niftysim_ran_them(tmp_path):
     mine, theirs = np.loadtxt(out / "U.txt"), np.loadtxt(data / "niftysim_box_submodels_U.txt")
     assert mine.shape == theirs.shape == (3 * (8 + 555), 10)
     assert not mine[:24].any()
-    for k in range(1, 10):
-        a, b = theirs[:, k].reshape(-1, 3), mine[:, k].reshape(-1, 3)
-        one_step = np.linalg.norm(a - theirs[:, k - 1].reshape(-1, 3), axis=1).max() / 100
-        scale = np.linalg.norm(a, axis=1).max()
-        assert np.linalg.norm(a - b, axis=1).max() < one_step + 0.005 * scale, k
+    _assert_frames_follow(mine, theirs, steps_a_frame=100)
 
 
 def test_deformable_contact_with_free_membranes_is_refused_by_name(tmp_path):
