@@ -5,6 +5,7 @@ file's mistakes named."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -242,6 +243,11 @@ def test_niftysims_membrane_only_test_model_runs_as_niftysim_ran_it(tmp_path):
     assert [c.type for c in frame.cells] == ["triangle"] and len(frame.cells[0].data) == 198
     tension = frame.cell_data["membrane_max_tension"][0]  # closed-form values: tests/test_membrane.py
     assert tension.shape == (198,) and np.isfinite(tension).all() and np.median(tension) > 0
+    # the last frame's membrane energies make up the run's strain energy (no tets; float32 sums)
+    energy = frame.cell_data["membrane_energy"][0]
+    summary = json.loads((out / "summary.json").read_text())
+    np.testing.assert_allclose(energy.sum(), summary["strain_energy"], rtol=1e-5)
+    assert summary["strain_energy"] > 0
     assert (out / "result.png").stat().st_size > 0
     view = CliRunner().invoke(app, ["view", str(model)])
     assert view.exit_code == 2 and "membranes alone (198 triangles, no tetrahedra)" in view.output

@@ -17,8 +17,8 @@ class ResultWriter:
     """Writes frames of a simulation. Point data: displacement [m], velocity [m/s]; cell data:
     von_mises [Pa], J, strain_energy_density [Pa], and on request cauchy [Pa] and green_strain
     (6 components xx, yy, zz, xy, yz, xz). ``fields`` chooses (default: the first five). A model
-    with membranes adds them as triangles, with membrane_max_tension [N/m] and membrane_area_ratio
-    (Model.membrane_results; NaN on the tets, the tets' fields NaN on them). With an
+    with membranes adds them as triangles, with membrane_max_tension [N/m], membrane_area_ratio and
+    membrane_energy [J] (Model.membrane_results; NaN on the tets, the tets' fields NaN on them). With an
     ``embedding`` (pliant.mesh.embed_surface), each frame also writes the fine surface that follows
     the deformation, as surface_NNNNN.vtu in surface.pvd. The .pvd indexes are rewritten after each
     frame. Each frame is written with its state's model: after a cut, frames have the new
@@ -62,7 +62,7 @@ class ResultWriter:
             "green_strain": res["green_strain"],
         }
         # Tets with their fields; membranes (if any) as triangles with theirs (max_tension [N/m],
-        # area_ratio), each block's fields NaN on the other; membranes alone: no tet block.
+        # area_ratio, energy [J]), each block's fields NaN on the other; membranes alone: no tet block.
         cells = {k: v for k, v in cell_src.items() if k in f}
         K, M = model.n_membranes, len(model.tets)
         blocks = [("tetra", model.tets)] if M else []
@@ -72,7 +72,7 @@ class ResultWriter:
             blocks.append(("triangle", model.membrane_faces))
             for k, v in cells.items():
                 data[k].append(np.full((K, *np.shape(v)[1:]), np.nan))
-            for k in ("max_tension", "area_ratio"):
+            for k in ("max_tension", "area_ratio", "energy"):
                 data["membrane_" + k] = ([np.full(M, np.nan)] if M else []) + [mem[k]]
         mesh = meshio.Mesh(model.reference_positions, blocks, point_data=point, cell_data=data)
         # Ctrl-C is held from the first file of the frame to the last index, so that result.pvd
