@@ -6,13 +6,10 @@ the one listed) with a <Material>: "Linear" (E ν; pliant's StVKMembrane, NiftyS
 linear membrane at small displacement) or "NeoHookean" (μ; NeoHookeanMembrane, the same
 incompressible membrane), with <Density> and <Thickness>. Shells with bending stiffness
 ("LinearShell", "LinearThickShell": NiftySim's rotation-free shells) are refused by name.
-A <SubModel>'s membranes join the merged model (submodel_membranes, as tledSubModelManager does):
-its facets in the merged node numbering, its sets offset to the merged facets."""
+A <SubModel>'s membranes are merged into the model first (niftysim_submodels.py), their sets
+marked with where they came from (ORIGIN), for the messages."""
 
 from __future__ import annotations
-
-import copy
-import xml.etree.ElementTree as ET
 
 import numpy as np
 
@@ -22,10 +19,10 @@ from ..mesh.split import split_quads
 from ..mesh.topology import boundary_faces
 from ..tled import ModelBuilder
 
-__all__ = ["add_membranes", "submodel_membranes"]
+__all__ = ["add_membranes", "ORIGIN"]
 
-# Set on a <ShellElementSet> the sub-model merge wrote (submodel_membranes): where it came from, for
-# the messages.
+# Set on a <ShellElementSet> the sub-model merge wrote (niftysim_submodels.py): where it came from,
+# for the messages.
 ORIGIN = "pliant-origin"
 
 
@@ -132,43 +129,6 @@ def _facets(
             f"shell element {i} refers to node {int(F[i, j])}; the model has nodes 0..{n_nodes - 1}", f, key
         )
     return (mapped(F), 1) if kind == "T3" else (split_quads(mapped(F)), 2)
-
-
-def submodel_membranes(sm, node_map, T: np.ndarray, first: int, f: str, key: str):
-    """Sub-model ``sm``'s membranes in the merged model: its triangles (F, 3) in the merged node
-    numbering (``node_map``: its node → the model's; T (M, 4): its tets, for SURFACE), and its
-    <ShellElementSet>s as sets of merged triangles from ``first`` on (listed, Size the count),
-    each marked with where it came from. None where it has no membranes. As tledSubModelManager
-    merges them into one list of facets; Q4 facets are split after the merge's renumbering (as a
-    model written whole splits them), and sub-models of different facet kinds merge too (NiftySim
-    refuses that)."""
-    from .niftysim import NiftySimError
-
-    shells, sets = sm.findall("ShellElements"), sm.findall("ShellElementSet")
-    if not shells and not sets:
-        return None
-    if len(shells) != 1 or not sets:
-        raise NiftySimError(
-            f"{len(shells)} <ShellElements> and {len(sets)} <ShellElementSet>: expected one "
-            "<ShellElements> and at least one <ShellElementSet> (the membranes' materials)",
-            f,
-            f"{key}/ShellElements",
-        )
-    kind = shells[0].get("Type", shells[0].get("type"))
-    faces, per = _facets(shells[0], kind, T, len(node_map), f, f"{key}/ShellElements", node_map)
-    out = []
-    for k, es in enumerate(sets):
-        where = f"{key}/ShellElementSet[{k}]"
-        listed = _set_members(es, len(faces) // per, kind, f, where)
-        members = first + (per * listed[:, None] + np.arange(per)).ravel()
-        merged = ET.Element("ShellElementSet", {**es.attrib, "Size": str(members.size), ORIGIN: where})
-        merged.text = " ".join(str(int(m)) for m in members)
-        for child in es:  # its material; the facets are merged.text now
-            c = copy.copy(child)
-            c.tail = None
-            merged.append(c)
-        out.append(merged)
-    return faces, out
 
 
 def _set_members(es, n: int, kind: str | None, f: str, key: str) -> np.ndarray:

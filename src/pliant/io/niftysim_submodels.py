@@ -8,7 +8,7 @@ nodes chosen by normal, "all" or a start index are resolved on the sub-model's o
 <SubModelNodeMergerDistance> d, each node of a later sub-mesh is the first node already in the
 mesh closer than d [m], if there is one (meshes assembled from blocks share their interface
 nodes). A sub-model's membranes (<ShellElements> with its <ShellElementSet>s) join the model's
-list of membrane triangles after the earlier sub-models' (niftysim_membranes.submodel_membranes).
+list of membrane triangles after the earlier sub-models' (_sub_membranes).
 A sub-model's <SystemParams> is ignored.
 
 The result is an ordinary <Model> element: the importer reads it as it reads any model, with its
@@ -24,7 +24,7 @@ import numpy as np
 
 from .niftysim import NiftySimError, _mesh, _numbers, element_set
 from .niftysim_elements import as_tets
-from .niftysim_membranes import submodel_membranes
+from .niftysim_membranes import ORIGIN, _facets, _set_members
 from .niftysim_geometry import (
     MESH_FILE_TAGS,
     constraint_nodes,
@@ -87,9 +87,7 @@ def flatten_submodels(root: ET.Element, f: str, membranes: bool = True) -> ET.El
         tets = as_tets(X, T, f, key)[0]  # an H8 sub-model's surfaces are those of its tetrahedra
         for k, c in enumerate(sm.findall("Constraint")):
             flat.append(_mapped_constraint(c, node_map, X, tets, f, f"{key}/Constraint[{k}]"))
-        sheet = (
-            submodel_membranes(sm, node_map, tets, sum(map(len, shell_faces)), f, key) if membranes else None
-        )
+        sheet = _sub_membranes(sm, node_map, tets, sum(map(len, shell_faces)), f, key) if membranes else None
         if sheet is not None:
             shell_faces.append(sheet[0])
             flat.extend(sheet[1])
@@ -157,14 +155,47 @@ def _add_nodes(X_all: np.ndarray, X: np.ndarray, d: float) -> tuple[np.ndarray, 
 
 def _offset_set(es: ET.Element, M: int, first: int, f: str, key: str) -> ET.Element:
     """A sub-model's element set in the merged numbering (its Size shorthands expanded locally)."""
-    elems = element_set(es, M, f, key)
-    out = ET.Element("ElementSet", dict(es.attrib, Size=str(elems.size)))
-    out.text = " ".join(str(int(e) + first) for e in elems)
-    for child in es:  # the children without the text after them: the elements are out.text now
+    return _listed_set(es, "ElementSet", element_set(es, M, f, key) + first)
+
+
+def _listed_set(es: ET.Element, tag: str, members: np.ndarray, **attrib: str) -> ET.Element:
+    """Set ``es`` as a <tag> listing ``members`` (Size their count), with ``es``'s other attributes
+    and ``attrib``, and its children (its material) without the text after them."""
+    out = ET.Element(tag, {**es.attrib, **attrib, "Size": str(len(members))})
+    out.text = " ".join(str(int(m)) for m in members)
+    for child in es:
         c = copy.copy(child)
         c.tail = None
         out.append(c)
     return out
+
+
+def _sub_membranes(sm, node_map, T: np.ndarray, first: int, f: str, key: str):
+    """Sub-model ``sm``'s membranes in the merged model: its triangles (F, 3) in the merged node
+    numbering (``node_map``: its node → the model's; T (M, 4): its tets, for SURFACE), and its
+    <ShellElementSet>s as sets of merged triangles from ``first`` on, each marked with where it
+    came from (ORIGIN). None where it has no membranes. As tledSubModelManager merges them into
+    one list of facets; Q4 facets are split after the merge's renumbering (as a model written
+    whole splits them), and sub-models of different facet kinds merge too (NiftySim refuses that)."""
+    shells, sets = sm.findall("ShellElements"), sm.findall("ShellElementSet")
+    if not shells and not sets:
+        return None
+    if len(shells) != 1 or not sets:
+        raise NiftySimError(
+            f"{len(shells)} <ShellElements> and {len(sets)} <ShellElementSet>: expected one "
+            "<ShellElements> and at least one <ShellElementSet> (the membranes' materials)",
+            f,
+            f"{key}/ShellElements",
+        )
+    kind = shells[0].get("Type", shells[0].get("type"))
+    faces, per = _facets(shells[0], kind, T, len(node_map), f, f"{key}/ShellElements", node_map)
+    merged = []
+    for k, es in enumerate(sets):
+        where = f"{key}/ShellElementSet[{k}]"
+        listed = _set_members(es, len(faces) // per, kind, f, where)
+        members = first + (per * listed[:, None] + np.arange(per)).ravel()
+        merged.append(_listed_set(es, "ShellElementSet", members, **{ORIGIN: where}))
+    return faces, merged
 
 
 def _mapped_constraint(c: ET.Element, node_map, X, T, f: str, key: str) -> ET.Element:
