@@ -262,7 +262,7 @@ def test_membranes_of_sub_models_are_the_model_written_whole(tmp_path):
         (
             _shells("T3", [[0, 1, 2]], 500, listed=[3]),
             "SubModel[1]/ShellElementSet[0]",
-            r"out of range 0\.\.0",
+            r"element index 3 out of range 0\.\.0",
         ),
     ],
 )

@@ -21,6 +21,8 @@ class FileError(InputError):
     ``file:line [key]: what was wrong; what was expected``."""
 
     def __init__(self, message: str, file: str = "", key: str = "", line: int | None = None):
+        if file and message.startswith(f"{file}: "):  # a builder error already naming the file
+            message = message[len(file) + 2 :]
         where = file
         if line:
             where += f":{line}"

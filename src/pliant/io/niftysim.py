@@ -92,7 +92,11 @@ def _numbers(el, path, what, dtype=float):
         raise NiftySimError(f"<{what}>: {bad[:40]!r} is not {kind}", str(path), what) from None
     if dtype is float and not np.all(np.isfinite(a)):
         i = int(np.argmax(~np.isfinite(a)))
-        raise NiftySimError(f"<{what}>: value {i} is {a[i]}; expected finite numbers", str(path), what)
+        raise NiftySimError(
+            f"<{what}>: {words[i][:40]!r} (number {i + 1} of {a.size}) is {a[i]}; expected finite numbers",
+            str(path),
+            what,
+        )
     return a
 
 
@@ -440,8 +444,9 @@ def element_set(es, M: int, f: str, key: str) -> np.ndarray:
         elems = np.arange(first, first + n)
     else:
         raise NiftySimError(f"<ElementSet Size={n}> lists {listed.size} elements", f, key)
-    if elems.size and (elems.min() < 0 or elems.max() >= M):
-        raise NiftySimError(f"element index out of range 0..{M - 1}", f, key)
+    bad = elems[(elems < 0) | (elems >= M)]
+    if bad.size:
+        raise NiftySimError(f"element index {int(bad[0])} out of range 0..{M - 1}", f, key)
     return elems
 
 

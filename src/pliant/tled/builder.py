@@ -183,8 +183,11 @@ class ModelBuilder:
                 taken[s.elements] = True
             elements = np.nonzero(~taken)[0]
         elements = np.asarray(elements, dtype=np.int64).ravel()
-        if elements.size and (elements.min() < 0 or elements.max() >= self.n_elements):
-            raise InputError(f"set_material: element index out of range 0..{self.n_elements - 1}")
+        bad = elements[(elements < 0) | (elements >= self.n_elements)]
+        if bad.size:
+            raise InputError(
+                f"set_material: element index {int(bad[0])} out of range 0..{self.n_elements - 1}"
+            )
         self.sets.append(_ElementSet(name or f"set{len(self.sets)}", elements, material, rho))
 
     # --- constraints and loads --------------------------------------------------------------
