@@ -147,6 +147,7 @@ def tetrahedralize_cmd(
 
     from .io import atomic_write, check_output_file
     from .mesh import read_surface, surface_to_tets, tet_quality
+    from .mesh.surface import metres_hint
     from .mesh.topology import boundary_faces
 
     check_output_file(out, "volume mesh", mesh_format=True)
@@ -156,6 +157,9 @@ def tetrahedralize_cmd(
     if target_tets < 1:
         raise InputError(f"--target-tets {target_tets}: expected >= 1")
     V, F = read_surface(inp)
+    hint = metres_hint(V, str(inp))
+    if hint:
+        err.print(f"warning: {hint} (--edge-length and the output are in the file's units)")
     if max_volume is not None:
         edge_length = (6 * np.sqrt(2) * max_volume) ** (1 / 3)  # regular tet of that volume
     X, T, info = surface_to_tets(

@@ -38,6 +38,18 @@ def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(V, dtype=float).reshape(-1, 3), np.asarray(F, dtype=np.int64).reshape(-1, 3)
 
 
+def metres_hint(X: np.ndarray, source: str) -> str | None:
+    """A warning when nodes X [m], (N, 3), span more than 10 m: pliant works in SI metres, and
+    a mesh that wide is most likely in millimetres (organs are centimetres across)."""
+    extent = float(np.ptp(X, axis=0).max()) if len(X) else 0.0
+    if extent <= 10.0:
+        return None
+    return (
+        f"{source}: the mesh is {extent:g} m across; pliant expects SI metres: if the file is in "
+        "millimetres, scale it by 0.001"
+    )
+
+
 def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle surface (.obj, .stl, .ply, .off, .vtk POLYDATA or UNSTRUCTURED_GRID, .vtu...
     any meshio format with triangles; a legacy VTK grid meshio refuses through pliant.io.vtk_grid).

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import MeshError
+from ..mesh.surface import metres_hint
 from .schema import Ctx, check_keys, vector
 
 if TYPE_CHECKING:
@@ -186,10 +187,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
         X = X + np.array(vector(ctx, spec["translate"], f"{key}.translate"))
         if emb:
             emb[0] = emb[0] + np.array(spec["translate"], float)
-    extent = float(np.ptp(X, axis=0).max())
-    if extent > 10.0:
-        scene.warnings.append(
-            f"{ctx.file}: the mesh is {extent:g} m across; pliant expects SI "
-            "metres: if the file is in millimetres, set mesh.scale = 0.001"
-        )
+    hint = metres_hint(X, str(ctx.file))
+    if hint:
+        scene.warnings.append(hint.replace("scale it by 0.001", "set mesh.scale = 0.001"))
     return X, np.asarray(T, np.int64), sets, node_sets
