@@ -64,18 +64,9 @@ def stable_substeps(model, dt: float) -> int:
 
 def _exact_limit(model) -> float:
     """EXACT_MARGIN of the mesh's own stable step 2/ω_max about the reference state
-    (pliant.cutting.stability: Lanczos on M⁻¹K, K from the engine's internal forces, β damping
-    included), computed once per model: every solver of it asks the same."""
-    if model._stable_step is None:
-        from ..cutting.stability import stable_step
-
-        exact = model
-        # float32 force differences are too noisy for Lanczos (ω_max 6.7x too high on ball_ball): a
-        # float64 copy of the model gives the step.
-        if model.dtype != np.float64:
-            exact = model.rebuilt("float64")
-        model._stable_step = stable_step(exact, exact.state())
-    return EXACT_MARGIN * model._stable_step
+    (Model.stable_step: Lanczos on M⁻¹K, β damping included), computed once per model: every solver
+    of it asks the same."""
+    return EXACT_MARGIN * model.stable_step()
 
 
 def _default_limit(model) -> float:
