@@ -124,11 +124,13 @@ def surface_to_tets(
     if log:
         if len(parts) > 1 and ref_vol is not None:
             merged = (ref_vol - vol) / ref_vol
-            what = (  # the tets and the surface differ by about 0.5 % without overlap (fTetWild's envelope)
-                f"{ref_vol - vol:.3g} m^3, {100 * merged:.0f} %, of overlap merged"
-                if merged > 0.01
-                else f"{100 * abs(merged):.2f} % apart: no overlap beyond the meshing's 1 %"
-            )
+            # Without overlap the tets and the surface differ by about 0.5 % (fTetWild's envelope).
+            if merged > 0.01:
+                what = f"{ref_vol - vol:.3g} m^3, {100 * merged:.0f} %, of overlap merged"
+            elif merged < -0.01:
+                what = f"the tets {100 * -merged:.1f} % larger than the bodies"
+            else:
+                what = f"{100 * abs(merged):.2f} % apart: no overlap beyond the meshing's 1 %"
             log(
                 f"{len(parts)} bodies meshed as their union: {vol:.4g} m^3 of tets for "
                 f"{ref_vol:.4g} m^3 of bodies ({what})"

@@ -38,15 +38,16 @@ def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(V, dtype=float).reshape(-1, 3), np.asarray(F, dtype=np.int64).reshape(-1, 3)
 
 
-def metres_hint(X: np.ndarray, source: str) -> str | None:
+def metres_hint(X: np.ndarray, source: str, remedy: str = "scale it by 0.001") -> str | None:
     """A warning when nodes X [m], (N, 3), span more than 10 m: pliant works in SI metres, and
-    a mesh that wide is most likely in millimetres (organs are centimetres across)."""
+    a mesh that wide is most likely in millimetres (organs are centimetres across). ``remedy``:
+    what the user can do where the mesh is read (a scene: ``set mesh.scale = 0.001``)."""
     extent = float(np.ptp(X, axis=0).max()) if len(X) else 0.0
     if extent <= 10.0:
         return None
     return (
         f"{source}: the mesh is {extent:g} m across; pliant expects SI metres: if the file is in "
-        "millimetres, scale it by 0.001"
+        f"millimetres, {remedy}"
     )
 
 

@@ -187,7 +187,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
         X = X + np.array(vector(ctx, spec["translate"], f"{key}.translate"))
         if emb:
             emb[0] = emb[0] + np.array(spec["translate"], float)
-    hint = metres_hint(X, str(ctx.file))
+    hint = metres_hint(X, str(ctx.file), "set mesh.scale = 0.001")
     if hint:
-        scene.warnings.append(hint.replace("scale it by 0.001", "set mesh.scale = 0.001"))
+        scene.warnings.append(hint)
     return X, np.asarray(T, np.int64), sets, node_sets
