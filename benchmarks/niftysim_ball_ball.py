@@ -1,7 +1,7 @@
-"""NiftySim's ball_ball.xml (../shared/niftysim; two Neo-Hookean balls of 1 m radius pushed 0.2 m
-into each other by ramped displacements of their far caps, Δt = 0.1 ms, 1 s) without its contact,
-three ways, compared at its ten output times as the largest nodal distance over the largest
-displacement:
+"""NiftySim's ball_ball.xml (tests/data/niftysim_ball_ball.xml, as in ../shared/niftysim; two
+Neo-Hookean balls of 1 m radius pushed 0.2 m into each other by ramped displacements of their far
+caps, Δt = 0.1 ms, 1 s) without its contact, three ways, compared at its ten output times as the
+largest nodal distance over the largest displacement:
 
 - pliant (float32, the import's precision), at Δt and at Δt/2;
 - an independent float64 TLED written here in numpy from the formulas (F = I + Σ u ∇N, the decoupled
@@ -35,7 +35,7 @@ import numpy as np
 import pliant as pl
 from pliant.io.niftysim import load_niftysim
 
-MODEL = Path(__file__).resolve().parents[2] / "shared" / "niftysim" / "ball_ball.xml"
+MODEL = Path(__file__).resolve().parents[1] / "tests" / "data" / "niftysim_ball_ball.xml"
 FRAMES = 10
 
 
