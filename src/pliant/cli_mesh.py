@@ -93,7 +93,8 @@ def check_cmd(inp: Path, as_json: bool = typer.Option(False, "--json")):
     if as_json:
         typer.echo(json.dumps(rep.as_dict(), indent=2))
     else:
-        console.print(f"{inp}: {rep.vertices:,} vertices, {rep.faces:,} faces, {rep.bodies} body/bodies")
+        bodies = f"{rep.bodies} {'body' if rep.bodies == 1 else 'bodies'}"
+        console.print(f"{inp}: {rep.vertices:,} vertices, {rep.faces:,} faces, {bodies}")
         console.print("  ok" if rep.ok else "  problems: " + "; ".join(rep.problems))
     raise typer.Exit(0 if rep.ok else 1)
 
