@@ -671,3 +671,27 @@ def test_niftysims_contact_search_settings_are_accepted_as_having_no_physics(tmp
     p = _balls_with(tmp_path, "<BVType>KDOP</BVType>")
     with pytest.raises(NiftySimError, match=r"\[SystemParams/BVType\].*expected AABB or OBB"):
         load_niftysim(p)
+
+
+def test_ball_balls_dynamics_do_not_depend_on_the_step(tmp_path):
+    """ball_ball.xml without its contact (each ball driven 0.2 m by its cap, y and z free; 1 m
+    balls, μ = 100 Pa, ρ = 20 kg/m³, α = 0.5 /s), float32 as imported: the answers at the model's
+    Δt = 0.1 ms and at Δt/2 agree to 2e-4 of the largest displacement at t = 1 s (measured 1.1e-4:
+    the time discretization's O(Δt²)). NiftySim's own answers at those two steps are 25 % and 49 %
+    from this one, from its float32 update coefficients (benchmarks/niftysim_ball_ball.py,
+    docs/validation.md): a spurious spring that grows the balls' free motion, the faster the
+    smaller the step; pliant's increment form has none."""
+    p = tmp_path / "balls.xml"
+    p.write_text(
+        re.sub(r"<DoDeformableCollision>.*?</DoDeformableCollision>", "", BALLS.read_text(), flags=re.S)
+    )
+    u = []
+    for dt in (1e-4, 5e-5):
+        sc = load_niftysim(p, overrides={"SystemParams.TimeStep": dt})
+        with pytest.warns(pl.PliantWarning, match="stable time step estimate"):  # the mesh's sliver
+            sim = pl.Simulation(sc.builder.finalize("float32"), dt=sc.dt)
+        sim.run(until=1.0)
+        u.append(sim.displacements)
+    largest = np.linalg.norm(u[0], axis=1).max()
+    assert largest > 0.2  # the caps' 0.2 m and the balls' own motion
+    assert np.linalg.norm(u[0] - u[1], axis=1).max() < 2e-4 * largest
