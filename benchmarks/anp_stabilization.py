@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pliant.cutting.split import interior_faces
 from pliant.validate.models import hollow_sphere, lame_solve
 
 E, P = 3.0e3, 30.0  # Pa, Pa (lame_solve's defaults)
@@ -38,12 +39,7 @@ def _spread(dJ: np.ndarray) -> float:
 
 def _neighbour_mean(T: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(mean of v over each element's face neighbours, mask of the elements with four of them)."""
-    faces = np.sort(np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]], T[:, [0, 1, 2]]]), 1)
-    owner = np.tile(np.arange(len(T)), 4)
-    order = np.lexsort(faces.T[::-1])
-    f, e = faces[order], owner[order]
-    shared = np.all(f[1:] == f[:-1], axis=1)
-    a, b = e[:-1][shared], e[1:][shared]
+    a, b = interior_faces(T)[1].T
     n = len(T)
     count = np.bincount(a, minlength=n) + np.bincount(b, minlength=n)
     total = np.bincount(a, v[b], n) + np.bincount(b, v[a], n)
