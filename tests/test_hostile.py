@@ -3,6 +3,7 @@ exit code 2 and one line on stderr that names the culprit, no traceback, no sign
 Python warning, nothing half-written. Runs the installed ``pliant`` program of this environment,
 as a user would."""
 
+import json
 import os
 import re
 import signal
@@ -371,8 +372,11 @@ def test_png_false_does_not_announce_a_picture(tmp_path):
     assert not (tmp_path / "o" / "result.png").exists()
 
 
-def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path):
-    """Ctrl-C between a frame's file and the index left result.pvd one frame short."""
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
+def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path, sig):
+    """Ctrl-C between a frame's file and the index left result.pvd one frame short. SIGTERM (a
+    batch scheduler's time limit, `timeout`, `kill`) ended the run without its summary: both now
+    end it as an interruption, every frame indexed and summary.json written."""
     p = scene(
         tmp_path, SCENE.replace("duration = 0.001", "duration = 100.0") + "[output]\nevery = 1\npng = false\n"
     )
@@ -385,10 +389,11 @@ def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path):
     deadline = time.time() + 60
     while time.time() < deadline and len(list((tmp_path / "o").glob("frame_*.vtu"))) < 20:
         time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, (out, err)
-    assert "Traceback" not in err
+    assert "Traceback" not in err and "interrupted at t = " in err
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["interrupted"]
     frames = sorted(f.name for f in (tmp_path / "o").glob("frame_*.vtu"))
     listed = re.findall(r'file="([^"]+)"', (tmp_path / "o" / "result.pvd").read_text())
     assert len(frames) >= 20 and listed == frames

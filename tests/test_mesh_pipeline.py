@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 import pliant as pl
 from pliant.cli import app
 from pliant.errors import MeshError
+from pliant.mesh.repair import surface_volume
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
 runner = CliRunner()
@@ -148,6 +149,26 @@ def test_bad_surfaces(tmp_path):
     F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
     with pytest.raises(MeshError, match="non-manifold"):
         pl.mesh.repair_surface(V, F)
+
+
+def test_repair_reports_every_change_it_makes():
+    """A tetrahedron's four faces, one of them wound against the others, then all four inward: the
+    repaired surface is closed with outward faces (positive volume: 1/6 of the unit cube's corner)
+    and the actions say what was changed; a surface needing nothing says nothing."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    outward = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    one_flipped = outward.copy()
+    one_flipped[1] = one_flipped[1, ::-1]
+    for F, expected in [
+        (outward, []),
+        (one_flipped, ["made winding consistent"]),
+        (outward[:, ::-1], ["flipped faces outward"]),
+    ]:
+        Vr, Fr, actions = pl.mesh.repair_surface(V, F)
+        assert surface_volume(Vr, Fr) == pytest.approx(
+            1 / 6, rel=1e-12
+        )  # sums of products of 0 and 1: round-off only
+        assert actions == expected
 
 
 def test_subdivision_levels_beyond_any_memory_are_refused():

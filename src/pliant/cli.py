@@ -33,7 +33,7 @@ app = typer.Typer(
     epilog="Exit codes: 0 done; 1 the simulation failed (unstable, not converged) "
     "or mesh check found problems; 2 bad input (one line names the file, key "
     "or element); 3 internal error (a bug: the line names the log with the "
-    "traceback); 130 interrupted.",
+    "traceback); 130 interrupted (Ctrl-C or SIGTERM).",
 )
 console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)

@@ -5,7 +5,9 @@ Exit codes (also in ``pliant --help`` and docs/scenes.md): 0 success; 1 the simu
 (:class:`~pliant.errors.InstabilityError`, :class:`~pliant.errors.ConvergenceError`) or a check
 found problems; 2 bad input (:class:`~pliant.errors.InputError`, usage errors, and files the
 operating system refuses to read or write); 3 an internal error, i.e. a bug in pliant: the line
-names the exception and the log file that holds the full traceback; 130 interrupted (Ctrl-C).
+names the exception and the log file that holds the full traceback; 130 interrupted (Ctrl-C, or
+SIGTERM as a batch scheduler's time limit, ``timeout`` and ``kill`` send it: both end a run the same
+way, its frames indexed and its summary written).
 
 Python warnings are routed too: pliant's own (:class:`~pliant.errors.PliantWarning`, and
 ``UserWarning`` raised from pliant modules) are printed as one ``warning:`` line each; those of
@@ -18,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import datetime
 import os
+import signal
 import sys
 import tempfile
 import traceback
@@ -87,6 +90,27 @@ def routed_warnings(console):
             warnings.showwarning = old
 
 
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt():
+    """SIGTERM raises KeyboardInterrupt in the main thread while the block runs, so that a
+    terminated command ends as an interrupted one (Python's default for SIGTERM ends the process
+    at once: no summary, no message). Main thread only (elsewhere a plain block)."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def run_guarded(app, argv: list[str] | None, console) -> int:
     """Run the typer ``app`` on ``argv`` (default sys.argv[1:]); returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -94,7 +118,7 @@ def run_guarded(app, argv: list[str] | None, console) -> int:
     def say(msg: str):
         console.print(f"[bold red]error:[/] {escape(one_line(msg))}", highlight=False, markup=True)
 
-    with routed_warnings(console):
+    with routed_warnings(console), terminate_as_interrupt():
         try:
             rv = app(args=argv, standalone_mode=False, prog_name="pliant")
             return rv if isinstance(rv, int) else EXIT_OK

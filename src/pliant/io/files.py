@@ -106,18 +106,20 @@ def make_output_dir(path, what: str = "output folder") -> Path:
 
 @contextlib.contextmanager
 def deferred_interrupt():
-    """Hold Ctrl-C (SIGINT) while a group of files is committed, so that an index never lists one
-    frame fewer than was written; the interrupt is raised when the block ends. Main thread only
-    (elsewhere a plain block)."""
+    """Hold Ctrl-C (SIGINT) and SIGTERM while a group of files is committed, so that an index never
+    lists one frame fewer than was written; the interrupt is raised when the block ends. Main
+    thread only (elsewhere a plain block)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     got: list[int] = []
-    old = signal.signal(signal.SIGINT, lambda s, f: got.append(s))
+    held = (signal.SIGINT, signal.SIGTERM)
+    old = [signal.signal(s, lambda s, f: got.append(s)) for s in held]
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old)
+        for s, handler in zip(held, old):
+            signal.signal(s, handler)
         if got:
             raise KeyboardInterrupt
 

@@ -265,7 +265,11 @@ def repair_surface(
     if bodies not in BODIES:
         raise MeshError(f"repair: bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
     actions = []
-    m = trimesh.Trimesh(np.asarray(V, float), np.asarray(F, np.int64), process=True, validate=True)
+    # process: merge duplicate vertices; not validate, whose fix_normals would re-wind faces
+    # silently (trimesh 5): the winding is fixed, and reported, body by body (_close_body).
+    m = trimesh.Trimesh(np.asarray(V, float), np.asarray(F, np.int64), process=True, validate=False)
+    m.update_faces(m.unique_faces() & m.nondegenerate_faces())
+    m.remove_unreferenced_vertices()
     if len(m.vertices) < len(V):
         actions.append(f"merged {len(V) - len(m.vertices)} duplicate/unused vertices")
     if len(m.faces) < len(F):
