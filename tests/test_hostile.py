@@ -474,6 +474,12 @@ def test_usage_errors_exit_2():
         (("size = [0.1, 0.02, 0.02]", "size = [1e300, 1e300, 1e300]"), ["non-finite volume"]),
         (("E = 5e5", "E = 1e300"), ["steps"]),
         (("density = 1000.0", "density = 1e-300"), ["steps"]),
+        # A given dt is checked against the mesh's highest frequency, whose M⁻¹K overflowed (an
+        # internal error: ARPACK could not start): refused against its stable step (1e-156 s).
+        (
+            ("density = 1000.0\n[solver]\n", "density = 1e-300\n[solver]\ndt = 1e-3\n"),
+            ["dt = 0.001 s exceeds the stable time step"],
+        ),
         (
             ("duration = 0.001", "duration = 0.001\nstatic = true\nincrements = 1000000000"),
             ["solver.increments"],
@@ -482,7 +488,8 @@ def test_usage_errors_exit_2():
 )
 def test_extreme_values_are_refused_in_one_line(tmp_path, patch, words):
     """Coordinates that overflow the geometry (an internal error before), materials and densities
-    that make the stable step absurdly small, and a billion load increments (a hang)."""
+    that make the stable step absurdly small (automatic or given), and a billion load increments
+    (a hang)."""
     p = scene(tmp_path, SCENE.replace(*patch))
     assert p.read_text() != SCENE
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), *words)

@@ -173,6 +173,21 @@ def test_interrupt_keeps_frames_and_summary(tmp_path, monkeypatch):
     assert saved["interrupted"] and (tmp_path / "o" / "result.pvd").read_text().count("<DataSet") == 4
 
 
+def test_an_automatic_step_ends_the_run_at_its_duration(tmp_path):
+    """dt = "auto" is the fewest whole steps of at most safety × dt_critical that reach the duration,
+    so the run ends at it (a 0.01 s run went on to 0.01129 s, the next multiple of the step)."""
+    from pliant import runner as run_mod
+
+    text = TENSION.replace("static = true", "static = false").replace("duration = 1.0", "duration = 0.01")
+    sc = load_scene(_write(tmp_path, text))
+    model, solver = run_mod.build(sc)
+    n = int(np.ceil(0.01 / (0.8 * model.dt_critical)))  # the solver's default safety, 0.8
+    assert 0.01 / (0.8 * model.dt_critical) % 1 > 0.01  # a step that does not divide the duration
+    assert solver.dt == pytest.approx(0.01 / n, rel=1e-15)  # one division: round-off only
+    s = run_mod.run_scene(sc, None, progress=False)
+    assert s["steps"] == n and s["simulated_time"] == pytest.approx(0.01, rel=1e-12)  # n sums of dt
+
+
 def test_scene_tools_and_errors(tmp_path):
     """[[tool]] tables build rigid tools with keyframes; bad ones are named errors."""
     text = TENSION.replace(

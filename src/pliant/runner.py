@@ -18,7 +18,7 @@ from .io import ResultWriter, atomic_write_text, check_output_dir
 from .job import Scene
 from .memory import OUTPUT_BYTES_PER_TET, require_memory
 from .tled import Solver
-from .tled.solver import MAX_STEPS
+from .tled.solver import MAX_STEPS, default_step
 
 
 def _frame_steps(scene: Scene, dt: float, total_steps: int) -> int:
@@ -48,15 +48,24 @@ def write_niftysim_text(path: Path, frames: list[np.ndarray]) -> None:
     atomic_write_text(path, text.getvalue())
 
 
-def scene_step(scene: Scene, model) -> float | None:
-    """The step [s] a run of the scene takes on ``model``: scene.dt, or for a scene whose step was
-    chosen for other elements (scene.meta["dt_divides"], its reason: a NiftySim H8 model split into
-    tetrahedra) dt / k for the least k that is stable, the output every k times as many steps (the
-    same frame times), with a warning that says so. None: the solver's own (safety × critical)."""
+def scene_step(scene: Scene, model, divide: bool = True) -> float | None:
+    """The step [s] a run of the scene takes on ``model``. The automatic step (scene.dt None) is
+    the solver's default, safety × critical, shortened to duration / n, n the fewest whole steps
+    that reach the duration, so that the run ends at it (it ran on to the next multiple of the step:
+    a 0.01 s run ended at 0.01129 s); None for a quasi-static solve (the solver's own). A given
+    scene.dt is kept, except for a scene whose step was chosen for other elements
+    (scene.meta["dt_divides"], its reason: a NiftySim H8 model split into tetrahedra) when
+    ``divide``: dt / k for the least k that is stable, the output every k times as many steps (the
+    same frame times), with a warning that says so."""
     from .tled.solver import stable_substeps
 
     dt = scene.dt
-    if dt is None or not scene.meta.get("dt_divides"):
+    if dt is None:
+        if scene.static:
+            return None
+        auto = default_step(model, scene.safety)
+        return min(auto, scene.duration / total_steps(scene.duration, auto))  # min: round-off
+    if not divide or not scene.meta.get("dt_divides"):
         return dt
     if "dt_divided_by" in scene.meta:  # decided once per scene (a viewer's reset asks again)
         return dt / scene.meta["dt_divided_by"]
@@ -73,14 +82,15 @@ def scene_step(scene: Scene, model) -> float | None:
 
 def build(scene: Scene, threads: int | None = None, backend: str | None = None, allow_unstable: bool = False):
     """The scene's model and solver. Input errors name the scene file (the builder knows only the
-    mesh's source); a duration of more than MAX_STEPS steps is refused here, before any work."""
+    mesh's source); a duration of more than MAX_STEPS steps is refused here, before any work. The
+    step is scene_step's."""
     try:
         model = scene.builder.finalize(
             scene.dtype,
             threads=scene.threads if threads is None else threads,
             backend=backend or scene.backend,
         )
-        dt = scene.dt if allow_unstable else scene_step(scene, model)
+        dt = scene_step(scene, model, divide=not allow_unstable)
         solver = Solver(
             model,
             dt=dt,

@@ -29,7 +29,7 @@ _RUN_SETTINGS = ("duration", "dt", "safety", "dtype", "backend", "check_every", 
 def _run_together(case: SceneCase, scenes: list) -> list[dict[str, Any]]:
     """Outputs of each scene, run as one batch. Raises InputError (settings differ) or
     PliantError (the batch failed)."""
-    from ..runner import body_measures, total_steps
+    from ..runner import body_measures, scene_step, total_steps
     from ..tled import Solver
     from ..tled.batch import Batch
 
@@ -42,7 +42,8 @@ def _run_together(case: SceneCase, scenes: list) -> list[dict[str, Any]]:
         raise InputError("batch: quasi-static solves run one by one")
     batch = Batch([sc.builder for sc in scenes], first.dtype, threads=case.threads, backend=first.backend)
     model = batch.model
-    solver = Solver(model, dt=first.dt, safety=first.safety, check_every=first.check_every)
+    dt = scene_step(first, model)  # as each run alone would take it
+    solver = Solver(model, dt=dt, safety=first.safety, check_every=first.check_every)
     state = model.state()
     solver.run(state, steps=total_steps(first.duration, solver.dt))
     res = model.element_results(state)

@@ -79,6 +79,12 @@ def _default_limit(model) -> float:
     return max(model.dt_critical, _exact_limit(model))
 
 
+def default_step(model, safety: float = 0.8) -> float:
+    """The step Δt [s] a Solver takes when none is given: ``safety`` × the element estimate (or the
+    exact limit where a membrane sets the estimate: _default_limit)."""
+    return safety * _default_limit(model)
+
+
 def _stable_limit(model, dt: float) -> float:
     """The largest step [s] a solver accepts, given the one asked for (TimeStepError above it): the
     element estimate for a step at most EXACT_CHECK_FRACTION of it (the default is 0.8 of it);
@@ -139,7 +145,7 @@ class Solver:
         if not (0 < safety <= 1):
             raise InputError(f"safety = {shown(safety)}; expected 0 < safety <= 1")
         if dt is None:
-            dt = safety * _default_limit(model)
+            dt = default_step(model, safety)
         dt = float(dt)
         if not math.isfinite(dt) or dt <= 0:
             raise TimeStepError(f"dt = {shown(dt)}; expected a finite time step > 0 [s]")
