@@ -9,6 +9,7 @@ import math
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -381,6 +382,21 @@ def test_batched_sweep_equals_runs_alone(bar_sweep, tmp_path):
         pd.testing.assert_series_equal(batched[col], alone[col], check_names=False)
     with pytest.raises(Exception, match="needs each run alone"):
         bar_sweep.write_text("batch = 2\n" + SWEEP.format(Es=ES) + "fields = true\n")
+        load_sweep(bar_sweep)
+
+
+def test_an_output_point_far_from_the_body_is_warned_of(bar_sweep):
+    """Its displacement is the nearest node's: a point 5 m from a 10 cm bar (a typo, or millimetres)
+    gave the tip's silently. The distance is to the tip node at (0.1, 0, 0): 4.9 m."""
+    from pliant.errors import PliantWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_sweep(bar_sweep)  # the tip itself: no warning
+    bar_sweep.write_text(SWEEP.format(Es=ES).replace("tip = [0.1, 0.0, 0.0]", "tip = [5.0, 0.0, 0.0]"))
+    with pytest.warns(
+        PliantWarning, match=r"output.points.tip\]: \[5.0, 0.0, 0.0\] is 4.9 m from the nearest"
+    ):
         load_sweep(bar_sweep)
 
 

@@ -30,11 +30,15 @@ import hashlib
 import json
 import math
 import sys
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .. import _core
+from ..errors import PliantWarning
 from ..scene.schema import Ctx, SceneError, check_keys, vector
 
 if sys.version_info >= (3, 11):
@@ -259,7 +263,7 @@ def _check_values(ctx: Ctx, spec: SweepSpec) -> None:
     if not (spec.fixed or first):
         return
     try:
-        load_job(spec.base, spec.ignore, {**spec.fixed, **first})
+        _check_points(ctx, spec, load_job(spec.base, spec.ignore, {**spec.fixed, **first}).builder.nodes)
         return
     except InputError as e:
         key, what, error = "parameter", "the parameters at their first choice or low end", e
@@ -269,6 +273,26 @@ def _check_values(ctx: Ctx, spec: SweepSpec) -> None:
         except InputError as e:
             key, what, error = "set", "the [set] values", e
     raise SceneError(f"the base file with {what} does not load: {error}", ctx.file, key, ctx.line_of(key))
+
+
+def _check_points(ctx: Ctx, spec: SweepSpec, X: np.ndarray) -> None:
+    """Warn of an output point farther than a tenth of the body's size from every node of the base
+    mesh X [m] (N, 3): its displacement is the nearest node's, so such a point is most likely a
+    typo or in other units."""
+    size = float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))) if len(X) else 0.0
+    for name, p in spec.outputs.points.items():
+        d2 = np.einsum("ij,ij->i", X - p, X - p)
+        node = int(np.argmin(d2))
+        if math.sqrt(d2[node]) > 0.1 * size:
+            warnings.warn(
+                PliantWarning(
+                    f"{ctx.file}:{ctx.line_of('output.points')} [output.points.{name}]: {list(p)} is "
+                    f"{math.sqrt(d2[node]):.3g} m from the nearest node ({node}, at "
+                    f"{np.round(X[node], 6).tolist()}) of a mesh {size:.3g} m across; its "
+                    "displacement is that node's (SI metres expected)"
+                ),
+                stacklevel=2,
+            )
 
 
 def _run_count(design: Design, params: list[Parameter]) -> int:
