@@ -58,11 +58,38 @@ def test_degenerate_element_is_reported_by_id(extra_nodes, tet):
         (dict(E=-1.0, nu=0.3), "E"),
         (dict(mu=0.0, K=1.0), "mu"),
         (dict(mu=1.0, K=float("nan")), "K"),
+        # Not numbers: float() made True 1.0 and '5' 5.0 silently, and raised a bare ValueError or
+        # TypeError naming no argument for 'abc' or None.
+        (dict(E=True, nu=0.3), "E = True"),
+        (dict(E="5", nu=0.3), "E = '5'"),
+        (dict(E=5e3, nu="abc"), "nu = 'abc'"),
+        (dict(mu=[1.0], K=10.0), r"mu = \[1.0\]"),
     ],
 )
 def test_bad_material_parameters(kwargs, text):
     with pytest.raises(pl.MaterialError, match=text):
         pl.NeoHookean(**kwargs)
+
+
+def test_parameters_that_are_not_numbers_are_named():
+    """Each material family, the density and the damping refuse a non-number by name; numpy
+    scalars and 0-d arrays are numbers."""
+    assert pl.NeoHookean(E=np.float32(4e3), nu=np.array(0.25)).mu == pytest.approx(1600.0)  # E / 2.5
+    with pytest.raises(pl.MaterialError, match="C01 = None"):
+        pl.MooneyRivlin(C10=1e3, C01=None, K=1e4)
+    with pytest.raises(pl.MaterialError, match="tau='1'"):
+        pl.Viscoelastic(pl.NeoHookean(E=5e3, nu=0.3), iso=[(0.5, "1")])
+    with pytest.raises(pl.MaterialError, match="nu = None"):
+        pl.StVKMembrane(E=1e3, nu=None, thickness=1e-3, density=1000.0)
+    X, T = _tet()
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    with pytest.raises(pl.MaterialError, match="density = True"):
+        b.set_material(pl.NeoHookean(mu=1, K=10), density=True)
+    b.set_material(pl.NeoHookean(mu=1, K=10), density=1000.0)
+    b.damping = "5"
+    with pytest.raises(pl.InputError, match="damping = '5'"):
+        b.finalize()
 
 
 def test_bad_density_and_missing_material():

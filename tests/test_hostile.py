@@ -157,6 +157,12 @@ def test_box_sizes_and_jitter_are_bounded(tmp_path):
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), "tets")
     p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [5, 2, 2]\njitter = 0.7"))
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), "jitter")
+    # TOML's true passed as one cell (bool is an int in Python), and the API's int() made 2.5 two
+    p = scene(tmp_path, SCENE.replace("cells = [5, 2, 2]", "cells = [true, 2, 2]"))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "mesh.cells", "three integers")
+    for cells in [(True, 2, 2), (2.5, 2, 2)]:
+        with pytest.raises(pl.InputError, match="expected three integers"):
+            pl.mesh.box_tets((0.1, 0.02, 0.02), cells)
     # a subnormal size passes as a length > 0, but the cells' corners coincide (the fuzzer's case:
     # the message showed a numpy array of the coordinates, named xs, which the scene does not have)
     p = scene(tmp_path, SCENE.replace("size = [0.1, 0.02, 0.02]", "size = [0.1, 0.02, 5e-324]"))

@@ -10,6 +10,18 @@ import numpy as np
 from .errors import InputError
 
 
+def as_real(value) -> float:
+    """``value`` as a float where it is a real number (int, float, a numpy scalar or 0-d array);
+    NaN for anything else (a bool, a string, None, a list), so that the caller's finiteness check
+    refuses it with its own message (float() made True 1.0 and '5' 5.0 silently, and raised
+    TypeError or ValueError naming no argument for None or 'abc')."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return math.nan
+    return float(value)
+
+
 def finite_number(value, what: str, unit: str = "") -> float:
     """``value`` as a finite float ("until = nan; expected a finite number [s]")."""
     try:

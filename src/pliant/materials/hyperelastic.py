@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from .. import _core
-from ..checks import shown
+from ..checks import as_real, shown
 from ..errors import MaterialError
 
 __all__ = [
@@ -24,7 +24,7 @@ __all__ = [
 
 
 def _positive(name: str, value: float, cls: str) -> float:
-    v = float(value)
+    v = as_real(value)
     if not math.isfinite(v) or v <= 0.0:
         raise MaterialError(f"{cls}: {name} = {shown(value)}; expected a finite value > 0 [Pa]")
     return v
@@ -33,10 +33,10 @@ def _positive(name: str, value: float, cls: str) -> float:
 def lame_from_young(E: float, nu: float, cls: str = "material") -> tuple[float, float]:
     """(μ, λ) [Pa] from Young's modulus E [Pa] and Poisson's ratio ν (−1 < ν < 0.5)."""
     E = _positive("E", E, cls)
-    nu = float(nu)
+    given, nu = nu, as_real(nu)
     if not math.isfinite(nu) or nu >= 0.5 or nu <= -1.0:
         raise MaterialError(
-            f"{cls}: nu = {shown(nu)}; expected -1 < nu < 0.5 (0.5 is incompressible, "
+            f"{cls}: nu = {shown(given)}; expected -1 < nu < 0.5 (0.5 is incompressible, "
             "which explicit dynamics cannot represent: use e.g. 0.49)"
         )
     return E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
@@ -130,7 +130,7 @@ class MooneyRivlin(Material):
 
     def __init__(self, C10, C01, K):
         self.C10 = _positive("C10", C10, "MooneyRivlin")
-        self.C01 = float(C01)
+        self.C01 = as_real(C01)
         if not math.isfinite(self.C01) or self.C01 < 0.0:
             raise MaterialError(f"MooneyRivlin: C01 = {shown(C01)}; expected a finite value >= 0 [Pa]")
         self.K = _positive("K", K, "MooneyRivlin")
@@ -158,7 +158,7 @@ class _MuLambda(Material):
             if mu is None or lam is None:
                 raise MaterialError(f"{cls}: missing parameters; expected (E, nu) or (mu, lam)")
             self.mu = _positive("mu", mu, cls)
-            self.lam = float(lam)
+            self.lam = as_real(lam)
             if not math.isfinite(self.lam) or self.lam + 2.0 * self.mu / 3.0 <= 0.0:
                 raise MaterialError(
                     f"{cls}: lam = {shown(lam)}; expected lam + 2 mu / 3 > 0 (positive bulk modulus)"
@@ -189,7 +189,7 @@ class LinearElastic(_MuLambda):
 
 
 def _finite(name: str, value, cls: str, minimum: float | None = None) -> float:
-    v = float(value)
+    v = as_real(value)
     if not math.isfinite(v) or (minimum is not None and v < minimum):
         raise MaterialError(
             f"{cls}: {name} = {shown(value)}; expected a finite value"
@@ -265,7 +265,7 @@ class TransverselyIsotropic(Material):
         c = "TransverselyIsotropic"
         self.mu, self.K = _positive("mu", mu, c), _positive("K", K, c)
         self.eta = _finite("eta", eta, c, minimum=0.0)
-        a = [float(v) for v in direction] if hasattr(direction, "__len__") else []
+        a = [as_real(v) for v in direction] if hasattr(direction, "__len__") else []
         n = math.sqrt(sum(v * v for v in a)) if len(a) == 3 else 0.0
         if not (math.isfinite(n) and n > 0):
             raise MaterialError(f"{c}: direction = {shown(direction)}; expected a non-zero 3-vector")

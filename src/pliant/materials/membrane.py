@@ -17,17 +17,14 @@ from __future__ import annotations
 import math
 
 from .. import _core
-from ..checks import shown
+from ..checks import as_real, shown
 from ..errors import MaterialError
 
 __all__ = ["MembraneMaterial", "StVKMembrane", "NeoHookeanMembrane"]
 
 
 def _finite_positive(cls: str, name: str, value, unit: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
+    v = as_real(value)
     if not math.isfinite(v) or v <= 0.0:
         raise MaterialError(f"{cls}: {name} = {shown(value)}; expected a finite value > 0 [{unit}]")
     return v
@@ -76,10 +73,7 @@ class StVKMembrane(MembraneMaterial):
 
     def __init__(self, E, nu, thickness, density):
         self.E = _finite_positive("StVKMembrane", "E", E, "Pa")
-        try:
-            self.nu = float(nu)
-        except (TypeError, ValueError):
-            self.nu = math.nan
+        self.nu = as_real(nu)
         if not math.isfinite(self.nu) or not -1.0 < self.nu <= 0.5:
             raise MaterialError(f"StVKMembrane: nu = {shown(nu)}; expected -1 < nu <= 0.5")
         self._set_sheet(thickness, density)

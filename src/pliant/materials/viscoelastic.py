@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from .. import _core
-from ..checks import shown
+from ..checks import as_real, shown
 from ..errors import MaterialError
 from .hyperelastic import Material
 
@@ -44,17 +44,17 @@ class Viscoelastic(Material):
         for name, series in (("iso", iso), ("vol", vol)):
             most = _core.prony_max // 2
             try:
-                pairs = [tuple(float(v) for v in p) for p in series]
+                pairs = [tuple(as_real(v) for v in p) for p in series]
             except (TypeError, ValueError):
                 pairs = None
             if pairs is None or len(pairs) > most or any(len(p) != 2 for p in pairs):
                 raise MaterialError(
                     f"{c}: {name} = {shown(series)}; expected up to {most} pairs (alpha, tau [s])"
                 )
-            for a, tau in pairs:
+            for (a, tau), given in zip(pairs, series):
                 if not (math.isfinite(a) and a >= 0 and math.isfinite(tau) and tau > 0):
                     raise MaterialError(
-                        f"{c}: {name} term (alpha={shown(a)}, tau={shown(tau)}); expected "
+                        f"{c}: {name} term (alpha={shown(given[0])}, tau={shown(given[1])}); expected "
                         "alpha >= 0 and tau > 0 [s]"
                     )
             if sum(a for a, _ in pairs) >= 1.0:

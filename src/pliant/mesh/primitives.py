@@ -108,11 +108,13 @@ def box_tets(
     a cell, making the mesh unstructured (less where a move would turn an element inside out:
     _untangled). Returns nodes (N, 3) [m] and tets (M, 4)."""
     try:
-        nx, ny, nz = (int(c) for c in cells)
-    except (TypeError, ValueError, OverflowError):
+        nx, ny, nz = cells
+    except (TypeError, ValueError):
         raise InputError(f"cells = {cells!r}; expected three integers >= 1") from None
-    if min(nx, ny, nz) < 1:
+    # Integers only: int() made 20.5 cells 20 and True one, silently.
+    if not all(isinstance(c, (int, np.integer)) and not isinstance(c, bool) and c >= 1 for c in (nx, ny, nz)):
         raise InputError(f"cells = {list(cells)}; expected three integers >= 1")
+    nx, ny, nz = int(nx), int(ny), int(nz)
     if 6 * nx * ny * nz > MAX_BOX_TETS:
         raise InputError(
             f"cells = {[nx, ny, nz]} make {6 * nx * ny * nz:.3g} tets; expected at most {MAX_BOX_TETS:.0e}"

@@ -149,7 +149,10 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                 raise ctx.error(f"{key}.size", "expected lengths > 0 [m]")
             h = el or min(size) / 4
             cells = spec.get("cells") or [max(1, round(s / h)) for s in size]
-            if not (len(cells) == 3 and all(isinstance(c, int) and c >= 1 for c in cells)):
+            if not (
+                len(cells) == 3
+                and all(isinstance(c, int) and not isinstance(c, bool) and c >= 1 for c in cells)
+            ):
                 raise ctx.error(f"{key}.cells", "expected three integers >= 1")
             X, T = pm.box_tets(
                 size, cells, origin=[-s / 2 for s in size], jitter=float(spec.get("jitter", 0.0))

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _core
-from ..checks import shown
+from ..checks import as_real, shown
 from ..errors import (
     DegenerateElementError,
     InputError,
@@ -174,7 +174,7 @@ class ModelBuilder:
         """Assign a material and density [kg/m³] to elements (indices; default: all not yet assigned)."""
         if not isinstance(material, Material):
             raise MaterialError(f"material = {shown(material)}; expected a pliant.materials.Material")
-        rho = float(density)
+        rho = as_real(density)
         if not math.isfinite(rho) or rho <= 0:
             raise MaterialError(f"density = {shown(density)}; expected a finite value > 0 [kg/m^3]")
         if elements is None:
@@ -540,11 +540,11 @@ class ModelBuilder:
         dtype = np.dtype(dtype)
         if dtype not in (np.float32, np.float64):
             raise InputError(f"dtype = {dtype}; expected float32 or float64")
-        a = float(self.damping)
+        a = as_real(self.damping)
         if not math.isfinite(a) or a < 0:
             raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")
         anp_stabilization(self.nodal_pressure_stabilization)  # InputError names a wrong value
-        beta = float(self.stiffness_damping)
+        beta = as_real(self.stiffness_damping)
         if not math.isfinite(beta) or beta < 0:
             raise InputError(
                 f"stiffness_damping = {shown(self.stiffness_damping)}; expected a finite value >= 0 [s]"
