@@ -72,8 +72,8 @@ def test_bad_material_parameters(kwargs, text):
 
 
 def test_parameters_that_are_not_numbers_are_named():
-    """Each material family, the density and the damping refuse a non-number by name; numpy
-    scalars and 0-d arrays are numbers."""
+    """Each material family, the density, damping, loads, friction and the solver's step settings
+    refuse a non-number by name; numpy scalars and 0-d arrays are numbers."""
     assert pl.NeoHookean(E=np.float32(4e3), nu=np.array(0.25)).mu == pytest.approx(1600.0)  # E / 2.5
     with pytest.raises(pl.MaterialError, match="C01 = None"):
         pl.MooneyRivlin(C10=1e3, C01=None, K=1e4)
@@ -90,6 +90,22 @@ def test_parameters_that_are_not_numbers_are_named():
     b.damping = "5"
     with pytest.raises(pl.InputError, match="damping = '5'"):
         b.finalize()
+    b.damping = 0.0
+    with pytest.raises(pl.InputError, match="gravity = 'down'"):
+        b.set_gravity("down")
+    with pytest.raises(pl.InputError, match="force = 'up'"):
+        b.add_force([0], "up")
+    with pytest.raises(pl.InputError, match="soft contact friction = '0.3'"):
+        b.set_soft_contact(friction="0.3")
+    model = b.finalize("float64")
+    for kwargs, says in [
+        (dict(dt=True), "dt = True"),  # was a step of 1 s
+        (dict(dt="1e-4"), "dt = '1e-4'"),
+        (dict(safety=True), "safety = True"),  # was the critical step itself
+        (dict(damping=True), "damping = True"),
+    ]:
+        with pytest.raises(pl.InputError, match=says):
+            pl.Solver(model, **kwargs)
 
 
 def test_bad_density_and_missing_material():

@@ -83,8 +83,10 @@ def test_pressure_float32_and_bad_faces():
     interior = np.array([[0, 1, 2]])  # not a boundary triangle of the cube
     with pytest.raises(InputError, match="face 0 .* not on the mesh boundary"):
         b.add_pressure(interior, 1.0)
-    with pytest.raises(InputError, match="pressure shape"):
+    with pytest.raises(InputError, match=r"pressure = \[1.0, 1.0, 1.0\] \(shape \(3,\)\)"):
         b.add_pressure(on[0], np.ones(3))
+    with pytest.raises(InputError, match="pressure = True"):
+        b.add_pressure(on[0], True)
 
 
 def test_hydrostatic_pressure_with_average_nodal_pressure():

@@ -164,9 +164,10 @@ dt = 2e-4
 def test_add_traction_refuses_bad_input():
     b, X, top = _free_cube()
     for faces, t, says in [
-        (top, (1.0, 2.0), "traction of shape"),
-        (top, (1.0, 2.0, np.inf), "not finite"),
-        (top[:, :2], (1.0, 2.0, 3.0), "faces shape"),
+        (top, (1.0, 2.0), r"traction = \(1.0, 2.0\) \(shape \(2,\)\)"),
+        (top, "up", "traction = 'up'"),
+        (top, (1.0, 2.0, np.inf), r"traction = \(1.0, 2.0, inf\) .* expected finite"),
+        (top[:, :2], (1.0, 2.0, 3.0), r"faces of shape \(18, 2\), int\d+; expected \(F, 3\) integer"),
         (top + b.n_nodes, (1.0, 2.0, 3.0), "add_traction faces"),
     ]:
         with pytest.raises(pl.InputError, match=says):

@@ -22,28 +22,43 @@ def as_real(value) -> float:
     return float(value)
 
 
-def finite_number(value, what: str, unit: str = "") -> float:
-    """``value`` as a finite float ("until = nan; expected a finite number [s]")."""
+def real_array(value) -> np.ndarray | None:
+    """``value`` as a float array where every entry is a real number; None for anything else (bools,
+    strings, ragged or nested objects): np.asarray(value, float) made True 1.0 and '1' 1.0."""
     try:
-        x = float(value)
-    except (TypeError, ValueError, OverflowError):
-        x = None
-    if x is None or not math.isfinite(x):
+        a = np.asarray(value)
+    except (TypeError, ValueError):
+        return None
+    if a.dtype.kind not in "iuf":
+        return None
+    return a.astype(float)
+
+
+def finite_number(value, what: str, unit: str = "") -> float:
+    """``value`` as a finite float ("until = nan; expected a finite number [s]"); a bool or a string
+    is not a number (as_real)."""
+    x = as_real(value)
+    if not math.isfinite(x):
         raise InputError(f"{what} = {shown(value)}; expected a finite number{f' [{unit}]' if unit else ''}")
     return x
 
 
 def finite_vector(value, n: int, what: str, unit: str = "") -> np.ndarray:
-    """``value`` as a float array of shape (n,) with finite entries."""
-    try:
-        a = np.asarray(value, dtype=float).ravel()
-    except (TypeError, ValueError):
-        a = None
+    """``value`` as a float array of shape (n,) with finite entries (numbers: no bools or strings)."""
+    a = real_array(value)
+    a = None if a is None else a.ravel()
     if a is None or a.shape != (n,) or not np.all(np.isfinite(a)):
         raise InputError(
             f"{what} = {shown(value)}; expected {n} finite numbers{f' [{unit}]' if unit else ''}"
         )
     return a
+
+
+def described(value) -> str:
+    """``value`` for a message about its shape: shown, with its shape where it is numeric
+    ("[1.0, 2.0] (shape (2,))", "'up'")."""
+    a = real_array(value)
+    return shown(value) if a is None else f"{shown(value)} (shape {a.shape})"
 
 
 def shown(value, limit: int = 80) -> str:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..checks import finite_number, shown
+from ..checks import finite_number, real_array, shown
 from ..errors import InputError
 
 __all__ = ["SoftContact", "body_labels"]
@@ -78,7 +78,8 @@ class SoftContact:
     @staticmethod
     def make(friction=0.0, pairs=None, self_contact=False, skin=None) -> SoftContact:
         """Checked settings; friction: μ or (μs, μk)."""
-        mu = np.atleast_1d(np.asarray(friction, dtype=float)) if _numeric(friction) else None
+        mu = real_array(friction)
+        mu = None if mu is None else np.atleast_1d(mu)
         if mu is None or mu.shape not in ((1,), (2,)) or not np.all(np.isfinite(mu)) or np.any(mu < 0):
             raise InputError(
                 f"soft contact friction = {shown(friction)}; expected μ or (μs, μk), finite, >= 0"
@@ -136,14 +137,6 @@ class SoftContact:
         for k, (a, b) in enumerate(order):
             table[a, b] = table[b, a] = k
         return table, order
-
-
-def _numeric(x) -> bool:
-    try:
-        np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        return False
-    return True
 
 
 def on_rollers(X: np.ndarray, faces: np.ndarray, held: np.ndarray) -> np.ndarray:

@@ -44,6 +44,7 @@ class Viscoelastic(Material):
         for name, series in (("iso", iso), ("vol", vol)):
             most = _core.prony_max // 2
             try:
+                series = list(series)  # iterated twice below (a generator would be empty the second time)
                 pairs = [tuple(as_real(v) for v in p) for p in series]
             except (TypeError, ValueError):
                 pairs = None

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _core
-from ..checks import as_real, shown
+from ..checks import as_real, described, real_array, shown
 from ..errors import (
     DegenerateElementError,
     InputError,
@@ -120,12 +120,11 @@ class ModelBuilder:
         Returns the global indices of the new elements."""
         src = source or self.source
         try:
-            X = np.asarray(nodes, dtype=float)
-            T = np.asarray(tets)
-        except (TypeError, ValueError) as e:
-            raise MeshError(
-                f"{src}: nodes (N, 3) and tetrahedra (M, 4) must be numeric arrays: {e}"
-            ) from None
+            X, T = real_array(nodes), np.asarray(tets)
+        except (TypeError, ValueError):  # ragged tetrahedra
+            X = None
+        if X is None:
+            raise MeshError(f"{src}: nodes (N, 3) and tetrahedra (M, 4) must be numeric arrays") from None
         if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] == 0:
             raise MeshError(f"{src}: nodes have shape {X.shape}; expected (N, 3) with N >= 1")
         if not np.all(np.isfinite(X)):
@@ -221,11 +220,12 @@ class ModelBuilder:
         ids = self._node_ids(nodes, "prescribe")
         ds = _dofs(dofs)
         given = "non-numeric"
+        val = real_array(displacement)
         try:
-            val = np.asarray(displacement, dtype=float)
-            given = f"shape {val.shape}"
-            val = np.broadcast_to(val, (ids.size, len(ds))) if val.ndim < 2 else val
-        except (TypeError, ValueError):
+            if val is not None:
+                given = f"shape {val.shape}"
+                val = np.broadcast_to(val, (ids.size, len(ds))) if val.ndim < 2 else val
+        except ValueError:
             val = None
         if val is None or val.shape != (ids.size, len(ds)):
             raise InputError(
@@ -252,15 +252,14 @@ class ModelBuilder:
     def add_force(self, nodes, force, curve: LoadCurve | None = None):
         """Add a force [N] on each node: (3,) for all, or (n, 3) per node; scaled by ``curve``."""
         ids = self._node_ids(nodes, "add_force")
+        f = real_array(force)
         try:
-            f = np.asarray(force, dtype=float)
-            f = np.broadcast_to(f, (ids.size, 3)) if f.ndim == 1 else f
-        except (TypeError, ValueError):
+            f = np.zeros((0, 0)) if f is None else np.broadcast_to(f, (ids.size, 3)) if f.ndim == 1 else f
+        except ValueError:
             f = np.zeros((0, 0))
         if f.shape != (ids.size, 3) or not np.all(np.isfinite(f)):
             raise InputError(
-                f"add_force: force of shape {f.shape} or not finite; expected finite (3,) or "
-                f"({ids.size}, 3) [N]"
+                f"add_force: force = {described(force)}; expected finite (3,) or ({ids.size}, 3) [N]"
             )
         self._forces.append((ids, np.array(f), curve or Constant()))
 
@@ -274,16 +273,18 @@ class ModelBuilder:
         (x1 − x0) × (x2 − x0); positive p pushes against it), as NiftySim does."""
         F = np.asarray(faces)
         if F.ndim != 2 or F.shape[1] != 3 or F.shape[0] == 0 or not np.issubdtype(F.dtype, np.integer):
-            raise InputError(f"add_pressure: faces shape {F.shape}; expected (F, 3) node ids")
+            raise InputError(
+                f"add_pressure: faces of shape {F.shape}, {F.dtype}; expected (F, 3) integer node ids"
+            )
         F = self._node_ids(F.ravel(), "add_pressure faces").reshape(-1, 3)
-        p = (
-            np.broadcast_to(np.asarray(pressure, float), (F.shape[0],)).copy()
-            if np.ndim(pressure) == 0
-            else np.asarray(pressure, float)
-        )
+        p = real_array(pressure)
+        if p is None:
+            p = np.zeros(0)
+        elif p.ndim == 0:
+            p = np.broadcast_to(p, (F.shape[0],)).copy()
         if p.shape != (F.shape[0],) or not np.all(np.isfinite(p)):
             raise InputError(
-                f"add_pressure: pressure shape {np.shape(pressure)}; expected a finite "
+                f"add_pressure: pressure = {described(pressure)}; expected a finite "
                 f"value or ({F.shape[0]},) [Pa]"
             )
         if orient:
@@ -310,16 +311,18 @@ class ModelBuilder:
         every face or (F, 3)."""
         F = np.asarray(faces)
         if F.ndim != 2 or F.shape[1] != 3 or F.shape[0] == 0 or not np.issubdtype(F.dtype, np.integer):
-            raise InputError(f"add_traction: faces shape {F.shape}; expected (F, 3) node ids")
+            raise InputError(
+                f"add_traction: faces of shape {F.shape}, {F.dtype}; expected (F, 3) integer node ids"
+            )
         F = self._node_ids(F.ravel(), "add_traction faces").reshape(-1, 3)
+        t = real_array(traction)
         try:
-            t = np.asarray(traction, dtype=float)
-            t = np.broadcast_to(t, F.shape).copy() if t.ndim == 1 else t
-        except (TypeError, ValueError):
+            t = np.zeros((0, 0)) if t is None else np.broadcast_to(t, F.shape).copy() if t.ndim == 1 else t
+        except ValueError:
             t = np.zeros((0, 0))
         if t.shape != F.shape or not np.all(np.isfinite(t)):
             raise InputError(
-                f"add_traction: traction of shape {t.shape} or not finite; expected finite (3,) or "
+                f"add_traction: traction = {described(traction)}; expected finite (3,) or "
                 f"({F.shape[0]}, 3) [Pa]"
             )
         self._tractions.append((F, t, curve or Constant()))
@@ -368,9 +371,10 @@ class ModelBuilder:
 
     def set_gravity(self, g=(0.0, 0.0, -9.81), curve: LoadCurve | None = None):
         """Body acceleration g [m/s²] applied to every node as m_a·g, scaled by ``curve``."""
-        gv = np.asarray(g, dtype=float).ravel()
-        if gv.shape != (3,) or not np.all(np.isfinite(gv)):
+        gv = real_array(g)
+        if gv is None or gv.ravel().shape != (3,) or not np.all(np.isfinite(gv)):
             raise InputError(f"gravity = {shown(g)}; expected 3 finite components [m/s^2]")
+        gv = gv.ravel()
         self._gravity = (gv, curve or Constant())
 
     def add_gravity(self, g, nodes, curve: LoadCurve | None = None):
@@ -379,9 +383,10 @@ class ModelBuilder:
         NiftySim's Gravity constraints, each on its listed nodes, add up). Nodes a cut copies
         (pliant.cutting) keep it."""
         ids = np.unique(self._node_ids(nodes, "add_gravity nodes"))
-        gv = np.asarray(g, dtype=float).ravel()
-        if gv.shape != (3,) or not np.all(np.isfinite(gv)):
+        gv = real_array(g)
+        if gv is None or gv.ravel().shape != (3,) or not np.all(np.isfinite(gv)):
             raise InputError(f"add_gravity: g = {shown(g)}; expected 3 finite components [m/s^2]")
+        gv = gv.ravel()
         self._node_gravity.append((ids, gv, curve or Constant()))
 
     def add_tool(self, tool, nodes=None):

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .._core import RunStatus
-from ..checks import finite_number, shown
+from ..checks import as_real, finite_number, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .anp import anp_stabilization
 from .model import Model, State
@@ -142,16 +142,14 @@ class Solver:
                 raise InputError(f"history_steps = {shown(history_steps)}; expected >= 1 or None")
         self.history_steps = history_steps
         self.model = model
-        if not (0 < safety <= 1):
+        if not (0 < as_real(safety) <= 1):
             raise InputError(f"safety = {shown(safety)}; expected 0 < safety <= 1")
-        if dt is None:
-            dt = default_step(model, safety)
-        dt = float(dt)
+        given, dt = dt, default_step(model, float(safety)) if dt is None else as_real(dt)
         if not math.isfinite(dt) or dt <= 0:
-            raise TimeStepError(f"dt = {shown(dt)}; expected a finite time step > 0 [s]")
+            raise TimeStepError(f"dt = {shown(given)}; expected a finite time step > 0 [s]")
         self._limit = model.dt_critical if allow_unstable else _stable_limit(model, dt)
         self.dt = dt
-        self.damping = model.damping if damping is None else float(damping)
+        self.damping = model.damping if damping is None else as_real(damping)
         if not math.isfinite(self.damping) or self.damping < 0:
             raise InputError(f"damping = {shown(damping)}; expected a finite value >= 0 [1/s]")
         if int(check_every) < 1:
@@ -313,9 +311,9 @@ class Solver:
         self._same_model(state_in, state_out)
         if state_in is state_out:
             raise InputError("step(state_in, state_out): states must be distinct; use run() in place")
-        dt = self.dt if dt is None else float(dt)
+        given, dt = dt, self.dt if dt is None else as_real(dt)
         if not (math.isfinite(dt) and dt > 0):
-            raise TimeStepError(f"dt = {shown(dt)}; expected a finite time step > 0 [s]")
+            raise TimeStepError(f"dt = {shown(given)}; expected a finite time step > 0 [s]")
         if dt > self._limit and self.dt <= self._limit:
             raise TimeStepError(f"dt = {dt:.4g} s exceeds the stable time step {self._limit:.4g} s")
         rep = self._backend.step(state_in._s, state_out._s, dt, self.damping)
