@@ -188,6 +188,24 @@ def test_an_automatic_step_ends_the_run_at_its_duration(tmp_path):
     assert s["steps"] == n and s["simulated_time"] == pytest.approx(0.01, rel=1e-12)  # n sums of dt
 
 
+def test_a_run_replaces_an_earlier_runs_files_and_keeps_the_users(tmp_path):
+    """A run of 3 frames into the folder of a run of 10 left frames 4 to 10 beside its own (a
+    folder mixing two runs); files that are not a run's stay."""
+    from pliant import runner as run_mod
+
+    text = TENSION.replace("static = true", "static = false").replace("duration = 1.0", "duration = 0.2")
+    out = tmp_path / "o"
+    run_mod.run_scene(load_scene(_write(tmp_path, text.replace("[output]", "[output]\nframes = 10"))), out)
+    (out / "notes.txt").write_text("mine")
+    assert len(list(out.glob("frame_*.vtu"))) == 11
+    with pytest.warns(
+        pl.PliantWarning, match="replaced the 13 files of an earlier run"
+    ):  # 11 frames, .pvd, .json
+        run_mod.run_scene(load_scene(_write(tmp_path, text.replace("[output]", "[output]\nframes = 3"))), out)
+    assert sorted(f.name for f in out.glob("frame_*.vtu")) == [f"frame_{k:05d}.vtu" for k in range(4)]
+    assert (out / "notes.txt").read_text() == "mine"
+
+
 def test_scene_tools_and_errors(tmp_path):
     """[[tool]] tables build rigid tools with keyframes; bad ones are named errors."""
     text = TENSION.replace(

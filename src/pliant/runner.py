@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import time
 import warnings
 from pathlib import Path
@@ -141,6 +142,27 @@ def _membrane_energy(model, state, nodes: slice) -> float:
     return float(model.membrane_results(state)["energy"][(first >= lo) & (first < hi)].sum())
 
 
+# What a run writes into its folder (run_scene): an earlier run's are replaced as a whole.
+RUN_FILES = ("result.pvd", "surface.pvd", "summary.json", "result.png", "tools.json", "U.txt", "F.txt")
+RUN_FRAME = re.compile(r"(frame|surface)_\d{5}\.vtu")
+
+
+def clear_earlier_run(out: Path) -> int:
+    """Remove the files an earlier run left in ``out`` (RUN_FILES and its numbered frames, where
+    its result.pvd or summary.json says one ran there; nothing else), so that a new run's folder
+    never mixes two runs: a run of 5 frames after one of 20 left frames 6 to 20 beside it. Returns
+    how many files were removed."""
+    if not any((out / f).exists() for f in ("result.pvd", "summary.json")):
+        return 0
+    old = [f for f in out.iterdir() if f.is_file() and (f.name in RUN_FILES or RUN_FRAME.fullmatch(f.name))]
+    for f in old:
+        try:
+            f.unlink()
+        except OSError as e:
+            raise InputError(f"{f}: cannot replace an earlier run's file: {e.strerror or e}") from None
+    return len(old)
+
+
 def _extra_args(e: Exception) -> tuple:
     """The arguments after the message of errors that carry more (an element id)."""
     return (e.element,) if hasattr(e, "element") else ()
@@ -195,6 +217,8 @@ def run_scene(
 
         Ve, Fe = scene.meta["embed_surface"]
         embedding = embed_surface(model.reference_positions, model.tets, Ve, Fe)
+    if out is not None and out.is_dir() and (n := clear_earlier_run(out)):
+        warnings.warn(PliantWarning(f"{out}: replaced the {n} files of an earlier run there"), stacklevel=2)
     writer = _NoFiles() if out is None else ResultWriter(out, model, fields=scene.fields, embedding=embedding)
     cutter = None
     if scene.blades:  # blades cut as it runs: model, solver and state change with the topology
