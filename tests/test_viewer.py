@@ -187,6 +187,25 @@ def test_playback_of_a_results_folder(chromium, tmp_path):
     v.server.stop()
 
 
+def test_playback_names_a_frame_it_cannot_read(tmp_path):
+    """A frame damaged after the folder was opened: the slider's callback (the server's thread)
+    raised; the label now names the file and the last good frame stays."""
+    from pliant.runner import run_scene
+    from pliant.view.viewer import PlaybackViewer
+
+    sc = load_scene(DEMO_SCENE)
+    sc.duration, sc.frames, sc.png = 0.05, 4, False
+    run_scene(sc, tmp_path, progress=False)
+    v = PlaybackViewer(tmp_path, port=_free_port())
+    try:
+        (tmp_path / "frame_00003.vtu").write_text("garbage")
+        assert v.shown(2) and "frame 3/5" in v.label.content
+        assert not v.shown(3)
+        assert "frame 4/5 cannot be shown" in v.label.content and "frame_00003.vtu" in v.label.content
+    finally:
+        v.server.stop()
+
+
 EXAMPLES = Path(__file__).parents[1] / "examples"
 
 GRASP_SCENE = """

@@ -419,8 +419,19 @@ class PlaybackViewer:
         _frame_camera(self.server, self.X)
         self.slider = self.server.gui.add_slider("frame", 0, len(self.files) - 1, 1, 0)
         self.label = self.server.gui.add_markdown("")
-        self.slider.on_update(lambda _: self.show(int(self.slider.value)))
+        self.slider.on_update(lambda _: self.shown(int(self.slider.value)))
         self.show(0)
+
+    def shown(self, i: int) -> bool:
+        """show(i) for the slider: a frame that cannot be read (damaged or replaced since the viewer
+        opened the folder) is named in the label instead of raising in the server's thread, and
+        the last good frame stays on screen. Returns whether frame i is shown."""
+        try:
+            self.show(i)
+        except (InputError, ValueError) as e:
+            self.label.content = f"**frame {i + 1}/{len(self.files)} cannot be shown**: {e}"
+            return False
+        return True
 
     def show(self, i: int):
         import trimesh
