@@ -264,6 +264,10 @@ def test_bad_soft_contact_settings_name_themselves():
         b.set_soft_contact(skin=0.0)
     with pytest.raises(InputError, match="pairs"):
         b.set_soft_contact(pairs="all")
+    with pytest.raises(InputError, match=r"pairs = \[\(0, 1.7\)\]"):  # int() made it body 1
+        b.set_soft_contact(pairs=[(0, 1.7)])
+    with pytest.raises(InputError, match="self_contact = \\[True\\]"):
+        b.set_soft_contact(self_contact=[True])
     b.set_soft_contact(pairs=[(0, 5)])
     with pytest.raises(InputError, match="body 5 does not exist.*2 bodies"):
         b.finalize()

@@ -22,6 +22,14 @@ def as_real(value) -> float:
     return float(value)
 
 
+def as_index(value) -> int:
+    """``value`` as an int where it is an integer (int or a numpy integer; not a bool); raises
+    ValueError otherwise (int() made 1.7 one and True one)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{value!r} is not an integer")
+    return int(value)
+
+
 def real_array(value) -> np.ndarray | None:
     """``value`` as a float array where every entry is a real number; None for anything else (bools,
     strings, ragged or nested objects): np.asarray(value, float) made True 1.0 and '1' 1.0."""

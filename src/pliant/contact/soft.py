@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..checks import finite_number, real_array, shown
+from ..checks import as_index, finite_number, real_array, shown
 from ..errors import InputError
 
 __all__ = ["SoftContact", "body_labels"]
@@ -89,14 +89,14 @@ class SoftContact:
             raise InputError(f"soft contact friction = {shown(friction)}: kinetic μk above static μs")
         if pairs is not None:
             try:
-                pairs = tuple((int(a), int(b)) for a, b in pairs)
+                pairs = tuple((as_index(a), as_index(b)) for a, b in pairs)
             except (TypeError, ValueError):
                 raise InputError(
                     f"soft contact pairs = {shown(pairs)}; expected pairs of body numbers [(a, b), ...]"
                 ) from None
         if not isinstance(self_contact, bool):
             try:
-                self_contact = tuple(int(b) for b in self_contact)
+                self_contact = tuple(as_index(b) for b in self_contact)
             except (TypeError, ValueError):
                 raise InputError(
                     f"self_contact = {shown(self_contact)}; expected True, False or a list of body numbers"

@@ -419,8 +419,11 @@ class PlaybackViewer:
         _frame_camera(self.server, self.X)
         self.slider = self.server.gui.add_slider("frame", 0, len(self.files) - 1, 1, 0)
         self.label = self.server.gui.add_markdown("")
-        self.slider.on_update(lambda _: self.shown(int(self.slider.value)))
+        self.slider.on_update(self._on_slider)
         self.show(0)
+
+    def _on_slider(self, _event) -> None:
+        self.shown(int(self.slider.value))
 
     def shown(self, i: int) -> bool:
         """show(i) for the slider: a frame that cannot be read (damaged or replaced since the viewer
