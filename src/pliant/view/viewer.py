@@ -9,6 +9,7 @@ clock); the drawing loop sends the surface to the browser at about 20 frames per
 
 from __future__ import annotations
 
+import asyncio
 import threading
 import time
 from pathlib import Path
@@ -59,6 +60,34 @@ class _Surface:
             np.add.at(acc, self.faces[:, k], element_values[self.owner])
             np.add.at(cnt, self.faces[:, k], 1)
         return acc / np.maximum(cnt, 1)
+
+
+class _Drag:
+    """One gizmo's drag as the browser reports it, and whether the gizmo should follow its
+    object's pose (keyframes, a reset). viser awaits async callbacks in message order, so the
+    phases arrive as the browser sent them."""
+
+    def __init__(self):
+        self.dragging = False
+        self.last = 0.0  # perf_counter of the last drag message
+        self.seen = None  # the object's pose (position and wxyz) the gizmo last followed
+
+    def heard(self, phase: str):
+        self.dragging = phase != "end"
+        self.last = time.perf_counter()
+
+    def follows(self, position, wxyz) -> bool:
+        """Whether to move the gizmo to the object's pose (position [m], wxyz): not while a drag
+        is on, nor for a second after one (the object is on its way to where the drag left it),
+        and only when the pose has changed since the gizmo last followed it (paused, a tool
+        stays where it was while its target is where the drag left the gizmo)."""
+        pose = np.concatenate([np.asarray(position, float), np.asarray(wxyz, float)])
+        if self.dragging or time.perf_counter() - self.last < 1.0:
+            return False
+        if self.seen is not None and np.allclose(pose, self.seen):
+            return False
+        self.seen = pose
+        return True
 
 
 class LiveViewer:
@@ -179,6 +208,8 @@ class LiveViewer:
                 b.keys = [k0.copy() for k0 in self._initial_blade_keys[j]]
             if self.sim.cutter is not None:
                 self.sim.cutter.embedding, self.sim.cutter.events = self.embedding, []
+        for d in self._drags + self._blade_drags:  # the gizmos go back with their objects
+            d.seen = None
 
     def toggle_grasp(self, k: int):
         """What tool k's grasp button does: close it (it holds the surface nodes within its reach,
@@ -206,6 +237,8 @@ class LiveViewer:
         self._initial_grips = [list(t.grips) for t in self.sim.solver.tools]
         self._initial_blade_keys = [[k.copy() for k in b.keys] for b in self.scene.blades]
         self.controls = []
+        self._drags = [_Drag() for _ in self.model.tools]
+        self._blade_drags = [_Drag() for _ in self.scene.blades]
         ext = float(np.ptp(self.model.reference_positions, axis=0).max())
         for k, tool in enumerate(self.model.tools):
             R, p = tool.pose(0.0)
@@ -224,9 +257,8 @@ class LiveViewer:
                 sc.add_cylinder(f"{name}/shape", radius=tool.radius, height=tool.length, color=(200, 80, 80))
             elif isinstance(tool, Box):
                 sc.add_box(f"{name}/shape", dimensions=tuple(2 * tool.half), color=(200, 80, 80))
-            ctrl.on_update(lambda _, k=k, c=ctrl: self._dragged(k, c))
+            ctrl.on_update(self._on_drag(self.move_tool, k, self._drags[k]))
             self.controls.append(ctrl)
-        self._last_drag = [0.0] * len(self.model.tools)
         self.blade_controls = []
         for j, blade in enumerate(self.scene.blades):  # a thin plate: the edge at its local z = 0
             R, p = blade.pose(0.0)
@@ -240,13 +272,22 @@ class LiveViewer:
                 position=(0.0, 0.0, depth / 2),
                 color=(150, 150, 170),
             )
-            ctrl.on_update(lambda _, j=j, c=ctrl: self._dragged_blade(j, c))
+            ctrl.on_update(self._on_drag(self.move_blade, j, self._blade_drags[j]))
             self.blade_controls.append(ctrl)
-        self._last_blade_drag = [0.0] * len(self.scene.blades)
 
-    def _dragged_blade(self, j, ctrl):
-        self._last_blade_drag[j] = time.perf_counter()
-        self.move_blade(j, ctrl.position, ctrl.wxyz)
+    def _on_drag(self, move, k: int, drag: _Drag):
+        """The gizmo callback: an async one, so that viser runs it in message order; it notes the
+        drag's phase and moves the object (``move(k, position, wxyz)``) on each update, taking
+        the pose the message brought (a pose read later may be the drawing loop's)."""
+
+        async def on_update(event):
+            phase = event.phase  # "start", "update" or "end" (viser >= 1.1)
+            position, wxyz = np.array(event.target.position), np.array(event.target.wxyz)
+            drag.heard(phase)
+            if phase == "update":
+                await asyncio.to_thread(move, k, position, wxyz)
+
+        return on_update
 
     def move_blade(self, j: int, position, wxyz=(1.0, 0.0, 0.0, 0.0)):
         """What dragging blade j's gizmo does: the blade moves there, no faster than 0.1 of the
@@ -259,10 +300,6 @@ class LiveViewer:
                 0.1 * self.sim.model.min_altitude,
                 self.sim.dt,
             )
-
-    def _dragged(self, k, ctrl):
-        self._last_drag[k] = time.perf_counter()
-        self.move_tool(k, ctrl.position, ctrl.wxyz)
 
     def move_tool(self, k: int, position, wxyz=(1.0, 0.0, 0.0, 0.0)):
         """What dragging tool k's gizmo does: the tool moves there over the next step."""
@@ -347,8 +384,9 @@ class LiveViewer:
         ext = float(np.ptp(self.model.reference_positions, axis=0).max())
         for k, ((f, _), (R, p)) in enumerate(zip(forces, poses)):
             ctrl = self.controls[k]
-            if ctrl is not None and time.perf_counter() - self._last_drag[k] > 1.0:
-                ctrl.position, ctrl.wxyz = tuple(p), tuple(quat_from_matrix(R))  # follow keyframes
+            q = quat_from_matrix(R)
+            if ctrl is not None and self._drags[k].follows(p, q):
+                ctrl.position, ctrl.wxyz = tuple(p), tuple(q)  # follow keyframes
             lines.append(f"tool {k} ({model.tools[k].name}): |F| = {np.linalg.norm(f):.3g} N")
             fmax = max(np.linalg.norm(f), 1e-12)
             seg = np.array([[p, p + 0.3 * ext * f / fmax]])
@@ -357,9 +395,10 @@ class LiveViewer:
             )
         self.force_text.content = "  \n".join(lines)
         for j, (R, p) in enumerate(blade_poses):
-            if time.perf_counter() - self._last_blade_drag[j] > 1.0:
+            q = quat_from_matrix(R)
+            if self._blade_drags[j].follows(p, q):
                 ctrl = self.blade_controls[j]
-                ctrl.position, ctrl.wxyz = tuple(p), tuple(quat_from_matrix(R))  # follow keyframes
+                ctrl.position, ctrl.wxyz = tuple(p), tuple(q)  # follow keyframes
 
     def serve(self, duration: float | None = None):
         """Run the simulation thread and the drawing loop (until Ctrl-C, :meth:`stop` or
