@@ -266,6 +266,16 @@ def test_state_save_and_restore(tmp_path):
     older.load(tmp_path / "old.npz")
     older.run(steps=50)
     np.testing.assert_allclose(older.displacements, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    # A folder as the file name was saved beside it (tmp_path/d -> tmp_path/d.npz)
+    (tmp_path / "d").mkdir()
+    with pytest.raises(pl.InputError, match="the state file is a folder"):
+        sim.save(tmp_path / "d")
+    assert not (tmp_path / "d.npz").exists()
+    # relax: a time that is not a number, a tolerance that is not positive (NaN relaxed forever)
+    with pytest.raises(pl.InputError, match="at_time = 'x'"):
+        sim.solver.relax(sim.state, at_time="x")
+    with pytest.raises(pl.InputError, match="tol = nan"):
+        sim.solver.relax(sim.state, tol=float("nan"))
 
 
 def test_non_finite_element_is_named_as_an_element():

@@ -717,10 +717,9 @@ class State:
         model's fingerprint), atomically. ``.npz`` is appended to a name without it."""
         from ..io.files import atomic_write, check_output_file
 
-        path = Path(path)
+        path = check_output_file(path, "state file")  # first: "/tmp" was saved as /tmp.npz
         if path.suffix != ".npz":
-            path = path.with_name(path.name + ".npz")
-        check_output_file(path, "state file")
+            path = check_output_file(path.with_name(path.name + ".npz"), "state file")
         u_prev = self.model.to_user_nodes(np.asarray(self._s.get_u_prev(), dtype=float))
         du = self.model.to_user_nodes(np.asarray(self._s.get_du(), dtype=float))
         data = dict(

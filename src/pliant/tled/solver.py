@@ -413,7 +413,9 @@ class Solver:
         out-of-balance force falls below ``tol``; raises :class:`ConvergenceError` if the last one
         does not within ``max_steps`` (unless ``strict=False``)."""
         self._same_model(state)
-        t_end = self.model.last_load_time if at_time is None else float(at_time)
+        t_end = self.model.last_load_time if at_time is None else finite_number(at_time, "at_time", "s")
+        if not as_real(tol) > 0:
+            raise InputError(f"tol = {shown(tol)}; expected a relative residual > 0")
         if not 1 <= int(increments) <= MAX_INCREMENTS:
             raise InputError(
                 f"increments = {shown(increments)}; expected 1 to {MAX_INCREMENTS} "
