@@ -95,6 +95,10 @@ def test_parameters_that_are_not_numbers_are_named():
         b.set_gravity("down")
     with pytest.raises(pl.InputError, match="force = 'up'"):
         b.add_force([0], "up")
+    with pytest.raises(pl.InputError, match=r"force = \(True, 0, 0\)"):  # numpy made it (1, 0, 0)
+        b.add_force([0], (True, 0, 0))
+    with pytest.raises(pl.InputError, match="gravity"):
+        b.set_gravity([0.0, True, -9.81])
     with pytest.raises(pl.InputError, match="soft contact friction = '0.3'"):
         b.set_soft_contact(friction="0.3")
     model = b.finalize("float64")

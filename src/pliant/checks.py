@@ -39,7 +39,15 @@ def real_array(value) -> np.ndarray | None:
         return None
     if a.dtype.kind not in "iuf":
         return None
+    if not isinstance(value, np.ndarray) and _has_bool(value):
+        return None  # numpy made (True, 0, 0) integers and (True, 0.5) floats
     return a.astype(float)
+
+
+def _has_bool(value) -> bool:
+    """Whether a (nested) sequence holds a bool anywhere."""
+    entries = np.asarray(value, dtype=object).ravel()
+    return any(isinstance(x, (bool, np.bool_)) for x in entries)
 
 
 def finite_number(value, what: str, unit: str = "") -> float:
