@@ -57,7 +57,11 @@ def test_a_failing_check_exits_1_naming_it(tmp_path, monkeypatch):
     wrong = Check("made up", "two against one", 2.0, 1.0, "1", "a check that must fail", 0.1)
     monkeypatch.setattr(cases, "CASES", {"bad": lambda quick: ([wrong], {})})
     monkeypatch.setattr("pliant.validate.report.CASES", cases.CASES)
+    # An earlier report in the folder: its plot goes (this run has none), other files stay.
+    for name in ("results.json", "cantilever.png", "notes.txt"):
+        (tmp_path / name).write_text("earlier")
     r = CliRunner().invoke(app, ["validate", "--quick", "-o", str(tmp_path)])
     assert r.exit_code == 1
+    assert not (tmp_path / "cantilever.png").exists() and (tmp_path / "notes.txt").exists()
     assert "made up, two against one" in r.output
     assert "**FAIL**" in (tmp_path / "report.md").read_text()

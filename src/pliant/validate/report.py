@@ -79,6 +79,9 @@ def run_validation(
     return rows
 
 
+PLOTS = ("uniaxial.png", "cantilever.png")  # every plot a report may have
+
+
 def _plots(out: Path, figures: dict) -> list[str]:
     import matplotlib
 
@@ -112,6 +115,9 @@ def _plots(out: Path, figures: dict) -> list[str]:
         ax.legend(fontsize=8)
         files.append(_save(fig, out / "cantilever.png"))
     plt.close("all")
+    if (out / "results.json").exists():  # an earlier report here: its plots this one lacks go
+        for name in set(PLOTS) - set(files):
+            (out / name).unlink(missing_ok=True)
     return files
 
 
