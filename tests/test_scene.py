@@ -197,12 +197,15 @@ def test_a_run_replaces_an_earlier_runs_files_and_keeps_the_users(tmp_path):
     out = tmp_path / "o"
     run_mod.run_scene(load_scene(_write(tmp_path, text.replace("[output]", "[output]\nframes = 10"))), out)
     (out / "notes.txt").write_text("mine")
-    assert len(list(out.glob("frame_*.vtu"))) == 11
+    (out / "frame_123456.vtu").write_text("")  # frame 123456 of a long run (six digits)
+    (out / "frame_1.vtu").write_text("")  # not a name a run gives a frame: stays
+    assert len(list(out.glob("frame_*.vtu"))) == 13
     with pytest.warns(
-        pl.PliantWarning, match="replaced the 13 files of an earlier run"
-    ):  # 11 frames, .pvd, .json
+        pl.PliantWarning, match="replaced the 14 files of an earlier run"
+    ):  # 12 frames, .pvd, .json
         run_mod.run_scene(load_scene(_write(tmp_path, text.replace("[output]", "[output]\nframes = 3"))), out)
-    assert sorted(f.name for f in out.glob("frame_*.vtu")) == [f"frame_{k:05d}.vtu" for k in range(4)]
+    frames = [f"frame_{k:05d}.vtu" for k in range(4)]
+    assert sorted(f.name for f in out.glob("frame_*.vtu")) == frames + ["frame_1.vtu"]
     assert (out / "notes.txt").read_text() == "mine"
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 import time
 import warnings
 from pathlib import Path
@@ -16,6 +15,7 @@ import numpy as np
 from . import __version__
 from .errors import InputError, InstabilityError, PliantWarning
 from .io import ResultWriter, atomic_write_text, check_output_dir
+from .io.results import INDEX, SURFACE_INDEX, is_frame_file
 from .job import Scene
 from .memory import OUTPUT_BYTES_PER_TET, require_memory
 from .tled import Solver
@@ -143,8 +143,7 @@ def _membrane_energy(model, state, nodes: slice) -> float:
 
 
 # What a run writes into its folder (run_scene): an earlier run's are replaced as a whole.
-RUN_FILES = ("result.pvd", "surface.pvd", "summary.json", "result.png", "tools.json", "U.txt", "F.txt")
-RUN_FRAME = re.compile(r"(frame|surface)_\d{5}\.vtu")
+RUN_FILES = (INDEX, SURFACE_INDEX, "summary.json", "result.png", "tools.json", "U.txt", "F.txt")
 
 
 def clear_earlier_run(out: Path) -> int:
@@ -152,9 +151,9 @@ def clear_earlier_run(out: Path) -> int:
     its result.pvd or summary.json says one ran there; nothing else), so that a new run's folder
     never mixes two runs: a run of 5 frames after one of 20 left frames 6 to 20 beside it. Returns
     how many files were removed."""
-    if not any((out / f).exists() for f in ("result.pvd", "summary.json")):
+    if not any((out / f).exists() for f in (INDEX, "summary.json")):
         return 0
-    old = [f for f in out.iterdir() if f.is_file() and (f.name in RUN_FILES or RUN_FRAME.fullmatch(f.name))]
+    old = [f for f in out.iterdir() if f.is_file() and (f.name in RUN_FILES or is_frame_file(f.name))]
     for f in old:
         try:
             f.unlink()
@@ -250,7 +249,7 @@ def run_scene(
         "interrupted": False,
         "error": None,
         "warnings": list(scene.warnings) + [str(w.message) for w in held],
-        "files": ["result.pvd", "summary.json"],
+        "files": [INDEX, "summary.json"],
     }
     pipeline = scene.meta.get("mesh_pipeline")
     if pipeline:  # a surface went through the mesh pipeline: say what it made

@@ -3,11 +3,25 @@ temporary name and renamed into place, so a crash or Ctrl-C never leaves a trunc
 
 from __future__ import annotations
 
-import numpy as np
-
+import re
 from pathlib import Path
 
+import numpy as np
+
 from .files import atomic_write, atomic_write_text, deferred_interrupt, make_output_dir
+
+
+# A series' files: its indexes, and frame i's volume and fine-surface files (ParaView's .pvd lists).
+INDEX, SURFACE_INDEX = "result.pvd", "surface.pvd"
+FRAME, SURFACE_FRAME = "frame_{:05d}.vtu", "surface_{:05d}.vtu"
+_FRAME_FILE = re.compile(
+    "|".join(re.escape(f.split("{")[0]) + r"\d{5,}\.vtu" for f in (FRAME, SURFACE_FRAME))
+)
+
+
+def is_frame_file(name: str) -> bool:
+    """Whether a file name is one a ResultWriter gives a frame (FRAME or SURFACE_FRAME, any i)."""
+    return _FRAME_FILE.fullmatch(name) is not None
 
 
 FIELDS = ("displacement", "velocity", "von_mises", "J", "strain_energy_density", "cauchy", "green_strain")
@@ -49,7 +63,8 @@ class ResultWriter:
 
         model = state.model  # the state's: after a cut (pliant.cutting), a new topology
         res = model.element_results(state)
-        name = f"frame_{len(self.frames):05d}.vtu"
+        i = len(self.frames)
+        name = FRAME.format(i)
         f = self.fields
         point = {
             k: v for k, v in (("displacement", state.displacements), ("velocity", state.velocities)) if k in f
@@ -82,7 +97,7 @@ class ResultWriter:
                 emb = self.embedding
                 Vs = emb.positions(model.tets, state.positions)
                 atomic_write(
-                    self.dir / name.replace("frame_", "surface_"),
+                    self.dir / SURFACE_FRAME.format(i),
                     lambda tmp: meshio.write(tmp, meshio.Mesh(Vs, [("triangle", emb.faces)]), binary=True),
                     "surface frame",
                 )
@@ -90,7 +105,9 @@ class ResultWriter:
                 self.dir / name, lambda tmp: meshio.write(tmp, mesh, binary=True), "result frame"
             )
             self.frames.append((state.time, name))
-            self._pvd("result.pvd", self.frames)
+            self._pvd(INDEX, self.frames)
             if self.embedding is not None:
-                self._pvd("surface.pvd", [(t, n.replace("frame_", "surface_")) for t, n in self.frames])
+                self._pvd(
+                    SURFACE_INDEX, [(t, SURFACE_FRAME.format(j)) for j, (t, _) in enumerate(self.frames)]
+                )
         return final
