@@ -323,7 +323,9 @@ class Solver:
             self._raise(rep)
 
     def run(self, state: State, steps: int | None = None, until: float | None = None) -> RunInfo:
-        """Advance ``state`` in place by ``steps`` steps or to time ``until`` [s]."""
+        """Advance ``state`` in place by ``steps`` steps or to time ``until`` [s] (a time the state
+        has reached takes no step: RunInfo.steps is 0, so that a loop over output times may call
+        it for every one)."""
         self._same_model(state)
         steps = self.step_count(state, steps, until)
         if steps == 0:
