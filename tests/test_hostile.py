@@ -466,6 +466,35 @@ def test_file_system_refusals_exit_2(tmp_path):
     assert buf.getvalue().strip() == f"error: {tmp_path / 'locked.obj'}: Permission denied"
 
 
+def test_inputs_that_are_not_regular_files_are_refused_without_waiting(tmp_path):
+    """A named pipe with no writer made `pliant run model.xml` and `pliant mesh quality` wait for
+    ever (the XML parser, the VTK header check opened it); /dev/zero and a folder were "no such
+    file". Each is now refused by what it is (cli's timeout fails a hang)."""
+    pipe = tmp_path / "pipe"
+    os.mkfifo(pipe)
+    for name in ("model.xml", "mesh.vtk", "scene.toml", "sweep.toml"):
+        (tmp_path / name).symlink_to(pipe)
+    scene = tmp_path / "s.toml"
+    not_regular = "not a regular file (a pipe, device or socket"
+    for args, culprit, what in [
+        (("run", tmp_path / "model.xml"), "model.xml", not_regular),
+        (("run", tmp_path / "scene.toml"), "scene.toml", not_regular),
+        (("run", "/dev/zero"), "/dev/zero", not_regular),
+        (("run", tmp_path), str(tmp_path), "a folder, not a file"),
+        (("sweep", tmp_path / "sweep.toml"), "sweep.toml", not_regular),
+        (("mesh", "quality", tmp_path / "mesh.vtk"), "mesh.vtk", not_regular),
+        (("mesh", "check", "/dev/zero"), "/dev/zero", not_regular),
+        (("run", scene), "[mesh.file]", not_regular),
+    ]:
+        scene.write_text(SCENE.replace('primitive = "box"', f'file = "{tmp_path / "mesh.vtk"}"'))
+        out = tmp_path / "out"
+        refused(
+            cli(*args, "-o", out, timeout=60) if args[0] in ("run", "sweep") else cli(*args, timeout=60),
+            culprit,
+            what,
+        )
+
+
 def test_usage_errors_exit_2():
     r = cli("run")
     assert r.returncode == 2 and "Traceback" not in r.stderr

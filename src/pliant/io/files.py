@@ -9,11 +9,29 @@ import contextlib
 import io
 import os
 import signal
+import stat
 import tempfile
 import threading
 from pathlib import Path
 
 from ..errors import InputError, MeshError
+
+
+def file_problem(path) -> str | None:
+    """Why ``path`` cannot be read as an input file ("no such file", "a folder, not a file", "not
+    a regular file ..."), or None when it can. A pipe, device or socket is refused: reading one
+    may wait for ever for a writer (a named pipe) or never end (/dev/zero)."""
+    try:
+        mode = Path(path).stat().st_mode
+    except FileNotFoundError:
+        return "no such file"
+    except OSError as e:  # a link loop, a name too long, no permission on a folder above it
+        return f"cannot be read ({e.strerror or e})"
+    if stat.S_ISDIR(mode):
+        return "a folder, not a file"
+    if not stat.S_ISREG(mode):
+        return "not a regular file (a pipe, device or socket: reading it may never end)"
+    return None
 
 
 def read_meshio(path, what: str = "mesh"):
@@ -22,8 +40,9 @@ def read_meshio(path, what: str = "mesh"):
     import meshio
 
     path = Path(path)
-    if not path.is_file():
-        raise MeshError(f"{path}: no such file")
+    problem = file_problem(path)
+    if problem:
+        raise MeshError(f"{path}: {problem}")
     sink = io.StringIO()
     try:
         with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):

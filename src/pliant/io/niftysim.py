@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FileError, InputError
+from .files import file_problem
 from ..mesh.primitives import orient_positive
 from ..materials import ArrudaBoyce, NeoHookean, Polynomial, StVenantKirchhoff, TransverselyIsotropic
 from ..job import Scene
@@ -188,6 +189,9 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     (e.g. 'DoDeformableCollision'); any other unsupported feature is an error naming it.
     ``overrides`` maps element paths to values set before import (see :func:`set_xml_key`)."""
     path = Path(path)
+    problem = file_problem(path)
+    if problem:
+        raise NiftySimError(f"{problem}; expected a NiftySim XML model file", str(path))
     try:
         root = ET.parse(path).getroot()
     except (ET.ParseError, OSError) as e:

@@ -167,6 +167,10 @@ def points(reader: Reader, binary: bool, words: list[str]) -> np.ndarray:
 def dataset_of(path) -> str | None:
     """The DATASET of a legacy VTK file by its header (POLYDATA, UNSTRUCTURED_GRID...), upper case;
     None for another file or one that cannot be read."""
+    from .files import file_problem
+
+    if file_problem(path):  # a named pipe would wait here for a writer
+        return None
     try:
         with open(path, "rb") as f:
             head = f.read(1024)

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
+from ..io.files import file_problem
 from ..io.vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
 
@@ -56,8 +57,9 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
     any meshio format with triangles; a legacy VTK grid meshio refuses through pliant.io.vtk_grid).
     Raises MeshError for a missing, unreadable, empty or out-of-range mesh."""
     path = Path(path)
-    if not path.is_file():
-        raise MeshError(f"{path}: no such file")
+    problem = file_problem(path)
+    if problem:
+        raise MeshError(f"{path}: {problem}")
     if path.suffix.lower() == ".obj":
         V, F = _read_obj(path)
     elif is_vtk_polydata(path):  # legacy VTK surfaces, which meshio does not read

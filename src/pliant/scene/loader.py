@@ -12,6 +12,7 @@ import numpy as np
 from .. import _core
 from .. import materials as mat
 from ..errors import InputError, PliantWarning
+from ..io.files import file_problem
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from ..tled.model import BACKENDS
@@ -143,8 +144,9 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
 
 def _read_toml(path: Path) -> tuple[str, dict]:
     """The file's text and its TOML tables; SceneError for a missing, unreadable or invalid file."""
-    if not path.is_file():
-        raise SceneError(f"no such scene file: {path}", str(path))
+    problem = file_problem(path)
+    if problem:
+        raise SceneError("no such scene file" if problem == "no such file" else problem, str(path))
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as e:

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import MeshError
+from ..io.files import file_problem
 from ..mesh.surface import metres_hint
 from .schema import Ctx, check_keys, vector
 
@@ -101,8 +102,9 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
     if "file" in spec:
         f = Path(spec["file"])
         f = f if f.is_absolute() else base / f
-        if not f.is_file():
-            raise ctx.error(f"{key}.file", f"no such file: {f}")
+        problem = file_problem(f)
+        if problem:
+            raise ctx.error(f"{key}.file", f"{problem}: {f}")
         surface_ext = {".obj", ".stl", ".ply", ".off"}
         try:
             if f.suffix.lower() in surface_ext or is_vtk_polydata(f):  # a surface: tetrahedralized

@@ -39,6 +39,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import PliantWarning
+from ..io.files import file_problem
 from ..scene.schema import Ctx, SceneError, check_keys, vector
 
 if sys.version_info >= (3, 11):
@@ -137,8 +138,9 @@ class SweepSpec:
 def load_sweep(path) -> SweepSpec:
     """Read and validate a sweep file. Raises SceneError naming file, key and line."""
     path = Path(path)
-    if not path.is_file():
-        raise SceneError(f"no such sweep file: {path}", str(path))
+    problem = file_problem(path)
+    if problem:
+        raise SceneError("no such sweep file" if problem == "no such file" else problem, str(path))
     text = path.read_text(encoding="utf-8", errors="replace")
     try:
         data = tomllib.loads(text)
@@ -162,8 +164,11 @@ def load_sweep(path) -> SweepSpec:
         ("base", "parameter"),
     )
     base = (path.parent / data["base"]).resolve()
-    if not base.is_file():
-        raise ctx.error("base", f"no such scene or NiftySim model: {base}")
+    problem = file_problem(base)
+    if problem:
+        raise ctx.error(
+            "base", f"{'no such scene or NiftySim model' if problem == 'no such file' else problem}: {base}"
+        )
     threads = data.get("threads", 1)
     limit = int(_core.thread_limit())
     if not 1 <= threads <= limit:

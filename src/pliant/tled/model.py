@@ -741,9 +741,12 @@ class State:
     def load(self, path):
         """Restore from a file written by :meth:`save` of the same model. A missing, corrupt,
         truncated or foreign file, or one saved from another model, raises InputError naming it."""
+        from ..io.files import file_problem
+
         path = Path(path)
-        if not path.is_file():
-            raise InputError(f"{path}: no such state file")
+        problem = file_problem(path)
+        if problem:
+            raise InputError(f"{path}: {'no such state file' if problem == 'no such file' else problem}")
         try:
             with np.load(path, allow_pickle=False) as d:
                 data = {k: d[k] for k in d.files}

@@ -19,7 +19,8 @@ import numpy as np
 from .. import _core
 from ..contact import quat_from_matrix
 from ..errors import InputError, PliantError
-from ..io.files import read_meshio
+from ..io.files import file_problem, read_meshio
+from ..io.results import INDEX
 from ..mesh.topology import boundary_faces
 
 BODY_FIELD = "body"  # the colour choice that tells a scene's bodies apart (Model.bodies)
@@ -428,9 +429,12 @@ class PlaybackViewer:
         import viser
 
         out = Path(out_dir)
-        pvd = out / "result.pvd"
-        if not pvd.exists():
-            raise InputError(f"{out}: no result.pvd (not a pliant results folder)")
+        pvd = out / INDEX
+        problem = file_problem(pvd)
+        if problem == "no such file":
+            raise InputError(f"{out}: no {INDEX} (not a pliant results folder)")
+        if problem:
+            raise InputError(f"{pvd}: {problem}")
         entries = re.findall(
             r'timestep="([^"]+)"[^>]*file="([^"/\\]+)"', pvd.read_text(encoding="utf-8", errors="replace")
         )
