@@ -495,6 +495,36 @@ def test_inputs_that_are_not_regular_files_are_refused_without_waiting(tmp_path)
         )
 
 
+def test_outputs_are_written_with_the_users_permissions_and_never_over_a_device(tmp_path):
+    """Every output was mode 0600 whatever the umask (the temporary file's, renamed into place):
+    a colleague or a web server could not read the results. A file now gets what open() gives a
+    new one, 0666 less the umask, or keeps the mode of the file it replaces. And an output path
+    that is a pipe or a device is refused: the rename would have replaced /dev/null itself."""
+    scene = tmp_path / "s.toml"
+    scene.write_text(SCENE)
+    r = subprocess.run(
+        f"umask 027 && {PLIANT} run {scene} -o {tmp_path / 'out'} --no-progress",
+        shell=True,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 0, r.stderr
+    for f in (tmp_path / "out").iterdir():
+        assert f.stat().st_mode & 0o777 == 0o640, (f.name, oct(f.stat().st_mode))
+    mesh = tmp_path / "t.vtk"
+    meshio.write(mesh, meshio.Mesh(np.eye(4, 3)[[3, 0, 1, 2]], [("tetra", np.array([[0, 1, 2, 3]]))]))
+    kept = tmp_path / "kept.png"
+    kept.write_bytes(b"")
+    kept.chmod(0o604)
+    assert cli("mesh", "quality", mesh, "--png", kept).returncode == 0
+    assert kept.stat().st_mode & 0o777 == 0o604 and kept.stat().st_size > 1000
+    pipe = tmp_path / "pipe.png"
+    os.mkfifo(pipe)
+    refused(cli("mesh", "quality", mesh, "--png", pipe, timeout=60), "pipe.png", "not a regular file")
+    assert pipe.is_fifo()
+
+
 def test_usage_errors_exit_2():
     r = cli("run")
     assert r.returncode == 2 and "Traceback" not in r.stderr

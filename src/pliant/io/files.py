@@ -80,7 +80,50 @@ def check_output_file(path, what: str = "output file", mesh_format: bool = False
     _probe_folder(parent, path, what)
     if path.exists() and not os.access(path, os.W_OK):
         raise InputError(f"{path}: cannot write the {what}: the file is read-only")
+    _refuse_special(path, what)
     return path
+
+
+def _refuse_special(path: Path, what: str) -> None:
+    """Refuse an output path that is a device, pipe or socket: the file is written under another
+    name and renamed into place, which would replace /dev/null itself."""
+    problem = file_problem(path) if path.exists() else None
+    if problem and problem.startswith("not a regular file"):
+        raise InputError(
+            f"{path}: cannot write the {what} there: {problem.split(' (')[0]} (a device, pipe or "
+            "socket, which the new file would replace); expected a file name"
+        )
+
+
+def _new_file_mode(path: Path) -> int:
+    """The permissions a written file gets: those of the file it replaces, else 0o666 less the
+    process's umask (what open() gives a new file; mkstemp's temporary files are 0o600)."""
+    try:
+        return stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        return 0o666 & ~_umask()
+
+
+def _umask() -> int:
+    """The process's umask, read without changing it (Linux: /proc/self/status); elsewhere the
+    one it had when pliant was imported."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    return _UMASK_AT_IMPORT
+
+
+def _read_umask_once() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+_UMASK_AT_IMPORT = _read_umask_once()
 
 
 def _probe_folder(folder: Path, path: Path, what: str) -> None:
@@ -148,6 +191,7 @@ def atomic_write(path, write, what: str = "file") -> Path:
     which is then renamed to ``path``. On failure nothing is left behind; OSError becomes an
     InputError naming ``path``."""
     path = Path(path)
+    _refuse_special(path, what)
     suffix = "".join(path.suffixes[-1:])
     try:
         fd, tmp = tempfile.mkstemp(
@@ -158,6 +202,7 @@ def atomic_write(path, write, what: str = "file") -> Path:
         raise InputError(f"{path}: cannot write the {what}: {e.strerror or e}") from None
     try:
         write(tmp)
+        os.chmod(tmp, _new_file_mode(path))
         os.replace(tmp, path)
     except OSError as e:
         Path(tmp).unlink(missing_ok=True)
