@@ -288,6 +288,26 @@ def test_a_sweep_file_given_to_run_says_to_use_sweep(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_scene_encodings(tmp_path):
+    """TOML is UTF-8. A UTF-8 byte-order mark (Windows editors write one) made a scene "not valid
+    TOML" at line 1: it is skipped, and the scene runs. UTF-16, with or without its mark, is named
+    as such, for a scene and for a sweep."""
+    scene = tmp_path / "bom.toml"
+    scene.write_bytes(b"\xef\xbb\xbf" + SCENE.encode())
+    r = cli("run", scene, "-o", tmp_path / "o", "--no-progress")
+    assert r.returncode == 0 and json.loads((tmp_path / "o" / "summary.json").read_text())["steps"] > 0
+    sweep = (ROOT / "examples" / "cantilever_sweep.toml").read_text()
+    sweep = sweep.replace('base = "cantilever.toml"', f'base = "{ROOT / "examples" / "cantilever.toml"}"')
+    for name, text, says in [
+        ("u16.toml", SCENE.encode("utf-16"), "UTF-16-encoded; expected UTF-8"),
+        ("u16be.toml", SCENE.encode("utf-16-be"), "NUL bytes (UTF-16, or not text); expected UTF-8"),
+    ]:
+        (tmp_path / name).write_bytes(text)
+        refused(cli("run", tmp_path / name, "-o", tmp_path / "o2"), name, says)
+    (tmp_path / "sweep.toml").write_bytes(sweep.encode("utf-16"))
+    refused(cli("sweep", tmp_path / "sweep.toml", "-o", tmp_path / "o3"), "sweep.toml", "UTF-16-encoded")
+
+
 def test_a_mesh_given_to_run_says_what_reads_it(tmp_path):
     mesh = ROOT / "tests" / "data" / "niftysim_sphere.vtk"
     refused(

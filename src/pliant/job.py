@@ -71,7 +71,7 @@ def parse_overrides(items) -> dict:
     """``KEY=VALUE`` strings (the command line's ``--set``) as overrides for :func:`load_job`:
     the value read as a TOML value (``1e-4``, ``[0, 0, -9.81]``, ``true``, ``"text"``), a bare
     word as a string. InputError naming the item if it has no ``=`` or no key."""
-    from .scene.loader import tomllib
+    from .scene.schema import tomllib
 
     out: dict = {}
     for item in items or ():

@@ -3,7 +3,6 @@ loads and outputs (the mesh and the tools have their own modules). See the packa
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +11,6 @@ import numpy as np
 from .. import _core
 from .. import materials as mat
 from ..errors import InputError, PliantWarning
-from ..io.files import file_problem
 from ..tled import Constant, ModelBuilder, Ramp, SmoothRamp, Step, Table
 from ..tled.curves import LoadCurve
 from ..tled.model import BACKENDS
@@ -24,14 +22,10 @@ from ..cutting.cut import check_cuttable
 from .bodies import load_bodies, set_contact
 from .membranes import add_membranes
 from .keys import apply_overrides
-from .schema import Ctx, SceneError, check_keys, vector
+from .schema import Ctx, check_keys, read_toml, vector
 from .tools import make_tool
 from .select import select_elements, select_faces, select_nodes
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["load_scene", "make_curve"]
 
@@ -90,7 +84,7 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     ``overrides`` maps dotted key paths (``'material.liver.E'``, ``'tool[1].keyframes[2].position[2]'``,
     see :mod:`pliant.scene.keys`) to values set before validation (a sweep's parameters)."""
     path = Path(path)
-    text, data = _read_toml(path)
+    text, data = read_toml(path)
     data = apply_overrides(data, overrides, str(path))
     ctx = Ctx(str(path), text)
     if isinstance(data, dict) and "base" in data and ("parameter" in data or "design" in data):
@@ -140,23 +134,6 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
         except InputError as e:
             raise ctx.error("solver.strain_smoothing", str(e)) from None
     return scene
-
-
-def _read_toml(path: Path) -> tuple[str, dict]:
-    """The file's text and its TOML tables; SceneError for a missing, unreadable or invalid file."""
-    problem = file_problem(path)
-    if problem:
-        raise SceneError("no such scene file" if problem == "no such file" else problem, str(path))
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as e:
-        raise SceneError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
-    try:
-        return text, tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise SceneError(f"not valid TOML: {e}", str(path)) from None
-    except RecursionError:
-        raise SceneError("not a usable scene: tables or arrays nested too deeply", str(path)) from None
 
 
 def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:

@@ -6,14 +6,56 @@ from __future__ import annotations
 import contextlib
 import math
 import re
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from ..errors import FileError, InputError
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
 
 class SceneError(FileError):
     """A scene file that does not meet the schema. ``file``, ``key`` and ``line`` name the culprit."""
+
+
+_WIDE_BOMS = {  # the byte-order marks of encodings TOML does not allow (TOML is UTF-8)
+    b"\xff\xfe\x00\x00": "UTF-32",
+    b"\x00\x00\xfe\xff": "UTF-32",
+    b"\xff\xfe": "UTF-16",
+    b"\xfe\xff": "UTF-16",
+}
+
+
+def read_toml(path: Path, what: str = "scene") -> tuple[str, dict]:
+    """A TOML file's text and its tables; SceneError for a missing, unreadable, wrongly encoded or
+    invalid file. A UTF-8 byte-order mark (as Windows editors write) is skipped; a UTF-16 or
+    UTF-32 file is named as such (TOML files are UTF-8)."""
+    from ..io.files import file_problem
+
+    problem = file_problem(path)
+    if problem:
+        raise SceneError(f"no such {what} file" if problem == "no such file" else problem, str(path))
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise SceneError(f"cannot read the {what} file: {e.strerror or e}", str(path)) from None
+    wide = next((name for bom, name in _WIDE_BOMS.items() if raw.startswith(bom)), None)
+    if wide:
+        raise SceneError(f"the file is {wide}-encoded; expected UTF-8 (save it as UTF-8)", str(path))
+    if b"\x00" in raw:  # UTF-16 without its mark, or not text at all
+        raise SceneError("the file holds NUL bytes (UTF-16, or not text); expected UTF-8 text", str(path))
+    text = raw.removeprefix(b"\xef\xbb\xbf").decode("utf-8", errors="replace")
+    try:
+        return text, tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"not valid TOML: {e}", str(path)) from None
+    except RecursionError:
+        raise SceneError(f"not a usable {what}: tables or arrays nested too deeply", str(path)) from None
 
 
 @dataclass

@@ -29,7 +29,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,12 +39,8 @@ import numpy as np
 from .. import _core
 from ..errors import PliantWarning
 from ..io.files import file_problem
-from ..scene.schema import Ctx, SceneError, check_keys, vector
+from ..scene.schema import Ctx, SceneError, check_keys, read_toml, vector
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["Parameter", "Design", "Outputs", "SweepSpec", "load_sweep", "DESIGNS"]
 
@@ -138,14 +133,7 @@ class SweepSpec:
 def load_sweep(path) -> SweepSpec:
     """Read and validate a sweep file. Raises SceneError naming file, key and line."""
     path = Path(path)
-    problem = file_problem(path)
-    if problem:
-        raise SceneError("no such sweep file" if problem == "no such file" else problem, str(path))
-    text = path.read_text(encoding="utf-8", errors="replace")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise SceneError(f"not valid TOML: {e}", str(path)) from None
+    text, data = read_toml(path, "sweep")
     ctx = Ctx(str(path), text)
     check_keys(
         ctx,
@@ -228,10 +216,7 @@ def _check_key_paths(ctx: Ctx, spec: SweepSpec) -> None:
     else:
         from ..scene.keys import set_key
 
-        try:
-            data = tomllib.loads(spec.base.read_text(encoding="utf-8", errors="replace"))
-        except tomllib.TOMLDecodeError as e:
-            raise ctx.error("base", f"{spec.base}: not valid TOML: {e}") from None
+        data = read_toml(spec.base)[1]  # a SceneError names the base file
 
         def put(key, value):
             set_key(data, key, value, str(spec.base))
