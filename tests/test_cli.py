@@ -92,6 +92,22 @@ def test_bench_json(tmp_path):
     assert all(row["element_steps_per_second"] > 0 for row in rows)
 
 
+def test_bench_materials_times_each_case_against_the_reference(tmp_path):
+    """`pliant bench --materials`: a row per case (every material, viscoelastic, T4ANP and
+    edge-smoothed), each a median of 5 chunk ratios with their range (no timing is asserted)."""
+    from pliant.bench import material_cases
+
+    f = tmp_path / "m.json"
+    r = runner.invoke(app, ["bench", "--materials", "--steps", "10", "--json", str(f)])
+    assert r.exit_code == 0, r.output
+    rows = json.loads(f.read_text())["materials"]
+    assert [row["material"] for row in rows] == [c[0] for c in material_cases()]
+    for row in rows:
+        assert 0 < row["relative_min"] <= row["relative"] <= row["relative_max"], row
+        assert row["steps"] == 10 and row["ms_per_step"] > 0 and 0 < row["element_share"] < 1
+    assert "range" in r.output and "median ratio" in r.output
+
+
 def test_bench_on_a_device_without_kernel_timings(tmp_path):
     """The emulated GPU's launches are not timed one by one (nor are the GPU's, inside graphs):
     the kernel shares are null in the JSON and "-" in the table, not a made-up 0 %."""
