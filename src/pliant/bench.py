@@ -273,13 +273,13 @@ def bench_materials(
     X, T = box_tets((0.12, 0.12, 0.04), cells, jitter=0.2, seed=0)
     chunk = max(1, steps // pairs)
     runs = [_material_run(X, T, c, dtype, threads, backend) for c in material_cases()]
-    ref = runs[0]
+    ref_solver, ref_state = runs[0]
     rows = []
-    for (name, *_), run in zip(material_cases(), runs):
+    for (name, *_), (solver, state) in zip(material_cases(), runs):
         times, ratios, element = [], [], 0.0
         for _ in range(pairs):
-            ref_wall, _ = run_timed(*ref, chunk)
-            wall, info = run_timed(*run, chunk)
+            ref_wall, _ = run_timed(ref_solver, ref_state, chunk)
+            wall, info = run_timed(solver, state, chunk)
             times.append(wall / chunk)
             ratios.append(wall / ref_wall)
             element += _share(info.element_seconds, wall, backend) or 0.0
@@ -287,7 +287,7 @@ def bench_materials(
             "material": name,
             "tets": len(T),
             "steps": chunk * pairs,
-            "threads": host_threads(run[0].model, backend),
+            "threads": host_threads(solver.model, backend),
             "ms_per_step": 1e3 * float(np.median(times)),
             "relative": float(np.median(ratios)),
             "relative_min": min(ratios),
