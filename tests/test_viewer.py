@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import pliant as pl
+
 from pliant.demo import DEMO_SCENE
 from pliant.scene import load_scene
 
@@ -213,6 +215,39 @@ def test_a_paused_drag_stays_where_it_was_left():
         assert np.allclose(ctrl.position, p0) and np.allclose(ctrl.wxyz, q0)
     finally:
         v.server.stop()
+
+
+def test_addresses_the_viewer_cannot_listen_on_are_refused():
+    """viser tries an address on a thousand ports, then waits for ever: an unknown host or another
+    machine's address hung `pliant view`. A port another program holds gives the next free one,
+    which the viewer reports (it printed the port asked for)."""
+    import socket
+    import subprocess
+    import sys
+
+    from pliant.view.viewer import LiveViewer, serve_on
+
+    cantilever = Path(__file__).parents[1] / "examples" / "cantilever.toml"
+    pliant = Path(sys.executable).with_name("pliant")
+    for host, says in [
+        ("192.0.2.1", "cannot listen on 192.0.2.1"),
+        ("no-such-host.invalid", "not an address"),
+    ]:
+        r = subprocess.run(
+            [str(pliant), "view", str(cantilever), "--host", host], capture_output=True, text=True, timeout=60
+        )
+        assert r.returncode == 2 and says in r.stderr and "Traceback" not in r.stderr, r.stderr
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        server = serve_on("127.0.0.1", port)
+        try:
+            assert server.get_port() not in (port, 0)
+        finally:
+            server.stop()
+    with pytest.raises(pl.InputError, match="threads = 0"):  # was taken as "automatic"
+        LiveViewer(load_scene(cantilever), port=_free_port(), threads=0)
 
 
 def test_playback_of_a_results_folder(chromium, tmp_path):

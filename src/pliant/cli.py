@@ -274,7 +274,10 @@ def view(
         _fail(e, 2)
     except OSError as e:
         _fail(InputError(f"cannot listen on {host}:{port}: {e}"), 2)
-    console.print(f"pliant viewer on http://{host}:{port} (Ctrl-C to stop)")
+    bound = v.server.get_port()
+    if bound != port:
+        err_console.print(f"[yellow]warning:[/] port {port} is in use: the viewer took {bound}")
+    console.print(f"pliant viewer on http://{host}:{bound} (Ctrl-C to stop)")
     try:
         v.serve()
     except KeyboardInterrupt:

@@ -42,6 +42,40 @@ def _frame_camera(server, X: np.ndarray):
     server.initial_camera.position = tuple(c + r * np.array([1.2, -1.2, 0.8]))
 
 
+def serve_on(host: str, port: int):
+    """A viser server on ``host``; on ``port``, or the next free port when another program has it
+    (``server.get_port()`` says which). An address this machine cannot listen on is refused first:
+    viser would try it on a thousand ports, then wait for ever."""
+    import viser
+
+    check_address(host, port)
+    return viser.ViserServer(host=host, port=port, verbose=False)
+
+
+def check_address(host: str, port: int) -> None:
+    """InputError unless this machine can listen on ``host``: an unknown name, another machine's
+    address, a port it may not open (below 1024 without privileges). A port in use passes."""
+    import errno
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except (OSError, UnicodeError) as e:
+        raise InputError(f"--host {host!r}: not an address of this machine ({e})") from None
+    reason = "no address"
+    for family, kind, proto, _, address in infos:
+        with socket.socket(family, kind, proto) as s:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                s.bind(address)
+                return
+            except OSError as e:
+                if e.errno == errno.EADDRINUSE:
+                    return  # viser takes the next free port
+                reason = e.strerror or str(e)
+    raise InputError(f"cannot listen on {host}:{port}: {reason}")
+
+
 class _Surface:
     """The boundary of a tet mesh as a compact triangle mesh, with node → vertex mapping."""
 
@@ -95,8 +129,6 @@ class LiveViewer:
     """Serve a scene live. ``host`` 127.0.0.1 by default; ``--host 0.0.0.0`` exposes it."""
 
     def __init__(self, scene, host: str = "127.0.0.1", port: int = 8080, threads: int | None = None):
-        import viser
-
         from ..tled import Simulation
         from ..tled.model import _auto_threads
 
@@ -105,7 +137,8 @@ class LiveViewer:
         # wall clock (1 engine thread: simulated/wall 1.00, capacity 1.0-2.4x; 2 threads: 0.99, with
         # the capacity dipping to 0.7x while a frame is drawn; docs/viewer.md).
         auto = max(1, min(_auto_threads(scene.builder.n_elements), _core.max_threads() - 1))
-        self.model = scene.builder.finalize(scene.dtype, threads=threads or scene.threads or auto)  # at reset
+        threads = threads if threads is not None else scene.threads or auto  # 0 is refused, not automatic
+        self.model = scene.builder.finalize(scene.dtype, threads=threads)  # at reset
         if not self.model.n_elements:
             raise InputError(
                 f"{scene.source}: membranes alone ({self.model.n_membranes} triangles, no tetrahedra): the "
@@ -137,7 +170,7 @@ class LiveViewer:
         self.realtime_factor = 0.0
         self.field = "von Mises stress [Pa]"
         self.error = ""
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.server = serve_on(host, port)
         _frame_camera(self.server, self.model.reference_positions)
         self._build_gui()
         self._build_scene()
@@ -426,8 +459,6 @@ class PlaybackViewer:
     def __init__(self, out_dir, host: str = "127.0.0.1", port: int = 8080):
         import re
 
-        import viser
-
         out = Path(out_dir)
         pvd = out / INDEX
         problem = file_problem(pvd)
@@ -458,7 +489,7 @@ class PlaybackViewer:
             raise InputError(f"{self.files[0]}: no tetrahedra; expected a pliant result frame")
         self.X, self._tets = first.points, first.cells_dict["tetra"]
         self.surface = _Surface(self._tets)  # of the frame shown (frames after a cut differ)
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.server = serve_on(host, port)
         _frame_camera(self.server, self.X)
         self.slider = self.server.gui.add_slider("frame", 0, len(self.files) - 1, 1, 0)
         self.label = self.server.gui.add_markdown("")
