@@ -112,6 +112,23 @@ def test_parameters_that_are_not_numbers_are_named():
             pl.Solver(model, **kwargs)
 
 
+@pytest.mark.parametrize(
+    "make, says",
+    [
+        (lambda: pl.Ramp(True), "t1 = True"),  # float() made it 1 s
+        (lambda: pl.Step("0.1"), "t0 = '0.1'"),
+        (lambda: pl.SmoothRamp(None), "t1 = None"),  # a bare TypeError
+        (lambda: pl.Table([0, 1], [0, True]), r"values = \[0, True\]"),  # numpy made it 1
+        (lambda: pl.Table([0, 1], [0, "1"]), r"values = \[0, '1'\]"),
+        (lambda: pl.Table([0, 1], [[0], [1]]), "values"),  # was flattened
+        (lambda: pl.Table(["a", "b"], [0, 1]), "times"),  # a bare ValueError
+    ],
+)
+def test_load_curves_that_are_not_numbers_are_named(make, says):
+    with pytest.raises(pl.InputError, match=says):
+        make()
+
+
 def test_bad_density_and_missing_material():
     X, T = _tet()
     b = pl.ModelBuilder()

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from .. import _core
-from ..checks import shown
+from ..checks import as_real, real_array, shown
 from ..errors import InputError
 
 K = _core.CurveKind
@@ -56,10 +56,11 @@ class LoadCurve:
 
 
 def _time(name, v, cls):
-    v = float(v)
-    if not math.isfinite(v):
+    """``v`` as a finite time [s]; a bool or a string is not one (float() made True 1 s)."""
+    t = as_real(v)
+    if not math.isfinite(t):
         raise InputError(f"{cls}: {name} = {shown(v)}; expected a finite time [s]")
-    return v
+    return t
 
 
 class Constant(LoadCurve):
@@ -124,8 +125,12 @@ class Table(LoadCurve):
     kind = K.Table
 
     def __init__(self, times, values):
-        t = np.asarray(times, dtype=float).ravel()
-        v = np.asarray(values, dtype=float).ravel()
+        t, v = real_array(times), real_array(values)
+        for name, given, a in (("times", times, t), ("values", values, v)):
+            if a is None or a.ndim > 1:  # booleans, strings, nested lists were made numbers
+                raise InputError(f"Table: {name} = {shown(given)}; expected a list of numbers")
+        assert t is not None and v is not None
+        t, v = t.ravel(), v.ravel()
         if t.size < 1 or t.size != v.size:
             raise InputError(f"Table: {t.size} times and {v.size} values; expected equal, >= 1")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
@@ -135,7 +140,7 @@ class Table(LoadCurve):
             raise InputError(
                 f"Table: times must increase strictly; times[{k + 1}] = {t[k + 1]:g} <= times[{k}] = {t[k]:g}"
             )
-        self.times, self.values = tuple(t), tuple(v)
+        self.times, self.values = tuple(t.tolist()), tuple(v.tolist())
 
     @property
     def end_time(self):
