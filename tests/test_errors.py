@@ -129,6 +129,37 @@ def test_load_curves_that_are_not_numbers_are_named(make, says):
         make()
 
 
+@pytest.mark.parametrize(
+    "make, says",
+    [
+        (lambda: pl.contact.Sphere(True), "radius = True"),  # float() made it 1 m
+        (lambda: pl.contact.Capsule(0.01, "0.1"), "length = '0.1'"),
+        (lambda: pl.contact.Box((True, 1.0, 1.0)), "half_extents"),
+        (lambda: pl.contact.Box((0.1, 0.1, float("inf"))), "half_extents"),
+        (lambda: pl.contact.Sphere(0.1, mu_s="0.3"), "mu_s = '0.3'"),
+        (lambda: pl.contact.Sphere(0.1, rotation=(True, 0, 0, 0)), "rotation"),
+        (lambda: pl.contact.Sphere(0.1, rotation=np.diag([2.0, 1.0, 1.0])), "not a rotation matrix"),
+        (lambda: pl.contact.Sphere(0.1, rotation=np.diag([1.0, 1.0, -1.0])), "not a rotation matrix"),
+        (lambda: pl.cutting.Blade(True), "length = True"),
+    ],
+)
+def test_tool_parameters_that_are_not_numbers_or_rotations_are_named(make, says):
+    """A scaled or mirrored matrix was taken for some other rotation; bools and strings for
+    numbers; an infinite box was accepted."""
+    with pytest.raises(pl.InputError, match=says):
+        make()
+
+
+def test_a_rotation_matrix_gives_its_quaternion():
+    """Against scipy's conversion of the same matrix (float64 and float32 round-off)."""
+    from scipy.spatial.transform import Rotation
+
+    R = Rotation.from_euler("xyz", [10.0, 20.0, 30.0], degrees=True)
+    for M, tol in ((R.as_matrix(), 1e-12), (R.as_matrix().astype(np.float32), 1e-6)):
+        q = pl.contact.Sphere(0.1, rotation=M).keys[0][4:]
+        assert np.allclose(q, R.as_quat()[[3, 0, 1, 2]], atol=tol)  # scipy: (x, y, z, w)
+
+
 def test_bad_density_and_missing_material():
     X, T = _tet()
     b = pl.ModelBuilder()

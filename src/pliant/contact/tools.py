@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .. import _core
-from ..checks import finite_number, finite_vector, shown
+from ..checks import as_real, finite_number, finite_vector, real_array, shown
 from ..errors import InputError
 
 __all__ = [
@@ -58,12 +58,21 @@ def quat_from_matrix(R) -> np.ndarray:
     return q / np.linalg.norm(q)
 
 
-def _quat(q) -> np.ndarray:
-    q = np.asarray(q, float).ravel()
-    if q.shape == (9,):
-        return quat_from_matrix(q.reshape(3, 3))
+def _quat(rotation) -> np.ndarray:
+    q = real_array(rotation)
+    q = np.full(0, np.nan) if q is None else q.ravel()  # a bool or a string is no rotation
+    if q.shape == (9,) and np.all(np.isfinite(q)):
+        R = q.reshape(3, 3)
+        # A rotation: orthonormal (to float32 round-off, as a scene's or a device's matrix may be
+        # given) with det +1; a scaled or mirrored matrix made some other rotation silently.
+        if not (np.allclose(R @ R.T, np.eye(3), atol=1e-5) and np.linalg.det(R) > 0):
+            raise InputError(
+                f"rotation {shown(rotation)}: not a rotation matrix (orthonormal with det +1); "
+                "expected a quaternion (w, x, y, z) or a 3×3 rotation matrix"
+            )
+        return quat_from_matrix(R)
     if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.linalg.norm(q) > 0:
-        raise InputError(f"rotation {shown(q)}: expected a quaternion (w, x, y, z) or a 3×3 matrix")
+        raise InputError(f"rotation {shown(rotation)}: expected a quaternion (w, x, y, z) or a 3×3 matrix")
     return q / np.linalg.norm(q)
 
 
@@ -83,8 +92,8 @@ class RigidTool:
         rotation=(1.0, 0.0, 0.0, 0.0),
         name: str | None = None,
     ):
-        self.mu_s = float(mu_s)
-        self.mu_k = float(self.mu_s if mu_k is None else mu_k)
+        self.mu_s = as_real(mu_s)
+        self.mu_k = self.mu_s if mu_k is None else as_real(mu_k)
         if not (0 <= self.mu_k <= self.mu_s) or not math.isfinite(self.mu_s):
             raise InputError(
                 f"{type(self).__name__}: friction mu_s = {shown(mu_s)}, mu_k = {shown(mu_k)}; "
@@ -201,10 +210,10 @@ class RigidTool:
 
 
 def _positive(cls, name, v):
-    v = float(v)
-    if not (math.isfinite(v) and v > 0):
+    x = as_real(v)  # a bool or a string is not a length
+    if not (math.isfinite(x) and x > 0):
         raise InputError(f"{cls}: {name} = {shown(v)}; expected a length > 0 [m]")
-    return v
+    return x
 
 
 class Plane(RigidTool):
@@ -241,7 +250,7 @@ class Capsule(RigidTool):
 
     def __init__(self, radius: float, length: float, **kw):
         self.radius = _positive("Capsule", "radius", radius)
-        self.length = float(length)
+        self.length = as_real(length)
         if not (math.isfinite(self.length) and self.length >= 0):
             raise InputError(f"Capsule: length = {shown(length)}; expected >= 0 [m]")
         super().__init__(**kw)
@@ -278,8 +287,9 @@ class Box(RigidTool):
     kind = _core.ToolKind.Box
 
     def __init__(self, half_extents, **kw):
-        h = np.asarray(half_extents, float).ravel()
-        if h.shape != (3,) or not np.all(h > 0):
+        h = real_array(half_extents)
+        h = None if h is None else h.ravel()
+        if h is None or h.shape != (3,) or not np.all(np.isfinite(h) & (h > 0)):
             raise InputError(f"Box: half_extents {shown(half_extents)}; expected 3 lengths > 0 [m]")
         self.half = h
         super().__init__(**kw)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ..checks import shown
+from ..checks import as_real, shown
 from ..contact.tools import RigidTool
 from ..errors import InputError
 
@@ -25,8 +25,8 @@ class Blade(RigidTool):
     kind = None  # not a contact tool: the engine never sees it
 
     def __init__(self, length: float, depth: float = 0.0, **kw):
-        self.length = float(length)
-        self.depth = float(depth)
+        self.length = as_real(length)  # a bool or a string is not a length
+        self.depth = as_real(depth)
         if not (math.isfinite(self.length) and self.length > 0):
             raise InputError(f"Blade: length = {shown(length)}; expected a length > 0 [m]")
         if not (math.isfinite(self.depth) and self.depth >= 0):
