@@ -129,6 +129,11 @@ def test_load_curves_that_are_not_numbers_are_named(make, says):
         make()
 
 
+# A mesh tool's test shape: a 1 cm tetrahedron, its faces outward.
+_TET_V = 0.01 * np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+_TET_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+
 @pytest.mark.parametrize(
     "make, says",
     [
@@ -141,6 +146,12 @@ def test_load_curves_that_are_not_numbers_are_named(make, says):
         (lambda: pl.contact.Sphere(0.1, rotation=np.diag([2.0, 1.0, 1.0])), "not a rotation matrix"),
         (lambda: pl.contact.Sphere(0.1, rotation=np.diag([1.0, 1.0, -1.0])), "not a rotation matrix"),
         (lambda: pl.cutting.Blade(True), "length = True"),
+        # A mesh tool: bare numpy errors, a negative spacing accepted, a tiny one asked for 1e21 cells.
+        (lambda: pl.contact.MeshTool(_TET_V * np.nan, _TET_F), "finite positions"),
+        (lambda: pl.contact.MeshTool(_TET_V, _TET_F + 10), "face 0 = \\[10, 12, 11\\] indexes beyond the 4"),
+        (lambda: pl.contact.MeshTool(_TET_V[:, :2], _TET_F), "expected \\(n >= 4, 3\\)"),
+        (lambda: pl.contact.MeshTool(_TET_V, _TET_F, spacing=-1.0), "spacing = -1.0"),
+        (lambda: pl.contact.MeshTool(_TET_V, _TET_F, spacing=1e-9), "at most 4,194,304"),
     ],
 )
 def test_tool_parameters_that_are_not_numbers_or_rotations_are_named(make, says):

@@ -302,6 +302,26 @@ class Box(RigidTool):
         return np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0)
 
 
+MAX_GRID_CELLS = 2**22  # a mesh tool's distance grid (160³; about 1.5 GB while it is computed)
+
+
+def _closed_mesh(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
+    """A mesh tool's vertices [m] (n, 3), finite, not all at one point, and its triangles (m, 3)
+    indexing them; InputError naming what is wrong."""
+    V = real_array(vertices)
+    if V is None or V.ndim != 2 or V.shape[1] != 3 or len(V) < 4 or not np.all(np.isfinite(V)):
+        raise InputError(f"MeshTool: vertices {shown(vertices)}; expected (n >= 4, 3) finite positions [m]")
+    F = np.asarray(faces)
+    if F.dtype.kind not in "iu" or F.ndim != 2 or F.shape[1] != 3 or len(F) < 4:
+        raise InputError(f"MeshTool: faces {shown(faces)}; expected (m >= 4, 3) vertex indices")
+    if F.min() < 0 or F.max() >= len(V):
+        bad = int(np.argmax((F < 0).any(axis=1) | (F >= len(V)).any(axis=1)))
+        raise InputError(f"MeshTool: face {bad} = {F[bad].tolist()} indexes beyond the {len(V)} vertices")
+    if not np.ptp(V, axis=0).max() > 0:
+        raise InputError("MeshTool: every vertex at one point; expected a closed surface")
+    return V, F.astype(np.int64)
+
+
 class MeshTool(RigidTool):
     """Any closed triangle mesh (vertices [m] in the tool frame, faces), through a signed-distance
     grid of spacing ``spacing`` [m] (default: 1/64 of its largest extent) interpolated trilinearly;
@@ -313,10 +333,18 @@ class MeshTool(RigidTool):
     def __init__(self, vertices, faces, spacing: float | None = None, **kw):
         from .sdf import signed_distance_grid
 
-        V = np.asarray(vertices, float)
-        F = np.asarray(faces, np.int64)
+        V, F = _closed_mesh(vertices, faces)
         ext = float(np.ptp(V, axis=0).max())
-        h = float(spacing) if spacing else ext / 64
+        h = ext / 64 if spacing is None else as_real(spacing)
+        if not (math.isfinite(h) and h > 0):
+            raise InputError(f"MeshTool: spacing = {shown(spacing)}; expected a length > 0 [m]")
+        cells = np.prod(np.ceil((np.ptp(V, axis=0) + 8 * h) / h) + 1)
+        if cells > MAX_GRID_CELLS:
+            raise InputError(
+                f"MeshTool: spacing {h:.3g} m makes a grid of {cells:.3g} cells over the tool's "
+                f"{ext:.3g} m; expected at most {MAX_GRID_CELLS:,} (a larger spacing; default 1/64 "
+                "of the largest extent)"
+            )
         self.origin, self.spacing, self.values = signed_distance_grid(V, F, h, margin=4 * h)
         super().__init__(**kw)
 
