@@ -171,6 +171,22 @@ def test_a_rotation_matrix_gives_its_quaternion():
         assert np.allclose(q, R.as_quat()[[3, 0, 1, 2]], atol=tol)  # scipy: (x, y, z, w)
 
 
+def test_a_boolean_mask_for_node_ids_says_how_to_give_them():
+    """np.asarray(mask, int) would have made a mask nodes 0 and 1; the call is named (fix said
+    "prescribe")."""
+    X, T = _tet()
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    for call, name in (
+        (lambda m: b.fix(m), "fix"),
+        (lambda m: b.add_force(m, (0.0, 0.0, -1.0)), "add_force"),
+    ):
+        with pytest.raises(
+            pl.InputError, match=rf"^{name}: node ids of type bool \(a mask\? give np.flatnonzero"
+        ):
+            call(X[:, 2] == 0.0)
+
+
 def test_bad_density_and_missing_material():
     X, T = _tet()
     b = pl.ModelBuilder()

@@ -194,7 +194,11 @@ class ModelBuilder:
         """Node ids as int64: integers, or floats with integral values; anything else (1.5,
         strings, booleans) raises InputError naming ``what``."""
         a = np.asarray(nodes)
-        if a.dtype == bool or not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating)):
+        if a.dtype == bool:  # a mask would have been nodes 0 and 1
+            raise InputError(
+                f"{what}: node ids of type bool (a mask? give np.flatnonzero(mask)); expected integers"
+            )
+        if not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating)):
             raise InputError(f"{what}: node ids of type {a.dtype}; expected integers")
         if np.issubdtype(a.dtype, np.floating):
             if not np.all(np.isfinite(a)) or np.any(a != np.round(a)):
@@ -210,14 +214,18 @@ class ModelBuilder:
 
     def fix(self, nodes, dofs="xyz"):
         """Fix the given DOFs of the nodes (zero displacement)."""
-        self.prescribe(nodes, 0.0, dofs=dofs, curve=Constant())
+        self._constrain(nodes, 0.0, dofs, Constant(), "fix")
 
     def prescribe(self, nodes, displacement, dofs="xyz", curve: LoadCurve | None = None):
         """Prescribe displacements [m] on DOFs of nodes, scaled in time by ``curve`` (default 1).
 
         ``displacement``: a scalar (all DOFs), a vector per DOF in ``dofs`` (len(dofs),), or per
         node (n, len(dofs)). A DOF prescribed twice with different values or curves is an error."""
-        ids = self._node_ids(nodes, "prescribe")
+        self._constrain(nodes, displacement, dofs, curve, "prescribe")
+
+    def _constrain(self, nodes, displacement, dofs, curve: LoadCurve | None, what: str):
+        """prescribe (or fix: ``what`` names the call in errors)."""
+        ids = self._node_ids(nodes, what)
         ds = _dofs(dofs)
         given = "non-numeric"
         val = real_array(displacement)
