@@ -272,10 +272,11 @@ def bench_materials(
     "ms_per_step" the median chunk's. Returns one dict per case."""
     X, T = box_tets((0.12, 0.12, 0.04), cells, jitter=0.2, seed=0)
     chunk = max(1, steps // pairs)
-    runs = [_material_run(X, T, c, dtype, threads, backend) for c in material_cases()]
+    cases = material_cases()
+    runs = [_material_run(X, T, c, dtype, threads, backend) for c in cases]
     ref_solver, ref_state = runs[0]
     rows = []
-    for (name, *_), (solver, state) in zip(material_cases(), runs):
+    for (name, *_), (solver, state) in zip(cases, runs):
         times, ratios, element = [], [], 0.0
         for _ in range(pairs):
             ref_wall, _ = run_timed(ref_solver, ref_state, chunk)

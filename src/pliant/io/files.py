@@ -87,8 +87,8 @@ def check_output_file(path, what: str = "output file", mesh_format: bool = False
 def _refuse_special(path: Path, what: str) -> None:
     """Refuse an output path that is a device, pipe or socket: the file is written under another
     name and renamed into place, which would replace /dev/null itself."""
-    problem = file_problem(path) if path.exists() else None
-    if problem and problem.startswith("not a regular file"):
+    problem = file_problem(path) or ""  # "no such file" for a new one
+    if problem.startswith("not a regular file"):
         raise InputError(
             f"{path}: cannot write the {what} there: {problem.split(' (')[0]} (a device, pipe or "
             "socket, which the new file would replace); expected a file name"
