@@ -94,6 +94,8 @@ def check_cmd(inp: Path, as_json: bool = typer.Option(False, "--json")):
         typer.echo(json.dumps(rep.as_dict(), indent=2))
     else:
         bodies = f"{rep.bodies} {'body' if rep.bodies == 1 else 'bodies'}"
+        if rep.cavities:
+            bodies += f" with {rep.cavities} {'cavity' if rep.cavities == 1 else 'cavities'}"
         console.print(f"{inp}: {rep.vertices:,} vertices, {rep.faces:,} faces, {bodies}")
         console.print("  ok" if rep.ok else "  problems: " + "; ".join(rep.problems))
     raise typer.Exit(0 if rep.ok else 1)
@@ -172,6 +174,8 @@ def tetrahedralize_cmd(
         bodies=bodies,
         log=console.print,
     )
+    for note in info["warnings"]:
+        err.print(f"warning: {note}")
     q = tet_quality(X, T)
     if quality is not None and q["radius_edge"].max() > quality:
         raise PliantError(f"worst radius–edge ratio {q['radius_edge'].max():.2f} exceeds --quality {quality}")

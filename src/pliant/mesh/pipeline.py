@@ -14,6 +14,7 @@ from .repair import repair_surface, require_volume, simplify
 from .tetra import MAX_TETS, tetrahedralize
 
 BODIES = ("union", "separate", "largest", "one")
+MIN_FACES = 2000  # the simplified surface keeps at least this many faces, to hold its shape
 
 
 def default_edge_length(V: np.ndarray, F: np.ndarray, target_tets: int = 20000) -> float:
@@ -49,8 +50,12 @@ def surface_to_tets(
     fill the surface's volume (within 10 %); on failure fTetWild runs again with half the envelope
     (a large envelope can swallow thin features), and a second failure is an error.
     ``target_tets`` is the count of regular tets the default edge aims at: fTetWild's tets, less
-    regular, come out about 1.5–4 times as many. Returns nodes, tets and an info dict.
+    regular, come out about 1.5–4 times as many. Returns nodes, tets and an info dict;
+    ``info["warnings"]`` lists what the caller should show (far more tets than the edge asks for,
+    and why: ``count_note``).
 
+    A body inside another is a cavity (its faces pointing in, as a hollow sphere's inner surface)
+    or an inclusion (pointing out: meshed with its container); it belongs to that body below.
     ``bodies``, for a surface of several closed bodies (they may overlap, as a teapot's body, lid,
     handle and spout do): "union" (default) meshes the union of the bodies, overlaps merged, as one
     conforming tet mesh (fTetWild's winding-number filter); "separate" meshes each body on its own
@@ -67,6 +72,7 @@ def surface_to_tets(
         "input_faces": int(len(F)),
         "seconds": {},
         "bodies_mode": bodies,
+        "warnings": [],
     }
     t = time.perf_counter()
     require_volume(V, F, closed=False)
@@ -75,7 +81,7 @@ def surface_to_tets(
         info["repair"] = actions
     info["seconds"]["repair"] = time.perf_counter() - t
     require_volume(V, F)
-    parts = _bodies(V, F)
+    parts, _, pieces = _bodies(V, F)
     info["bodies"] = len(parts)
     if bodies == "separate" and len(parts) > 1:
         return _separate(parts, edge_length, target_tets, epsilon, info, log)
@@ -88,7 +94,7 @@ def surface_to_tets(
         import trimesh
 
         area = float(trimesh.Trimesh(V, F, process=False).area)
-        target_faces = max(2000, int(area / (math.sqrt(3) / 4 * el * el)))
+        target_faces = max(MIN_FACES, int(area / (math.sqrt(3) / 4 * el * el)))
     if target_faces < len(F):
         V, F = simplify(V, F, target_faces=target_faces)
     info["simplified_faces"] = int(len(F))
@@ -97,15 +103,19 @@ def surface_to_tets(
     import trimesh
 
     surf = trimesh.Trimesh(V, F, process=False)
-    ref_vol = abs(float(surf.volume)) if surf.is_watertight else None
+    area = float(surf.area)
+    filled = _bodies(V, F)[1] if surf.is_watertight else []  # of the simplified surface
+    ref_vol = sum(filled) if filled else None
     # Overlapping bodies: the union's volume lies between the largest body's and the sum.
-    low = max(abs(float(p.volume)) for p in parts) if len(parts) > 1 else ref_vol
+    low = max(filled) if ref_vol else None
     eps = 2e-3 if epsilon is None else float(epsilon)
+    tries = []  # (envelope, volume ratio) of each fTetWild run
     for attempt in range(2):
-        X, T = tetrahedralize(V, F, edge_length=el, epsilon=eps, keep_all=len(parts) > 1)
+        X, T = tetrahedralize(V, F, edge_length=el, epsilon=eps, keep_all=pieces > 1)
         vol = float(tet_volumes(X, T).sum())
         ratio = vol / ref_vol if ref_vol else 1.0
         info["volume_ratio"] = ratio
+        tries.append((eps, ratio))
         if ref_vol is None or low is None or 0.9 * low <= vol <= 1.1 * ref_vol:
             break
         if attempt == 1:
@@ -121,6 +131,9 @@ def surface_to_tets(
     info["epsilon"] = eps
     info["seconds"]["tetrahedralize"] = time.perf_counter() - t
     info["nodes"], info["tets"] = int(len(X)), int(len(T))
+    note = count_note(len(T), vol, area, len(F), el, tries)
+    if note:
+        info["warnings"].append(note)
     if log:
         if len(parts) > 1 and ref_vol is not None:
             merged = (ref_vol - vol) / ref_vol
@@ -143,11 +156,68 @@ def surface_to_tets(
     return X, T, info
 
 
-def _bodies(V: np.ndarray, F: np.ndarray) -> list:
-    """The connected bodies of a surface, as trimesh meshes."""
+# fTetWild's tets of edge el usually number 1.5–4 times the regular tets of that edge that fill the
+# volume; beyond this many times, say why.
+MANY_TETS = 10.0
+
+
+def count_note(tets: int, volume: float, area: float, faces: int, el: float, tries: list) -> str | None:
+    """Why ``tets`` tets are far more than the regular tets of edge ``el`` [m] that fill ``volume``
+    [m³] (a regular tet of edge a: a³/(6√2)), or None when they are not (under ``MANY_TETS`` times).
+    ``area`` [m²] and ``faces``: the meshed surface's; ``tries``: (envelope, volume ratio) of each
+    fTetWild run. Triangles of edge el resolve area / (√3/4 el²) faces; fTetWild keeps the others.
+    A closed surface's 2 × volume / area is the thickness of a thin-walled body (a wall of area A/2
+    each side); walls thinner than the edge must be filled by tets as thin as they are."""
+    regular = volume / (el**3 / (6.0 * math.sqrt(2.0)))
+    if not (regular > 0 and tets > MANY_TETS * regular):
+        return None
+    thick = 2.0 * volume / area if area > 0 else math.inf
+    why = []
+    if len(tries) > 1:
+        eps, ratio = tries[0]
+        why.append(
+            f"the envelope {eps:g} filled {100 * ratio:.0f} % of the volume, and the retry at "
+            f"{tries[-1][0]:g} follows the surface closer"
+        )
+    resolved = area / (math.sqrt(3.0) / 4.0 * el * el)
+    if faces > 4 * resolved:
+        why.append(
+            f"the surface keeps {faces:,} faces (at least {MIN_FACES:,}, to hold its shape) where "
+            f"the edge resolves about {resolved:,.0f}; a surface of fewer faces (pliant mesh simplify) "
+            "makes fewer tets"
+        )
+    if thick < el:
+        why.append(
+            f"the walls are about {thick:.2g} m thick (2 × volume / area) under the {el:.2g} m edge, "
+            "and tets that fill them are no thicker than they are"
+        )
+    return (
+        f"{tets:,} tets, {tets / regular:.0f} times the {regular:,.0f} regular tets of edge {el:.3g} m "
+        "that fill the volume (usually 1.5–4 times)"
+        + (
+            ": " + "; ".join(why)
+            if why
+            else ": fTetWild refined the surface to follow it within the envelope"
+        )
+        + ". A volume mesh with fewer tets needs a thicker or smoother surface"
+    )
+
+
+def _bodies(V: np.ndarray, F: np.ndarray) -> tuple[list, list[float], int]:
+    """The bodies of a surface, as trimesh meshes: each outer body with the cavities and inclusions
+    inside it (bodies.groups); the volume [m³] each fills (bodies.filled_volumes); and how many
+    closed pieces the surface has (a body on an island in a cavity is two tet pieces)."""
     import trimesh
 
-    return trimesh.Trimesh(V, F, process=False).split(only_watertight=False)
+    from .bodies import filled_volumes, groups, parents
+
+    pieces = trimesh.Trimesh(V, F, process=False).split(only_watertight=False)
+    parent = parents(pieces) if len(pieces) > 1 else [-1] * len(pieces)
+    grouped = groups(pieces, parent) if len(pieces) > 1 else [[0]] * len(pieces)
+    bodies = [
+        trimesh.util.concatenate([pieces[k] for k in g]) if len(g) > 1 else pieces[g[0]] for g in grouped
+    ]
+    return bodies, filled_volumes(pieces, parent), len(pieces)
 
 
 def _separate(parts, edge_length, target_tets, epsilon, info, log):
@@ -158,7 +228,7 @@ def _separate(parts, edge_length, target_tets, epsilon, info, log):
     el = float(edge_length) if edge_length else default_edge_length(V, F, target_tets)
     Xs, Ts, n = [], [], 0
     for p in parts:
-        X, T, _ = surface_to_tets(
+        X, T, one = surface_to_tets(
             np.asarray(p.vertices),
             np.asarray(p.faces),
             edge_length=el,
@@ -166,6 +236,7 @@ def _separate(parts, edge_length, target_tets, epsilon, info, log):
             repair=False,
             bodies="one",
         )
+        info["warnings"] += one["warnings"]
         Xs.append(X)
         Ts.append(T + n)
         n += len(X)

@@ -3,7 +3,8 @@
 Libraries: trimesh (MIT) for connectivity and winding; fast-simplification (MIT,
 Fast-Quadric-Mesh-Simplification, Garland–Heckbert quadric error metrics) for QEM. Loop
 subdivision is ours (trimesh's weights its boundary vertices with all their neighbours). Hole filling
-is ours: each boundary loop is closed by a fan around a new vertex at the loop's centroid.
+is ours: each boundary loop is closed by a minimum-area triangulation (fill_loop). Bodies
+inside bodies (cavities, inclusions): bodies.py.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ class SurfaceReport:
     watertight: bool
     volume: float
     self_intersections: int | None = None
+    cavities: int = 0  # bodies inside a body with faces pointing in (bodies.py); not in ``bodies``
     problems: list[str] = field(default_factory=list)
 
     @property
@@ -89,7 +91,14 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
     scale = float(np.ptp(V, axis=0).max()) or 1.0
     degenerate = int((area <= 1e-12 * scale**2).sum())
     dup = len(F) - len(np.unique(np.sort(F, axis=1), axis=0))
-    bodies = int(len(m.split(only_watertight=False))) if len(F) else 0
+    pieces = m.split(only_watertight=False) if len(F) else []
+    bodies, cavities = len(pieces), 0
+    if bodies > 1:
+        from .bodies import groups
+
+        grouped = groups(pieces)
+        bodies = len(grouped)
+        cavities = sum(int(pieces[k].volume < 0) for g in grouped for k in g[1:])
     holes = len(boundary_loops(F)) if boundary else 0
     winding = bool(m.is_winding_consistent)
     watertight = boundary == 0 and nonman == 0
@@ -107,6 +116,7 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
         bool(watertight and volume > 0),
         watertight,
         volume,
+        cavities=int(cavities),
     )
     if self_intersections and nonman == 0:
         rep.self_intersections = count_self_intersections(V, F)
@@ -289,19 +299,21 @@ def repair_surface(
             "two faces); cannot repair automatically"
         )
     parts: list = [m.submesh([g], append=True) for g in big]
-    if len(parts) > 1 and bodies == "one":
+    done = [_close_body(p, fill_holes, actions) for p in parts]
+    closed, grouped = _orient_bodies([c for c, _ in done], [r for _, r in done], actions)
+    if len(grouped) > 1 and bodies == "one":
         raise MeshError(
-            f"repair: {len(parts)} separate bodies; keep them all (bodies='all', "
+            f"repair: {len(grouped)} separate bodies; keep them all (bodies='all', "
             "--bodies all: their union is meshed), or the largest (--bodies largest)"
         )
-    if len(parts) > 1 and bodies == "largest":
-        n = len(parts)
-        parts = [max(parts, key=lambda p: len(p.faces))]
+    if len(grouped) > 1 and bodies == "largest":
+        n = len(grouped)
+        grouped = [max(grouped, key=lambda g: len(closed[g[0]].faces))]
         actions.append(f"kept the largest of {n} bodies")
-    closed = [_close_body(p, fill_holes, actions) for p in parts]
-    if len(closed) > 1:
-        actions.append(f"kept {len(closed)} bodies")
-    out: Any = trimesh.util.concatenate(closed) if len(closed) > 1 else closed[0]
+    if len(grouped) > 1:
+        actions.append(f"kept {len(grouped)} bodies")
+    keep = [closed[k] for g in grouped for k in g]
+    out: Any = trimesh.util.concatenate(keep) if len(keep) > 1 else keep[0]
     rep = check_surface(out.vertices, out.faces, self_intersections=False)
     if not rep.watertight or not rep.winding_consistent:
         raise MeshError(
@@ -312,7 +324,8 @@ def repair_surface(
 
 
 def _close_body(m, fill_holes: bool, actions: list[str]):
-    """One connected body: holes filled, winding consistent, faces outward."""
+    """One connected body: holes filled, winding consistent. Returns it and whether its winding was
+    changed (its orientation then says nothing of the file's intent)."""
     import trimesh
 
     Vr, Fr = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
@@ -327,13 +340,36 @@ def _close_body(m, fill_holes: bool, actions: list[str]):
                 "edges) by minimum-area triangulation"
             )
     m = trimesh.Trimesh(Vr, Fr, process=False)
-    if not m.is_winding_consistent:
+    rewound = not m.is_winding_consistent
+    if rewound:
         trimesh.repair.fix_winding(m)
         actions.append("made winding consistent")
-    if m.is_watertight and m.volume < 0:
-        m.invert()
-        actions.append("flipped faces outward")
-    return m
+    return m, rewound
+
+
+def _orient_bodies(closed: list, rewound: list, actions: list[str]) -> tuple[list, list[list[int]]]:
+    """Outer bodies' faces outward; a body inside another keeps its orientation relative to the
+    outer one (faces in: a cavity; out: an inclusion, meshed with its container), unless its winding
+    had to be made consistent, when it points outward. Returns the bodies and their groups
+    (bodies.groups: each outer body with the bodies inside it)."""
+    from .bodies import groups
+
+    grouped = groups(closed) if len(closed) > 1 else [[0]]
+    for g in grouped:
+        flip = closed[g[0]].is_watertight and closed[g[0]].volume < 0
+        for k in g:
+            b = closed[k]
+            if k != g[0] and rewound[k]:
+                if b.is_watertight and b.volume < 0:
+                    b.invert()
+            elif flip:
+                b.invert()
+        if flip:
+            actions.append("flipped faces outward")
+        cavities = sum(closed[k].volume < 0 for k in g[1:])
+        if cavities:
+            actions.append(f"kept {cavities} inner surface(s) facing inward (cavities)")
+    return closed, grouped
 
 
 def surface_volume(V: np.ndarray, F: np.ndarray) -> float:

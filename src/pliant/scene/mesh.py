@@ -131,6 +131,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                     bodies=spec.get("bodies", "union"),
                 )
                 scene.meta["mesh_pipeline"] = info
+                scene.warnings += [f"{f}: {note}" for note in info["warnings"]]
                 if spec.get("embed") or spec.get("embed_subdivide"):
                     Ve, Fe = pm.subdivide_loop(V * scale, F, int(spec.get("embed_subdivide", 0)))
                     scene.meta["embed_surface"] = [Ve, Fe]

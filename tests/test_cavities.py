@@ -1,0 +1,125 @@
+"""Bodies inside bodies: a hollow sphere (an outer sphere, an inner one facing in) stays hollow
+through repair and tetrahedralization, whichever way the file winds it; an inner sphere facing out
+is an inclusion and the ball is meshed solid (fTetWild's winding numbers, Jacobson et al. 2013).
+References: the closed-form volumes of the shell and the ball, and the cavity's radius. Also the
+warning for far more tets than the edge asks for, checked against the wall's built thickness."""
+
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import pliant as pl
+from pliant.mesh.bodies import winding_number
+
+RO, RI = 0.05, 0.045  # outer and inner radius [m]: a 5 mm wall
+SHELL = 4 / 3 * math.pi * (RO**3 - RI**3)
+BALL = 4 / 3 * math.pi * RO**3
+EXE = str(Path(sys.executable).with_name("pliant"))
+
+
+def _nested(inner_faces_in=True, flip_all=False):
+    """Outer icosphere and an inner one, as one surface: V [m] (n, 3), F (f, 3)."""
+    o = trimesh.creation.icosphere(subdivisions=4, radius=RO)
+    i = trimesh.creation.icosphere(subdivisions=3, radius=RI)
+    Fi = i.faces[:, ::-1] if inner_faces_in else i.faces
+    V = np.vstack([o.vertices, i.vertices])
+    F = np.vstack([o.faces, Fi + len(o.vertices)])
+    return V, (F[:, ::-1] if flip_all else F)
+
+
+def _volume(X, T):
+    e = X[T]
+    return float(
+        np.einsum("ij,ij->i", np.cross(e[:, 1] - e[:, 0], e[:, 2] - e[:, 0]), e[:, 3] - e[:, 0]).sum() / 6
+    )
+
+
+def test_winding_number_is_one_inside_and_zero_outside():
+    """The solid angles of a closed surface sum to 4π at a point inside it and to 0 outside (Gauss);
+    faces turned in give −1. Polyhedral sphere: exact up to round-off (1e-9)."""
+    o = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+    w = winding_number(o.vertices, o.faces, np.array([[0, 0, 0], [0.3, -0.2, 0.5], [2, 0, 0], [0, 1.5, 1]]))
+    assert w == pytest.approx([1, 1, 0, 0], abs=1e-9)
+    assert winding_number(o.vertices, o.faces[:, ::-1], np.zeros((1, 3))) == pytest.approx([-1], abs=1e-9)
+
+
+@pytest.mark.parametrize("flip_all", [False, True], ids=["as-built", "inside-out"])
+def test_a_hollow_sphere_stays_hollow(flip_all):
+    """The tets fill the 5 mm wall: their volume is the shell's (polyhedral spheres hold 0.5–1.5 %
+    less than true ones, fTetWild's envelope moves each surface by ~0.1 mm: 3 %), none lies in the
+    cavity (a centroid at least 1 mm, a fifth of the wall, inside the inner radius would be one). A
+    file wound inside out is turned as a whole: the inner surface stays a cavity."""
+    V, F = _nested(flip_all=flip_all)
+    X, T, info = pl.mesh.surface_to_tets(V, F, edge_length=0.004)
+    assert info["bodies"] == 1
+    assert _volume(X, T) == pytest.approx(SHELL, rel=0.03)
+    assert np.linalg.norm(X[T].mean(axis=1), axis=1).min() > RI - 0.001
+    if flip_all:
+        assert "flipped faces outward" in info["repair"]
+    assert "kept 1 inner surface(s) facing inward (cavities)" in info["repair"]
+
+
+def test_an_inner_sphere_facing_out_is_an_inclusion():
+    """Both spheres facing out: inside the inner one the winding number is 2, and the ball is solid
+    (its volume, 3 %: as above), as fTetWild's filter and the file say."""
+    V, F = _nested(inner_faces_in=False)
+    X, T, info = pl.mesh.surface_to_tets(V, F, edge_length=0.006)
+    assert info["bodies"] == 1
+    assert _volume(X, T) == pytest.approx(BALL, rel=0.03)
+
+
+def test_an_island_in_a_cavity_is_kept():
+    """Three levels: a 5 cm sphere facing out, a 4 cm cavity facing in, a 2 cm ball facing out in
+    it. The tets fill the wall and the ball, V = 4/3 π (5³ − 4³ + 2³) cm³ (3 %, as above), and the
+    ball is a piece of its own (no node shared with the wall: it lies 2 cm from it)."""
+    parts = [trimesh.creation.icosphere(subdivisions=4, radius=r) for r in (0.05, 0.04, 0.02)]
+    parts[1].invert()
+    m = trimesh.util.concatenate(parts)
+    X, T, info = pl.mesh.surface_to_tets(m.vertices, m.faces, edge_length=0.005)
+    assert info["bodies"] == 1
+    assert _volume(X, T) == pytest.approx(4 / 3 * math.pi * (0.05**3 - 0.04**3 + 0.02**3), rel=0.03)
+    inner = np.linalg.norm(X[T].mean(axis=1), axis=1) < 0.03
+    assert 0 < inner.sum() < len(T) and not np.intersect1d(T[inner], T[~inner]).size
+
+
+def test_check_and_repair_name_the_cavity(tmp_path):
+    V, F = _nested()
+    src = tmp_path / "hollow.obj"
+    trimesh.Trimesh(V, F, process=False).export(src)
+    r = subprocess.run([EXE, "mesh", "check", str(src)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and "1 body with 1 cavity" in r.stdout and "ok" in r.stdout, r.stdout + r.stderr
+    rep = pl.mesh.check_surface(V, F, self_intersections=False)
+    assert (rep.bodies, rep.cavities, rep.ok) == (1, 1, True)
+
+
+def test_far_more_tets_than_the_edge_asks_for_says_why(tmp_path):
+    """At a target of 300 tets the edge is about 16 mm, over three times the 5 mm wall: the tets
+    that fill the wall are many times more. The warning gives the wall's thickness as 2 × volume /
+    area, for this shell (2/3)(R³ − r³)/(R² + r²) = 4.99 mm: within 5 % of the 5 mm built (the
+    polyhedral spheres' area and volume). A solid ball at that target also has many more tets than
+    regular ones, from its surface of 2,000 faces (it resolves 120): the warning says so and names
+    no wall. At 10,000 (fTetWild's usual 1.5–4 times) there is no warning."""
+    V, F = _nested()
+    src = tmp_path / "hollow.obj"
+    trimesh.Trimesh(V, F, process=False).export(src)
+    r = subprocess.run(
+        [EXE, "mesh", "tetrahedralize", str(src), str(tmp_path / "h.vtu"), "--target-tets", "300"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert r.returncode == 0, r.stderr
+    thick = float(re.search(r"the walls are about ([0-9.e-]+) m thick", r.stderr)[1])
+    assert thick == pytest.approx(RO - RI, rel=0.05)
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=RO)
+    *_, info = pl.mesh.surface_to_tets(ball.vertices, ball.faces, target_tets=300)
+    (note,) = info["warnings"]
+    assert "the surface keeps 2,000 faces" in note and "walls" not in note
+    *_, info = pl.mesh.surface_to_tets(ball.vertices, ball.faces, target_tets=10000)
+    assert info["warnings"] == []
