@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from ..errors import MeshError
-from .primitives import tet_volumes
+from .primitives import tet_volumes, unit_scale
 from .repair import repair_surface, require_volume, simplify
 from .tetra import MAX_TETS, tetrahedralize
 
@@ -21,14 +21,26 @@ def default_edge_length(V: np.ndarray, F: np.ndarray, target_tets: int = 20000) 
     """Edge [m] of regular tets that would fill the enclosed volume with ``target_tets`` tets
     (a regular tet of edge a has volume a³/(6√2)); the volume is the surface's own if it is closed
     and at least 0.3 × its convex hull's (self-intersecting scans can enclose a misleadingly small
-    signed volume), else 0.3 × the convex hull's."""
+    signed volume), else 0.3 × the convex hull's. At least the edge of ``target_tets`` equilateral
+    triangles covering the surface (area / (√3/4 a²)): a body thinner than its edge (a sheet, a
+    capsule's wall) would otherwise get an edge from its small volume and millions of surface
+    triangles (a disc 5 nm thick and 10 cm across: fTetWild ran for hours at 0.1 mm)."""
     import trimesh
 
-    m = trimesh.Trimesh(V, F, process=False)
+    # On the surface scaled by a power of two to a diagonal of about 1 (trimesh's tolerances are
+    # absolute: its hull of a surface 1e30 across overflowed), the edge scaled back.
+    scale = unit_scale(V)
+    return _unit_edge(trimesh.Trimesh(np.asarray(V, float) * scale, F, process=False), target_tets) / scale
+
+
+def _unit_edge(m, target_tets: int) -> float:
+    """default_edge_length of trimesh mesh m."""
     hull = float(m.convex_hull.volume)
     vol = float(m.volume) if m.is_watertight else 0.0
     vol = max(vol, 0.3 * hull)
-    return (6.0 * math.sqrt(2.0) * vol / target_tets) ** (1.0 / 3.0)
+    by_volume = (6.0 * math.sqrt(2.0) * vol / target_tets) ** (1.0 / 3.0)
+    by_area = math.sqrt(float(m.area) / (math.sqrt(3.0) / 4.0 * target_tets))
+    return max(by_volume, by_area)
 
 
 def surface_to_tets(

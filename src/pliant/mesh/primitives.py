@@ -3,12 +3,22 @@
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
 from ..checks import shown
 from ..errors import InputError
 from ..memory import BOX_BYTES_PER_TET, require_memory
+
+
+def unit_scale(V: np.ndarray) -> float:
+    """A power of two that scales points V [m] (n, 3) to a bounding-box diagonal between 0.7 and
+    1.4 (exact both ways in floating point); 1 for a box of no or non-finite size. The libraries'
+    absolute tolerances (trimesh's 1e-8 merge, fTetWild's) then act as on a body a metre across."""
+    V = np.asarray(V, float)
+    diag = float(np.linalg.norm(np.ptp(V, axis=0))) if len(V) else 0.0
+    return 2.0 ** -round(math.log2(diag)) if math.isfinite(diag) and diag > 0 else 1.0
 
 
 def tet_volumes(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:

@@ -277,7 +277,14 @@ def repair_surface(
     actions = []
     # process: merge duplicate vertices; not validate, whose fix_normals would re-wind faces
     # silently (trimesh 5): the winding is fixed, and reported, body by body (_close_body).
-    m = trimesh.Trimesh(np.asarray(V, float), np.asarray(F, np.int64), process=True, validate=False)
+    # trimesh merges vertices and finds degenerate faces with absolute tolerances (1e-8): work on the
+    # surface scaled by a power of two (exact) to a diagonal of about 1, so that a surface 1e-9 or
+    # 1e30 across is repaired as one of 1 m (its vertices all merged, or rounded past int64, were).
+    from .primitives import unit_scale
+
+    V = np.asarray(V, float)
+    scale = unit_scale(V)
+    m = trimesh.Trimesh(V * scale, np.asarray(F, np.int64), process=True, validate=False)
     m.update_faces(m.unique_faces() & m.nondegenerate_faces())
     m.remove_unreferenced_vertices()
     if len(m.vertices) < len(V):
@@ -320,7 +327,7 @@ def repair_surface(
             f"repair: still not a closed, consistently oriented surface after "
             f"repair ({'; '.join(rep.problems)})"
         )
-    return np.asarray(out.vertices, float), np.asarray(out.faces, np.int64), actions
+    return np.asarray(out.vertices, float) / scale, np.asarray(out.faces, np.int64), actions
 
 
 def _close_body(m, fill_holes: bool, actions: list[str]):
@@ -404,7 +411,10 @@ def _no_volume(V: np.ndarray, F: np.ndarray, closed: bool) -> str | None:
     vol = surface_volume(V, F)
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     if abs(vol) <= 1e-9 * diag**3:
-        return f"its faces enclose a signed volume of {vol:.3g} m^3 (a zero-thickness shell)"
+        return (
+            f"its faces enclose a signed volume of {vol:.3g} m^3, under 1e-9 of the cube of its "
+            f"{diag:.3g} m diagonal (a zero-thickness shell, or a vertex far from the others)"
+        )
     return None
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from .primitives import orient_positive, tet_volumes
+from .primitives import orient_positive, tet_volumes, unit_scale
 
 
 MAX_TETS = 2e7  # beyond this fTetWild runs for hours and exhausts a workstation's memory
@@ -123,6 +123,15 @@ def tetrahedralize(
             f"tets in the surface's {volume:.3g} m^3; expected at most {MAX_TETS:.0e} "
             "(give a larger edge length)"
         )
+    P = V[F.astype(np.int64)]
+    area = float(np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1).sum() / 2)
+    faces = area / (math.sqrt(3) / 4 * el**2)  # triangles of edge el that cover the surface
+    if faces > MAX_TETS:
+        raise MeshError(
+            f"tetrahedralize: edge length {el:.3g} m would make about {faces:.3g} triangles on the "
+            f"surface's {area:.3g} m^2 (it encloses {volume:.3g} m^3: walls "
+            f"{2 * volume / area:.2g} m thick); expected at most {MAX_TETS:.0e} (give a larger edge length)"
+        )
     key = hashlib.sha256(
         V.tobytes() + F.tobytes() + repr((el, epsilon, optimize, keep_all, 3)).encode()
     ).hexdigest()[:24]
@@ -131,6 +140,10 @@ def tetrahedralize(
         with np.load(path) as d:
             return d["nodes"], d["tets"]
     W = _ftetwild()
+    # fTetWild's tolerances are absolute in places: it returned no tets for a surface 1e30 across and
+    # crashed on one 1e-9 across. It meshes the surface scaled by a power of two (exact both ways) to
+    # a diagonal of about 1; its edge length and envelope are relative to the diagonal.
+    scale = unit_scale(V)
     # fTetWild writes a scratch file (__tracked_surface.stl) into the working directory: run it
     # in a temporary one so that users' folders stay clean.
     here = os.getcwd()
@@ -138,7 +151,7 @@ def tetrahedralize(
         os.chdir(scratch)
         try:
             nodes, tets = W.tetrahedralize_mesh(
-                V,
+                V * scale,
                 F,
                 bool(optimize),
                 False,
@@ -159,7 +172,7 @@ def tetrahedralize(
             )
         finally:
             os.chdir(here)
-    nodes = np.asarray(nodes, float)
+    nodes = np.asarray(nodes, float) / scale
     tets = np.asarray(tets, np.int64)
     if len(tets) == 0:
         raise MeshError(
