@@ -67,3 +67,24 @@ def test_a_stray_vertex_is_named_in_the_refusal():
     V[0] *= 1e6
     with pytest.raises(pl.MeshError, match="a vertex far from the others"):
         pl.mesh.surface_to_tets(V, s.faces, target_tets=500)
+
+
+def test_a_crash_of_ftetwild_is_a_mesh_error_not_the_end_of_python():
+    """fTetWild (pytetwild 0.4.2) stops with a segmentation fault on a sphere a nanometre across
+    given unscaled (tetrahedralize scales it first, above); it runs in a child process, so the
+    crash is a MeshError naming the signal and this process goes on. Should a later fTetWild mesh
+    this sphere, the assertion below fails with what it returned instead."""
+    from pliant.mesh import ftetwild
+
+    s = trimesh.creation.icosphere(subdivisions=2, radius=1e-9)
+    try:
+        nodes, tets = ftetwild.run(s.vertices, s.faces.astype(np.uint32), 0.05, 2e-3, True, 0)
+    except pl.MeshError as e:
+        assert "fTetWild stopped with SIGSEGV" in str(e) and "pliant mesh repair" in str(e)
+    else:
+        raise AssertionError(
+            f"fTetWild meshed the 1 nm sphere unscaled ({len(tets)} tets): it crashed before"
+        )
+    s = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+    nodes, tets = ftetwild.run(s.vertices, s.faces.astype(np.uint32), 0.05, 2e-3, True, 0)
+    assert len(tets) > 1000

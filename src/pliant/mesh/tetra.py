@@ -9,44 +9,19 @@ Output tets are positively oriented; degenerate slivers are removed.
 
 from __future__ import annotations
 
-import glob
 import hashlib
 import math
-import importlib.machinery
-import importlib.util
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MeshError
+from . import ftetwild
 from .primitives import orient_positive, tet_volumes, unit_scale
 
 
 MAX_TETS = 2e7  # beyond this fTetWild runs for hours and exhausts a workstation's memory
-
-
-def _ftetwild():
-    """fTetWild's compiled wrapper. pytetwild's package __init__ imports pyvista (a large optional
-    dependency we do not need), so load the extension module directly when that import fails."""
-    try:
-        from pytetwild import PyfTetWildWrapper  # noqa: F401
-
-        return PyfTetWildWrapper
-    except ImportError:
-        pass
-    spec = importlib.util.find_spec("pytetwild")
-    if spec is None or spec.origin is None:
-        raise MeshError("tetrahedralization needs the 'pytetwild' package (pip install pytetwild)")
-    so = glob.glob(os.path.join(os.path.dirname(spec.origin), "PyfTetWildWrapper*.so"))
-    if not so:
-        raise MeshError("pytetwild is installed but its fTetWild extension was not found")
-    loader = importlib.machinery.ExtensionFileLoader("pytetwild.PyfTetWildWrapper", so[0])
-    mspec = importlib.util.spec_from_file_location("pytetwild.PyfTetWildWrapper", so[0], loader=loader)
-    mod = importlib.util.module_from_spec(mspec)
-    loader.exec_module(mod)
-    return mod
 
 
 def largest_component(tets: np.ndarray, keep_all: bool = False, island: float = 0.01) -> np.ndarray:
@@ -139,39 +114,12 @@ def tetrahedralize(
     if cache and path.exists():
         with np.load(path) as d:
             return d["nodes"], d["tets"]
-    W = _ftetwild()
     # fTetWild's tolerances are absolute in places: it returned no tets for a surface 1e30 across and
     # crashed on one 1e-9 across. It meshes the surface scaled by a power of two (exact both ways) to
-    # a diagonal of about 1; its edge length and envelope are relative to the diagonal.
+    # a diagonal of about 1; its edge length and envelope are relative to the diagonal. In a child
+    # process (ftetwild.py): a crash there is a MeshError, not the end of the caller's.
     scale = unit_scale(V)
-    # fTetWild writes a scratch file (__tracked_surface.stl) into the working directory: run it
-    # in a temporary one so that users' folders stay clean.
-    here = os.getcwd()
-    with tempfile.TemporaryDirectory(prefix="pliant-ftetwild-") as scratch:
-        os.chdir(scratch)
-        try:
-            nodes, tets = W.tetrahedralize_mesh(
-                V * scale,
-                F,
-                bool(optimize),
-                False,
-                el / diag,
-                0.0,
-                float(epsilon),
-                10.0,
-                False,
-                int(threads),
-                80,
-                6,
-                True,
-                False,
-                False,
-                np.zeros((0, 3)),
-                np.zeros((0, 4), np.int32),
-                np.zeros(0),
-            )
-        finally:
-            os.chdir(here)
+    nodes, tets = ftetwild.run(V * scale, F, el / diag, float(epsilon), bool(optimize), int(threads))
     nodes = np.asarray(nodes, float) / scale
     tets = np.asarray(tets, np.int64)
     if len(tets) == 0:
