@@ -36,7 +36,8 @@ def winding_number(V: np.ndarray, F: np.ndarray, points: np.ndarray) -> np.ndarr
 def parents(bodies: list) -> list[int]:
     """For closed bodies (trimesh meshes), the index of the smallest body each lies inside (every
     one of up to ``SAMPLES`` of its vertices at a winding number beyond ½), or −1."""
-    vols = [abs(float(b.volume)) for b in bodies]
+    with np.errstate(divide="ignore", invalid="ignore"):  # trimesh's centre of mass of a flat piece
+        vols = [abs(float(b.volume)) for b in bodies]
     box = [np.asarray(b.bounds) for b in bodies]
     out = []
     for j, b in enumerate(bodies):

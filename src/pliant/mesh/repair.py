@@ -93,7 +93,7 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
     dup = len(F) - len(np.unique(np.sort(F, axis=1), axis=0))
     pieces = m.split(only_watertight=False) if len(F) else []
     bodies, cavities = len(pieces), 0
-    if bodies > 1:
+    if bodies > 1 and boundary == 0 and nonman == 0:  # nesting: of closed pieces only
         from .bodies import groups
 
         grouped = groups(pieces)
