@@ -203,15 +203,11 @@ def count_note(tets: int, volume: float, area: float, faces: int, el: float, tri
             f"the walls are about {thick:.2g} m thick (2 × volume / area) under the {el:.2g} m edge, "
             "and tets that fill them are no thicker than they are"
         )
+    if not why:
+        why.append("fTetWild refined the surface to follow it within the envelope (a larger one makes fewer)")
     return (
         f"{tets:,} tets, {tets / regular:.0f} times the {regular:,.0f} regular tets of edge {el:.3g} m "
-        "that fill the volume (usually 1.5–4 times)"
-        + (
-            ": " + "; ".join(why)
-            if why
-            else ": fTetWild refined the surface to follow it within the envelope"
-        )
-        + ". A volume mesh with fewer tets needs a thicker or smoother surface"
+        "that fill the volume (usually 1.5–4 times): " + "; ".join(why)
     )
 
 

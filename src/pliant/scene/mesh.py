@@ -177,6 +177,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                 )
             X, T, info = pm.surface_to_tets(V, F, edge_length=el, target_tets=spec.get("target_tets", 10000))
             scene.meta["mesh_pipeline"] = info
+            scene.warnings += [f"primitive {kind}: {note}" for note in info["warnings"]]
         else:
             raise ctx.error(
                 f"{key}.primitive", f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus"
