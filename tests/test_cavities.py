@@ -23,6 +23,11 @@ BALL = 4 / 3 * math.pi * RO**3
 EXE = str(Path(sys.executable).with_name("pliant"))
 
 
+def _pliant(*args) -> subprocess.CompletedProcess:
+    """The installed command line, run to its end (a guard of 10 minutes against a hang)."""
+    return subprocess.run([EXE, *map(str, args)], capture_output=True, text=True, timeout=600)
+
+
 def _nested(inner_faces_in=True, flip_all=False):
     """Outer icosphere and an inner one, as one surface: V [m] (n, 3), F (f, 3)."""
     o = trimesh.creation.icosphere(subdivisions=4, radius=RO)
@@ -92,7 +97,7 @@ def test_check_and_repair_name_the_cavity(tmp_path):
     V, F = _nested()
     src = tmp_path / "hollow.obj"
     trimesh.Trimesh(V, F, process=False).export(src)
-    r = subprocess.run([EXE, "mesh", "check", str(src)], capture_output=True, text=True, timeout=120)
+    r = _pliant("mesh", "check", src)
     assert r.returncode == 0 and "1 body with 1 cavity" in r.stdout and "ok" in r.stdout, r.stdout + r.stderr
     rep = pl.mesh.check_surface(V, F, self_intersections=False)
     assert (rep.bodies, rep.cavities, rep.ok) == (1, 1, True)
@@ -108,12 +113,7 @@ def test_far_more_tets_than_the_edge_asks_for_says_why(tmp_path):
     V, F = _nested()
     src = tmp_path / "hollow.obj"
     trimesh.Trimesh(V, F, process=False).export(src)
-    r = subprocess.run(
-        [EXE, "mesh", "tetrahedralize", str(src), str(tmp_path / "h.vtu"), "--target-tets", "300"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    r = _pliant("mesh", "tetrahedralize", src, tmp_path / "h.vtu", "--target-tets", 300)
     assert r.returncode == 0, r.stderr
     thick = float(re.search(r"the walls are about ([0-9.e-]+) m thick", r.stderr)[1])
     assert thick == pytest.approx(RO - RI, rel=0.05)
@@ -165,12 +165,7 @@ def test_a_hollow_sphere_from_a_file_inflates_as_lame_says(tmp_path):
     i.invert()
     trimesh.util.concatenate([o, i]).export(tmp_path / "hollow.stl")
     (tmp_path / "lame.toml").write_text(LAME)
-    r = subprocess.run(
-        [EXE, "run", str(tmp_path / "lame.toml"), "-o", str(tmp_path / "out"), "--no-progress"],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    r = _pliant("run", tmp_path / "lame.toml", "-o", tmp_path / "out", "--no-progress")
     assert r.returncode == 0, r.stdout + r.stderr
     m = meshio.read(tmp_path / "out" / "frame_00001.vtu")
     X, u = m.points, m.point_data["displacement"]
