@@ -79,6 +79,20 @@ def test_an_inner_sphere_facing_out_is_an_inclusion():
     assert _volume(X, T) == pytest.approx(BALL, rel=0.03)
 
 
+def test_a_cavity_poking_through_its_wall_is_still_a_cavity():
+    """A 4.5 cm cavity 6 mm off the centre of a 5 cm sphere pokes 1 mm through the wall (1 % of its
+    vertices outside, as where a scan self-intersects): it is still the sphere's cavity, and the
+    tets fill the ball less the cavity, 4/3 π (5³ − 4.5³) cm³ plus the 1 mm cap's 0.001 cm³
+    (3 %, as above); taken for a body of its own it was turned outward and the ball came out solid."""
+    o = trimesh.creation.icosphere(subdivisions=4, radius=RO)
+    i = trimesh.creation.icosphere(subdivisions=3, radius=RI).apply_translation([0.006, 0, 0])
+    i.invert()
+    m = trimesh.util.concatenate([o, i])
+    X, T, info = pl.mesh.surface_to_tets(m.vertices, m.faces, edge_length=0.008)
+    assert info["bodies"] == 1 and "kept 1 inner surface(s) facing inward (cavities)" in info["repair"]
+    assert _volume(X, T) == pytest.approx(SHELL, rel=0.03)
+
+
 def test_an_island_in_a_cavity_is_kept():
     """Three levels: a 5 cm sphere facing out, a 4 cm cavity facing in, a 2 cm ball facing out in
     it. The tets fill the wall and the ball, V = 4/3 π (5³ − 4³ + 2³) cm³ (3 %, as above), and the
