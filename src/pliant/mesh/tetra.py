@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import MeshError
 from . import ftetwild
-from .primitives import orient_positive, tet_volumes, unit_scale
+from .primitives import orient_positive, tet_volumes, triangle_measures, unit_scale
 
 
 MAX_TETS = 2e7  # beyond this fTetWild runs for hours and exhausts a workstation's memory
@@ -98,8 +98,7 @@ def tetrahedralize(
             f"tets in the surface's {volume:.3g} m^3; expected at most {MAX_TETS:.0e} "
             "(give a larger edge length)"
         )
-    P = V[F.astype(np.int64)]
-    area = float(np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1).sum() / 2)
+    area = float(triangle_measures(V, F.astype(np.int64))[0].sum())
     faces = area / (math.sqrt(3) / 4 * el**2)  # triangles of edge el that cover the surface
     if faces > MAX_TETS:
         raise MeshError(
