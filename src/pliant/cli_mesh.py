@@ -144,6 +144,11 @@ def tetrahedralize_cmd(
         "overlaps merged), separate (a mesh per body), largest, "
         "or one (refuse).",
     ),
+    fill_shell: bool = typer.Option(
+        False,
+        help="The surface is a thin-walled shell (an organ's capsule: two sheets a wall apart): "
+        "mesh the solid its outer sheet encloses, openings closed, instead of the wall.",
+    ),
 ):
     """Surface → positively oriented tet mesh (.vtu) with surface nodes and faces marked."""
     import meshio
@@ -172,6 +177,7 @@ def tetrahedralize_cmd(
         target_tets=target_tets,
         repair=repair,
         bodies=bodies,
+        fill_shell=fill_shell,
         log=console.print,
     )
     for note in info["warnings"]:

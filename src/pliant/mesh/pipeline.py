@@ -53,6 +53,7 @@ def surface_to_tets(
     repair: bool = True,
     keep_largest: bool = False,
     bodies: str = "union",
+    fill_shell: bool = False,
     log=None,
 ) -> tuple[np.ndarray, np.ndarray, dict]:
     """Tet mesh [m] of a triangle surface. Steps (each timed in the returned info): repair (holes,
@@ -72,7 +73,12 @@ def surface_to_tets(
     handle and spout do): "union" (default) meshes the union of the bodies, overlaps merged, as one
     conforming tet mesh (fTetWild's winding-number filter); "separate" meshes each body on its own
     (the meshes share no nodes, and overlap where the bodies do); "largest" keeps the largest body;
-    "one" refuses several bodies. ``info["bodies"]`` says how many there were."""
+    "one" refuses several bodies. ``info["bodies"]`` says how many there were.
+
+    ``fill_shell``: the surface is a thin-walled shell, an organ's capsule (two sheets a wall apart,
+    joined at the rims of its openings): mesh the solid its outer sheet encloses, the openings
+    closed (``shell.outer_sheet``; ``info["shell"]`` says what was kept), instead of the wall. It
+    repairs the surface whatever ``repair`` says."""
     if bodies not in BODIES:
         raise MeshError(f"bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
     if keep_largest:
@@ -88,9 +94,15 @@ def surface_to_tets(
     }
     t = time.perf_counter()
     require_volume(V, F, closed=False)
-    if repair:
+    if repair or fill_shell:  # the shell's sheets are told apart on a closed, outward surface
         V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(bodies, bodies))
         info["repair"] = actions
+    if fill_shell:
+        from .shell import outer_sheet
+
+        V, F, info["shell"] = outer_sheet(V, F)
+        V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(bodies, bodies))
+        info["repair"] = info.get("repair", []) + actions
     info["seconds"]["repair"] = time.perf_counter() - t
     require_volume(V, F)
     parts, _, pieces = _bodies(V, F)
@@ -201,7 +213,8 @@ def count_note(tets: int, volume: float, area: float, faces: int, el: float, tri
     if thick < el:
         why.append(
             f"the walls are about {thick:.2g} m thick (2 × volume / area) under the {el:.2g} m edge, "
-            "and tets that fill them are no thicker than they are"
+            "and tets that fill them are no thicker than they are (an organ's capsule, a hollow "
+            "organ? fill_shell, --fill-shell, meshes the solid inside it)"
         )
     if not why:
         why.append("fTetWild refined the surface to follow it within the envelope (a larger one makes fewer)")

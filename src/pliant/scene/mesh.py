@@ -78,6 +78,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
             "embed_subdivide": "int",
             "bodies": "str",
             "envelope": "number",
+            "fill_shell": "bool",
         },
     )
     if ("file" in spec) == ("primitive" in spec):
@@ -107,7 +108,9 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
             raise ctx.error(f"{key}.file", f"{problem}: {f}")
         surface_ext = {".obj", ".stl", ".ply", ".off"}
         try:
-            if f.suffix.lower() in surface_ext or is_vtk_polydata(f):  # a surface: tetrahedralized
+            surface = f.suffix.lower() in surface_ext or is_vtk_polydata(f)
+            _surface_keys_only(ctx, key, spec, surface)
+            if surface:  # a surface: tetrahedralized
                 V, F = pm.read_surface(f)
                 from ..mesh.pipeline import BODIES
 
@@ -129,6 +132,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                     target_tets=spec.get("target_tets", 10000),
                     epsilon=env,
                     bodies=spec.get("bodies", "union"),
+                    fill_shell=bool(spec.get("fill_shell", False)),
                 )
                 scene.meta["mesh_pipeline"] = info
                 scene.warnings += [f"{f}: {note}" for note in info["warnings"]]
@@ -144,6 +148,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
             raise ctx.error(f"{key}.file", str(e)) from None
         scene.meta["mesh_source"] = str(f)
     else:
+        _surface_keys_only(ctx, key, spec, False)
         kind = spec["primitive"]
         if kind == "box":
             size = spec.get("size", [0.1, 0.1, 0.1])
@@ -198,3 +203,19 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
     if hint:
         scene.warnings.append(hint)
     return X, np.asarray(T, np.int64), sets, node_sets
+
+
+# Keys that only a surface file's tetrahedralization reads.
+SURFACE_KEYS = ("bodies", "envelope", "fill_shell")
+
+
+def _surface_keys_only(ctx, key: str, spec: dict, surface: bool) -> None:
+    """Refuse a surface-meshing key on a primitive or a volume mesh, which it would not change."""
+    given = [k for k in SURFACE_KEYS if k in spec]
+    if given and not surface:
+        what = f"primitive {spec['primitive']!r}" if "primitive" in spec else "a volume mesh file"
+        raise ctx.error(
+            f"{key}.{given[0]}",
+            f"'{given[0]}' applies to a surface file (.obj, .stl, .ply, .off, VTK polydata) that is "
+            f"tetrahedralized, not to {what}",
+        )
