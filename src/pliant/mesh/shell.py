@@ -36,6 +36,7 @@ PAIRED = 0.8
 # thin plate: about ½ both ways) are refused.
 OUTER = 0.75
 SAMPLES = 64
+CHUNK = 20_000  # faces whose rays are cast at once
 
 
 def outer_sheet(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -83,15 +84,23 @@ def opposite_faces(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray
     N /= np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
     h = float(np.median(np.linalg.norm(P[:, 1] - P[:, 0], axis=1)))
     k = min(NEAREST, len(F))
-    _, near = cKDTree(C).query(C, k=k, distance_upper_bound=REACH * h)
-    near = np.where(near < len(F), near, 0).astype(np.int64)  # beyond the reach: masked below
-    ok = near != np.arange(len(F))[:, None]
-    t = _ray_hits(C, -N, P, near)
-    ok &= np.isfinite(t) & (np.einsum("fd,fkd->fk", N, N[near]) < 0.0)
-    t = np.where(ok, t, np.inf)
-    j = np.argmin(t, axis=1)
-    dist = t[np.arange(len(F)), j]
-    return np.where(np.isfinite(dist), near[np.arange(len(F)), j], -1), dist
+    tree = cKDTree(C)
+    opposite = np.full(len(F), -1, np.int64)
+    dist = np.full(len(F), np.inf)
+    for lo in range(0, len(F), CHUNK):  # (chunk, k, 3) arrays: about 100 MB at a time
+        rows = np.arange(lo, min(lo + CHUNK, len(F)))
+        _, near = tree.query(C[rows], k=k, distance_upper_bound=REACH * h)
+        near = np.asarray(near, np.int64).reshape(len(rows), k)
+        ok = (near < len(F)) & (near != rows[:, None])  # len(F): none within the reach
+        near = np.where(ok, near, 0)
+        t = _ray_hits(C[rows], -N[rows], P, near)
+        ok &= np.isfinite(t) & (np.einsum("fd,fkd->fk", N[rows], N[near]) < 0.0)
+        t = np.where(ok, t, np.inf)
+        j = np.argmin(t, axis=1)
+        best = t[np.arange(len(rows)), j]
+        dist[rows] = best
+        opposite[rows] = np.where(np.isfinite(best), near[np.arange(len(rows)), j], -1)
+    return opposite, dist
 
 
 def _ray_hits(O: np.ndarray, D: np.ndarray, P: np.ndarray, near: np.ndarray) -> np.ndarray:
@@ -134,7 +143,10 @@ def sheets(faces: np.ndarray, adj: np.ndarray, opposite: np.ndarray) -> np.ndarr
     L = (sp.diags(np.asarray(abs(A).sum(axis=1)).ravel()) - A).tocsc()
     # Shift-invert about a point below the spectrum (L is positive semi-definite); a fixed start
     # vector: the same split on every run.
-    _, vec = eigsh(L, k=1, sigma=-1e-3, which="LM", v0=np.linspace(1.0, 2.0, n))
+    try:
+        _, vec = eigsh(L, k=1, sigma=-1e-3, which="LM", v0=np.linspace(1.0, 2.0, n))
+    except (ArithmeticError, RuntimeError, ValueError) as e:  # ARPACK's errors are RuntimeErrors
+        raise MeshError(f"fill_shell: the sheets of {n} faces could not be told apart ({e})") from None
     return vec[:, 0] > 0
 
 
@@ -162,6 +174,8 @@ def trim_rim(F: np.ndarray, faces: np.ndarray) -> np.ndarray:
     import trimesh
 
     while True:
+        if len(faces) == 0:
+            raise MeshError("fill_shell: nothing is left of the outer sheet once its rim is trimmed")
         sub = F[faces]
         pieces = trimesh.graph.connected_components(_adjacency(sub), nodes=np.arange(len(sub)), min_len=1)
         faces = np.sort(faces[max(pieces, key=len)])
