@@ -1,6 +1,6 @@
 """What share of the step does soft contact take? Runs NiftySim's ball_ball.xml (two balls driven
 into each other, DoDeformableCollision) from t = 0.5 s to 1 s and examples/organs_contact.toml (a
-liver and a neighbouring organ) from 0.25 s to 0.5 s after running each to the start, and prints
+liver and a kidney pressed onto it) from 0.25 s to 0.5 s after running each to the start, and prints
 the element, node and contact seconds of the step (RunInfo) and the contact share (docs/contact.md,
 "Cost"). Not a test. On the GPU the kernels are not timed one by one (they run inside graphs):
 it prints the wall time per step (benchmarks/gpu_kernels.py reads the kernels' times).

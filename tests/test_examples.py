@@ -38,3 +38,30 @@ def test_example_runs(path, tmp_path):
     frames = json.loads((tmp_path / "summary.json").read_text())["frames"]
     assert frames == 3 or (scene.blades and frames >= 3)  # a shorter step after a cut: more steps
     assert (tmp_path / "result.png").exists()
+
+
+def test_the_kidney_passes_its_push_to_the_liver():
+    """examples/organs_contact.toml at its end: the kidney, pushed down at its top, is in balance
+    (Newton's third law through it): the force its top's support exerts on it (the internal forces
+    there, Model.internal_forces) equals the contact force it exerts on the liver (the contact
+    report's pair force, summed in the engine's fixed point) plus what its damping still takes, α Σ m v
+    over its free nodes. Tolerance 3 % of the force: the kidney's remaining acceleration Σ m a
+    (0.5 s is 0.2 s after the push stops, about six damping times 1/α)."""
+    import pliant as pl
+
+    scene = load_scene(Path(__file__).parents[1] / "examples" / "organs_contact.toml")
+    b = scene.builder
+    X, T, body = np.asarray(b.nodes), np.asarray(b.tets), b.bodies()
+    model = b.finalize(scene.dtype)
+    sim = pl.Simulation(model)
+    sim.run(until=scene.duration)
+    pair = sim.contact_report().pairs[0]
+    assert pair.bodies == (0, 1)  # the liver (the [mesh]) and the kidney (the [[body]])
+    on_liver = np.asarray(pair.force)[-1]
+    kidney = np.unique(T[body == 1])
+    top = kidney[X[kidney, 2] >= 0.16]  # the scene's displacement constraint
+    free = np.setdiff1d(kidney, top)
+    support = model.internal_forces(sim.state)[top].sum(axis=0)
+    damping = b.damping * (model.mass[free, None] * sim.state.velocities[free]).sum(axis=0)
+    assert on_liver[2] < -0.05  # the kidney presses down on the liver [N]
+    np.testing.assert_allclose(support, on_liver + damping, atol=0.03 * np.linalg.norm(on_liver))

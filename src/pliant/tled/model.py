@@ -611,8 +611,9 @@ class Model:
         return self._volumes.copy()
 
     def internal_forces(self, state: "State") -> np.ndarray:
-        """Internal nodal forces f(u) [N], (N, 3); at constrained DOFs of an equilibrium state they
-        are the reaction forces the supports exert, with opposite sign."""
+        """Internal nodal forces f(u) [N], (N, 3), the forces the elements need at the nodes: at the
+        constrained DOFs of an equilibrium state, less the loads applied there, the forces the
+        supports exert on the body (a bar hanging under gravity: its weight, upward, at the top)."""
         return self.to_user_nodes(np.asarray(self._results().internal_forces(state._s), dtype=float))
 
     def strain_energy(self, state: "State") -> float:
