@@ -98,6 +98,8 @@ def check_cmd(inp: Path, as_json: bool = typer.Option(False, "--json")):
             bodies += f" with {rep.cavities} {'cavity' if rep.cavities == 1 else 'cavities'}"
         console.print(f"{inp}: {rep.vertices:,} vertices, {rep.faces:,} faces, {bodies}")
         console.print("  ok" if rep.ok else "  problems: " + "; ".join(rep.problems))
+        for note in rep.notes:
+            console.print(f"  note: {note}")
     raise typer.Exit(0 if rep.ok else 1)
 
 
