@@ -62,6 +62,21 @@ def test_a_bowl_is_filled_to_the_segment_its_outer_sheet_bounds(opening, inside_
     assert "kept the outer sheet" in info["shell"][0]
 
 
+def test_a_hollow_sphere_with_a_thin_wall_is_filled_to_the_ball():
+    """A capsule without openings, its inner sheet a closed surface of its own (a cavity facing in,
+    1 mm inside the outer one): the two sheets are one shell, and the solid is the ball (4/3 π R³;
+    tolerance 3 %: the icosphere holds 0.6 % less, fTetWild's envelope ~0.6 %)."""
+    outer = trimesh.creation.icosphere(subdivisions=4, radius=R)
+    inner = trimesh.creation.icosphere(subdivisions=4, radius=R - WALL)
+    V = np.vstack([outer.vertices, inner.vertices])
+    F = np.vstack([outer.faces, inner.faces[:, ::-1] + len(outer.vertices)])
+    X, T, info = pl.mesh.surface_to_tets(V, F, edge_length=0.008, fill_shell=True)
+    assert _volume(X, T) == pytest.approx(4 / 3 * math.pi * R**3, rel=0.03)
+    note = info["shell"][0]
+    assert f"({len(outer.faces)} of {len(F)} faces" in note  # the outer sphere, whole
+    assert float(note.split("wall ")[1].split(" m")[0]) == pytest.approx(WALL, rel=0.01)
+
+
 def test_each_face_of_a_bowl_finds_the_other_sheet_a_wall_away():
     """The rays along the inward normals cross the wall: the distance to the opposite face is the
     wall, 1 mm (to 2 %: the facets of the two sheets lie at slightly different depths), for all

@@ -50,10 +50,9 @@ def outer_sheet(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, l
     V, F = np.asarray(m.vertices), np.asarray(m.faces)
     adj = np.asarray(m.face_adjacency)
     opposite, depth = opposite_faces(V, F)
-    bodies = trimesh.graph.connected_components(adj, nodes=np.arange(len(F)), min_len=1)
+    bodies = _bodies(len(F), adj, opposite)
     keep, actions = [], []
-    for k, faces in enumerate(sorted(bodies, key=lambda b: int(np.min(b)))):
-        faces = np.sort(faces)
+    for k, faces in enumerate(bodies):
         who = f"body {k + 1} of {len(bodies)}" if len(bodies) > 1 else "the surface"
         paired = float(np.mean(opposite[faces] >= 0))
         if paired < PAIRED:
@@ -70,6 +69,22 @@ def outer_sheet(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, l
         )
         keep.append(kept)
     return V, F[np.sort(np.concatenate(keep))], actions
+
+
+def _bodies(n: int, adj: np.ndarray, opposite: np.ndarray) -> list[np.ndarray]:
+    """The faces of each body, sorted, bodies in the order of their first face: faces joined by an
+    edge or across a wall (a face and its opposite), so that two closed sheets a wall apart (a
+    hollow sphere: its outer surface and its cavity's) are one shell."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    o = np.flatnonzero(opposite >= 0)
+    e = np.r_[adj.reshape(-1, 2), np.c_[o, opposite[o]]]
+    _, label = connected_components(
+        coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)), directed=False
+    )
+    first = np.unique(label, return_index=True)[1]
+    return [np.flatnonzero(label == label[f]) for f in np.sort(first)]
 
 
 def opposite_faces(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
