@@ -120,8 +120,9 @@ def test_the_liver_capsule_is_filled_to_an_organ():
 
 
 def test_scenes_and_the_command_line_take_fill_shell(tmp_path):
-    """``[mesh] fill_shell = true`` and ``--fill-shell`` mesh the bowl solid; the key on a primitive
-    is refused by name (it would change nothing)."""
+    """``[mesh] fill_shell = true`` and ``pliant mesh tetrahedralize --fill-shell`` mesh the bowl
+    solid, ``pliant mesh repair --fill-shell`` writes that solid's closed surface; the key on a
+    primitive is refused by name (it would change nothing)."""
     V, F = _bowl(90)
     trimesh.Trimesh(V, F).export(tmp_path / "bowl.stl")
     scene = tmp_path / "bowl.toml"
@@ -152,6 +153,15 @@ def test_scenes_and_the_command_line_take_fill_shell(tmp_path):
 
     out = meshio.read(tmp_path / "bowl.vtu")
     assert _volume(out.points, out.cells_dict["tetra"]) == pytest.approx(_segment(90), rel=0.03)
+    r = subprocess.run(
+        [EXE, "mesh", "repair", tmp_path / "bowl.stl", tmp_path / "solid.stl", "--fill-shell"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert r.returncode == 0 and "kept the outer sheet" in r.stdout, r.stderr
+    solid = trimesh.load(tmp_path / "solid.stl")  # the hemisphere's closed surface
+    assert solid.is_watertight and solid.volume == pytest.approx(_segment(90), rel=0.03)
     material = '[[material]]\ntype = "neo-hookean"\nE = 1e4\nnu = 0.3\ndensity = 1000.0\n'
     scene.write_text('[mesh]\nprimitive = "sphere"\nradius = 0.05\nfill_shell = true\n' + material)
     r = subprocess.run([EXE, "run", scene, "-o", tmp_path / "o"], capture_output=True, text=True, timeout=600)

@@ -103,6 +103,10 @@ def check_cmd(inp: Path, as_json: bool = typer.Option(False, "--json")):
     raise typer.Exit(0 if rep.ok else 1)
 
 
+# --fill-shell of repair and tetrahedralize: what it is for (each command then says what it makes).
+FILL_SHELL_HELP = "The surface is a thin-walled shell (an organ's capsule: two sheets a wall apart): "
+
+
 @mesh_app.command("repair")
 @_guard
 def repair_cmd(
@@ -112,6 +116,10 @@ def repair_cmd(
     bodies: str = typer.Option(
         "all", help="Several closed bodies: all (keep each, closed and outward), largest, or one (refuse)."
     ),
+    fill_shell: bool = typer.Option(
+        False,
+        help=FILL_SHELL_HELP + "write its outer sheet, openings closed: the surface of the solid inside.",
+    ),
 ):
     """Fill holes, fix winding, drop fragments; refuse with the reason where it cannot."""
     from .io import check_output_file
@@ -120,6 +128,12 @@ def repair_cmd(
     check_output_file(out, "surface mesh", mesh_format=True)
     V, F = read_surface(inp)
     Vr, Fr, actions = repair_surface(V, F, keep_largest=keep_largest, bodies=bodies)
+    if fill_shell:
+        from .mesh.shell import outer_sheet
+
+        Vr, Fr, kept = outer_sheet(Vr, Fr)
+        Vr, Fr, more = repair_surface(Vr, Fr, keep_largest=keep_largest, bodies=bodies)
+        actions += kept + more
     write_surface(out, Vr, Fr)
     rep = check_surface(Vr, Fr)
     console.print(f"{out}: " + ("; ".join(actions) or "nothing to repair"))
@@ -148,8 +162,8 @@ def tetrahedralize_cmd(
     ),
     fill_shell: bool = typer.Option(
         False,
-        help="The surface is a thin-walled shell (an organ's capsule: two sheets a wall apart): "
-        "mesh the solid its outer sheet encloses, openings closed, instead of the wall.",
+        help=FILL_SHELL_HELP
+        + "mesh the solid its outer sheet encloses, openings closed, instead of the wall.",
     ),
 ):
     """Surface → positively oriented tet mesh (.vtu) with surface nodes and faces marked."""
