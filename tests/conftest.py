@@ -1,4 +1,7 @@
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -7,6 +10,18 @@ import pytest
 # compare thread counts ask for theirs explicitly.
 if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+
+@pytest.fixture
+def pliant_cli():
+    """The installed command line: ``pliant_cli(*args)`` runs ``pliant args...`` to its end and
+    returns the CompletedProcess (text output; a guard of 10 minutes against a hang)."""
+    exe = str(Path(sys.executable).with_name("pliant"))
+
+    def run(*args) -> subprocess.CompletedProcess:
+        return subprocess.run([exe, *map(str, args)], capture_output=True, text=True, timeout=600)
+
+    return run
 
 
 @pytest.fixture(params=["float32", "float64"])

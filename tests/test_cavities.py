@@ -6,9 +6,6 @@ warning for far more tets than the edge asks for, checked against the wall's bui
 
 import math
 import re
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,12 +17,6 @@ from pliant.mesh.bodies import winding_number
 RO, RI = 0.05, 0.045  # outer and inner radius [m]: a 5 mm wall
 SHELL = 4 / 3 * math.pi * (RO**3 - RI**3)
 BALL = 4 / 3 * math.pi * RO**3
-EXE = str(Path(sys.executable).with_name("pliant"))
-
-
-def _pliant(*args) -> subprocess.CompletedProcess:
-    """The installed command line, run to its end (a guard of 10 minutes against a hang)."""
-    return subprocess.run([EXE, *map(str, args)], capture_output=True, text=True, timeout=600)
 
 
 def _nested(inner_faces_in=True, flip_all=False):
@@ -107,17 +98,17 @@ def test_an_island_in_a_cavity_is_kept():
     assert 0 < inner.sum() < len(T) and not np.intersect1d(T[inner], T[~inner]).size
 
 
-def test_check_and_repair_name_the_cavity(tmp_path):
+def test_check_and_repair_name_the_cavity(tmp_path, pliant_cli):
     V, F = _nested()
     src = tmp_path / "hollow.obj"
     trimesh.Trimesh(V, F, process=False).export(src)
-    r = _pliant("mesh", "check", src)
+    r = pliant_cli("mesh", "check", src)
     assert r.returncode == 0 and "1 body with 1 cavity" in r.stdout and "ok" in r.stdout, r.stdout + r.stderr
     rep = pl.mesh.check_surface(V, F, self_intersections=False)
     assert (rep.bodies, rep.cavities, rep.ok) == (1, 1, True)
 
 
-def test_far_more_tets_than_the_edge_asks_for_says_why(tmp_path):
+def test_far_more_tets_than_the_edge_asks_for_says_why(tmp_path, pliant_cli):
     """At a target of 300 tets the edge is about 16 mm, over three times the 5 mm wall: the tets
     that fill the wall are many times more. The warning gives the wall's thickness as 2 × volume /
     area, for this shell (2/3)(R³ − r³)/(R² + r²) = 4.99 mm: within 5 % of the 5 mm built (the
@@ -127,7 +118,7 @@ def test_far_more_tets_than_the_edge_asks_for_says_why(tmp_path):
     V, F = _nested()
     src = tmp_path / "hollow.obj"
     trimesh.Trimesh(V, F, process=False).export(src)
-    r = _pliant("mesh", "tetrahedralize", src, tmp_path / "h.vtu", "--target-tets", 300)
+    r = pliant_cli("mesh", "tetrahedralize", src, tmp_path / "h.vtu", "--target-tets", 300)
     assert r.returncode == 0, r.stderr
     thick = float(re.search(r"the walls are about ([0-9.e-]+) m thick", r.stderr)[1])
     assert thick == pytest.approx(RO - RI, rel=0.05)
@@ -166,7 +157,7 @@ dofs = "{d}"
 )
 
 
-def test_a_hollow_sphere_from_a_file_inflates_as_lame_says(tmp_path):
+def test_a_hollow_sphere_from_a_file_inflates_as_lame_says(tmp_path, pliant_cli):
     """End to end: an STL of a hollow sphere (a = 2 cm, b = 4 cm, inner surface facing in) in a
     scene, 30 Pa inside (1 % of E: small strain), relaxed. Lamé: u(r) = p a³ / (E (b³ − a³))
     ((1 − 2ν) r + (1 + ν) b³ / (2 r²)). RMS error over the nodes within 4 % of the largest u
@@ -179,7 +170,7 @@ def test_a_hollow_sphere_from_a_file_inflates_as_lame_says(tmp_path):
     i.invert()
     trimesh.util.concatenate([o, i]).export(tmp_path / "hollow.stl")
     (tmp_path / "lame.toml").write_text(LAME)
-    r = _pliant("run", tmp_path / "lame.toml", "-o", tmp_path / "out", "--no-progress")
+    r = pliant_cli("run", tmp_path / "lame.toml", "-o", tmp_path / "out", "--no-progress")
     assert r.returncode == 0, r.stdout + r.stderr
     m = meshio.read(tmp_path / "out" / "frame_00001.vtu")
     X, u = m.points, m.point_data["displacement"]

@@ -5,8 +5,6 @@ plate and a solid ball, refused by name; HuBMAP's liver capsule (examples/data),
 holds the organ: far more than its wall, less than its convex hull."""
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +18,6 @@ from pliant.mesh.shell import opposite_faces, outer_sheet
 
 R, WALL = 0.05, 0.001  # the bowl's outer radius and wall [m]
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-EXE = str(Path(sys.executable).with_name("pliant"))
 
 
 def _bowl(opening_deg: float, inside_out: bool = False):
@@ -119,63 +116,35 @@ def test_the_liver_capsule_is_filled_to_an_organ():
     assert 0.45 < kept / total < 0.55
 
 
-def test_scenes_and_the_command_line_take_fill_shell(tmp_path):
+def test_scenes_and_the_command_line_take_fill_shell(tmp_path, pliant_cli):
     """``[mesh] fill_shell = true`` and ``pliant mesh tetrahedralize --fill-shell`` mesh the bowl
     solid, ``pliant mesh repair --fill-shell`` writes that solid's closed surface; the key on a
     primitive is refused by name (it would change nothing)."""
-    V, F = _bowl(90)
-    trimesh.Trimesh(V, F).export(tmp_path / "bowl.stl")
-    scene = tmp_path / "bowl.toml"
-    scene.write_text(
-        '[mesh]\nfile = "bowl.stl"\nedge_length = 0.008\nfill_shell = true\n'
-        '[[material]]\ntype = "neo-hookean"\nE = 1e4\nnu = 0.3\ndensity = 1000.0\n'
-    )
-    s = load_scene(scene)
-    m = s.builder.finalize("float64")
-    assert float(np.sum(m.element_volumes())) == pytest.approx(_segment(90), rel=0.03)
-    r = subprocess.run(
-        [
-            EXE,
-            "mesh",
-            "tetrahedralize",
-            tmp_path / "bowl.stl",
-            tmp_path / "bowl.vtu",
-            "--edge-length",
-            "0.008",
-            "--fill-shell",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert r.returncode == 0, r.stderr
     import meshio
 
+    V, F = _bowl(90)
+    trimesh.Trimesh(V, F).export(tmp_path / "bowl.stl")
+    material = '[[material]]\ntype = "neo-hookean"\nE = 1e4\nnu = 0.3\ndensity = 1000.0\n'
+    scene = tmp_path / "bowl.toml"
+    scene.write_text('[mesh]\nfile = "bowl.stl"\nedge_length = 0.008\nfill_shell = true\n' + material)
+    m = load_scene(scene).builder.finalize("float64")
+    assert float(np.sum(m.element_volumes())) == pytest.approx(_segment(90), rel=0.03)
+    r = pliant_cli(
+        "mesh",
+        "tetrahedralize",
+        tmp_path / "bowl.stl",
+        tmp_path / "bowl.vtu",
+        "--edge-length",
+        0.008,
+        "--fill-shell",
+    )
+    assert r.returncode == 0, r.stderr
     out = meshio.read(tmp_path / "bowl.vtu")
     assert _volume(out.points, out.cells_dict["tetra"]) == pytest.approx(_segment(90), rel=0.03)
-    r = subprocess.run(
-        [EXE, "mesh", "repair", tmp_path / "bowl.stl", tmp_path / "solid.stl", "--fill-shell"],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    r = pliant_cli("mesh", "repair", tmp_path / "bowl.stl", tmp_path / "solid.stl", "--fill-shell")
     assert r.returncode == 0 and "kept the outer sheet" in r.stdout, r.stderr
     solid = trimesh.load(tmp_path / "solid.stl")  # the hemisphere's closed surface
     assert solid.is_watertight and solid.volume == pytest.approx(_segment(90), rel=0.03)
-    material = '[[material]]\ntype = "neo-hookean"\nE = 1e4\nnu = 0.3\ndensity = 1000.0\n'
     scene.write_text('[mesh]\nprimitive = "sphere"\nradius = 0.05\nfill_shell = true\n' + material)
-    r = subprocess.run([EXE, "run", scene, "-o", tmp_path / "o"], capture_output=True, text=True, timeout=600)
+    r = pliant_cli("run", scene, "-o", tmp_path / "o")
     assert r.returncode == 2 and "mesh.fill_shell" in r.stderr and "Traceback" not in r.stderr
-
-
-def test_check_notes_a_thin_walled_surface():
-    """`check_surface` (``pliant mesh check``) notes walls of 2 × volume / area under 2 % of the
-    diagonal, pointing to fill_shell: the bowl's are its 1 mm wall (to 5 %: the rim's area); a ball
-    has none, and the note is no problem."""
-    V, F, _ = pl.mesh.repair_surface(*_bowl(90))
-    rep = pl.mesh.check_surface(V, F)
-    assert rep.ok and len(rep.notes) == 1 and "--fill-shell" in rep.notes[0]
-    wall = float(rep.notes[0].split("walls about ")[1].split(" m")[0])
-    assert wall == pytest.approx(WALL, rel=0.05)
-    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
-    assert pl.mesh.check_surface(ball.vertices, ball.faces).notes == []
