@@ -148,3 +148,16 @@ def test_scenes_and_the_command_line_take_fill_shell(tmp_path, pliant_cli):
     scene.write_text('[mesh]\nprimitive = "sphere"\nradius = 0.05\nfill_shell = true\n' + material)
     r = pliant_cli("run", scene, "-o", tmp_path / "o")
     assert r.returncode == 2 and "mesh.fill_shell" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_check_notes_a_thin_walled_surface():
+    """`check_surface` (``pliant mesh check``) notes walls of 2 × volume / area under 2 % of the
+    diagonal, pointing to fill_shell: the bowl's are its 1 mm wall (to 5 %: the rim's area); a ball
+    has none, and the note is no problem."""
+    V, F, _ = pl.mesh.repair_surface(*_bowl(90))
+    rep = pl.mesh.check_surface(V, F)
+    assert rep.ok and len(rep.notes) == 1 and "--fill-shell" in rep.notes[0]
+    wall = float(rep.notes[0].split("walls about ")[1].split(" m")[0])
+    assert wall == pytest.approx(WALL, rel=0.05)
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
+    assert pl.mesh.check_surface(ball.vertices, ball.faces).notes == []

@@ -192,7 +192,8 @@ def trim_rim(F: np.ndarray, faces: np.ndarray) -> np.ndarray:
         if len(faces) == 0:
             raise MeshError("fill_shell: nothing is left of the outer sheet once its rim is trimmed")
         sub = F[faces]
-        pieces = trimesh.graph.connected_components(_adjacency(sub), nodes=np.arange(len(sub)), min_len=1)
+        adjacent = trimesh.graph.face_adjacency(faces=sub)
+        pieces = trimesh.graph.connected_components(adjacent, nodes=np.arange(len(sub)), min_len=1)
         faces = np.sort(faces[max(pieces, key=len)])
         sub = F[faces]
         e = np.sort(np.stack([sub[:, [0, 1]], sub[:, [1, 2]], sub[:, [2, 0]]], axis=1), axis=2)
@@ -203,13 +204,3 @@ def trim_rim(F: np.ndarray, faces: np.ndarray) -> np.ndarray:
         if not drop.any():
             return faces
         faces = faces[~drop]
-
-
-def _adjacency(F: np.ndarray) -> np.ndarray:
-    """Pairs of faces (indices into F) that share an edge."""
-    e = np.sort(np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=2).reshape(-1, 2)
-    face = np.repeat(np.arange(len(F)), 3)
-    order = np.lexsort((e[:, 1], e[:, 0]))
-    e, face = e[order], face[order]
-    same = (e[1:] == e[:-1]).all(axis=1)
-    return np.c_[face[:-1][same], face[1:][same]]
