@@ -20,7 +20,7 @@ def body(material, tool: bool = False, X=X, T=T) -> pl.ModelBuilder:
     b.set_material(material, density=1000.0)
     b.fix(np.nonzero(X[:, 0] < 1e-9)[0])
     b.set_gravity((0.0, 0.0, -9.81))
-    b.add_force(np.nonzero(X[:, 0] > 0.04 - 1e-9)[0], (0.0, 0.001, 0.0), curve=pl.Ramp(0.01))
+    b.add_force(np.nonzero(X[:, 0] > X[:, 0].max() - 1e-9)[0], (0.0, 0.001, 0.0), curve=pl.Ramp(0.01))
     b.damping = 20.0
     if tool:  # touches the free end (the bar: 0 ≤ x ≤ 0.04 m, 0 ≤ z ≤ 0.02 m), presses 0.4 mm/ms
         probe = Sphere(0.006, mu_s=0.3, mu_k=0.2, name="probe")

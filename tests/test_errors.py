@@ -187,6 +187,26 @@ def test_a_boolean_mask_for_node_ids_says_how_to_give_them():
             call(X[:, 2] == 0.0)
 
 
+def test_an_empty_node_selection_is_refused_by_each_call():
+    """A selection that missed (a plane a little off the nodes) would have fixed, loaded or
+    exposed nothing and run on; scenes refuse an empty selection, and so does the API, naming the
+    call."""
+    X, T = _tet()
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    none = np.flatnonzero(X[:, 2] < -1.0)
+    for call, name in (
+        (lambda: b.fix(none), "fix"),
+        (lambda: b.prescribe([], 0.01, "z"), "prescribe"),
+        (lambda: b.add_force(none, (0.0, 0.0, -1.0)), "add_force"),
+        (lambda: b.add_gravity((0.0, 0.0, -9.81), none), "add_gravity nodes"),
+        (lambda: b.add_tool(pl.contact.Sphere(0.01), nodes=[]), "add_tool 'sphere' nodes"),
+    ):
+        with pytest.raises(pl.InputError, match=rf"^{name}: no nodes given \(an empty selection\)"):
+            call()
+    assert not b.tools  # nothing half-added
+
+
 def test_bad_density_and_missing_material():
     X, T = _tet()
     b = pl.ModelBuilder()

@@ -190,10 +190,12 @@ class ModelBuilder:
         self.sets.append(_ElementSet(name or f"set{len(self.sets)}", elements, material, rho))
 
     # --- constraints and loads --------------------------------------------------------------
-    def _node_ids(self, nodes, what: str) -> np.ndarray:
+    def _node_ids(self, nodes, what: str, empty: bool = True) -> np.ndarray:
         """Node ids as int64: integers, or floats with integral values; anything else (1.5,
-        strings, booleans) raises InputError naming ``what``."""
+        strings, booleans), or no ids at all unless ``empty``, raises InputError naming ``what``."""
         a = np.asarray(nodes)
+        if not empty and a.size == 0:  # a selection that missed: the call would do nothing
+            raise InputError(f"{what}: no nodes given (an empty selection); expected at least one node id")
         if a.dtype == bool:  # a mask would have been nodes 0 and 1
             raise InputError(
                 f"{what}: node ids of type bool (a mask? give np.flatnonzero(mask)); expected integers"
@@ -213,7 +215,8 @@ class ModelBuilder:
         return ids
 
     def fix(self, nodes, dofs="xyz"):
-        """Fix the given DOFs of the nodes (zero displacement)."""
+        """Fix the given DOFs of the nodes (zero displacement). Node selections here and in
+        prescribe, add_force, add_gravity and add_tool may not be empty (InputError)."""
         self._constrain(nodes, 0.0, dofs, Constant(), "fix")
 
     def prescribe(self, nodes, displacement, dofs="xyz", curve: LoadCurve | None = None):
@@ -225,7 +228,7 @@ class ModelBuilder:
 
     def _constrain(self, nodes, displacement, dofs, curve: LoadCurve | None, what: str):
         """prescribe (or fix: ``what`` names the call in errors)."""
-        ids = self._node_ids(nodes, what)
+        ids = self._node_ids(nodes, what, empty=False)
         ds = _dofs(dofs)
         given = "non-numeric"
         val = real_array(displacement)
@@ -259,7 +262,7 @@ class ModelBuilder:
 
     def add_force(self, nodes, force, curve: LoadCurve | None = None):
         """Add a force [N] on each node: (3,) for all, or (n, 3) per node; scaled by ``curve``."""
-        ids = self._node_ids(nodes, "add_force")
+        ids = self._node_ids(nodes, "add_force", empty=False)
         f = real_array(force)
         try:
             f = np.zeros((0, 0)) if f is None else np.broadcast_to(f, (ids.size, 3)) if f.ndim == 1 else f
@@ -390,7 +393,7 @@ class ModelBuilder:
         mass, scaled by ``curve``; it adds to set_gravity's and to other add_gravity calls (as
         NiftySim's Gravity constraints, each on its listed nodes, add up). Nodes a cut copies
         (pliant.cutting) keep it."""
-        ids = np.unique(self._node_ids(nodes, "add_gravity nodes"))
+        ids = np.unique(self._node_ids(nodes, "add_gravity nodes", empty=False))
         gv = real_array(g)
         if gv is None or gv.ravel().shape != (3,) or not np.all(np.isfinite(gv)):
             raise InputError(f"add_gravity: g = {shown(g)}; expected 3 finite components [m/s^2]")
@@ -415,7 +418,7 @@ class ModelBuilder:
                     f"{_core.masked_tools} tools can be "
                     f"restricted to nodes; this is tool {len(self.tools)}"
                 )
-            nodes = np.unique(self._node_ids(nodes, f"add_tool {shown(tool.name)} nodes"))
+            nodes = np.unique(self._node_ids(nodes, f"add_tool {shown(tool.name)} nodes", empty=False))
         self.tools.append(tool)
         self.tool_nodes.append(nodes)
         return tool
