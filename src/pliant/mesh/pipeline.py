@@ -94,14 +94,15 @@ def surface_to_tets(
     }
     t = time.perf_counter()
     require_volume(V, F, closed=False)
+    keep = {"union": "all", "separate": "all"}.get(bodies, bodies)  # the pieces repair keeps
     if repair or fill_shell:  # the shell's sheets are told apart on a closed, outward surface
-        V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(bodies, bodies))
+        V, F, actions = repair_surface(V, F, bodies=keep)
         info["repair"] = actions
     if fill_shell:
         from .shell import outer_sheet
 
         V, F, info["shell"] = outer_sheet(V, F)
-        V, F, actions = repair_surface(V, F, bodies={"union": "all", "separate": "all"}.get(bodies, bodies))
+        V, F, actions = repair_surface(V, F, bodies=keep)
         info["repair"] = info.get("repair", []) + actions
     info["seconds"]["repair"] = time.perf_counter() - t
     require_volume(V, F)

@@ -315,14 +315,9 @@ def repair_surface(
         actions.append(
             f"dropped {len(groups) - len(big)} fragment(s) of {len(m.faces) - sum(len(g) for g in big)} faces"
         )
-    _, count = _edges(np.asarray(m.faces)[np.concatenate(big)])
-    if (count > 2).any():
-        raise MeshError(
-            f"repair: {(count > 2).sum()} non-manifold edge(s) (shared by more than "
-            "two faces); cannot repair automatically"
-        )
+    shared = _split_touching(np.asarray(m.faces), big, actions)
     parts: list = [m.submesh([g], append=True) for g in big]
-    done = [_close_body(p, fill_holes, actions) for p in parts]
+    done = _solid([_close_body(p, fill_holes, actions) for p in parts], shared, actions)
     closed, grouped = _orient_bodies([c for c, _ in done], [r for _, r in done], actions)
     if len(grouped) > 1 and bodies == "one":
         raise MeshError(
@@ -344,6 +339,53 @@ def repair_surface(
             f"repair ({'; '.join(rep.problems)})"
         )
     return np.asarray(out.vertices, float) / scale, np.asarray(out.faces, np.int64), actions
+
+
+def _split_touching(F: np.ndarray, pieces: list, actions: list[str]) -> int:
+    """Non-manifold edges (of more than two faces) where bodies touch: two cubes sharing an edge
+    (four faces on it), or two regions sharing an interface (three faces on each of its edges). The
+    pieces (face indices, joined across edges of two faces only: trimesh's face_adjacency) come
+    apart there, each with its own copy of the edge, and hole filling closes the open ones (each
+    region over the interface); a piece that still holds such an edge more than twice raises
+    MeshError. Returns how many edges were split."""
+    uniq, count = _edges(F[np.concatenate(pieces)])
+    shared = {tuple(e) for e in uniq[count > 2].tolist()}
+    if not shared:
+        return 0
+    for g in pieces:
+        e, c = _edges(F[g])
+        held = np.array([tuple(x) in shared for x in e.tolist()], bool)
+        if (c[held] > 2).any():
+            raise MeshError(
+                f"repair: {len(shared)} non-manifold edge(s) (shared by more than two faces) "
+                "within one piece; cannot repair automatically"
+            )
+    actions.append(f"split the surface at {len(shared)} non-manifold edge(s) (bodies touching there)")
+    return len(shared)
+
+
+def _solid(done: list, shared: int, actions: list[str]) -> list:
+    """The closed pieces (_close_body's) less the flat ones, enclosing less than 1e-9 of their own
+    diagonal cubed: a sheet and the triangulation that closed its hole, such as an interface that
+    _split_touching left on its own. If every piece is flat, MeshError where non-manifold edges
+    were split (the pieces between them enclose nothing), else all of them (what checks them next
+    names the reason: no volume, a vertex far from the others)."""
+
+    def flat(m) -> bool:
+        V, F = np.asarray(m.vertices), np.asarray(m.faces)
+        return abs(surface_volume(V, F)) <= 1e-9 * float(np.linalg.norm(np.ptp(V, axis=0))) ** 3
+
+    kept = [d for d in done if not flat(d[0])]
+    if not kept and shared:
+        raise MeshError(
+            f"repair: no piece of the surface encloses a volume (the pieces between its {shared} "
+            "non-manifold edge(s)); cannot repair automatically"
+        )
+    if not kept:
+        return done
+    if len(kept) < len(done):
+        actions.append(f"dropped {len(done) - len(kept)} flat piece(s) enclosing no volume")
+    return kept
 
 
 def _close_body(m, fill_holes: bool, actions: list[str]):
