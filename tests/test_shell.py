@@ -20,13 +20,13 @@ R, WALL = 0.05, 0.001  # the bowl's outer radius and wall [m]
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-def _bowl(opening_deg: float, inside_out: bool = False):
-    """A spherical bowl of wall WALL, its outer sheet a cap of polar angle ``opening_deg`` on a
-    sphere of radius R about +z, its inner sheet R − WALL, joined at the rim: a profile of 24 + 24
+def _bowl(opening_deg: float, inside_out: bool = False, wall: float = WALL):
+    """A spherical bowl of wall ``wall`` [m], its outer sheet a cap of polar angle ``opening_deg`` on
+    a sphere of radius R about +z, its inner sheet R − wall, joined at the rim: a profile of 24 + 24
     points revolved in 64 sections. V [m] (n, 3), F (f, 3)."""
     a = np.linspace(0.0, math.radians(opening_deg), 24)
     outer = np.c_[R * np.sin(a), R * np.cos(a)]
-    inner = np.c_[(R - WALL) * np.sin(a), (R - WALL) * np.cos(a)][::-1]
+    inner = np.c_[(R - wall) * np.sin(a), (R - wall) * np.cos(a)][::-1]
     m = trimesh.creation.revolve(np.r_[outer, inner], sections=64)
     F = np.asarray(m.faces)
     return np.asarray(m.vertices), (F[:, ::-1] if inside_out else F)
@@ -57,6 +57,21 @@ def test_a_bowl_is_filled_to_the_segment_its_outer_sheet_bounds(opening, inside_
     X, T, info = pl.mesh.surface_to_tets(V, F, edge_length=0.008, fill_shell=True)
     assert _volume(X, T) == pytest.approx(_segment(opening), rel=0.03)
     assert "kept the outer sheet" in info["shell"][0]
+
+
+def test_a_bowl_whose_wall_is_thicker_than_its_triangles_is_filled_too():
+    """A 1 cm wall under triangles of about 4.5 mm: the faces within three edges of a face are on
+    its own sheet (fewer than PAIRED of them find an opposite there), so the rays look deeper, along
+    points down the ray. The tets fill the same segment (3 %, as above) and the wall is measured
+    (1 %: the facets of the two sheets lie at slightly different depths)."""
+    from pliant.mesh.shell import PAIRED
+
+    V, F = _bowl(120, wall=0.01)
+    Vr, Fr, _ = pl.mesh.repair_surface(V, F)
+    assert np.mean(opposite_faces(Vr, Fr)[0] >= 0) < PAIRED  # the near search alone would refuse it
+    X, T, info = pl.mesh.surface_to_tets(V, F, edge_length=0.008, fill_shell=True)
+    assert _volume(X, T) == pytest.approx(_segment(120), rel=0.03)
+    assert float(info["shell"][0].split("wall ")[1].split(" m")[0]) == pytest.approx(0.01, rel=0.01)
 
 
 def test_a_hollow_sphere_with_a_thin_wall_is_filled_to_the_ball():

@@ -8,7 +8,9 @@ tetrahedra fill the organ.
 Method:
 
 1. each face's *opposite*: the nearest face whose plane a ray from its centroid along its inward
-   normal crosses, facing back, within a few edges (Möller & Trumbore 1997 ray–triangle test);
+   normal crosses, facing back, within a few edges (Möller & Trumbore 1997 ray–triangle test); where
+   too few faces find one so near (a wall thicker than its triangles), among the faces nearest to
+   points along the ray, as deep as a tenth of the surface's size;
 2. the two sheets: faces joined by an edge lie on one sheet, a face and its opposite on two, and the
    signs of the smallest eigenvector of that signed graph's Laplacian split the faces into the two
    sides with the fewest relations broken (the rims; Kunegis et al. 2010, "Spectral analysis of
@@ -29,6 +31,11 @@ from .bodies import winding_number
 # capsule's wall is thinner than its triangles: the liver's 0.9 mm under edges of 4.3 mm).
 REACH = 3.0
 NEAREST = 32
+# Where too few faces find one (a wall thicker than its triangles), among the PROBED faces nearest to
+# each of the points one median edge, then 1.5 times as deep, and so on along the ray, as deep as
+# DEEP × the bounding box's diagonal (a ball's faces, whose rays cross it, find none so near).
+PROBED = 8
+DEEP = 0.1
 # At least this share of a body's faces must find their opposite: a solid's faces mostly find none.
 PAIRED = 0.8
 # The outer sheet's winding number at the inner sheet's faces is near 1 (liver 0.95, kidney 1.00)
@@ -50,6 +57,10 @@ def outer_sheet(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, l
     V, F = np.asarray(m.vertices), np.asarray(m.faces)
     adj = np.asarray(m.face_adjacency)
     opposite, depth = opposite_faces(V, F)
+    if np.mean(opposite >= 0) < PAIRED:  # a wall thicker than a few triangles: look deeper
+        deep, deep_depth = opposite_faces(V, F, probed=True)
+        new = (opposite < 0) & (deep >= 0)
+        opposite[new], depth[new] = deep[new], deep_depth[new]
     bodies = _bodies(len(F), adj, opposite)
     keep, actions = [], []
     for k, faces in enumerate(bodies):
@@ -58,7 +69,8 @@ def outer_sheet(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, l
         if paired < PAIRED:
             raise MeshError(
                 f"fill_shell: {who} is not a thin-walled shell: {100 * paired:.0f} % of its faces face "
-                f"another within {REACH:g} edges (expected >= {100 * PAIRED:.0f} %); mesh it as it is"
+                f"another across a wall thinner than {DEEP:.0%} of its size (expected >= "
+                f"{100 * PAIRED:.0f} %); mesh it as it is"
             )
         side = sheets(faces, adj, opposite)
         outer = _outer_side(V, F, faces, side, who)
@@ -87,10 +99,12 @@ def _bodies(n: int, adj: np.ndarray, opposite: np.ndarray) -> list[np.ndarray]:
     return [np.flatnonzero(label == label[f]) for f in np.sort(first)]
 
 
-def opposite_faces(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def opposite_faces(V: np.ndarray, F: np.ndarray, probed: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Per face, the nearest face (−1: none) that a ray from its centroid along its inward normal
     hits, facing back (normals apart by more than 90°), among the ``NEAREST`` faces whose centroids
-    lie within ``REACH`` median edges; and the hit's distance [m] (inf: none). Shapes (f,)."""
+    lie within ``REACH`` median edges, or, if ``probed``, among the ``PROBED`` nearest to each point
+    along the ray (one median edge deep, then 1.5 times deeper each, to ``DEEP`` × the diagonal), no
+    farther than that; and the hit's distance [m] (inf: none). Shapes (f,)."""
     from scipy.spatial import cKDTree
 
     P = V[F]
@@ -98,19 +112,26 @@ def opposite_faces(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray
     N = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
     N /= np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
     h = float(np.median(np.linalg.norm(P[:, 1] - P[:, 0], axis=1)))
-    k = min(NEAREST, len(F))
+    deepest = DEEP * float(np.linalg.norm(np.ptp(V, axis=0)))
+    depths = h * 1.5 ** np.arange(int(np.log(max(deepest / h, 1.0)) / np.log(1.5)) + 1)
+    k = min(PROBED if probed else NEAREST, len(F))
     tree = cKDTree(C)
     opposite = np.full(len(F), -1, np.int64)
     dist = np.full(len(F), np.inf)
-    for lo in range(0, len(F), CHUNK):  # (chunk, k, 3) arrays: about 100 MB at a time
-        rows = np.arange(lo, min(lo + CHUNK, len(F)))
-        _, near = tree.query(C[rows], k=k, distance_upper_bound=REACH * h)
-        near = np.asarray(near, np.int64).reshape(len(rows), k)
+    step = max(CHUNK * NEAREST // (k * len(depths) if probed else k), 1)
+    for lo in range(0, len(F), step):  # (rows, candidates, 3) arrays: about 100 MB at a time
+        rows = np.arange(lo, min(lo + step, len(F)))
+        if probed:
+            probes = C[rows, None, :] - depths[None, :, None] * N[rows, None, :]
+            _, near = tree.query(probes.reshape(-1, 3), k=k)
+        else:
+            _, near = tree.query(C[rows], k=k, distance_upper_bound=REACH * h)
+        near = np.asarray(near, np.int64).reshape(len(rows), -1)
         ok = (near < len(F)) & (near != rows[:, None])  # len(F): none within the reach
         near = np.where(ok, near, 0)
         t = _ray_hits(C[rows], -N[rows], P, near)
         ok &= np.isfinite(t) & (np.einsum("fd,fkd->fk", N[rows], N[near]) < 0.0)
-        t = np.where(ok, t, np.inf)
+        t = np.where(ok & (t <= deepest if probed else True), t, np.inf)
         j = np.argmin(t, axis=1)
         best = t[np.arange(len(rows)), j]
         dist[rows] = best
