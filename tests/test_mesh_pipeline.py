@@ -148,6 +148,7 @@ def test_bad_surfaces(tmp_path):
     # Three triangles on one edge: non-manifold beyond repair.
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1.0]])
     F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    assert pl.mesh.check_surface(V, F).notes == []  # no note that repair would split it
     with pytest.raises(MeshError, match="non-manifold edge"):
         pl.mesh.repair_surface(V, F)
 
@@ -177,6 +178,7 @@ def test_bodies_touching_along_an_edge_or_a_face_are_split_there():
     (fTetWild keeps the boundary within its envelope, 2e-3 of the diagonal)."""
     exact = 2 * 0.02**3
     V, F = _cubes((0.02, 0.02, 0.0))
+    assert "where bodies touch" in pl.mesh.check_surface(V, F).notes[0]  # check points to repair
     Vr, Fr, actions = pl.mesh.repair_surface(V, F, bodies="all")
     assert "split the surface at 1 non-manifold edge(s) (bodies touching there)" in actions
     assert surface_volume(Vr, Fr) == pytest.approx(exact, rel=1e-12)

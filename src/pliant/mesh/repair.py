@@ -139,6 +139,11 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
         rep.problems.append(f"{bodies} separate bodies")
     if rep.self_intersections:
         rep.problems.append(f"{rep.self_intersections} self-intersecting face pair(s)")
+    if nonman and _repairs_touching(V, F):
+        rep.notes.append(
+            f"the {nonman} non-manifold edge(s) are where bodies touch: repair (and tetrahedralize) "
+            "splits the surface there"
+        )
     wall = 2.0 * volume / float(area.sum()) if watertight and volume > 0 else math.inf
     across = float(np.linalg.norm(np.ptp(V, axis=0))) if len(V) else 0.0
     if wall < THIN_WALL * across:  # a closed surface of area A around V: walls 2V/A thick
@@ -362,6 +367,16 @@ def _split_touching(F: np.ndarray, pieces: list, actions: list[str]) -> int:
             )
     actions.append(f"split the surface at {len(shared)} non-manifold edge(s) (bodies touching there)")
     return len(shared)
+
+
+def _repairs_touching(V: np.ndarray, F: np.ndarray) -> bool:
+    """Whether repair_surface (keeping every body) splits the surface's non-manifold edges where
+    bodies touch and closes what it splits (_split_touching, _solid)."""
+    try:
+        _, _, actions = repair_surface(V, F, bodies="all")
+    except MeshError:
+        return False
+    return any(a.startswith("split the surface at") for a in actions)
 
 
 def _solid(done: list, shared: int, actions: list[str]) -> list:
