@@ -188,6 +188,8 @@ def test_bodies_touching_along_an_edge_or_a_face_are_split_there():
     assert len(F) == 22
     Vr, Fr, actions = pl.mesh.repair_surface(V, F, bodies="all")
     assert "split the surface at 4 non-manifold edge(s) (bodies touching there)" in actions
+    # the two open cubes and the interface, each closed over its one square hole, said once
+    assert "filled 1 hole(s) (4 boundary edges) by minimum-area triangulation, in each of 3 pieces" in actions
     assert "dropped 1 flat piece(s) enclosing no volume" in actions
     assert surface_volume(Vr, Fr) == pytest.approx(exact, rel=1e-12)
 

@@ -343,7 +343,7 @@ def repair_surface(
             f"repair: still not a closed, consistently oriented surface after "
             f"repair ({'; '.join(rep.problems)})"
         )
-    return np.asarray(out.vertices, float) / scale, np.asarray(out.faces, np.int64), actions
+    return np.asarray(out.vertices, float) / scale, np.asarray(out.faces, np.int64), _once(actions)
 
 
 def _split_touching(F: np.ndarray, pieces: list, actions: list[str]) -> int:
@@ -367,6 +367,14 @@ def _split_touching(F: np.ndarray, pieces: list, actions: list[str]) -> int:
             )
     actions.append(f"split the surface at {len(shared)} non-manifold edge(s) (bodies touching there)")
     return len(shared)
+
+
+def _once(actions: list[str]) -> list[str]:
+    """Each action once, in order, an action done to several pieces alike saying how many."""
+    count: dict[str, int] = {}
+    for a in actions:
+        count[a] = count.get(a, 0) + 1
+    return [a if n == 1 else f"{a}, in each of {n} pieces" for a, n in count.items()]
 
 
 def _repairs_touching(V: np.ndarray, F: np.ndarray) -> bool:
