@@ -214,7 +214,8 @@ def test_submodel_mesh_files_and_normal_constraints_resolve_on_their_own_mesh(tm
 @pytest.mark.parametrize(
     "mesh, constraint, says",
     [
-        ('<MSHMesh Type="T4">nowhere.msh</MSHMesh>', "", "nowhere.msh"),
+        ('<MSHMesh Type="T4">nowhere.msh</MSHMesh>', "", "'nowhere.msh': not found beside the model"),
+        ('<MSHMesh Type="T4">.</MSHMesh>', "", "a folder, not a file"),
         ('<MSHMesh Type="H8">sphere.msh</MSHMesh>', "", "H8"),
         ('<MSHMesh Type="Q4">sphere.msh</MSHMesh>', "", "expected T4, T4ANP or H8"),
         ('<MSHMesh Type="T4">sphere.msh<Rotation>0 0 90</Rotation></MSHMesh>', "", "expected 6"),

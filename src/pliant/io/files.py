@@ -17,20 +17,25 @@ from pathlib import Path
 from ..errors import InputError, MeshError
 
 
+# file_problem's answers that callers tell apart (the others are only shown).
+MISSING = "no such file"
+NOT_REGULAR = "not a regular file (a pipe, device or socket: reading it may never end)"
+
+
 def file_problem(path) -> str | None:
-    """Why ``path`` cannot be read as an input file ("no such file", "a folder, not a file", "not
-    a regular file ..."), or None when it can. A pipe, device or socket is refused: reading one
+    """Why ``path`` cannot be read as an input file (MISSING, "a folder, not a file", NOT_REGULAR,
+    "cannot be read (...)"), or None when it can. A pipe, device or socket is refused: reading one
     may wait for ever for a writer (a named pipe) or never end (/dev/zero)."""
     try:
         mode = Path(path).stat().st_mode
     except FileNotFoundError:
-        return "no such file"
+        return MISSING
     except OSError as e:  # a link loop, a name too long, no permission on a folder above it
         return f"cannot be read ({e.strerror or e})"
     if stat.S_ISDIR(mode):
         return "a folder, not a file"
     if not stat.S_ISREG(mode):
-        return "not a regular file (a pipe, device or socket: reading it may never end)"
+        return NOT_REGULAR
     return None
 
 
@@ -87,10 +92,9 @@ def check_output_file(path, what: str = "output file", mesh_format: bool = False
 def _refuse_special(path: Path, what: str) -> None:
     """Refuse an output path that is a device, pipe or socket: the file is written under another
     name and renamed into place, which would replace /dev/null itself."""
-    problem = file_problem(path) or ""  # "no such file" for a new one
-    if problem.startswith("not a regular file"):
+    if file_problem(path) == NOT_REGULAR:  # (MISSING for a new one)
         raise InputError(
-            f"{path}: cannot write the {what} there: {problem.split(' (')[0]} (a device, pipe or "
+            f"{path}: cannot write the {what} there: not a regular file (a device, pipe or "
             "socket, which the new file would replace); expected a file name"
         )
 

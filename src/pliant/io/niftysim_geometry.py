@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, MeshError
+from .files import MISSING, file_problem
 from .niftysim import NiftySimError, _numbers, _scalar, facets_facing
 
 __all__ = [
@@ -44,15 +45,16 @@ def mesh_file(el, f: str) -> tuple[np.ndarray, np.ndarray, str]:
     if not name:
         raise NiftySimError(f"<{key}> names no mesh file", f, key)
     here = Path(f).parent / name
-    path = here if here.is_file() or Path(name).is_absolute() else Path(name)
-    if path.exists() and not path.is_file():
-        raise NiftySimError(f"<{key}> mesh file {name!r}: {path} is not a regular file", f, key)
-    if not path.is_file():
+    path = Path(name) if file_problem(here) == MISSING and not Path(name).is_absolute() else here
+    problem = file_problem(path)
+    if problem == MISSING:
         raise NiftySimError(
             f"<{key}> mesh file {name!r}: not found beside the model ({here}) nor in the working folder",
             f,
             key,
         )
+    if problem:
+        raise NiftySimError(f"<{key}> mesh file {name!r}: {path}: {problem}", f, key)
     try:
         X, T = _file_cells(path, "hexahedron" if etype == "H8" else "tetra", f"<{key} Type={etype}>")
     except MeshError as e:

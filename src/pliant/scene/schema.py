@@ -35,11 +35,11 @@ def read_toml(path: Path, what: str = "scene") -> tuple[str, dict]:
     """A TOML file's text and its tables; SceneError for a missing, unreadable, wrongly encoded or
     invalid file. A UTF-8 byte-order mark (as Windows editors write) is skipped; a UTF-16 or
     UTF-32 file is named as such (TOML files are UTF-8)."""
-    from ..io.files import file_problem
+    from ..io.files import MISSING, file_problem
 
     problem = file_problem(path)
     if problem:
-        raise SceneError(f"no such {what} file" if problem == "no such file" else problem, str(path))
+        raise SceneError(f"no such {what} file" if problem == MISSING else problem, str(path))
     try:
         raw = path.read_bytes()
     except OSError as e:

@@ -19,7 +19,7 @@ import numpy as np
 from .. import _core
 from ..contact import quat_from_matrix
 from ..errors import InputError, PliantError
-from ..io.files import file_problem, read_meshio
+from ..io.files import MISSING, file_problem, read_meshio
 from ..io.results import INDEX
 from ..mesh.topology import boundary_faces
 
@@ -462,7 +462,7 @@ class PlaybackViewer:
         out = Path(out_dir)
         pvd = out / INDEX
         problem = file_problem(pvd)
-        if problem == "no such file":
+        if problem == MISSING:
             raise InputError(f"{out}: no {INDEX} (not a pliant results folder)")
         if problem:
             raise InputError(f"{pvd}: {problem}")
