@@ -121,7 +121,8 @@ def repair_cmd(
         help=FILL_SHELL_HELP + "write its outer sheet, openings closed: the surface of the solid inside.",
     ),
 ):
-    """Fill holes, fix winding, drop fragments; refuse with the reason where it cannot."""
+    """Fill holes, fix winding, drop fragments, split bodies touching at an edge; refuse with the
+    reason where it cannot."""
     from .io import check_output_file
     from .mesh import check_surface, read_surface, repair_surface, write_surface
 
