@@ -112,7 +112,8 @@ def test_a_thin_plate_is_refused_as_not_a_capsule():
 
 
 def test_a_solid_ball_is_refused_as_not_a_shell():
-    """A ball's faces find no face facing them within three edges: not a shell."""
+    """A ball's faces find no face facing them within three edges, nor deeper (their rays cross
+    the ball, beyond a tenth of its size): not a shell."""
     ball = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
     with pytest.raises(MeshError, match="not a thin-walled shell: 0 % of its faces"):
         outer_sheet(ball.vertices, ball.faces)
