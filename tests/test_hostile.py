@@ -580,6 +580,25 @@ def test_extreme_values_are_refused_in_one_line(tmp_path, patch, words):
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), *words)
 
 
+@pytest.mark.parametrize("size", [1e10, 1e-12])
+def test_volumes_beyond_float32_are_refused_and_float64_takes_the_large_ones(tmp_path, size):
+    """A box 1e10 m across (a file read in the wrong unit) has tets of ~1e28 m^3: in float32 the
+    engine's forces V0·S·∇N overflowed and the run stopped as "unstable" (exit 1, NaN at the first
+    step); tets of 1e-12 m (1e-37 m^3) lost their mass and forces to underflow. Both are refused,
+    naming the element and the range; float64 holds 1e28 m^3 and runs."""
+    text = SCENE.replace("size = [0.1, 0.02, 0.02]", f"size = [{size}, {size}, {size}]")
+    text = text.replace("point = [-0.05, 0, 0]", f"point = [{-size / 2}, 0, 0]")
+    text = text.replace("duration = 0.001", "duration = 1e-14" if size < 1 else "duration = 0.001")
+    p = scene(tmp_path, text)
+    refused(
+        cli("run", p, "-o", tmp_path / "o"), str(p), "element 0 has volume", "float32", "dtype = 'float64'"
+    )
+    if size > 1:
+        p64 = scene(tmp_path, text.replace("[solver]\n", '[solver]\ndtype = "float64"\n'), name="f64.toml")
+        r = cli("run", p64, "-o", tmp_path / "o64")
+        assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr[-2000:]
+
+
 def test_a_mesh_file_cell_beyond_its_nodes_is_named(tmp_path):
     """A cell of a volume mesh file that refers to a node the file does not have (meshio reads it
     as it is): `pliant mesh quality` crashed with an IndexError (exit 3); now the file, the cell,

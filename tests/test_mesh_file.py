@@ -1,8 +1,10 @@
 """Mesh files no one here wrote (NiftySim's tetrahedral sphere, BSD; meshes gmsh wrote) read
 through meshio."""
 
+import warnings
 from pathlib import Path
 
+import meshio
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -197,3 +199,27 @@ def test_abaqus_c3d8_hexahedra_with_their_sets(tmp_path):
     ua = run('{ set = "fixed" }', "a")
     assert np.abs(ua).max() > 0
     assert np.array_equal(ua, run("{ plane = { point = [0.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0] } }", "b"))
+
+
+def test_nodes_written_once_per_element_corner_are_warned_of(tmp_path):
+    """NiftySim's sphere written with one node per element corner (as some exporters write volume
+    meshes): its 789 tets no longer share nodes and each would move on its own. The reader warns,
+    counting the 4 × 789 − 278 nodes that repeat a position and naming the first pair (the first
+    corner whose original node came before); the file as NiftySim wrote it draws no warning."""
+    X, T, _ = pl.io.read_volume_mesh(SPHERE)
+    soup = tmp_path / "soup.vtu"
+    meshio.write(soup, meshio.Mesh(X[T].reshape(-1, 3), [("tetra", np.arange(T.size).reshape(-1, 4))]))
+    seen: dict[int, int] = {}
+    first = None
+    for j, node in enumerate(T.ravel().tolist()):
+        if node in seen and first is None:
+            first = (seen[node], j)
+        seen.setdefault(node, j)
+    with pytest.warns(pl.PliantWarning) as record:
+        pl.io.read_volume_mesh(soup)
+    (message,) = [str(w.message) for w in record]
+    assert f"{4 * 789 - 278} node(s) lie exactly where another node lies" in message
+    assert f"first: nodes {first[0]} and {first[1]}" in message and str(soup) in message
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pl.io.read_volume_mesh(SPHERE)

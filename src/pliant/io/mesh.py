@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import warnings
 from functools import partial
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import MeshError, PliantWarning
 from ..mesh.split import SPLIT_CELLS, refine_tetra10, split_cells
+from ..mesh.topology import coincident_nodes
 from .vtk_grid import read_meshio_or_grid
 
 
@@ -96,7 +98,24 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
         new[used] = np.arange(used.size)
         X, tets = X[used], new[tets]
         node_sets = {k: new[v[new[v] >= 0]] for k, v in node_sets.items() if np.any(new[v] >= 0)}
+    _warn_coincident(path, X, tets)
     return VolumeMeshFile(X, tets, sets, node_sets, split)
+
+
+def _warn_coincident(path: Path, X: np.ndarray, tets: np.ndarray) -> None:
+    """Warn of element nodes at exactly another's position (topology.coincident_nodes): the
+    elements on either side are not joined there, which a file written with one node per element
+    corner does silently (every element then moves on its own)."""
+    n, a, b = coincident_nodes(X, tets)
+    if n:
+        warnings.warn(
+            PliantWarning(
+                f"{path}: {n} node(s) lie exactly where another node lies (first: nodes {a} and {b} "
+                f"at {X[a].tolist()}), so the elements on either side are not joined there; merge "
+                "duplicate nodes if the mesh is one body (separate bodies may touch this way)"
+            ),
+            stacklevel=3,
+        )
 
 
 def mesh_points(mesh) -> np.ndarray:

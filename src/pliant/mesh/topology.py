@@ -121,3 +121,20 @@ def conformity_problem(nodes: np.ndarray, tets: np.ndarray) -> str | None:
 def boundary_nodes(tets: np.ndarray) -> np.ndarray:
     """Indices of the nodes on the boundary faces, ascending."""
     return np.unique(boundary_faces(tets)[0])
+
+
+def coincident_nodes(nodes: np.ndarray, tets: np.ndarray) -> tuple[int, int, int]:
+    """Nodes of tetrahedra (M, 4) at exactly the position [m] (N, 3) of another node of theirs:
+    (how many nodes share their position with a lower-numbered node, the first such pair a < b),
+    or (0, -1, -1). Such nodes do not join the elements on either side: a file written one node
+    per element corner, or bodies meant to be separate."""
+    used = np.unique(np.asarray(tets, np.int64))
+    P = np.asarray(nodes, float)[used] + 0.0  # -0.0 and 0.0 alike
+    order = np.lexsort(P.T[::-1])
+    same = np.all(P[order[1:]] == P[order[:-1]], axis=1)
+    if not same.any():
+        return 0, -1, -1
+    later = np.maximum(used[order[1:]], used[order[:-1]])[same]
+    lower = np.minimum(used[order[1:]], used[order[:-1]])[same]
+    k = int(np.argmin(later))
+    return int(same.sum()), int(lower[k]), int(later[k])

@@ -19,7 +19,6 @@ from ..checks import as_real, described, real_array, shown
 from ..errors import (
     DegenerateElementError,
     InputError,
-    InvertedElementError,
     MaterialError,
     MeshError,
     PliantWarning,
@@ -30,6 +29,7 @@ from ..memory import MODEL_BYTES_PER_TET, require_memory
 from ..mesh.primitives import triangle_measures
 from ..mesh.topology import conformity_problem
 from .curves import Constant, LoadCurve
+from .geometry import check_geometry
 from .anp import ANP_STABILIZATION, anp_stabilization
 from .smoothing import strain_smoothing
 
@@ -598,35 +598,7 @@ class ModelBuilder:
         X = np.ascontiguousarray(self.nodes)
         T32 = np.ascontiguousarray(self.tets.astype(np.int32))
         vol, alt = _core.tet_geometry(X, T32)
-        bad = np.nonzero(~(np.isfinite(vol) & np.isfinite(alt)))[0]
-        if bad.size:
-            e = int(bad[0])
-            raise MeshError(
-                f"{self.source}: element {e} has a non-finite volume or altitude: "
-                f"coordinates up to {float(np.abs(X).max()):.3g} m overflow (SI metres "
-                "expected; scale the mesh)"
-            )
-        edges = X[T32[:, [1, 2, 3, 2, 3, 3]]] - X[T32[:, [0, 0, 0, 1, 1, 2]]]
-        lmax = np.sqrt((edges**2).sum(-1)).max(axis=1, initial=0.0)
-        cube = lmax**3  # an element whose four nodes coincide has no edge: 0, flagged below
-        rel = np.divide(vol, cube, out=np.zeros_like(vol), where=cube > 0)
-        degenerate = np.nonzero(np.abs(rel) < 1e-8)[0]
-        if degenerate.size:
-            e = int(degenerate[0])
-            raise DegenerateElementError(
-                f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is degenerate: volume "
-                f"{vol[e]:.3e} m^3 for longest edge {lmax[e]:.3e} m; expected a non-flat tetrahedron",
-                e,
-            )
-        inverted = np.nonzero(vol < 0)[0]
-        if inverted.size:
-            e = int(inverted[0])
-            raise InvertedElementError(
-                f"{self.source}: element {e} (nodes {self.tets[e].tolist()}) is inverted: volume "
-                f"{vol[e]:.3e} m^3; expected positive orientation (swap two nodes), "
-                f"{inverted.size} inverted element(s) in all",
-                e,
-            )
+        check_geometry(self.source, X, T32, vol, alt, dtype)
         check_backend(backend)
         model = Model(self, owner, dtype, threads, geometry=(vol, alt))
         model._set_default_backend(backend, device)
