@@ -411,12 +411,18 @@ def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path, sig):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        env={**os.environ, "PYTHONFAULTHANDLER": "1"},  # SIGABRT below prints every thread's stack
     )
     deadline = time.time() + 60
     while time.time() < deadline and len(list((tmp_path / "o").glob("frame_*.vtu"))) < 20:
         time.sleep(0.05)
     proc.send_signal(sig)
-    out, err = proc.communicate(timeout=60)
+    try:
+        out, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:  # a hang: fail with where the run was (faulthandler's dump)
+        proc.send_signal(signal.SIGABRT)
+        out, err = proc.communicate(timeout=30)
+        pytest.fail(f"the run did not end within 60 s of {sig!r}; its stacks:\n{err[-6000:]}")
     assert proc.returncode == 130, (out, err)
     assert "Traceback" not in err and "interrupted at t = " in err
     assert json.loads((tmp_path / "o" / "summary.json").read_text())["interrupted"]
@@ -424,6 +430,25 @@ def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path, sig):
     listed = re.findall(r'file="([^"]+)"', (tmp_path / "o" / "result.pvd").read_text())
     assert len(frames) >= 20 and listed == frames
     assert not list((tmp_path / "o").glob(".*tmp*"))  # nothing half-written left behind
+
+
+def test_an_interrupt_before_frame_0_is_on_disk_still_ends_with_a_summary(tmp_path, monkeypatch):
+    """Frame 0 is written inside the run's interruption handling: a Ctrl-C that lands while its
+    fields are computed (before the file is held against interrupts) ends the run as interrupted,
+    with summary.json, which lists no index since no frame reached the disk, and only files that exist."""
+    from pliant.io.results import ResultWriter
+    from pliant.runner import run_scene
+    from pliant.scene import load_scene
+
+    def interrupted(self, state):
+        raise KeyboardInterrupt  # where Python raises a SIGINT that lands outside the held block
+
+    monkeypatch.setattr(ResultWriter, "write", interrupted)
+    summary = run_scene(load_scene(scene(tmp_path)), tmp_path / "o")
+    on_disk = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["interrupted"] and on_disk["interrupted"] and on_disk["frames"] == 0
+    assert "result.pvd" not in on_disk["files"] and not (tmp_path / "o" / "result.pvd").exists()
+    assert all((tmp_path / "o" / f).is_file() for f in on_disk["files"])  # each file it lists is there
 
 
 # --- the guard itself --------------------------------------------------------------------------

@@ -224,7 +224,6 @@ def run_scene(
         from .cutting import Cutter
 
         cutter = Cutter(list(scene.blades), embedding=embedding)
-    writer.write(state)
     # NiftySim's U.txt, F.txt: each frame's nodal values after the first
     texts: dict[str, list[np.ndarray]] = {
         v: [] for v in scene.meta.get("niftysim_outputs", ()) if out is not None
@@ -262,6 +261,7 @@ def run_scene(
             )
     t0 = time.perf_counter()
     try:
+        writer.write(state)  # frame 0, inside: a Ctrl-C while it is written still ends with a summary
         if scene.static:
             info = solver.relax(
                 state, at_time=scene.duration, tol=scene.tol, increments=scene.increments, strict=False
@@ -382,5 +382,7 @@ def run_scene(
         if out is None:
             summary["files"] = []
         else:
+            if not writer.frames:  # interrupted before frame 0 was on disk: no index either
+                summary["files"].remove(INDEX)
             atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
     return summary
