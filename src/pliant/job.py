@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .errors import InputError
+from .mesh.surface import SURFACE_SUFFIXES
 from .tled import ModelBuilder
 
 __all__ = ["Scene", "load_job", "parse_overrides"]
@@ -64,7 +65,7 @@ def load_job(path, ignore=None, overrides: dict | None = None) -> Scene:
 
 
 # Mesh files that `pliant run` and `pliant view` may be handed by mistake for a scene.
-MESH_SUFFIXES = {".vtk", ".vtu", ".vtp", ".obj", ".stl", ".ply", ".off", ".msh", ".mesh", ".inp", ".xdmf"}
+MESH_SUFFIXES = {".vtk", ".vtu", ".vtp", ".msh", ".mesh", ".inp", ".xdmf", *SURFACE_SUFFIXES}
 
 
 def parse_overrides(items) -> dict:

@@ -1,5 +1,6 @@
-"""Triangle surface meshes: reading (OBJ read here, robust to texture data; other formats through
-meshio), writing, and primitive surfaces. Vertices [m] (V, 3) float64, faces (F, 3) int64."""
+"""Triangle surface meshes: reading (OBJ read here, robust to texture data; ASCII STL by
+pliant.io.stl; glTF through trimesh; other formats through meshio), writing, and primitive
+surfaces. Vertices [m] (V, 3) float64, faces (F, 3) int64."""
 
 from __future__ import annotations
 
@@ -9,7 +10,13 @@ import numpy as np
 
 from ..errors import MeshError
 from ..io.files import file_problem
+from ..io.stl import is_ascii_stl, read_ascii_stl
 from ..io.vtk_polydata import is_vtk_polydata, read_vtk_polydata
+
+
+# Files read as surfaces by their suffix (and legacy VTK POLYDATA .vtk by its header): scenes
+# tetrahedralize them.
+SURFACE_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
 
 
 def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -52,19 +59,47 @@ def metres_hint(X: np.ndarray, source: str, remedy: str = "scale it by 0.001") -
     )
 
 
+def _read_gltf(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A glTF 2.0 file's (.glb, .gltf) triangle meshes, each placed by its node's transform
+    (trimesh's scene graph), as one surface; vertices at exactly one position joined (glTF splits
+    them where normals or texture coordinates differ). glTF's unit is the metre (glTF 2.0 spec §3.4)."""
+    import trimesh
+
+    try:
+        m = trimesh.load(path, force="mesh", process=False)
+    except Exception as e:  # trimesh raises what its parsers raise
+        raise MeshError(f"{path}: cannot read as a glTF surface ({type(e).__name__}: {e})") from None
+    if not isinstance(m, trimesh.Trimesh):  # force="mesh" gives one; anything else holds no triangles
+        raise MeshError(f"{path}: no triangle mesh in the glTF file")
+    V, F = (
+        np.asarray(m.vertices, dtype=np.float64).reshape(-1, 3),
+        np.asarray(m.faces, np.int64).reshape(-1, 3),
+    )
+    if not len(F):
+        return V, F
+    V, inv = np.unique(V, axis=0, return_inverse=True)
+    return V, inv.reshape(-1)[F]
+
+
 def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a triangle surface (.obj, .stl, .ply, .off, .vtk POLYDATA or UNSTRUCTURED_GRID, .vtu...
-    any meshio format with triangles; a legacy VTK grid meshio refuses through pliant.io.vtk_grid).
-    Raises MeshError for a missing, unreadable, empty or out-of-range mesh."""
+    """Read a triangle surface (.obj, .stl (ASCII or binary), .ply, .off, .glb/.gltf, .vtk POLYDATA
+    or UNSTRUCTURED_GRID, .vtu... any meshio format with triangles; a legacy VTK grid meshio refuses
+    through pliant.io.vtk_grid). Raises MeshError for a missing, unreadable, empty or out-of-range
+    mesh."""
     path = Path(path)
     problem = file_problem(path)
     if problem:
         raise MeshError(f"{path}: {problem}")
-    if path.suffix.lower() == ".obj":
+    suffix = path.suffix.lower()
+    if suffix == ".obj":
         V, F = _read_obj(path)
+    elif suffix == ".stl" and is_ascii_stl(path):
+        V, F = read_ascii_stl(path)
+    elif suffix in (".glb", ".gltf"):
+        V, F = _read_gltf(path)
     elif is_vtk_polydata(path):  # legacy VTK surfaces, which meshio does not read
         V, F = read_vtk_polydata(path)
-    elif path.suffix.lower() == ".vtp":
+    elif suffix == ".vtp":
         raise MeshError(
             f"{path}: VTK XML PolyData (.vtp) is not read; expected a legacy .vtk (VTK's "
             "vtkPolyDataWriter), .stl, .ply, .obj or .off surface"

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import MeshError
 from ..io.files import file_problem
-from ..mesh.surface import metres_hint
+from ..mesh.surface import SURFACE_SUFFIXES, metres_hint
 from .schema import Ctx, check_keys, vector
 
 if TYPE_CHECKING:
@@ -106,9 +106,8 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
         problem = file_problem(f)
         if problem:
             raise ctx.error(f"{key}.file", f"{problem}: {f}")
-        surface_ext = {".obj", ".stl", ".ply", ".off"}
         try:
-            surface = f.suffix.lower() in surface_ext or is_vtk_polydata(f)
+            surface = f.suffix.lower() in SURFACE_SUFFIXES or is_vtk_polydata(f)
             _surface_keys_only(ctx, key, spec, surface)
             if surface:  # a surface: tetrahedralized
                 V, F = pm.read_surface(f)
@@ -216,6 +215,6 @@ def _surface_keys_only(ctx, key: str, spec: dict, surface: bool) -> None:
         what = f"primitive {spec['primitive']!r}" if "primitive" in spec else "a volume mesh file"
         raise ctx.error(
             f"{key}.{given[0]}",
-            f"'{given[0]}' applies to a surface file (.obj, .stl, .ply, .off, VTK polydata) that is "
+            f"'{given[0]}' applies to a surface file ({', '.join(SURFACE_SUFFIXES)}, VTK polydata) that is "
             f"tetrahedralized, not to {what}",
         )

@@ -1,0 +1,93 @@
+"""Triangle surfaces from STL files. Binary STL is read by meshio; ASCII STL here, since meshio's
+reader takes every line's last three words without looking at its keyword, and a blank line (which
+many writers leave before ``endsolid``) or a facet of four vertices broke it ("cannot reshape array
+of size 144 into shape (0)"). ASCII grammar (3D Systems, "StereoLithography Interface
+Specification", 1988, §6.5): ``solid NAME``, then facets of ``facet normal ni nj nk`` / ``outer
+loop`` / ``vertex x y z`` ... / ``endloop`` / ``endfacet``, then ``endsolid NAME``; several solids
+may follow one another. Keywords in any case, blank lines and any spacing accepted; a polygon of
+more than three vertices is fanned from its first. Vertices at exactly the same position are one
+vertex (STL stores each facet's corners on their own; meshio's binary reader joins them alike)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshError
+
+__all__ = ["is_ascii_stl", "read_ascii_stl"]
+
+
+def is_ascii_stl(path) -> bool:
+    """Whether ``path`` is an ASCII STL: it begins with ``solid`` and its size is not that of a
+    binary STL (84 bytes + 50 a facet, the count at byte 80), whose free 80-byte header may also
+    begin with ``solid``."""
+    path = Path(path)
+    with open(path, "rb") as f:
+        head = f.read(84)
+    if not head.lstrip().lower().startswith(b"solid"):
+        return False
+    if len(head) == 84:
+        n = int.from_bytes(head[80:84], "little")
+        return path.stat().st_size != 84 + 50 * n
+    return True
+
+
+def _vertex(path: Path, lineno: int, words: list[str]) -> list[float]:
+    try:
+        xyz = [float(w) for w in words[1:]]
+    except ValueError:
+        xyz = []
+    if len(xyz) != 3:
+        raise MeshError(f"{path}:{lineno}: expected 'vertex x y z', got {' '.join(words)[:80]!r}")
+    return xyz
+
+
+def read_ascii_stl(path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices [file units] (V, 3) float64 and triangles (F, 3) int64 of an ASCII STL file,
+    coincident corners joined. MeshError naming the file and line for an unknown keyword, a bad
+    vertex, a facet of fewer than three vertices, or a file that ends inside a facet."""
+    path = Path(path)
+    corners: list[list[float]] = []  # every facet's corners, in order
+    sizes: list[int] = []  # vertices per facet
+    facet_line, loop = 0, []  # the open facet's first line (0: none) and its vertices
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for lineno, line in enumerate(f, 1):
+            words = line.split()
+            if not words:
+                continue
+            key = words[0].lower()
+            if key == "vertex":
+                if not facet_line:
+                    raise MeshError(f"{path}:{lineno}: vertex outside a facet")
+                loop.append(_vertex(path, lineno, words))
+            elif key == "facet":
+                if facet_line:
+                    raise MeshError(f"{path}:{lineno}: facet inside the facet of line {facet_line}")
+                facet_line, loop = lineno, []
+            elif key == "endfacet":
+                if len(loop) < 3:
+                    raise MeshError(
+                        f"{path}:{facet_line}: facet with {len(loop)} vertices; expected 3 (or a polygon)"
+                    )
+                corners.extend(loop)
+                sizes.append(len(loop))
+                facet_line = 0
+            elif key not in ("solid", "endsolid", "outer", "endloop"):
+                raise MeshError(
+                    f"{path}:{lineno}: unexpected {words[0][:40]!r} in an ASCII STL; expected solid, "
+                    "facet normal, outer loop, vertex, endloop, endfacet or endsolid"
+                )
+    if facet_line:
+        raise MeshError(f"{path}: the file ends inside the facet of line {facet_line} (truncated?)")
+    V = np.asarray(corners, dtype=float).reshape(-1, 3)
+    n = np.asarray(sizes, dtype=np.int64) - 2  # triangles per facet, fanned from its first corner
+    facet = np.repeat(np.arange(len(n)), n)
+    first = (np.cumsum(sizes) - sizes)[facet]  # the facet's first corner
+    k = np.arange(len(facet)) - (np.cumsum(n) - n)[facet] + 1  # 1 .. size − 2 within the facet
+    F = np.stack([first, first + k, first + k + 1], axis=1).astype(np.int64)
+    if not len(F):
+        return V, F.reshape(-1, 3)
+    V, inv = np.unique(V, axis=0, return_inverse=True)
+    return V, inv.reshape(-1)[F]
