@@ -3,6 +3,8 @@ writers: keywords in capitals, CRLF, tabs, blank lines, polygons, several solids
 (trimesh's .glb, with a node's transform). References: the writer's own mesh, and closed forms of
 the volume enclosed and of where a transform puts the vertices."""
 
+import re
+
 import numpy as np
 import pytest
 import trimesh
@@ -145,3 +147,130 @@ def test_a_glb_scene_mesh_is_tetrahedralized(tmp_path):
     X, T = b.nodes, b.tets
     e1, e2, e3 = (X[T[:, k]] - X[T[:, 0]] for k in (1, 2, 3))
     assert np.einsum("ij,ij->i", np.cross(e1, e2), e3).sum() / 6 == pytest.approx(1e-4, rel=5e-3)
+
+
+# --- PLY and OFF -------------------------------------------------------------------------------
+CUBE = (
+    np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]) * 0.05
+)
+QUADS = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [0, 4, 7, 3], [1, 2, 6, 5]]  # outward
+
+
+def test_trimeshs_binary_ply_with_face_colours_is_its_mesh(tmp_path):
+    """trimesh's default binary PLY, with a colour a face (meshio refused it: "buffer size must be
+    a multiple of element size")."""
+    m = trimesh.creation.icosphere(subdivisions=2, radius=0.05)
+    m.visual.face_colors = [200, 30, 30, 255]
+    p = tmp_path / "s.ply"
+    m.export(p)
+    V, F = read_surface(p)
+    assert np.allclose(V[F], m.vertices[m.faces], rtol=0, atol=1e-8)  # the file's float32 corners
+    assert enclosed_volume(V, F) == pytest.approx(m.volume, rel=1e-6)
+
+
+def ply_text(faces=QUADS, vertices=len(CUBE), drop=0):
+    """An ASCII PLY of the 5 cm cube in the specification's other type names (uint8, uint32,
+    float64), a colour a vertex; its last ``drop`` lines cut."""
+    head = (
+        f"ply\nformat ascii 1.0\ncomment written by hand\nelement vertex {vertices}\nproperty float64 x\n"
+        "property float64 y\nproperty float64 z\nproperty uint8 red\n"
+        f"element face {len(faces)}\nproperty list uint8 uint32 vertex_indices\nend_header\n"
+    )
+    rows = [f"{x:g} {y:g} {z:g} 255" for x, y, z in CUBE] + [
+        f"{len(q)} " + " ".join(map(str, q)) for q in faces
+    ]
+    return head + "\n".join(rows[: len(rows) - drop]) + "\n"
+
+
+def test_ascii_ply_of_quads_in_the_specifications_type_names(tmp_path):
+    """Six quads become twelve triangles enclosing the cube's 1.25e-4 m³ (meshio refused the type
+    names: KeyError ('uint8', 'uint32'))."""
+    p = tmp_path / "c.ply"
+    p.write_text(ply_text())
+    V, F = read_surface(p)
+    assert len(F) == 12 and enclosed_volume(V, F) == pytest.approx(0.05**3, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "text, says",
+    [
+        (ply_text(drop=2), "counts 8 vertex, 6 face records; the file holds 12 (truncated?)"),
+        (ply_text(vertices=10**12), "counts 1,000,000,000,000 vertex, 6 face records; the file holds 14"),
+        (ply_text() + "3 0 1 2\n", "the file holds 15 (more than it says)"),
+        (ply_text(faces=[]), "8 vertices and 0 faces in its header; expected a surface"),
+        (ply_text().replace("end_header", "end"), "has no end_header"),
+        (ply_text().replace("ascii", "utf8"), "PLY format 'utf8'"),
+    ],
+    ids=["truncated", "counts-too-many", "extra-record", "points-only", "no-end-header", "bad-format"],
+)
+def test_malformed_ply_is_refused_naming_what_is_wrong(tmp_path, text, says):
+    """trimesh alone read these as far as they went (7 of 12 faces of a truncated box) and said
+    nothing."""
+    p = tmp_path / "c.ply"
+    p.write_text(text)
+    with pytest.raises(MeshError, match=re.escape(says)):
+        read_surface(p)
+
+
+def off_text(header="OFF", colours=True, drop=0):
+    rows = [f"{x:g} {y:g} {z:g}" for x, y, z in CUBE]
+    rows += [f"{len(q)} " + " ".join(map(str, q)) + (" 255 0 0" if colours else "") for q in QUADS]
+    return (
+        f"{header}\n# a comment\n\n{len(CUBE)} {len(QUADS)} 12\n" + "\n".join(rows[: len(rows) - drop]) + "\n"
+    )
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        off_text(),
+        off_text(colours=False).replace("OFF\n# a comment\n\n8", "OFF 8"),  # counts on the header line
+        off_text(colours=False).replace("OFF\n# a comment\n\n8", "OFF8"),  # glued, as ModelNet's files
+        off_text(header="COFF", colours=False)
+        .replace(" 0.05\n", " 0.05 255 0 0 255\n")
+        .replace(" 0\n", " 0 9 9 9 9\n"),
+        off_text(header="nOFF\n3"),
+    ],
+    ids=["face-colours", "counts-inline", "counts-glued", "coff", "noff"],
+)
+def test_off_variants_give_the_cube(tmp_path, text):
+    """Quads with a colour after each face, COFF's colour after each vertex, the counts on the
+    header's line: twelve triangles enclosing 1.25e-4 m³ (meshio refused all but plain triangles)."""
+    p = tmp_path / "c.off"
+    p.write_text(text)
+    V, F = read_surface(p)
+    assert len(V) == 8 and len(F) == 12
+    assert enclosed_volume(V, F) == pytest.approx(0.05**3, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "text, says",
+    [
+        (off_text(drop=3), "the file ends after 3 of its 6 faces (truncated?)"),
+        (
+            off_text().replace("8 6 12", "80000000000 6 12"),
+            "the file ends after 14 of its 80,000,000,000 vertices",
+        ),
+        (off_text().replace("0.05 0 0", "0.05 zero 0"), "c.off:6: expected a vertex 'x y z'"),
+        (off_text().replace("4 0 3 2 1", "4 0 3 2 8"), "c.off:13: vertex index out of range 0..7"),
+        (off_text().replace("4 0 3 2 1", "2 0 3"), "c.off:13: a face of 2 vertices"),
+        (off_text() + "1 2 3\n", "c.off:19: more data after the 8 vertices and 6 faces"),
+        (off_text(header="OFF BINARY"), "binary OFF is not read"),
+        (off_text(header="PLY"), "'PLY' is not an OFF header"),
+    ],
+    ids=[
+        "truncated",
+        "counts-too-many",
+        "bad-vertex",
+        "bad-index",
+        "two-vertex-face",
+        "extra",
+        "binary",
+        "not-off",
+    ],
+)
+def test_malformed_off_is_refused_naming_the_line(tmp_path, text, says):
+    p = tmp_path / "c.off"
+    p.write_text(text)
+    with pytest.raises(MeshError, match=re.escape(says)):
+        read_surface(p)

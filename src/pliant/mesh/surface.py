@@ -1,5 +1,5 @@
-"""Triangle surface meshes: reading (OBJ read here, robust to texture data; ASCII STL by
-pliant.io.stl; glTF through trimesh; other formats through meshio), writing, and primitive
+"""Triangle surface meshes: reading (OBJ read here, robust to texture data; ASCII STL, OFF and PLY
+by pliant.io.stl, .off and .ply; glTF through trimesh; other formats through meshio), writing, and primitive
 surfaces. Vertices [m] (V, 3) float64, faces (F, 3) int64."""
 
 from __future__ import annotations
@@ -10,6 +10,8 @@ import numpy as np
 
 from ..errors import MeshError
 from ..io.files import file_problem
+from ..io.off import read_off
+from ..io.ply import read_ply
 from ..io.stl import is_ascii_stl, read_ascii_stl
 from ..io.vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
@@ -97,6 +99,10 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
         V, F = read_ascii_stl(path)
     elif suffix in (".glb", ".gltf"):
         V, F = _read_gltf(path)
+    elif suffix == ".off":
+        V, F = read_off(path)
+    elif suffix == ".ply":
+        V, F = read_ply(path)
     elif is_vtk_polydata(path):  # legacy VTK surfaces, which meshio does not read
         V, F = read_vtk_polydata(path)
     elif suffix == ".vtp":
