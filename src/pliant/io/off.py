@@ -4,7 +4,8 @@ variants, all common. Format (Geomview manual, "OFF Files"): a header keyword ``
 (optionally followed by the counts on the same line), the counts ``NVertices NFaces NEdges``, then a
 vertex a line (x y z, then whatever the variant adds: normals, colour, texture coordinates), then a
 face a line (``k v1 ... vk``, then an optional colour). ``#`` starts a comment; blank lines are
-skipped; a first count glued to the keyword (``OFF490 518 0``, as in ModelNet's files) is read. Polygons are fanned from their first vertex. The binary variant is refused by name."""
+skipped; a first count glued to the keyword (``OFF490 518 0``, as in ModelNet's files) is read.
+Polygons are fanned from their first vertex. The binary variant is refused by name."""
 
 from __future__ import annotations
 
