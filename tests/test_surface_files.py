@@ -274,3 +274,15 @@ def test_malformed_off_is_refused_naming_the_line(tmp_path, text, says):
     p.write_text(text)
     with pytest.raises(MeshError, match=re.escape(says)):
         read_surface(p)
+
+
+def test_obj_lines_in_any_spacing(tmp_path):
+    """Tab-separated and indented OBJ lines (the format separates by white space) were skipped:
+    this unit tetrahedron read as one vertex. Its outward faces enclose 1/6 m³."""
+    p = tmp_path / "t.obj"
+    p.write_bytes(
+        b"v\t0 0 0\r\nv\t1\t0\t0\r\n  v 0 1 0\r\nv 0 0 1\r\n"
+        b"f\t1 3 2\r\n  f 1 2 4\r\n\tf 1/1/1 4/1/1 3/1/1\r\nf -3 -2 -1\r\n"
+    )
+    V, F = read_surface(p)
+    assert len(V) == 4 and len(F) == 4 and enclosed_volume(V, F) == pytest.approx(1 / 6, rel=1e-15)

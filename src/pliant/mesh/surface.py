@@ -25,17 +25,18 @@ def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     V, F = [], []
     with open(path, encoding="utf-8", errors="replace") as f:
         for lineno, line in enumerate(f, 1):
-            if line.startswith("v "):
-                parts = line.split()
+            words = line.split()  # any spacing: tabs, indentation, CRLF
+            key = words[0] if words else ""
+            if key == "v":
                 try:
-                    V.append([float(x) for x in parts[1:4]])
+                    V.append([float(x) for x in words[1:4]])
                 except ValueError:
                     raise MeshError(f"{path}:{lineno}: bad vertex line {line.strip()[:80]!r}") from None
                 if len(V[-1]) != 3:
                     raise MeshError(f"{path}:{lineno}: vertex with {len(V[-1])} coordinates")
-            elif line.startswith("f "):
+            elif key == "f":
                 try:
-                    idx = [int(t.split("/")[0]) for t in line.split()[1:]]
+                    idx = [int(t.split("/")[0]) for t in words[1:]]
                 except ValueError:
                     raise MeshError(f"{path}:{lineno}: bad face line {line.strip()[:80]!r}") from None
                 idx = [i - 1 if i > 0 else len(V) + i for i in idx]
