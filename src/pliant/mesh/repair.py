@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ..errors import MeshError
+from .topology import unique_rows
 
 
 @dataclass
@@ -53,16 +54,15 @@ class SurfaceReport:
 
 def _edges(F: np.ndarray):
     e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    uniq, count = np.unique(e, axis=0, return_counts=True)
-    return uniq, count
+    return unique_rows(e, return_counts=True)
 
 
 def boundary_loops(F: np.ndarray) -> list[np.ndarray]:
     """Closed loops of boundary edges (edges used by one face), as ordered vertex lists."""
     directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     key = np.sort(directed, axis=1)
-    uniq, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    b = directed[count[inv.ravel()] == 1]
+    uniq, inv, count = unique_rows(key, return_inverse=True, return_counts=True)
+    b = directed[count[inv] == 1]
     nxt: dict[int, list[int]] = {}
     for a, c in b:
         nxt.setdefault(int(a), []).append(int(c))
@@ -93,8 +93,14 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
     area = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1) / 2
     scale = float(np.ptp(V, axis=0).max()) or 1.0
     degenerate = int((area <= 1e-12 * scale**2).sum())
-    dup = len(F) - len(np.unique(np.sort(F, axis=1), axis=0))
-    pieces = m.split(only_watertight=False) if len(F) else []
+    dup = len(F) - len(unique_rows(np.sort(F, axis=1)))
+    # connected pieces (by shared edges); split into meshes only when there are several
+    bodies = (
+        trimesh.graph.connected_components(m.face_adjacency, nodes=np.arange(len(F)), min_len=1)
+        if len(F)
+        else []
+    )
+    pieces = m.split(only_watertight=False) if len(bodies) > 1 else [m] * len(bodies)
     bodies, cavities = len(pieces), 0
     if bodies > 1 and boundary == 0 and nonman == 0:  # nesting: of closed pieces only
         from .bodies import groups
@@ -190,7 +196,7 @@ def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_00
             pairs.append(np.stack([o[a], o[b]], 1))
     if not pairs:
         return 0
-    P = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0)
+    P = unique_rows(np.sort(np.concatenate(pairs), axis=1))
     P = P[P[:, 0] != P[:, 1]][:max_pairs]
     share = (F[P[:, 0]][:, :, None] == F[P[:, 1]][:, None, :]).any(axis=(1, 2))
     P = P[~share]
@@ -573,8 +579,7 @@ def _loop_once(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     half = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])  # (3F, 2), face k*F + f
     opp = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])  # vertex opposite each
     key = np.sort(half, axis=1)
-    edges, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
+    edges, inv, count = unique_rows(key, return_inverse=True, return_counts=True)
     if (count > 2).any():
         raise MeshError(f"subdivide: {(count > 2).sum()} non-manifold edge(s); repair first")
     ne = len(edges)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MeshError
+from .topology import unique_rows
 from .bodies import winding_number
 
 # A face's opposite is looked for among the nearest faces within this many median edges (a
@@ -246,8 +247,8 @@ def trim_rim(F: np.ndarray, faces: np.ndarray) -> np.ndarray:
         faces = np.sort(faces[max(pieces, key=len)])
         sub = F[faces]
         e = np.sort(np.stack([sub[:, [0, 1]], sub[:, [1, 2]], sub[:, [2, 0]]], axis=1), axis=2)
-        _, inv, count = np.unique(e.reshape(-1, 2), axis=0, return_inverse=True, return_counts=True)
-        open_edge = (count[inv.ravel()] == 1).reshape(-1, 3)
+        _, inv, count = unique_rows(e.reshape(-1, 2), return_inverse=True, return_counts=True)
+        open_edge = (count[inv] == 1).reshape(-1, 3)
         ends = np.bincount(e[open_edge].ravel(), minlength=int(F.max()) + 1)
         drop = (open_edge.sum(axis=1) >= 2) | (ends[sub] > 2).any(axis=1)
         if not drop.any():

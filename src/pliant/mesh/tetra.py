@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
+from .topology import unique_rows
 from . import ftetwild
 from .primitives import orient_positive, tet_volumes, triangle_measures, unit_scale
 
@@ -37,8 +38,7 @@ def largest_component(tets: np.ndarray, keep_all: bool = False, island: float = 
         axis=1,
     )
     owner = np.tile(np.arange(M), 4)
-    _, inv = np.unique(faces, axis=0, return_inverse=True)
-    inv = inv.ravel()
+    _, inv = unique_rows(faces, return_inverse=True)
     order = np.argsort(inv, kind="stable")
     same = inv[order][1:] == inv[order][:-1]
     a, b = owner[order][:-1][same], owner[order][1:][same]

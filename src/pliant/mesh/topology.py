@@ -12,8 +12,8 @@ def boundary_faces(tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     faces = tets[:, local].reshape(-1, 3)
     owner = np.repeat(np.arange(len(tets)), 4)
     key = np.sort(faces, axis=1)
-    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    once = count[inv.ravel()] == 1
+    _, inv, count = unique_rows(key, return_inverse=True, return_counts=True)
+    once = count[inv] == 1
     return faces[once], owner[once]
 
 
@@ -28,6 +28,26 @@ def _row_keys(keys: np.ndarray) -> np.ndarray:
             flat = flat * n + keys[:, c]
         return flat
     return keys.view(np.dtype((np.void, 8 * keys.shape[1]))).ravel()
+
+
+def unique_rows(rows: np.ndarray, return_inverse: bool = False, return_counts: bool = False):
+    """``np.unique(rows, axis=0, ...)`` for rows (R, k) of non-negative integers, with the same
+    results (the distinct rows in lexicographic order; the inverse flat, shape (R,)), sorted as one
+    int64 a row where (max + 1)^k fits in 62 bits. np.unique sorts rows as records, field by field:
+    12 s for the 3.9 M edges of a 1.3 M-face surface, where one key a row takes under a second."""
+    rows = np.asarray(rows, dtype=np.int64)
+    one_key = (
+        rows.ndim == 2 and rows.size and rows.min() >= 0 and float(rows.max() + 1) ** rows.shape[1] < 2.0**62
+    )
+    if one_key:
+        _, first, inv, count = np.unique(
+            _row_keys(rows), return_index=True, return_inverse=True, return_counts=True
+        )
+        uniq = rows[first]
+    else:
+        uniq, inv, count = np.unique(rows, axis=0, return_inverse=True, return_counts=True)
+    out = [uniq] + ([inv.reshape(-1)] if return_inverse else []) + ([count] if return_counts else [])
+    return out[0] if len(out) == 1 else tuple(out)
 
 
 def _first_repeat(keys: np.ndarray, run: int) -> np.ndarray | None:
