@@ -286,3 +286,17 @@ def test_obj_lines_in_any_spacing(tmp_path):
     )
     V, F = read_surface(p)
     assert len(V) == 4 and len(F) == 4 and enclosed_volume(V, F) == pytest.approx(1 / 6, rel=1e-15)
+
+
+def test_join_coincident_is_numpys_unique_rows():
+    """The corner joining of STL and glTF against np.unique(axis=0): the same vertices in the same
+    order and the same renumbered faces, -0.0 and 0.0 one position."""
+    from pliant.io.stl import join_coincident
+
+    rng = np.random.default_rng(1)
+    V = rng.integers(0, 5, size=(2000, 3)).astype(float)
+    V[::7] *= -1.0  # -0.0 where a coordinate is 0
+    F = rng.integers(0, 2000, size=(3000, 3))
+    want, inv = np.unique(V, axis=0, return_inverse=True)
+    got, G = join_coincident(V, F)
+    assert np.array_equal(got, want) and np.array_equal(G, inv.reshape(-1)[F])

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import MeshError
 
-__all__ = ["is_ascii_stl", "read_ascii_stl"]
+__all__ = ["is_ascii_stl", "join_coincident", "read_ascii_stl"]
 
 
 def is_ascii_stl(path) -> bool:
@@ -32,6 +32,22 @@ def is_ascii_stl(path) -> bool:
         n = int.from_bytes(head[80:84], "little")
         return path.stat().st_size != 84 + 50 * n
     return True
+
+
+def join_coincident(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) at exactly one position made one, as np.unique(V, axis=0) orders them (-0.0
+    and 0.0 alike), faces (F, 3) renumbered: formats that store each facet's corners on their own
+    (STL) or split vertices at seams (glTF). Sorted with lexsort, where np.unique's row sort takes
+    seconds a million rows."""
+    if not len(V):
+        return V, F
+    P = np.asarray(V, dtype=np.float64) + 0.0
+    order = np.lexsort(P.T[::-1])
+    new = np.ones(len(P), dtype=bool)
+    new[1:] = np.any(P[order[1:]] != P[order[:-1]], axis=1)
+    rank = np.empty(len(P), dtype=np.int64)
+    rank[order] = np.cumsum(new) - 1
+    return P[order[new]], rank[F]
 
 
 def _vertex(path: Path, lineno: int, words: list[str]) -> list[float]:
@@ -89,5 +105,4 @@ def read_ascii_stl(path) -> tuple[np.ndarray, np.ndarray]:
     F = np.stack([first, first + k, first + k + 1], axis=1).astype(np.int64)
     if not len(F):
         return V, F.reshape(-1, 3)
-    V, inv = np.unique(V, axis=0, return_inverse=True)
-    return V, inv.reshape(-1)[F]
+    return join_coincident(V, F)

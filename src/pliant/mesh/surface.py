@@ -12,7 +12,7 @@ from ..errors import MeshError
 from ..io.files import file_problem
 from ..io.off import read_off
 from ..io.ply import read_ply
-from ..io.stl import is_ascii_stl, read_ascii_stl
+from ..io.stl import is_ascii_stl, join_coincident, read_ascii_stl
 from ..io.vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
 
@@ -78,10 +78,7 @@ def _read_gltf(path: Path) -> tuple[np.ndarray, np.ndarray]:
         np.asarray(m.vertices, dtype=np.float64).reshape(-1, 3),
         np.asarray(m.faces, np.int64).reshape(-1, 3),
     )
-    if not len(F):
-        return V, F
-    V, inv = np.unique(V, axis=0, return_inverse=True)
-    return V, inv.reshape(-1)[F]
+    return join_coincident(V, F) if len(F) else (V, F)
 
 
 def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
