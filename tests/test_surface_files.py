@@ -85,6 +85,25 @@ def test_binary_stl_whose_header_says_solid_is_read_as_binary(tmp_path):
     assert enclosed_volume(V, F) == pytest.approx(0.1 * 0.05 * 0.02, rel=1e-6)  # float32 corners
 
 
+@pytest.mark.parametrize("cut", [-20, 50], ids=["truncated", "more-data"])
+def test_binary_stl_of_the_wrong_size_is_refused_with_both_sizes(tmp_path, cut):
+    """A binary STL is 84 bytes + 50 a facet its header counts (meshio said "UnicodeDecodeError")."""
+    data = trimesh.creation.icosphere(subdivisions=1).export(file_type="stl")  # 80 facets: 4,084 bytes
+    p = tmp_path / "b.stl"
+    p.write_bytes(data[:cut] if cut < 0 else data + b"\0" * cut)
+    with pytest.raises(MeshError, match=f"counts 80 facets is 4,084 bytes; this one is {4084 + cut:,}"):
+        read_surface(p)
+
+
+def test_binary_stl_is_the_writers_mesh(tmp_path):
+    m = trimesh.creation.icosphere(subdivisions=2, radius=0.05)
+    p = tmp_path / "b.stl"
+    m.export(p, file_type="stl")
+    V, F = read_surface(p)
+    assert len(V) == len(m.vertices) and len(F) == len(m.faces)  # the corners joined
+    assert np.allclose(V[F], m.vertices[m.faces], rtol=0, atol=1e-8)  # float32 in the file
+
+
 @pytest.mark.parametrize(
     "cut, says",
     [

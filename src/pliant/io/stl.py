@@ -1,12 +1,14 @@
-"""Triangle surfaces from STL files. Binary STL is read by meshio; ASCII STL here, since meshio's
-reader takes every line's last three words without looking at its keyword, and a blank line (which
-many writers leave before ``endsolid``) or a facet of four vertices broke it ("cannot reshape array
-of size 144 into shape (0)"). ASCII grammar (3D Systems, "StereoLithography Interface
-Specification", 1988, §6.5): ``solid NAME``, then facets of ``facet normal ni nj nk`` / ``outer
-loop`` / ``vertex x y z`` ... / ``endloop`` / ``endfacet``, then ``endsolid NAME``; several solids
-may follow one another. Keywords in any case, blank lines and any spacing accepted; a polygon of
-more than three vertices is fanned from its first. Vertices at exactly the same position are one
-vertex (STL stores each facet's corners on their own; meshio's binary reader joins them alike)."""
+"""Triangle surfaces from STL files, ASCII and binary. meshio's ASCII reader took every line's last
+three words without looking at its keyword, and a blank line (which many writers leave before
+``endsolid``) or a facet of four vertices broke it ("cannot reshape array of size 144 into shape
+(0)"); a truncated binary file came back as "UnicodeDecodeError". Binary layout: an 80-byte free
+header, the facet count (uint32), then 50 bytes a facet (normal and three vertices as 12 float32,
+an attribute uint16), little-endian; its size is 84 + 50 × count. ASCII grammar (3D Systems,
+"StereoLithography Interface Specification", 1988, §6.5): ``solid NAME``, then facets of ``facet
+normal ni nj nk`` / ``outer loop`` / ``vertex x y z`` ... / ``endloop`` / ``endfacet``, then
+``endsolid NAME``; several solids may follow one another. Keywords in any case, blank lines and any
+spacing accepted; a polygon of more than three vertices is fanned from its first. Vertices at
+exactly the same position are one vertex (STL stores each facet's corners on their own)."""
 
 from __future__ import annotations
 
@@ -16,22 +18,50 @@ import numpy as np
 
 from ..errors import MeshError
 
-__all__ = ["is_ascii_stl", "join_coincident", "read_ascii_stl"]
+__all__ = ["is_ascii_stl", "join_coincident", "read_ascii_stl", "read_binary_stl", "read_stl"]
 
 
 def is_ascii_stl(path) -> bool:
-    """Whether ``path`` is an ASCII STL: it begins with ``solid`` and its size is not that of a
-    binary STL (84 bytes + 50 a facet, the count at byte 80), whose free 80-byte header may also
-    begin with ``solid``."""
+    """Whether ``path`` is an ASCII STL: it begins with ``solid``, its size is not that of a binary
+    STL (84 bytes + 50 a facet, the count at byte 80), whose free header may also begin with
+    ``solid``, and its first kilobyte is text (no NUL byte, which binary facets hold)."""
     path = Path(path)
     with open(path, "rb") as f:
-        head = f.read(84)
+        head = f.read(1024)
     if not head.lstrip().lower().startswith(b"solid"):
         return False
-    if len(head) == 84:
+    if len(head) >= 84 and path.stat().st_size == 84 + 50 * int.from_bytes(head[80:84], "little"):
+        return False
+    return b"\0" not in head
+
+
+_FACET = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attribute", "<u2")])  # 50 bytes
+
+
+def read_binary_stl(path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices [file units] (V, 3) float64 and triangles (F, 3) int64 of a binary STL file,
+    coincident corners joined. MeshError naming the file when its size is not 84 bytes + 50 for
+    each facet its header counts (truncated, or more data)."""
+    path = Path(path)
+    size = path.stat().st_size
+    with open(path, "rb") as f:
+        head = f.read(84)
+        if len(head) < 84:
+            raise MeshError(f"{path}: {size} bytes: too short for a binary STL (84-byte header) or ASCII STL")
         n = int.from_bytes(head[80:84], "little")
-        return path.stat().st_size != 84 + 50 * n
-    return True
+        if size != 84 + 50 * n:
+            raise MeshError(
+                f"{path}: a binary STL whose header counts {n:,} facets is {84 + 50 * n:,} bytes; this one "
+                f"is {size:,} ({'truncated?' if size < 84 + 50 * n else 'more data than facets'})"
+            )
+        facets = np.fromfile(f, dtype=_FACET, count=n)
+    V = facets["v"].astype(np.float64).reshape(-1, 3)
+    return join_coincident(V, np.arange(len(V), dtype=np.int64).reshape(-1, 3))
+
+
+def read_stl(path) -> tuple[np.ndarray, np.ndarray]:
+    """An STL file, ASCII or binary (is_ascii_stl): vertices (V, 3) float64, triangles (F, 3)."""
+    return read_ascii_stl(path) if is_ascii_stl(path) else read_binary_stl(path)
 
 
 def join_coincident(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

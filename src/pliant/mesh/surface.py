@@ -1,6 +1,6 @@
-"""Triangle surface meshes: reading (OBJ read here, robust to texture data; ASCII STL, OFF and PLY
-by pliant.io.stl, .off and .ply; glTF through trimesh; other formats through meshio), writing, and primitive
-surfaces. Vertices [m] (V, 3) float64, faces (F, 3) int64."""
+"""Triangle surface meshes: reading (OBJ read here, robust to texture data; STL, OFF and PLY by
+pliant.io.stl, .off and .ply; glTF through trimesh; other formats through meshio), writing, and
+primitive surfaces. Vertices [m] (V, 3) float64, faces (F, 3) int64."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from ..errors import MeshError
 from ..io.files import file_problem
 from ..io.off import read_off
 from ..io.ply import read_ply
-from ..io.stl import is_ascii_stl, join_coincident, read_ascii_stl
+from ..io.stl import join_coincident, read_stl
 from ..io.vtk_polydata import is_vtk_polydata, read_vtk_polydata
 
 
@@ -93,8 +93,8 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
     suffix = path.suffix.lower()
     if suffix == ".obj":
         V, F = _read_obj(path)
-    elif suffix == ".stl" and is_ascii_stl(path):
-        V, F = read_ascii_stl(path)
+    elif suffix == ".stl":
+        V, F = read_stl(path)
     elif suffix in (".glb", ".gltf"):
         V, F = _read_gltf(path)
     elif suffix == ".off":
