@@ -106,6 +106,15 @@ def test_run_cli_static_scene_outputs(tmp_path):
             None,
             "selects no node",
         ),
+        (  # a box written as a table, as other tools spell it: the message shows the form
+            (
+                "nodes = { plane = { point = [0, 0, 0], normal = [1, 0, 0] } }",
+                "nodes = { box = { min = [0, 0, 0] } }",
+            ),
+            "constraint[0].nodes.box",
+            26,
+            "expected list [[x0, y0, z0], [x1, y1, z1]] (opposite corners [m])",
+        ),
     ],
 )
 def test_scene_errors_name_key_and_line(tmp_path, patch, key, line, text):

@@ -138,21 +138,25 @@ def check_keys(
     ctx: Ctx, table: Any, path: str, allowed: dict[str, str], required: tuple[str, ...] = ()
 ) -> dict:
     """Check that ``table`` is a table whose keys are among ``allowed`` (key → type name; '|' for
-    alternatives) and that ``required`` keys are present. Returns the table."""
+    alternatives; after a space, the form the message shows: "list [[x0, y0, z0], [x1, y1, z1]]")
+    and that ``required`` keys are present. Returns the table."""
     if not isinstance(table, dict):
         raise ctx.error(path, f"expected a table, got {type(table).__name__}")
     for k, v in table.items():
         kp = key_path(path, k)
         if k not in allowed:
             raise ctx.error(kp, f"unknown key {_short(k, 40)}; expected one of: {', '.join(sorted(allowed))}")
-        kinds = allowed[k].split("|")
+        spec, _, form = allowed[k].partition(" ")
+        kinds = spec.split("|")
         ok = False
         for kind in kinds:
             types = _TYPES.get(kind, ())
             if isinstance(v, types) and not (kind in ("number", "int") and isinstance(v, bool)):
                 ok = True
         if not ok:
-            raise ctx.error(kp, f"{k} = {_short(v)}: expected {' or '.join(kinds)}")
+            raise ctx.error(
+                kp, f"{k} = {_short(v)}: expected {' or '.join(kinds)}{' ' + form if form else ''}"
+            )
         if isinstance(v, float) and not math.isfinite(v):
             raise ctx.error(kp, f"{k} = {v!r}: expected a finite number")
     for k in required:

@@ -18,10 +18,10 @@ from .schema import Ctx, check_keys, vector
 
 _KEYS = {
     "all": "bool",
-    "ids": "list",
-    "box": "list",
-    "sphere": "table",
-    "plane": "table",
+    "ids": "list [i, j, ...] (0-based node indices)",
+    "box": "list [[x0, y0, z0], [x1, y1, z1]] (opposite corners [m])",
+    "sphere": "table { center = [x, y, z], radius = r } [m]",
+    "plane": "table { point = [x, y, z], normal = [nx, ny, nz] }",
     "surface": "bool",
     "set": "str",
 }
