@@ -50,7 +50,7 @@ def _mask(ctx: Ctx, spec: dict, path: str, P: np.ndarray, extent: float) -> np.n
             ctx,
             spec["sphere"],
             f"{path}.sphere",
-            {"center": "list", "radius": "number"},
+            {"center": "list [x, y, z] [m]", "radius": "number"},
             ("center", "radius"),
         )
         m &= (
@@ -62,7 +62,7 @@ def _mask(ctx: Ctx, spec: dict, path: str, P: np.ndarray, extent: float) -> np.n
             ctx,
             spec["plane"],
             f"{path}.plane",
-            {"point": "list", "normal": "list", "side": "str", "tol": "number"},
+            {"point": "list [x, y, z] [m]", "normal": "list [nx, ny, nz]", "side": "str", "tol": "number"},
             ("point", "normal"),
         )
         n = np.array(vector(ctx, p["normal"], f"{path}.plane.normal"))
