@@ -319,3 +319,21 @@ def test_join_coincident_is_numpys_unique_rows():
     want, inv = np.unique(V, axis=0, return_inverse=True)
     got, G = join_coincident(V, F)
     assert np.array_equal(got, want) and np.array_equal(G, inv.reshape(-1)[F])
+
+
+def test_a_repaired_surface_is_written_as_glb_and_read_back(tmp_path):
+    """`pliant mesh repair IN OUT.glb` writes binary glTF (meshio writes none): the same triangles
+    read back, to float32 (glTF stores positions as float32)."""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    m = trimesh.creation.icosphere(subdivisions=2, radius=0.05)
+    src, out = tmp_path / "s.obj", tmp_path / "r.glb"
+    m.export(src)
+    r = CliRunner().invoke(app, ["mesh", "repair", str(src), str(out)])
+    assert r.exit_code == 0, r.output
+    V, F = read_surface(out)
+    W, G = read_surface(src)
+    assert len(F) == len(G)
+    assert triangles(np.float32(V).astype(float), F) == triangles(np.float32(W).astype(float), G)

@@ -51,10 +51,10 @@ def simplify_cmd(
     ratio: Optional[float] = typer.Option(None, "--ratio", help="Fraction of faces to keep."),
 ):
     """QEM simplification (Garland–Heckbert, via fast-simplification)."""
-    from .io import check_output_file
+    from .mesh.surface import check_surface_output
     from .mesh import read_surface, simplify, write_surface
 
-    check_output_file(out, "surface mesh", mesh_format=True)
+    check_surface_output(out)
     V, F = read_surface(inp)
     t = time.perf_counter()
     Vs, Fs = simplify(V, F, target_faces=target_faces, ratio=ratio)
@@ -69,10 +69,10 @@ def simplify_cmd(
 @_guard
 def subdivide_cmd(inp: Path, out: Path, levels: int = typer.Option(1, "--levels", help="Levels.")):
     """Loop subdivision (with Loop's boundary rules)."""
-    from .io import check_output_file
+    from .mesh.surface import check_surface_output
     from .mesh import read_surface, subdivide_loop, write_surface
 
-    check_output_file(out, "surface mesh", mesh_format=True)
+    check_surface_output(out)
     if not 0 <= levels <= 6:
         raise InputError(f"--levels {levels}: expected 0 to 6 (each level multiplies the faces by 4)")
     V, F = read_surface(inp)
@@ -123,10 +123,10 @@ def repair_cmd(
 ):
     """Fill holes, fix winding, drop fragments, split bodies touching at an edge; refuse with the
     reason where it cannot."""
-    from .io import check_output_file
+    from .mesh.surface import check_surface_output
     from .mesh import check_surface, read_surface, repair_surface, write_surface
 
-    check_output_file(out, "surface mesh", mesh_format=True)
+    check_surface_output(out)
     V, F = read_surface(inp)
     Vr, Fr, actions = repair_surface(V, F, keep_largest=keep_largest, bodies=bodies)
     if fill_shell:

@@ -129,19 +129,32 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
     return V, F
 
 
+def check_surface_output(path) -> Path:
+    """``path`` as a surface file pliant can write (a meshio format or .glb) in a writable folder;
+    InputError naming it otherwise. Commands check it before their work."""
+    from ..io.files import check_output_file
+
+    glb = Path(path).suffix.lower() == ".glb"
+    return check_output_file(path, "surface mesh", mesh_format=not glb)
+
+
 def write_surface(path, V: np.ndarray, F: np.ndarray) -> None:
-    """Write a triangle surface in any meshio format (by extension), atomically. An unwritable
-    path or an unknown extension raises InputError naming the path."""
+    """Write a triangle surface in any meshio format (by extension), or binary glTF (.glb, through
+    trimesh: float32 positions), atomically. An unwritable path or an unknown extension raises
+    InputError naming the path."""
     import meshio
 
-    from ..io.files import atomic_write, check_output_file
+    from ..io.files import atomic_write
 
-    path = check_output_file(path, "surface mesh", mesh_format=True)
-    atomic_write(
-        path,
-        lambda tmp: meshio.write(tmp, meshio.Mesh(np.asarray(V, float), [("triangle", np.asarray(F))])),
-        "surface mesh",
-    )
+    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    path = check_surface_output(path)
+    if path.suffix.lower() == ".glb":
+        import trimesh
+
+        glb = trimesh.Trimesh(V, F, process=False).export(file_type="glb")
+        atomic_write(path, lambda tmp: Path(tmp).write_bytes(glb), "surface mesh")
+        return
+    atomic_write(path, lambda tmp: meshio.write(tmp, meshio.Mesh(V, [("triangle", F)])), "surface mesh")
 
 
 def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:
