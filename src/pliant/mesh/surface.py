@@ -152,6 +152,7 @@ def write_surface(path, V: np.ndarray, F: np.ndarray) -> None:
         import trimesh
 
         glb = trimesh.Trimesh(V, F, process=False).export(file_type="glb")
+        assert isinstance(glb, bytes)  # a .glb export is one blob
         atomic_write(path, lambda tmp: Path(tmp).write_bytes(glb), "surface mesh")
         return
     atomic_write(path, lambda tmp: meshio.write(tmp, meshio.Mesh(V, [("triangle", F)])), "surface mesh")
