@@ -337,3 +337,17 @@ def test_a_repaired_surface_is_written_as_glb_and_read_back(tmp_path):
     W, G = read_surface(src)
     assert len(F) == len(G)
     assert triangles(np.float32(V).astype(float), F) == triangles(np.float32(W).astype(float), G)
+
+
+def test_trimeshs_off_is_its_mesh_in_bulk_and_line_by_line(tmp_path):
+    """A plain triangle OFF is parsed in bulk; a comment in it sends it line by line: both give
+    the writer's mesh."""
+    m = trimesh.creation.icosphere(subdivisions=2, radius=0.05)
+    plain, commented = tmp_path / "s.off", tmp_path / "c.off"
+    m.export(plain)
+    text = plain.read_text().splitlines()
+    commented.write_text("\n".join(text[:5] + ["# a comment among the vertices"] + text[5:]) + "\n")
+    for p in (plain, commented):
+        V, F = read_surface(p)
+        # trimesh writes 10 decimals: within 5e-11 m
+        assert np.allclose(V, m.vertices, rtol=0, atol=1e-10) and np.array_equal(F, m.faces)
