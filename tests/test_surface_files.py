@@ -219,12 +219,30 @@ def test_ascii_ply_of_quads_in_the_specifications_type_names(tmp_path):
         (ply_text(faces=[]), "8 vertices and 0 faces in its header; expected a surface"),
         (ply_text().replace("end_header", "end"), "has no end_header"),
         (ply_text().replace("ascii", "utf8"), "PLY format 'utf8'"),
+        (ply_text(faces=[*QUADS[:5], [1, 2]]), "c.ply:25: a face of 2 vertices; expected 3 or more"),
+        (
+            ply_text().replace("4 0 3 2 1", "4 0 3 2 1.5"),
+            "c.ply:20: face record '4 0 3 2 1.5' does not match",
+        ),
+        (ply_text().replace("property uint8 red\n", ""), "c.ply:11: vertex record '0 0 0 255' has values"),
+        (ply_text().replace("uint8 uint32 vertex", "uint8 float32 vertex"), "vertex_indices of type float32"),
     ],
-    ids=["truncated", "counts-too-many", "extra-record", "points-only", "no-end-header", "bad-format"],
+    ids=[
+        "truncated",
+        "counts-too-many",
+        "extra-record",
+        "points-only",
+        "no-end-header",
+        "bad-format",
+        "two-vertex-face",
+        "fractional-index",
+        "unnamed-value",
+        "float-indices",
+    ],
 )
 def test_malformed_ply_is_refused_naming_what_is_wrong(tmp_path, text, says):
-    """trimesh alone read these as far as they went (7 of 12 faces of a truncated box) and said
-    nothing."""
+    """trimesh alone read these as far as it could and said nothing: 7 of the 12 faces of a
+    truncated box; a face of two vertices dropped; an index of 1.5 read as 1."""
     p = tmp_path / "c.ply"
     p.write_text(text)
     with pytest.raises(MeshError, match=re.escape(says)):
