@@ -175,13 +175,17 @@ CUBE = (
 QUADS = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [0, 4, 7, 3], [1, 2, 6, 5]]  # outward
 
 
-def test_trimeshs_binary_ply_with_face_colours_is_its_mesh(tmp_path):
-    """trimesh's default binary PLY, with a colour a face (meshio refused it: "buffer size must be
-    a multiple of element size")."""
+@pytest.mark.parametrize("colours", [True, False], ids=["face-colours", "plain"])
+@pytest.mark.parametrize("encoding", ["binary", "ascii"])
+def test_trimeshs_ply_is_its_mesh(tmp_path, encoding, colours):
+    """trimesh's PLY: binary with a colour a face (meshio refused it: "buffer size must be a
+    multiple of element size") or plain; ASCII plain (read in bulk) or with colours (record by
+    record)."""
     m = trimesh.creation.icosphere(subdivisions=2, radius=0.05)
-    m.visual.face_colors = [200, 30, 30, 255]
+    if colours:
+        m.visual.face_colors = [200, 30, 30, 255]
     p = tmp_path / "s.ply"
-    m.export(p)
+    m.export(p, encoding=encoding)
     V, F = read_surface(p)
     assert np.allclose(V[F], m.vertices[m.faces], rtol=0, atol=1e-8)  # the file's float32 corners
     assert enclosed_volume(V, F) == pytest.approx(m.volume, rel=1e-6)
