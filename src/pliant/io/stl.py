@@ -112,7 +112,7 @@ def _ascii_corners_in_bulk(path: Path) -> np.ndarray | None:
     if b"endfacet" not in words[-4:]:  # the last facet, then "endsolid [name]"
         return None
     first = words.index(b"facet") if b"facet" in words[:64] else -1
-    last = len(words) - words[::-1].index(b"endfacet")
+    last = len(words) - next(i for i, w in enumerate(reversed(words)) if w == b"endfacet")  # no copy
     body, tail = words[first:last] if first >= 0 else [], words[last:]
     n = len(body) // 21
     if not n or len(body) != 21 * n or not tail or tail[0] != b"endsolid" or words[0] != b"solid":
