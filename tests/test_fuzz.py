@@ -422,3 +422,106 @@ def test_vtk_polydata_files_read_or_fail_by_name(data):
 def test_fuzz_messages_quote_no_numpy_reprs():
     """The check above (no 'np.float64(' in any message) has teeth: numpy 2 prints scalars so."""
     assert re.search(r"np\.float64\(", repr(np.float64(1.0))) or np.__version__ < "2"
+
+
+# --- STL, OFF and PLY text: the bulk parsers against the line-by-line readers ------------------
+_CORNERS = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+_FACES = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+_STL = (
+    "solid tet\n"
+    + "".join(
+        "facet normal 0 0 0\n  outer loop\n"
+        + "".join("    vertex {} {} {}\n".format(*_CORNERS[i]) for i in f)
+        + "  endloop\nendfacet\n"
+        for f in _FACES
+    )
+    + "endsolid tet\n"
+)
+_OFF = "OFF\n4 4 0\n" + "".join("{} {} {}\n".format(*c) for c in _CORNERS)
+_OFF += "".join("3 {} {} {}\n".format(*f) for f in _FACES)
+_PLY = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+_PLY += "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+_PLY += "".join("{} {} {}\n".format(*c) for c in _CORNERS) + "".join(
+    "3 {} {} {}\n".format(*f) for f in _FACES
+)
+_WORDS = ["nan", "inf", "-1", "0", "3", "4", "5", "2.5", "1e400", "-0", "99999999999999999999", "x", "#"]
+_WORDS += ["facet", "vertex", "endfacet", "endloop", "outer", "solid", "endsolid", "OFF", "COFF", "ply"]
+_WORDS += ["element", "property", "list", "uchar", "float", "end_header", "face", "vertex_indices", ""]
+
+
+@st.composite
+def surface_texts(draw, base: str):
+    """``base`` with one to four mutations: a word replaced, a line deleted, duplicated or moved,
+    a blank line or a carriage return put in, or the file cut short."""
+    lines = base.splitlines()
+    for _ in range(draw(st.integers(1, 4))):
+        i = draw(st.integers(0, len(lines) - 1))
+        kind = draw(st.integers(0, 6))
+        words = lines[i].split() or [""]
+        if kind <= 1:
+            words[draw(st.integers(0, len(words) - 1))] = draw(st.sampled_from(_WORDS))
+            lines[i] = " ".join(words)
+        elif kind == 2:
+            del lines[i]
+        elif kind == 3:
+            lines.insert(i, lines[i])
+        elif kind == 4:
+            lines.insert(draw(st.integers(0, len(lines) - 1)), lines.pop(i))
+        elif kind == 5:
+            lines.insert(i, draw(st.sampled_from(["", "  ", "\r", "# note"])))
+        else:
+            lines = lines[:i] + [lines[i][: draw(st.integers(0, len(lines[i])))]]
+        if not lines:
+            lines = [""]
+    return "\n".join(lines) + draw(st.sampled_from(["\n", "", "\r\n"]))
+
+
+def _outcome(p: Path):
+    """read_surface's result (vertices, faces) or the InputError's message, checked to name p."""
+    try:
+        V, F = pl.mesh.read_surface(p)
+    except InputError as e:
+        _check_error(e, p)
+        return str(e)
+    assert np.all(np.isfinite(V)) and F.min() >= 0 and F.max() < len(V)
+    return V, F
+
+
+def _bulk_agrees_with_lines(text: str, suffix: str, module, bulk: str) -> None:
+    """The property: read_surface reads the file, or refuses it naming the file; and with the
+    bulk parser (``module.bulk``) turned off, the line-by-line reader gives the same vertices and
+    faces, or refuses it too (the bulk parser takes a file only where it reads it as the lines do)."""
+    from unittest import mock
+
+    p = _write(text, suffix)
+    got = _outcome(p)
+    with mock.patch.object(module, bulk, lambda *a, **k: None):
+        by_lines = _outcome(p)
+    if isinstance(got, str) or isinstance(by_lines, str):
+        assert isinstance(got, str) and isinstance(by_lines, str), (got, by_lines)
+    else:
+        assert np.array_equal(got[0], by_lines[0]) and np.array_equal(got[1], by_lines[1])
+
+
+@BUDGET
+@given(surface_texts(_STL))
+def test_stl_text_reads_as_its_lines_or_fails_by_name(text):
+    from pliant.io import stl
+
+    _bulk_agrees_with_lines(text, ".stl", stl, "_ascii_corners_in_bulk")
+
+
+@BUDGET
+@given(surface_texts(_OFF))
+def test_off_text_reads_as_its_lines_or_fails_by_name(text):
+    from pliant.io import off
+
+    _bulk_agrees_with_lines(text, ".off", off, "_fast")
+
+
+@BUDGET
+@given(surface_texts(_PLY))
+def test_ply_text_reads_as_its_lines_or_fails_by_name(text):
+    from pliant.io import ply
+
+    _bulk_agrees_with_lines(text, ".ply", ply, "_ascii_in_bulk")

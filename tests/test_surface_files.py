@@ -124,6 +124,31 @@ def test_malformed_ascii_stl_is_refused_naming_the_line(tmp_path, cut, says):
         read_surface(p)
 
 
+def _split_first_vertex(text: str) -> str:
+    """The first vertex line with its last number moved to a line of its own."""
+    line = next(ln for ln in text.splitlines() if ln.strip().startswith("vertex"))
+    return text.replace(line, "\n".join(line.rsplit(" ", 1)), 1)
+
+
+@pytest.mark.parametrize(
+    "damage, says",
+    [
+        (lambda t: t.replace("facet normal", "facett normal", 1), "ico.stl:2: unexpected 'facett'"),
+        (lambda t: _split_first_vertex(t), "ico.stl:4: expected 'vertex x y z'"),
+    ],
+    ids=["first-facet", "vertex-over-two-lines"],
+)
+def test_trimeshs_ascii_stl_damaged_is_refused_naming_the_line(tmp_path, damage, says):
+    """The bulk reader took words at their places: it dropped a first facet whose keyword was
+    damaged, and read a vertex whose numbers ran over two lines. Both are read line by line now,
+    and refused there, as every other damaged line."""
+    m = trimesh.creation.icosphere(subdivisions=1, radius=0.05)
+    p = tmp_path / "ico.stl"
+    p.write_text(damage(trimesh.exchange.stl.export_stl_ascii(m)))
+    with pytest.raises(MeshError, match=re.escape(says)):
+        read_surface(p)
+
+
 def test_gltf_meshes_are_placed_by_their_nodes(tmp_path):
     """A .glb of a 24-sided cylinder (r = 2 cm, h = 10 cm) at node translation (1, 2, 3) m, scaled
     by 0.5: its vertices where the transform puts them, and the prism's volume
@@ -230,6 +255,10 @@ def test_ascii_ply_of_quads_in_the_specifications_type_names(tmp_path):
         ),
         (ply_text().replace("property uint8 red\n", ""), "c.ply:11: vertex record '0 0 0 255' has values"),
         (ply_text().replace("uint8 uint32 vertex", "uint8 float32 vertex"), "vertex_indices of type float32"),
+        (
+            ply_text().replace("4 0 3 2 1", "4 0 3 2 99999999999999999999"),
+            "c.ply:20: vertex index out of range 0..7",
+        ),
     ],
     ids=[
         "truncated",
@@ -242,6 +271,7 @@ def test_ascii_ply_of_quads_in_the_specifications_type_names(tmp_path):
         "fractional-index",
         "unnamed-value",
         "float-indices",
+        "index-beyond-int64",
     ],
 )
 def test_malformed_ply_is_refused_naming_what_is_wrong(tmp_path, text, says):
@@ -298,6 +328,10 @@ def test_off_variants_give_the_cube(tmp_path, text):
         (off_text() + "1 2 3\n", "c.off:19: more data after the 8 vertices and 6 faces"),
         (off_text(header="OFF BINARY"), "binary OFF is not read"),
         (off_text(header="PLY"), "'PLY' is not an OFF header"),
+        (
+            off_text(colours=False).replace("4 0 3 2 1", "4 0 3 2 99999999999999999999"),
+            "c.off:13: vertex index out of range 0..7",
+        ),
     ],
     ids=[
         "truncated",
@@ -308,6 +342,7 @@ def test_off_variants_give_the_cube(tmp_path, text):
         "extra",
         "binary",
         "not-off",
+        "index-beyond-int64",
     ],
 )
 def test_malformed_off_is_refused_naming_the_line(tmp_path, text, says):

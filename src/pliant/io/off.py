@@ -86,7 +86,7 @@ def _fast(path: Path, nv: int, nf: int, after: int) -> tuple[np.ndarray, np.ndar
     try:
         V = np.array(b" ".join(rows[:nv]).split(), dtype=np.float64)
         F = np.array(b" ".join(rows[nv:]).split(), dtype=np.int64)
-    except ValueError:
+    except (ValueError, OverflowError):  # numpy: a number beyond int64
         return None
     if V.size != 3 * nv or F.size != 4 * nf or np.any(F[::4] != 3):
         return None

@@ -98,7 +98,7 @@ def _values(path: Path, lineno: int, words: list[str], e: _Element) -> dict[str,
     return out
 
 
-def _ascii_in_bulk(path: Path, elements: list[_Element], start: int):
+def _ascii_in_bulk(rows: list[bytes], elements: list[_Element]):
     """The common ASCII file read in bulk (numpy parses the numbers): a vertex element of scalar
     properties, then a face element of its index list alone, every face a triangle. None for
     anything else, which the record-by-record reader then reads or refuses naming its line.
@@ -108,13 +108,10 @@ def _ascii_in_bulk(path: Path, elements: list[_Element], start: int):
     vert, face = elements
     if any(is_list for _, is_list, _ in vert.props):
         return None
-    with open(path, "rb") as f:
-        f.seek(start)
-        rows = [r for r in f.read().split(b"\n") if r.strip()]
     try:
         X = np.array(b" ".join(rows[: vert.count]).split(), dtype=np.float64)
         T = np.array(b" ".join(rows[vert.count :]).split(), dtype=np.int64)
-    except ValueError:
+    except (ValueError, OverflowError):  # numpy: a number beyond int64
         return None
     k = len(vert.props)
     if X.size != k * vert.count or T.size != 4 * face.count or np.any(T[::4] != 3):
@@ -124,45 +121,42 @@ def _ascii_in_bulk(path: Path, elements: list[_Element], start: int):
     return np.ascontiguousarray(X), T.reshape(face.count, 4)[:, 1:].copy()
 
 
-def _read_ascii(path: Path, elements: list[_Element], start: int, line0: int):
+def _face(path: Path, lineno: int, words: list[str], e: _Element, nv: int) -> list[int]:
+    """A face record's vertex indices: 3 or more, each in 0 .. nv − 1."""
+    r = _values(path, lineno, words, e)
+    idx = r.get("vertex_indices", r.get("vertex_index", []))
+    if len(idx) < 3:
+        raise MeshError(f"{path}:{lineno}: a face of {len(idx)} vertices; expected 3 or more")
+    if min(idx) < 0 or max(idx) >= nv:
+        raise MeshError(f"{path}:{lineno}: vertex index out of range 0..{nv - 1} in {' '.join(words)[:80]!r}")
+    return idx
+
+
+def _read_ascii(path: Path, raw: list[bytes], elements: list[_Element], line0: int):
     """Vertices (x, y, z) and faces (polygons fanned from their first vertex) of an ASCII PLY."""
     V: list[list[float]] = []
     F: list[list[int]] = []
-    with open(path, "rb") as f:
-        f.seek(start)
-        lines = ((n, raw.decode("ascii", errors="replace").split()) for n, raw in enumerate(f, line0 + 1))
-        lines = ((n, w) for n, w in lines if w)
-        for e in elements:
-            for i in range(e.count):
-                try:
-                    lineno, words = next(lines)
-                except StopIteration:
-                    raise MeshError(
-                        f"{path}: the file ends after {i:,} of its {e.count:,} {e.name} records (truncated?)"
-                    ) from None
-                if e.name == "vertex":
-                    r = _values(path, lineno, words, e)
-                    V.append([r["x"][0], r["y"][0], r["z"][0]])
-                elif e.name == "face":
-                    r = _values(path, lineno, words, e)
-                    idx = r.get("vertex_indices", r.get("vertex_index", []))
-                    if len(idx) < 3:
-                        raise MeshError(f"{path}:{lineno}: a face of {len(idx)} vertices; expected 3 or more")
-                    F.extend([idx[0], idx[j], idx[j + 1]] for j in range(1, len(idx) - 1))
-        extra = next(lines, None)
+    nv = sum(e.count for e in elements if e.name == "vertex")  # faces may come first
+    lines = ((n, line.decode("ascii", errors="replace").split()) for n, line in enumerate(raw, line0 + 1))
+    lines = ((n, w) for n, w in lines if w)
+    for e in elements:
+        for i in range(e.count):
+            try:
+                lineno, words = next(lines)
+            except StopIteration:
+                raise MeshError(
+                    f"{path}: the file ends after {i:,} of its {e.count:,} {e.name} records (truncated?)"
+                ) from None
+            if e.name == "vertex":
+                r = _values(path, lineno, words, e)
+                V.append([r["x"][0], r["y"][0], r["z"][0]])
+            elif e.name == "face":
+                idx = _face(path, lineno, words, e, nv)
+                F.extend([idx[0], idx[j], idx[j + 1]] for j in range(1, len(idx) - 1))
+    extra = next(lines, None)
     if extra is not None:
         raise MeshError(f"{path}:{extra[0]}: more records than the header counts")
     return np.asarray(V, dtype=np.float64).reshape(-1, 3), np.asarray(F, dtype=np.int64).reshape(-1, 3)
-
-
-def _ascii_records(path: Path, start: int) -> int:
-    """Non-blank lines after the header: the records of an ASCII PLY, one a line."""
-    n = 0
-    with open(path, "rb") as f:
-        f.seek(start)
-        for line in f:
-            n += bool(line.strip())
-    return n
 
 
 def _read_binary(path: Path, counts: dict[str, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -205,11 +199,15 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
             f"{path}: face vertex_indices of type {(kinds or ['none'])[0]}; expected a list of integers"
         )
     if fmt == "ascii":
-        if (found := _ascii_records(path, start)) != sum(counts.values()):
+        with open(path, "rb") as f:
+            f.seek(start)
+            raw = f.read().split(b"\n")  # the lines after the header; read once
+        rows = [r for r in raw if r.strip()]  # the records, one a line
+        if (found := len(rows)) != sum(counts.values()):
             said = ", ".join(f"{n:,} {k}" for k, n in counts.items())
             raise MeshError(
                 f"{path}: the header counts {said} records; the file holds {found:,} "
                 f"({'truncated?' if found < sum(counts.values()) else 'more than it says'})"
             )
-        return _ascii_in_bulk(path, elements, start) or _read_ascii(path, elements, start, line0)
+        return _ascii_in_bulk(rows, elements) or _read_ascii(path, raw, elements, line0)
     return _read_binary(path, counts)

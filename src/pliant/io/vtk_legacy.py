@@ -85,7 +85,7 @@ class Reader:
             raise self.fail(f"{what}: {len(words)} values on the lines of {count} announced")
         try:
             return np.array(words, dtype=float if dtype[0] == "f" else np.int64)
-        except ValueError:
+        except (ValueError, OverflowError):  # OverflowError: a whole number beyond int64
             raise self.fail(f"{what}: a value that is not a number") from None
 
     def skip_metadata(self) -> None:
