@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
+from ..mesh.topology import join_coincident
 
 __all__ = ["is_ascii_stl", "join_coincident", "read_ascii_stl", "read_binary_stl", "read_stl"]
 
@@ -63,22 +64,6 @@ def read_binary_stl(path) -> tuple[np.ndarray, np.ndarray]:
 def read_stl(path) -> tuple[np.ndarray, np.ndarray]:
     """An STL file, ASCII or binary (is_ascii_stl): vertices (V, 3) float64, triangles (F, 3)."""
     return read_ascii_stl(path) if is_ascii_stl(path) else read_binary_stl(path)
-
-
-def join_coincident(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (V, 3) at exactly one position made one, as np.unique(V, axis=0) orders them (-0.0
-    and 0.0 alike), faces (F, 3) renumbered: formats that store each facet's corners on their own
-    (STL) or split vertices at seams (glTF). Sorted with lexsort, where np.unique's row sort takes
-    seconds a million rows."""
-    if not len(V):
-        return V, F
-    P = np.asarray(V, dtype=np.float64) + 0.0
-    order = np.lexsort(P.T[::-1])
-    new = np.ones(len(P), dtype=bool)
-    new[1:] = np.any(P[order[1:]] != P[order[:-1]], axis=1)
-    rank = np.empty(len(P), dtype=np.int64)
-    rank[order] = np.cumsum(new) - 1
-    return P[order[new]], rank[F]
 
 
 def _vertex(path: Path, lineno: int, words: list[str]) -> list[float]:

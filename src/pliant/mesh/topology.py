@@ -1,4 +1,4 @@
-"""Topology of tet meshes: boundary faces and nodes."""
+"""Topology of tet meshes and surfaces: boundary faces, unique rows, coincident nodes."""
 
 from __future__ import annotations
 
@@ -143,15 +143,35 @@ def boundary_nodes(tets: np.ndarray) -> np.ndarray:
     return np.unique(boundary_faces(tets)[0])
 
 
+def _sorted_positions(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (N, 3) in lexicographic order (-0.0 and 0.0 alike; np.unique(axis=0)'s order,
+    by lexsort, where np.unique's row sort takes seconds a million rows): the order (N,) and
+    whether each position in it equals the one before (N − 1,)."""
+    P = np.asarray(P, dtype=np.float64) + 0.0
+    order = np.lexsort(P.T[::-1])
+    return order, np.all(P[order[1:]] == P[order[:-1]], axis=1)
+
+
+def join_coincident(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) at exactly one position made one, as np.unique(V, axis=0) orders them (-0.0
+    and 0.0 alike), faces (F, 3) renumbered: formats that store each facet's corners on their own
+    (STL) or split vertices at seams (glTF)."""
+    if not len(V):
+        return V, F
+    order, same = _sorted_positions(V)
+    new = np.concatenate([[True], ~same])
+    rank = np.empty(len(V), dtype=np.int64)
+    rank[order] = np.cumsum(new) - 1
+    return np.asarray(V, dtype=np.float64)[order[new]] + 0.0, rank[F]
+
+
 def coincident_nodes(nodes: np.ndarray, tets: np.ndarray) -> tuple[int, int, int]:
     """Nodes of tetrahedra (M, 4) at exactly the position [m] (N, 3) of another node of theirs:
     (how many nodes share their position with a lower-numbered node, the first such pair a < b),
     or (0, -1, -1). Such nodes do not join the elements on either side: a file written one node
     per element corner, or bodies meant to be separate."""
     used = np.unique(np.asarray(tets, np.int64))
-    P = np.asarray(nodes, float)[used] + 0.0  # -0.0 and 0.0 alike
-    order = np.lexsort(P.T[::-1])
-    same = np.all(P[order[1:]] == P[order[:-1]], axis=1)
+    order, same = _sorted_positions(np.asarray(nodes, float)[used])
     if not same.any():
         return 0, -1, -1
     later = np.maximum(used[order[1:]], used[order[:-1]])[same]
