@@ -451,16 +451,25 @@ _WORDS += ["element", "property", "list", "uchar", "float", "end_header", "face"
 
 @st.composite
 def surface_texts(draw, base: str):
-    """``base`` with one to four mutations: a word replaced, a line deleted, duplicated or moved,
-    a blank line or a carriage return put in, or the file cut short."""
+    """``base`` with one to four mutations: a word replaced or put in, a line deleted, duplicated,
+    moved, joined to the next or split in two, a blank line or a carriage return put in, or the
+    file cut short."""
     lines = base.splitlines()
     for _ in range(draw(st.integers(1, 4))):
         i = draw(st.integers(0, len(lines) - 1))
-        kind = draw(st.integers(0, 6))
+        kind = draw(st.integers(0, 9))
         words = lines[i].split() or [""]
         if kind <= 1:
             words[draw(st.integers(0, len(words) - 1))] = draw(st.sampled_from(_WORDS))
             lines[i] = " ".join(words)
+        elif kind == 7:
+            words.insert(draw(st.integers(0, len(words))), draw(st.sampled_from(_WORDS)))
+            lines[i] = " ".join(words)
+        elif kind == 8 and i + 1 < len(lines):
+            lines[i : i + 2] = [lines[i] + " " + lines[i + 1]]
+        elif kind == 9:
+            k = draw(st.integers(0, len(words)))
+            lines[i : i + 1] = [" ".join(words[:k]), " ".join(words[k:])]
         elif kind == 2:
             del lines[i]
         elif kind == 3:
@@ -469,7 +478,7 @@ def surface_texts(draw, base: str):
             lines.insert(draw(st.integers(0, len(lines) - 1)), lines.pop(i))
         elif kind == 5:
             lines.insert(i, draw(st.sampled_from(["", "  ", "\r", "# note"])))
-        else:
+        elif kind == 6:
             lines = lines[:i] + [lines[i][: draw(st.integers(0, len(lines[i])))]]
         if not lines:
             lines = [""]

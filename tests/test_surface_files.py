@@ -352,6 +352,40 @@ def test_malformed_off_is_refused_naming_the_line(tmp_path, text, says):
         read_surface(p)
 
 
+TRIS = [[q[0], q[j], q[j + 1]] for q in QUADS for j in (1, 2)]
+TRI_OFF = f"OFF\n{len(CUBE)} {len(TRIS)} 0\n" + "".join(f"{x:g} {y:g} {z:g}\n" for x, y, z in CUBE)
+TRI_OFF += "".join(f"3 {a} {b} {c}\n" for a, b, c in TRIS)
+
+
+@pytest.mark.parametrize(
+    "suffix, text, says",
+    [
+        (".off", TRI_OFF.replace("0 0 0\n0.05 0 0", "0 0\n0 0.05 0 0"), "c.off:3: expected a vertex 'x y z'"),
+        (".off", TRI_OFF.replace("3 0 3 2\n", "3 0 3\n2 "), "c.off:11: a face of 3 vertices with 2 given"),
+        (
+            ".ply",
+            ply_text(faces=TRIS).replace("0 0 0 255\n0.05 0 0 255", "0 0 0\n255 0.05 0 0 255"),
+            "c.ply:12: vertex record '0 0 0' does not match",
+        ),
+        (
+            ".ply",
+            ply_text(faces=TRIS).replace("0 0 0 255", "0 0 0 25.5"),
+            "c.ply:12: vertex record '0 0 0 25.5' does not match",
+        ),
+    ],
+    ids=["off-vertex-split", "off-face-split", "ply-vertex-split", "ply-fractional-uint8"],
+)
+def test_triangle_files_read_in_bulk_are_refused_by_the_line_at_fault(tmp_path, suffix, text, says):
+    """The bulk parsers counted the numbers of a block: a vertex short of a value on one line and
+    one with a value too many on the next read as two good vertices (shifted), and a fractional
+    uint8 as a number. Each row is now checked to hold its words alone and of its type, and the
+    file falls back to the line-by-line reader, which names the line."""
+    p = tmp_path / f"c{suffix}"
+    p.write_text(text)
+    with pytest.raises(MeshError, match=re.escape(says)):
+        read_surface(p)
+
+
 def test_obj_lines_in_any_spacing(tmp_path):
     """Tab-separated and indented OBJ lines (the format separates by white space) were skipped:
     this unit tetrahedron read as one vertex. Its outward faces enclose 1/6 m³."""

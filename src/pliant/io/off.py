@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
+from .text_table import table
 
 __all__ = ["read_off"]
 
@@ -76,24 +77,22 @@ def _header(path: Path, lines) -> tuple[int, int, int]:
 
 
 def _fast(path: Path, nv: int, nf: int, after: int) -> tuple[np.ndarray, np.ndarray] | None:
-    """The common file read in bulk (numpy parses the numbers): no comment after the header, three
-    numbers a vertex line, only triangles without colours, nothing more. None for anything else,
-    which the line-by-line reader then reads or refuses naming its line. 1.3 M faces: 10 s → 2 s."""
+    """The common file read in bulk (numpy parses the numbers; text_table): no comment after the
+    header, three numbers a vertex line, only triangles without colours, nothing more. None for
+    anything else, which the line-by-line reader then reads or refuses naming its line. 1.3 M
+    faces: 10 s → 2 s."""
     data = path.read_bytes().split(b"\n")[after:]
     rows = [r for r in data if r.strip()]
     if len(rows) != nv + nf or any(b"#" in r for r in rows):
         return None
-    try:
-        V = np.array(b" ".join(rows[:nv]).split(), dtype=np.float64)
-        F = np.array(b" ".join(rows[nv:]).split(), dtype=np.int64)
-    except (ValueError, OverflowError):  # numpy: a number beyond int64
+    xyz = table(rows[:nv], [np.float64] * 3)
+    face = table(rows[nv:], [np.int64] * 4)
+    if xyz is None or face is None or np.any(face[0] != 3):
         return None
-    if V.size != 3 * nv or F.size != 4 * nf or np.any(F[::4] != 3):
-        return None
-    F = F.reshape(nf, 4)[:, 1:]
+    F = np.stack(face[1:], axis=1)
     if nf and (F.min() < 0 or F.max() >= nv):
         return None
-    return V.reshape(nv, 3), F
+    return np.stack(xyz, axis=1), F
 
 
 def read_off(path) -> tuple[np.ndarray, np.ndarray]:
