@@ -139,8 +139,9 @@ def test_bench_contact_cases_run_on_every_backend(backend, monkeypatch):
         assert (r["contact_share"] is None) == (backend != "cpu")
 
 
-def test_bad_option_exits_2():
-    r = runner.invoke(app, ["bench", "--sizes", "abc"])
+@pytest.mark.parametrize("sizes", ["abc", "3,,4", "600,", ""])
+def test_bad_option_exits_2(sizes):
+    r = runner.invoke(app, ["bench", "--sizes", sizes])
     assert r.exit_code == 2
     assert "expected comma-separated integers" in r.output
 

@@ -307,7 +307,7 @@ def bench(
     from .tled.solver import MAX_STEPS
 
     try:
-        n = [int(s) for s in sizes.split(",") if s.strip()]
+        n = [int(s) for s in sizes.split(",")]  # an empty entry ("3,,4", "3,") is a typo: refused
     except ValueError:
         _fail(InputError(f"--sizes {sizes!r}: expected comma-separated integers"), 2)
     if steps < 1 or large_steps < 1 or not n or any(v < 1 for v in n):
