@@ -4,14 +4,18 @@ or raises a typed pliant error (InputError; InstabilityError once running) whose
 line naming the file. Any other exception, a crash or a hang fails. A fixed budget of examples,
 derandomized, so that CI runs the same cases every time."""
 
+import atexit
 import math
 import os
 import re
+import shutil
 import tempfile
+import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -108,9 +112,12 @@ def _loads_or_fails_by_name(load, p: Path):
         pass
 
 
-def _write(text: str, suffix: str) -> Path:
-    d = Path(tempfile.mkdtemp(prefix="pliant-fuzz-"))
-    p = d / f"case{suffix}"
+_CASES = Path(tempfile.mkdtemp(prefix="pliant-fuzz-"))  # one folder a process, each case overwriting
+atexit.register(shutil.rmtree, _CASES, ignore_errors=True)
+
+
+def _write(text: str | bytes, suffix: str) -> Path:
+    p = _CASES / f"case{suffix}"
     p.write_text(text, encoding="utf-8", errors="surrogatepass") if isinstance(text, str) else p.write_bytes(
         text
     )
@@ -330,7 +337,7 @@ def _polydata_seeds() -> list[bytes]:
 
     from test_vtk_polydata import DATA, _binary_file
 
-    d = Path(tempfile.mkdtemp(prefix="pliant-fuzz-"))
+    d = _CASES
     _binary_file(
         d / "b.vtk", "float", b"FIELD FieldData 1\nlabels 1 2 int\n" + struct.pack(">2i", 7, 9) + b"\n"
     )
@@ -534,3 +541,53 @@ def test_ply_text_reads_as_its_lines_or_fails_by_name(text):
     from pliant.io import ply
 
     _bulk_agrees_with_lines(text, ".ply", ply, "_ascii_in_bulk")
+
+
+# --- volume meshes in meshio's text formats -------------------------------------------------------
+def _meshio_text(suffix: str, **kw) -> str:
+    """Two tets (with gmsh tags where the format keeps them) in the text meshio writes for suffix."""
+    import meshio
+
+    X = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], float)
+    data = (
+        {"gmsh:physical": [np.array([1, 2])], "gmsh:geometrical": [np.array([1, 1])]}
+        if ".msh" in suffix
+        else {}
+    )
+    p = _CASES / f"base{suffix}"
+    meshio.write(p, meshio.Mesh(X, [("tetra", np.array([[0, 1, 2, 3], [1, 2, 3, 4]]))], cell_data=data), **kw)
+    return p.read_text()
+
+
+_VOLUME_BASES = {
+    ".msh": [_meshio_text(".msh", file_format="gmsh22", binary=False), _meshio_text(".msh", binary=False)],
+    ".vtk": [_meshio_text(".vtk", binary=False)],
+    ".vtu": [_meshio_text(".vtu", binary=False)],
+    ".mesh": [_meshio_text(".mesh")],
+    ".inp": [_meshio_text(".inp")],
+}
+
+
+@pytest.mark.parametrize(
+    "suffix, base",
+    [(s, b) for s, bases in _VOLUME_BASES.items() for b in bases],
+    ids=["gmsh22", "gmsh41", "vtk", "vtu", "medit", "abaqus"],
+)
+def test_volume_mesh_texts_read_or_fail_by_name(suffix, base):
+    """The property for volume meshes: read_volume_mesh gives nodes (N, 3) and tets (M, 4) that
+    index them, or an InputError of one line naming the file (meshio's own failures included)."""
+
+    @BUDGET
+    @given(surface_texts(base))
+    def reads_or_fails(text):
+        p = _write(text, suffix)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # coincident nodes, meshio's "only for debugging"
+                X, T, _ = pl.io.read_volume_mesh(p)
+        except InputError as e:
+            _check_error(e, p)
+            return
+        assert X.shape[1:] == (3,) and T.shape[1:] == (4,) and T.min() >= 0 and T.max() < len(X)
+
+    reads_or_fails()

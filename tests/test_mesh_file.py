@@ -223,3 +223,83 @@ def test_nodes_written_once_per_element_corner_are_warned_of(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         pl.io.read_volume_mesh(SPHERE)
+
+
+_INP_NODES = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n"
+_VTK_NO_POINTS = (
+    "# vtk DataFile Version 5.1\nno points\nASCII\nDATASET UNSTRUCTURED_GRID\nCELLS 2 4\n"
+    "OFFSETS vtktypeint64\n0\n4\nCONNECTIVITY vtktypeint64\n0\n1\n2\n3\nCELL_TYPES 1\n10\n"
+)
+_GMSH41_CUT = (
+    "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 0 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n"
+    "0 0 1\n$EndNodes\n$Elements\n1 1 1 1\n3 1 4 1\n1 1 2\n"
+)
+
+
+@pytest.mark.parametrize(
+    "name, text, says",
+    [
+        ("empty.inp", _INP_NODES + "*ELEMENT, TYPE=C3D4\n", "its tetra blocks hold no cells"),
+        (
+            "nameless.inp",
+            _INP_NODES + "*ELEMENT\n1, 1, 2, 3, 4\n",
+            "(RuntimeError: TYPE not found in *ELEMENT)",
+        ),
+        ("cut.msh", _GMSH41_CUT, "a block of tetra cells holds 2 node numbers in rows of 2; expected 4"),
+        ("nopoints.vtk", _VTK_NO_POINTS, "no points; expected (N, 3) node coordinates"),
+    ],
+    ids=[
+        "abaqus-empty-element-block",
+        "abaqus-element-without-type",
+        "gmsh41-cut-in-a-cell",
+        "vtk-no-points",
+    ],
+)
+def test_malformed_volume_mesh_files_are_refused_on_one_line(tmp_path, name, text, says):
+    """Found by fuzzing meshio's formats (mutated word by word and line by line): these ended in
+    numpy's AxisError, ValueError ("cannot reshape array of size 2 into shape (4)") and IndexError,
+    or in a message of three lines (meshio's own, holding newlines)."""
+    p = tmp_path / name
+    p.write_text(text)
+    with pytest.raises(pl.errors.MeshError) as e:
+        pl.io.read_volume_mesh(p)
+    assert says in str(e.value) and str(p) in str(e.value) and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize(
+    "cut",
+    [-3, -12, 40, "points"],
+    ids=["in-a-cell-section", "in-a-header", "a-bracket-short", "before-points"],
+)
+def test_a_truncated_ansys_msh_is_refused_and_does_not_hang(tmp_path, cut: int | str):
+    """meshio's ANSYS / Fluent reader (a .msh that is not gmsh's) skips to a closing bracket one
+    character at a time and, once the file has ended, kept reading for ever. A truncated file, or
+    one with a bracket short, is now refused. The reading runs on a thread given 60 s, so that a
+    hang fails this test instead of stalling the suite."""
+    import threading
+
+    whole = meshio.Mesh(
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float), [("tetra", np.array([[0, 1, 2, 3]]))]
+    )
+    p = tmp_path / "fluent.msh"
+    meshio.write(p, whole, file_format="ansys", binary=False)
+    text = p.read_text()
+    if cut == "points":  # the points section's first line, then nothing
+        text = text[: text.index("\n", text.index("(10 (1")) + 1]
+    else:
+        text = text[:cut] if cut < 0 else text.replace(")", "", 1)
+    p.write_text(text)
+    got: list[BaseException | None] = []
+
+    def read():
+        try:
+            pl.io.read_volume_mesh(p)
+            got.append(None)
+        except BaseException as e:  # noqa: BLE001 (handed to the test's thread)
+            got.append(e)
+
+    t = threading.Thread(target=read, daemon=True)
+    t.start()
+    t.join(60)
+    assert got, "read_volume_mesh did not return in 60 s"
+    assert isinstance(got[0], pl.errors.MeshError) and str(p) in str(got[0]), got[0]

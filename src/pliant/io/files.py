@@ -39,11 +39,49 @@ def file_problem(path) -> str | None:
     return None
 
 
+class _EndOfFileRaises(io.BufferedReader):
+    """A file that raises meshio's ReadError when read again at its end: meshio's ANSYS reader
+    skips to a closing bracket one character at a time, and to the next line of data one line at a
+    time, for ever once the file has ended (a truncated file, or a bracket short). The first read
+    at the end gives b"" as usual (the reader's own loop stops on it)."""
+
+    ended = False
+
+    def _at_end(self, data: bytes, size: int | None) -> bytes:
+        if data or size == 0:
+            return data
+        if self.ended:
+            from meshio import ReadError
+
+            raise ReadError("the file ends inside a section (truncated, or a bracket short)")
+        self.ended = True
+        return data
+
+    def read(self, size: int | None = -1) -> bytes:
+        return self._at_end(super().read(size), size)
+
+    def readline(self, size: int | None = -1) -> bytes:
+        return self._at_end(super().readline(size), size)
+
+
+def _meshio_read(path: Path):
+    """meshio.read, a .msh told apart by its first word: gmsh's ``$MeshFormat``, else ANSYS /
+    Fluent's, read through _EndOfFileRaises."""
+    import meshio
+
+    if path.suffix.lower() != ".msh":
+        return meshio.read(path)
+    with open(path, "rb") as f:
+        gmsh = f.read(256).lstrip().startswith(b"$MeshFormat")
+    if gmsh:
+        return meshio.read(path, file_format="gmsh")
+    with _EndOfFileRaises(io.FileIO(path, "rb")) as f:
+        return meshio.read(f, file_format="ansys")
+
+
 def read_meshio(path, what: str = "mesh"):
     """``meshio.read(path)`` with every failure (exceptions, meshio's printed errors and its
     ``sys.exit``) turned into one MeshError naming the file and the reason."""
-    import meshio
-
     path = Path(path)
     problem = file_problem(path)
     if problem:
@@ -51,14 +89,15 @@ def read_meshio(path, what: str = "mesh"):
     sink = io.StringIO()
     try:
         with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-            return meshio.read(path)
+            return _meshio_read(path)
     except (Exception, SystemExit) as e:
         said = " ".join(sink.getvalue().split())
         reason = (
             f"{type(e).__name__}: {e}"
-            if str(e) and not isinstance(e, SystemExit)
+            if str(e).strip() and not isinstance(e, SystemExit)
             else (said or type(e).__name__)
         )
+        reason = " ".join(reason.split())  # one line (meshio's messages may hold newlines)
         raise MeshError(f"{path}: cannot read as a {what} ({reason[:300]})") from None
 
 

@@ -29,6 +29,10 @@ LINEARIZED = {
 }
 # Cells simulated: tetrahedra, and the cells split into them.
 VOLUME_CELLS = {"tetra", "tetra10", *SPLIT_CELLS, *LINEARIZED}
+# Nodes a volume cell (VTK's and meshio's cell types).
+_CELL_NODES = {"tetra": 4, "tetra10": 10, "hexahedron": 8, "wedge": 6, "pyramid": 5}
+_CELL_NODES |= {"hexahedron20": 20, "hexahedron27": 27, "wedge15": 15, "wedge18": 18, "pyramid13": 13}
+_CELL_NODES |= {"pyramid14": 14}
 
 
 class VolumeMeshFile(NamedTuple):
@@ -85,7 +89,7 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
             f"{path}: no volume cells (cell types: {', '.join(kinds)}); expected 'tetra' cells (or "
             "linear hexahedra, wedges, pyramids; surface meshes go through the mesh pipeline)"
         )
-    X = mesh_points(mesh)
+    X = mesh_points(mesh, path)
     tets, owner, split = _volume_tets(path, mesh, X, blocks)
     sets = {
         k: np.nonzero(np.isin(owner, cells))[0]
@@ -118,12 +122,33 @@ def _warn_coincident(path: Path, X: np.ndarray, tets: np.ndarray) -> None:
         )
 
 
-def mesh_points(mesh) -> np.ndarray:
-    """A meshio mesh's points as (N, 3) floats [file units] (2-D points get z = 0)."""
-    X = np.asarray(mesh.points, dtype=float)
-    if X.ndim != 2 or X.shape[1] < 3:
-        X = np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
-    return X[:, :3]
+def mesh_points(mesh, source) -> np.ndarray:
+    """A meshio mesh's points as (N, 3) floats [file units] (2-D points get z = 0; a file without
+    points gives none, and its cells then refer to nodes it lacks). MeshError naming ``source``
+    for points of another shape."""
+    X = np.asarray(mesh.points if mesh.points is not None else np.zeros((0, 3)), dtype=float)
+    if X.size == 0:
+        return np.zeros((0, 3))
+    if X.ndim != 2 or not 1 <= X.shape[1] <= 3:
+        shape = f"points of shape {X.shape}" if X.ndim else "no points"
+        raise MeshError(f"{source}: {shape}; expected (N, 3) node coordinates")
+    return np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
+
+
+def cell_array(source, block) -> np.ndarray:
+    """A meshio volume cell block's node numbers (cells, nodes a cell) int64; an empty block as
+    (0, nodes a cell). MeshError naming ``source`` for a block of another shape (meshio reads some
+    truncated files into one)."""
+    width = _CELL_NODES[block.type]
+    data = np.asarray(block.data, np.int64)
+    if data.size == 0:
+        return data.reshape(0, width)
+    if data.ndim != 2 or data.shape[1] != width:
+        raise MeshError(
+            f"{source}: a block of {block.type} cells holds {data.size} node numbers in rows of "
+            f"{data.shape[-1]}; expected {width} a cell (a truncated or malformed file?)"
+        )
+    return data
 
 
 def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
@@ -135,7 +160,9 @@ def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
     split: dict[str, int] = {}
     n = 0
     for i, c in blocks:
-        data = np.asarray(c.data, np.int64)
+        data = cell_array(path, c)
+        if data.size == 0:  # an empty block (an Abaqus *ELEMENT line with no elements after it)
+            continue
         bad = np.nonzero(np.any((data < 0) | (data >= len(X)), axis=1))[0]
         if bad.size:  # meshio reads such files as they are
             k = int(bad[0])
@@ -154,6 +181,9 @@ def _volume_tets(path: Path, mesh, X: np.ndarray, blocks):
         tets.append(t)
         owner.append(o + n)
         n += len(data)
+    if not tets:
+        kinds = ", ".join(sorted({c.type for _, c in blocks}))
+        raise MeshError(f"{path}: its {kinds} blocks hold no cells; expected at least one volume element")
     return np.concatenate(tets), np.concatenate(owner), split
 
 

@@ -66,16 +66,16 @@ def _file_cells(path: Path, kind: str, what: str) -> tuple[np.ndarray, np.ndarra
     """A mesh file's nodes (N, 3) and its cells of ``kind`` (meshio's name), in file order: the
     element numbering the model's sets use. A file whose volume cells are of another kind is
     refused (NiftySim reads the type the model names)."""
-    from .mesh import SURFACE_CELLS, mesh_points
+    from .mesh import SURFACE_CELLS, cell_array, mesh_points
     from .vtk_grid import read_meshio_or_grid
 
     mesh = read_meshio_or_grid(path, "volume mesh")
     other = sorted({c.type for c in mesh.cells} - {kind} - SURFACE_CELLS)
-    blocks = [np.asarray(c.data, np.int64) for c in mesh.cells if c.type == kind]
+    blocks = [cell_array(path, c) for c in mesh.cells if c.type == kind]
     if other or not blocks:
         found = ", ".join(sorted({c.type for c in mesh.cells})) or "none"
         raise MeshError(f"{path}: cells {found}; {what} expects {kind} cells only")
-    return mesh_points(mesh), np.concatenate(blocks)
+    return mesh_points(mesh, path), np.concatenate(blocks)
 
 
 def _transformed(X: np.ndarray, el, f: str, key: str) -> np.ndarray:
