@@ -544,43 +544,51 @@ def test_ply_text_reads_as_its_lines_or_fails_by_name(text):
 
 
 # --- volume meshes in meshio's text formats -------------------------------------------------------
-def _meshio_text(suffix: str, **kw) -> str:
-    """Two tets (with gmsh tags where the format keeps them) in the text meshio writes for suffix."""
+def _meshio_text(suffix: str, cells: str = "tetra", **kw) -> str:
+    """Two tets, or a tet's four faces (cells="triangle"), with gmsh tags where the format keeps
+    them, in the text meshio writes for suffix."""
     import meshio
 
     X = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], float)
-    data = (
-        {"gmsh:physical": [np.array([1, 2])], "gmsh:geometrical": [np.array([1, 1])]}
-        if ".msh" in suffix
-        else {}
-    )
+    rows = {"tetra": [[0, 1, 2, 3], [1, 2, 3, 4]], "triangle": [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]}[
+        cells
+    ]
+    tags = {"gmsh:physical": [np.ones(len(rows), int)], "gmsh:geometrical": [np.ones(len(rows), int)]}
     p = _CASES / f"base{suffix}"
-    meshio.write(p, meshio.Mesh(X, [("tetra", np.array([[0, 1, 2, 3], [1, 2, 3, 4]]))], cell_data=data), **kw)
+    mesh = meshio.Mesh(X, [(cells, np.array(rows))], cell_data=tags if ".msh" in suffix else {})
+    meshio.write(p, mesh, **kw)
     return p.read_text()
 
 
-_VOLUME_BASES = {
-    ".msh": [_meshio_text(".msh", file_format="gmsh22", binary=False), _meshio_text(".msh", binary=False)],
-    ".vtk": [_meshio_text(".vtk", binary=False)],
-    ".vtu": [_meshio_text(".vtu", binary=False)],
-    ".mesh": [_meshio_text(".mesh")],
-    ".inp": [_meshio_text(".inp")],
-}
+_MESHIO_BASES = [
+    (fmt, suffix, cells, _meshio_text(suffix, cells, **kw))
+    for cells in ("tetra", "triangle")
+    for fmt, suffix, kw in [
+        ("gmsh22", ".msh", {"file_format": "gmsh22", "binary": False}),
+        ("ansys", ".msh", {"file_format": "ansys", "binary": False}),
+        ("vtk", ".vtk", {"binary": False}),
+        ("vtu", ".vtu", {"binary": False}),
+        ("medit", ".mesh", {}),
+        ("abaqus", ".inp", {}),
+    ]
+]
 
 
 @pytest.mark.parametrize(
-    "suffix, base",
-    [(s, b) for s, bases in _VOLUME_BASES.items() for b in bases],
-    ids=["gmsh22", "gmsh41", "vtk", "vtu", "medit", "abaqus"],
+    "suffix, cells, base", [b[1:] for b in _MESHIO_BASES], ids=[f"{b[0]}-{b[2]}" for b in _MESHIO_BASES]
 )
-def test_volume_mesh_texts_read_or_fail_by_name(suffix, base):
-    """The property for volume meshes: read_volume_mesh gives nodes (N, 3) and tets (M, 4) that
-    index them, or an InputError of one line naming the file (meshio's own failures included)."""
+def test_meshio_texts_read_or_fail_by_name(suffix, cells, base):
+    """The property for meshes in meshio's formats: read_volume_mesh gives nodes (N, 3) and tets
+    (M, 4) that index them, read_surface finite vertices and triangles that index them; or each an
+    InputError of one line naming the file (meshio's own failures included), and no hang."""
 
     @BUDGET
     @given(surface_texts(base))
     def reads_or_fails(text):
         p = _write(text, suffix)
+        if cells == "triangle":
+            _surface_reads_or_fails_by_name(p)
+            return
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # coincident nodes, meshio's "only for debugging"

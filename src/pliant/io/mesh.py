@@ -29,10 +29,10 @@ LINEARIZED = {
 }
 # Cells simulated: tetrahedra, and the cells split into them.
 VOLUME_CELLS = {"tetra", "tetra10", *SPLIT_CELLS, *LINEARIZED}
-# Nodes a volume cell (VTK's and meshio's cell types).
+# Nodes a cell (VTK's and meshio's cell types): the volume cells, and the surface cells surfaces take.
 _CELL_NODES = {"tetra": 4, "tetra10": 10, "hexahedron": 8, "wedge": 6, "pyramid": 5}
 _CELL_NODES |= {"hexahedron20": 20, "hexahedron27": 27, "wedge15": 15, "wedge18": 18, "pyramid13": 13}
-_CELL_NODES |= {"pyramid14": 14}
+_CELL_NODES |= {"pyramid14": 14, "triangle": 3, "quad": 4}
 
 
 class VolumeMeshFile(NamedTuple):
@@ -136,9 +136,9 @@ def mesh_points(mesh, source) -> np.ndarray:
 
 
 def cell_array(source, block) -> np.ndarray:
-    """A meshio volume cell block's node numbers (cells, nodes a cell) int64; an empty block as
-    (0, nodes a cell). MeshError naming ``source`` for a block of another shape (meshio reads some
-    truncated files into one)."""
+    """A meshio cell block's (volume cells', triangles' or quads') node numbers (cells, nodes a
+    cell) int64; an empty block as (0, nodes a cell). MeshError naming ``source`` for a block of
+    another shape (meshio reads some truncated files into one)."""
     width = _CELL_NODES[block.type]
     data = np.asarray(block.data, np.int64)
     if data.size == 0:

@@ -109,17 +109,18 @@ def read_surface(path) -> tuple[np.ndarray, np.ndarray]:
             "vtkPolyDataWriter), .stl, .ply, .obj or .off surface"
         )
     else:
+        from ..io.mesh import cell_array, mesh_points
         from ..io.vtk_grid import read_meshio_or_grid
 
         m = read_meshio_or_grid(path, "surface mesh")
-        tris = [c.data for c in m.cells if c.type == "triangle"]
-        quads = [c.data for c in m.cells if c.type == "quad"]
+        tris = [cell_array(path, c) for c in m.cells if c.type == "triangle"]
+        quads = [cell_array(path, c) for c in m.cells if c.type == "quad"]
         parts = tris + [q[:, [0, 1, 2]] for q in quads] + [q[:, [0, 2, 3]] for q in quads]
         if not parts:
             raise MeshError(
                 f"{path}: no triangles (cell types: {', '.join(sorted({c.type for c in m.cells})) or 'none'})"
             )
-        V, F = np.asarray(m.points, float)[:, :3], np.concatenate(parts).astype(np.int64)
+        V, F = mesh_points(m, path), np.concatenate(parts)
     if len(V) == 0 or len(F) == 0:
         raise MeshError(f"{path}: empty mesh ({len(V)} vertices, {len(F)} faces)")
     if F.min() < 0 or F.max() >= len(V):
