@@ -457,6 +457,25 @@ def test_state_load_checks_values(tmp_path):
 
 
 @pytest.mark.parametrize(
+    "key, value", [("grip_tool", 5), ("grip_tool", -2), ("grip_tool", 0.5), ("grip_at", np.nan)]
+)
+def test_state_load_checks_the_grip_state(tmp_path, key, value):
+    """A saved grasp state names, per contact node, the tool holding it: a number past the model's
+    tools went into the engine, which reads that tool's jaws by it (past the end of its array)."""
+    sim, _ = _sim(tool=True)
+    sim.save(tmp_path / "s.npz")
+    with np.load(tmp_path / "s.npz") as d:
+        data = {k: d[k] for k in d.files}
+    assert data["grip_tool"].size > 0 and data["grip_at"].size == 3 * data["grip_tool"].size
+    data[key] = data[key].astype(float)
+    data[key].flat[0] = value
+    np.savez(tmp_path / "bad.npz", **data)
+    with pytest.raises(pl.InputError, match=r"grip state holds tool numbers outside -1\.\.0"):
+        sim.load(tmp_path / "bad.npz")
+    sim.load(tmp_path / "s.npz")  # the file as saved still loads
+
+
+@pytest.mark.parametrize(
     "call, text",
     [
         (lambda s: s.run(steps=2**70), "expected 0 to"),

@@ -739,6 +739,27 @@ class State:
         )  # engine layout, same model
         atomic_write(path, lambda tmp: np.savez(tmp, **data), "state file")
 
+    def _set_grip(self, path: Path, tool: np.ndarray, at: np.ndarray) -> None:
+        """A saved grasp state: per contact node the tool holding it (−1: none; whole numbers below
+        the model's tool count) and where it is held (finite positions [m])."""
+        n = len(self.model.tools)
+        try:
+            held = np.asarray(tool, dtype=np.float64).ravel()
+            where = np.asarray(at, dtype=np.float64).ravel()
+        except (TypeError, ValueError) as e:
+            raise InputError(f"{path}: grip state: {e}") from None
+        if not (
+            np.all(held == np.round(held)) and np.all((held >= -1) & (held < n)) and np.isfinite(where).all()
+        ):
+            raise InputError(
+                f"{path}: grip state holds tool numbers outside -1..{n - 1} (this model has {n} tools) or "
+                "non-finite positions: not a state of this model"
+            )
+        try:
+            self._s.set_grip(held.astype(np.int32).tolist(), where.tolist())
+        except (TypeError, ValueError) as e:
+            raise InputError(f"{path}: {e}") from None
+
     def load(self, path):
         """Restore from a file written by :meth:`save` of the same model. A missing, corrupt,
         truncated or foreign file, or one saved from another model, raises InputError naming it."""
@@ -788,12 +809,7 @@ class State:
             except (TypeError, ValueError) as e:
                 raise InputError(f"{path}: {e}") from None
         if "grip_tool" in data and "grip_at" in data:
-            try:
-                self._s.set_grip(
-                    data["grip_tool"].astype(np.int32).ravel().tolist(), data["grip_at"].ravel().tolist()
-                )
-            except (TypeError, ValueError) as e:
-                raise InputError(f"{path}: {e}") from None
+            self._set_grip(path, data["grip_tool"], data["grip_at"])
         du = self.model.to_engine_nodes(self._check(data["du"], f"{path}: du")) if "du" in data else None
         self._s.set_u(u)
         self._s.set_u_prev(u_prev)  # and the increment u − u⁻ (files saved before it was kept)
