@@ -2,7 +2,8 @@
 
 from .builder import ModelBuilder
 from .curves import Constant, LoadCurve, Ramp, SmoothRamp, Hilly, Step, Table
-from .model import Model, State
+from .model import Model
+from .state import State
 from .report import ContactReport, PairHistory, RelaxInfo, RunInfo, ToolHistory
 from .smoothing import StrainSmoothing
 from .solver import Simulation, Solver

@@ -18,7 +18,8 @@ from .._core import RunStatus
 from ..checks import as_real, finite_number, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .anp import anp_stabilization
-from .model import Model, State
+from .model import Model
+from .state import State
 from .report import ContactReport, PairHistory, RelaxInfo, RunInfo, ToolHistory, tool_force
 
 __all__ = ["Solver", "RunInfo", "RelaxInfo", "Simulation", "MAX_STEPS"]
