@@ -110,7 +110,8 @@ def _ascii_corners_in_bulk(path: Path) -> np.ndarray | None:
     triangle facets of seven lines each, their keywords in lower case, then one line ``endsolid
     [name]``; each facet's 21 words checked at their places and its lines where the line-by-line
     reader looks, so that the file reads as that reader reads it. None for anything else, which the
-    line-by-line reader then reads or refuses naming its line. 1.3 M facets: 18 s → 8 s."""
+    line-by-line reader then reads or refuses naming its line. 1.3 M facets (390 MB), on a loaded
+    machine: 18–23 s line by line, 11–13 s in bulk, of which the check of the lines takes 3–4 s."""
     data = path.read_bytes()
     head = data.find(b"\n")  # the end of the solid's line
     stop = data.find(b"\n", data.rfind(b"endfacet"))  # the end of the last facet's line
