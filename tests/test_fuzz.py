@@ -112,6 +112,29 @@ def _loads_or_fails_by_name(load, p: Path):
         pass
 
 
+@pytest.fixture(autouse=True)
+def _a_hang_fails():
+    """A test of CI's budget that runs past 10 minutes fails (TimeoutError) instead of stalling the
+    suite: a reader that never returns is one of the failures these tests look for. Not set when
+    exploring (PLIANT_FUZZ_EXAMPLES), whose budget is the developer's."""
+    import signal
+
+    if _EXPLORE or not hasattr(signal, "SIGALRM"):
+        yield
+        return
+
+    def hung(signum, frame):
+        raise TimeoutError("a fuzz test ran past 600 s: a reader hangs on one of its cases")
+
+    old = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(600)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+
+
 _CASES = Path(tempfile.mkdtemp(prefix="pliant-fuzz-"))  # one folder a process, each case overwriting
 atexit.register(shutil.rmtree, _CASES, ignore_errors=True)
 
