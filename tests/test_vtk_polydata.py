@@ -231,3 +231,20 @@ def test_a_polydata_scene_mesh_is_tetrahedralized(tmp_path):
     e1, e2, e3 = (X[T[:, k]] - X[T[:, 0]] for k in (1, 2, 3))
     volume = np.einsum("ij,ij->i", np.cross(e1, e2), e3).sum() / 6
     assert volume == pytest.approx(1.0, rel=5e-3)
+
+
+def test_a_signalling_nan_point_is_refused_without_a_numpy_warning(tmp_path):
+    """A binary float whose bits are a signalling NaN made numpy print "RuntimeWarning: invalid
+    value encountered in cast" (found by fuzzing) before the refusal of the non-finite point; the
+    refusal alone is shown now."""
+    import warnings
+
+    p = tmp_path / "snan.vtk"
+    _binary_file(p)
+    data = p.read_bytes()
+    first = data.index(b"POINTS 8 float\n") + len(b"POINTS 8 float\n")
+    p.write_bytes(data[:first] + struct.pack(">I", 0x7FA00000) + data[first + 4 :])  # point 0's x
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(MeshError, match="non-finite vertex"):
+            pl.mesh.read_surface(p)

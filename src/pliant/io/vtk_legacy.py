@@ -74,7 +74,8 @@ class Reader:
             self.i += count * size
             if self.data[self.i : self.i + 1] == b"\n":  # the writer ends binary data with a newline
                 self.i += 1
-            return out.astype(dtype)
+            with np.errstate(invalid="ignore"):  # a signalling NaN's bits: NaN, refused by the callers
+                return out.astype(dtype)
         words: list[str] = []
         while len(words) < count:
             text = self.raw_line()
@@ -161,7 +162,8 @@ def points(reader: Reader, binary: bool, words: list[str]) -> np.ndarray:
     if len(words) < 3:
         raise reader.fail("POINTS: expected 'POINTS n type'")
     n = count(reader, words[1], "POINTS")
-    return reader.array(binary, 3 * n, words[2], "POINTS").astype(float).reshape(n, 3)
+    with np.errstate(invalid="ignore"):  # as in Reader.array
+        return reader.array(binary, 3 * n, words[2], "POINTS").astype(float).reshape(n, 3)
 
 
 def dataset_of(path) -> str | None:
