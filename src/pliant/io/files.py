@@ -42,8 +42,9 @@ def file_problem(path) -> str | None:
 class _EndOfFileRaises(io.BufferedReader):
     """A file that raises meshio's ReadError when read again at its end: meshio's ANSYS reader
     skips to a closing bracket one character at a time, and to the next line of data one line at a
-    time, for ever once the file has ended (a truncated file, or a bracket short). The first read
-    at the end gives b"" as usual (the reader's own loop stops on it)."""
+    time, for ever once the file has ended (a truncated file, or a bracket short); its PLY reader
+    skips blank lines so. The first read at the end gives b"" as usual (a reader's own loop stops
+    on it)."""
 
     ended = False
 
@@ -53,7 +54,7 @@ class _EndOfFileRaises(io.BufferedReader):
         if self.ended:
             from meshio import ReadError
 
-            raise ReadError("the file ends inside a section (truncated, or a bracket short)")
+            raise ReadError("the file ends where its reader expects more (truncated, or a bracket short?)")
         self.ended = True
         return data
 
@@ -66,9 +67,13 @@ class _EndOfFileRaises(io.BufferedReader):
 
 def _meshio_read(path: Path):
     """meshio.read, a .msh told apart by its first word: gmsh's ``$MeshFormat``, else ANSYS /
-    Fluent's, read through _EndOfFileRaises."""
+    Fluent's; ANSYS and PLY (whose header reader skips blank lines for ever at the end of a file)
+    read through _EndOfFileRaises."""
     import meshio
 
+    if path.suffix.lower() == ".ply":
+        with _EndOfFileRaises(io.FileIO(path, "rb")) as f:
+            return meshio.read(f, file_format="ply")
     if path.suffix.lower() != ".msh":
         return meshio.read(path)
     with open(path, "rb") as f:
