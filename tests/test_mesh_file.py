@@ -234,6 +234,11 @@ _GMSH41_CUT = (
     "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 0 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n"
     "0 0 1\n$EndNodes\n$Elements\n1 1 1 1\n3 1 4 1\n1 1 2\n"
 )
+_TECPLOT_HUGE = (  # meshio's Tecplot reader keeps node numbers as Python ints, of any size
+    'VARIABLES = "X", "Y", "Z"\nZONE NODES = 4, ELEMENTS = 1,\n'
+    "DATAPACKING = BLOCK, ZONETYPE = FETETRAHEDRON\n"
+    "0.0 1.0 0.0 0.0\n0.0 0.0 1.0 0.0\n0.0 0.0 0.0 1.0\n99999999999999999999 2 3 4\n"
+)
 
 
 @pytest.mark.parametrize(
@@ -247,18 +252,20 @@ _GMSH41_CUT = (
         ),
         ("cut.msh", _GMSH41_CUT, "a block of tetra cells holds 2 node numbers in rows of 2; expected 4"),
         ("nopoints.vtk", _VTK_NO_POINTS, "no points; expected (N, 3) node coordinates"),
+        ("huge.dat", _TECPLOT_HUGE, "tetra node numbers unreadable (Python int too large"),
     ],
     ids=[
         "abaqus-empty-element-block",
         "abaqus-element-without-type",
         "gmsh41-cut-in-a-cell",
         "vtk-no-points",
+        "tecplot-index-beyond-64-bits",
     ],
 )
 def test_malformed_volume_mesh_files_are_refused_on_one_line(tmp_path, name, text, says):
     """Found by fuzzing meshio's formats (mutated word by word and line by line): these ended in
-    numpy's AxisError, ValueError ("cannot reshape array of size 2 into shape (4)") and IndexError,
-    or in a message of three lines (meshio's own, holding newlines)."""
+    numpy's AxisError, ValueError ("cannot reshape array of size 2 into shape (4)"), IndexError and
+    OverflowError, or in a message of three lines (meshio's own, holding newlines)."""
     p = tmp_path / name
     p.write_text(text)
     with pytest.raises(pl.errors.MeshError) as e:
@@ -276,8 +283,6 @@ def test_a_truncated_ansys_msh_is_refused_and_does_not_hang(tmp_path, cut: int |
     character at a time and, once the file has ended, kept reading for ever. A truncated file, or
     one with a bracket short, is now refused. The reading runs on a thread given 60 s, so that a
     hang fails this test instead of stalling the suite."""
-    import threading
-
     whole = meshio.Mesh(
         np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float), [("tetra", np.array([[0, 1, 2, 3]]))]
     )
@@ -289,6 +294,15 @@ def test_a_truncated_ansys_msh_is_refused_and_does_not_hang(tmp_path, cut: int |
     else:
         text = text[:cut] if cut < 0 else text.replace(")", "", 1)
     p.write_text(text)
+    _refused_in_time(p)
+
+
+def _refused_in_time(p: Path) -> None:
+    """read_volume_mesh(p) raises a MeshError naming p. It runs on a thread given 60 s (a read of
+    these few hundred bytes takes milliseconds), so that a reader that loops for ever fails the
+    test instead of stalling the suite."""
+    import threading
+
     got: list[BaseException | None] = []
 
     def read():
@@ -303,3 +317,113 @@ def test_a_truncated_ansys_msh_is_refused_and_does_not_hang(tmp_path, cut: int |
     t.join(60)
     assert got, "read_volume_mesh did not return in 60 s"
     assert isinstance(got[0], pl.errors.MeshError) and str(p) in str(got[0]), got[0]
+
+
+_TWO_TETS = meshio.Mesh(
+    np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], float),
+    [("tetra", np.array([[0, 1, 2, 3], [1, 2, 3, 4]]))],
+)
+
+
+@pytest.mark.parametrize(
+    "fmt, suffix, after",
+    [
+        ("mdpa", ".mdpa", "Begin Nodes"),
+        ("nastran", ".bdf", "BEGIN BULK"),
+        ("tecplot", ".dat", "FETETRAHEDRON\n0"),
+        ("ply", ".ply", "ply\n"),
+    ],
+)
+def test_a_file_cut_short_in_a_format_whose_reader_loops_is_refused(tmp_path, fmt, suffix, after):
+    """meshio's Kratos, Nastran and Tecplot readers skip lines until a keyword, and its PLY
+    reader skips blank lines, for ever once the file has ended: a file that meshio itself wrote,
+    cut short (found by cutting each format's file at every byte; each cut here hangs
+    meshio.read), hung read_volume_mesh. Each is now refused by name."""
+    p = tmp_path / f"cut{suffix}"
+    meshio.write(p, _TWO_TETS, file_format=fmt, **({"binary": False} if fmt == "ply" else {}))
+    text = p.read_text()
+    p.write_text(text[: text.index(after) + len(after)])
+    _refused_in_time(p)
+
+
+@pytest.mark.parametrize("empty", [".node", ".ele"])
+@pytest.mark.parametrize("which", [".node", ".ele"])
+def test_a_tetgen_file_without_its_header_line_is_refused(tmp_path, empty, which):
+    """meshio's TetGen reader skips blank and comment lines for ever when a .node or .ele file
+    holds no header line (an empty file, or comments only): either file read by either name."""
+    meshio.write(tmp_path / "m.node", _TWO_TETS, file_format="tetgen")
+    (tmp_path / f"m{empty}").write_text("# only a comment\n\n")
+    _refused_in_time(tmp_path / f"m{which}")
+
+
+# Every format meshio writes that read_volume_mesh reads (suffix, meshio's writer keywords), in
+# ASCII and binary where both exist; the TetGen pair is cut in its .node file.
+_WRITTEN = [
+    (".inp", {}),
+    (".msh", {"file_format": "ansys", "binary": False}),
+    (".msh", {"file_format": "ansys", "binary": True}),
+    (".avs", {}),
+    (".f3grid", {"binary": False}),
+    (".f3grid", {"binary": True}),
+    (".msh", {"file_format": "gmsh22", "binary": False}),
+    (".msh", {"file_format": "gmsh22", "binary": True}),
+    (".msh", {"file_format": "gmsh", "binary": False}),
+    (".msh", {"file_format": "gmsh", "binary": True}),
+    (".mdpa", {}),
+    (".mesh", {}),
+    (".meshb", {}),
+    (".bdf", {}),
+    (".vol", {}),
+    (".post", {}),
+    (".su2", {}),
+    (".dat", {}),
+    (".vtk", {"binary": False}),
+    (".vtk", {"binary": True}),
+    (".vtu", {"binary": False}),
+    (".vtu", {"binary": True}),
+    (".xml", {}),
+    (".node", {}),
+]
+
+
+@pytest.mark.parametrize(
+    "suffix, kw",
+    _WRITTEN,
+    ids=[f"{kw.get('file_format', s[1:])}{'-binary' * kw.get('binary', 0)}" for s, kw in _WRITTEN],
+)
+def test_every_cut_of_a_written_file_reads_or_is_refused_by_name(tmp_path, suffix, kw):
+    """Two tets written by meshio, cut at every byte: each cut file reads as nodes (N, 3) and tets
+    that index them, or is refused by a one-line InputError naming it; never another exception,
+    and never a hang (the cuts run on a thread given 120 s, about 50 times what they take). This
+    is how the hanging readers above were found."""
+    import threading
+
+    p = tmp_path / f"two{suffix}"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # meshio's "only for debugging", "legacy format"
+        meshio.write(p, _TWO_TETS, **kw)
+    whole = p.read_bytes()
+    wrong: list[str] = []
+    done: list[int] = []
+
+    def cuts():
+        for cut in range(len(whole)):
+            p.write_bytes(whole[:cut])
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")  # coincident nodes and the like
+                    X, T, _ = pl.io.read_volume_mesh(p)
+                if not (X.shape[1:] == (3,) and T.shape[1:] == (4,) and (len(T) == 0 or T.max() < len(X))):
+                    wrong.append(f"cut {cut}: nodes {X.shape}, tets {T.shape}")
+            except pl.errors.InputError as e:
+                if str(p) not in str(e) or "\n" in str(e):
+                    wrong.append(f"cut {cut}: {e}")
+            except Exception as e:  # noqa: BLE001 (reported below)
+                wrong.append(f"cut {cut}: {type(e).__name__}: {e}")
+            done.append(cut)
+
+    t = threading.Thread(target=cuts, daemon=True)
+    t.start()
+    t.join(120)
+    assert len(done) == len(whole), f"the read of cut {len(done)} did not return"
+    assert not wrong, wrong[:5]

@@ -40,48 +40,83 @@ def file_problem(path) -> str | None:
 
 
 class _EndOfFileRaises(io.BufferedReader):
-    """A file that raises meshio's ReadError when read again at its end: meshio's ANSYS reader
-    skips to a closing bracket one character at a time, and to the next line of data one line at a
-    time, for ever once the file has ended (a truncated file, or a bracket short); its PLY reader
-    skips blank lines so. The first read at the end gives b"" as usual (a reader's own loop stops
-    on it)."""
+    """A file that raises meshio's ReadError when read again at its end. Some of meshio's readers
+    loop for ever once a cut file has ended (they never test for the end): ANSYS / Fluent skips to
+    a closing bracket one character at a time; PLY skips blank lines; Kratos (.mdpa), Nastran and
+    Tecplot skip lines until a keyword. Reads at the end give b"" as usual (a reader's own loop
+    stops on one) up to AT_END times: io.TextIOWrapper, through which a text reader reads with
+    read1, reads the end once per line asked for after the last one."""
 
-    ended = False
+    AT_END = 1000
+    ends_read = 0
 
     def _at_end(self, data: bytes, size: int | None) -> bytes:
         if data or size == 0:
             return data
-        if self.ended:
+        self.ends_read += 1
+        if self.ends_read > self.AT_END:
             from meshio import ReadError
 
             raise ReadError("the file ends where its reader expects more (truncated, or a bracket short?)")
-        self.ended = True
         return data
 
     def read(self, size: int | None = -1) -> bytes:
         return self._at_end(super().read(size), size)
 
+    def read1(self, size: int = -1) -> bytes:
+        return self._at_end(super().read1(size), size)
+
     def readline(self, size: int | None = -1) -> bytes:
         return self._at_end(super().readline(size), size)
 
 
-def _meshio_read(path: Path):
-    """meshio.read, a .msh told apart by its first word: gmsh's ``$MeshFormat``, else ANSYS /
-    Fluent's; ANSYS and PLY (whose header reader skips blank lines for ever at the end of a file)
-    read through _EndOfFileRaises."""
+# meshio's formats read through _EndOfFileRaises (the mode its reader opens a file in), found by
+# cutting a file each format's writer made at every byte (tests/test_mesh_file.py).
+_LOOPS_AT_END = {"ansys": "rb", "ply": "rb", "mdpa": "rb", "nastran": "r", "tecplot": "r"}
+
+
+def _meshio_format(path: Path) -> str | None:
+    """The one meshio format of path's suffix; a .msh told apart by its first word (gmsh's
+    ``$MeshFormat``, else ANSYS / Fluent's); None where meshio is left to choose."""
     import meshio
 
-    if path.suffix.lower() == ".ply":
-        with _EndOfFileRaises(io.FileIO(path, "rb")) as f:
-            return meshio.read(f, file_format="ply")
-    if path.suffix.lower() != ".msh":
-        return meshio.read(path)
-    with open(path, "rb") as f:
-        gmsh = f.read(256).lstrip().startswith(b"$MeshFormat")
-    if gmsh:
-        return meshio.read(path, file_format="gmsh")
+    suffix = path.suffix.lower()
+    if suffix == ".msh":
+        with open(path, "rb") as f:
+            return "gmsh" if f.read(256).lstrip().startswith(b"$MeshFormat") else "ansys"
+    formats = meshio.extension_to_filetypes.get(suffix, [])
+    return formats[0] if len(formats) == 1 else None
+
+
+def _tetgen_headers(path: Path) -> None:
+    """meshio's TetGen reader skips blank and comment lines for ever when a .node or .ele file has
+    no header line: raise its ReadError first."""
+    from meshio import ReadError
+
+    for part in (path.with_suffix(".node"), path.with_suffix(".ele")):
+        if not part.is_file():
+            raise ReadError(f"TetGen's {part.name} is missing beside it")
+        with open(part, "rb") as f:
+            if not any(line.strip() and not line.lstrip().startswith(b"#") for line in f):
+                raise ReadError(f"{part.name} holds no header line")
+
+
+def _meshio_read(path: Path):
+    """meshio.read, the formats whose readers loop at the end of a cut file read through
+    _EndOfFileRaises."""
+    import meshio
+
+    file_format = _meshio_format(path)
+    if file_format == "tetgen":
+        _tetgen_headers(path)
+    mode = _LOOPS_AT_END.get(file_format or "")
+    if mode is None:
+        return meshio.read(path, file_format=file_format)
     with _EndOfFileRaises(io.FileIO(path, "rb")) as f:
-        return meshio.read(f, file_format="ansys")
+        if mode == "rb":
+            return meshio.read(f, file_format=file_format)
+        with io.TextIOWrapper(f) as text:
+            return meshio.read(text, file_format=file_format)
 
 
 def read_meshio(path, what: str = "mesh"):

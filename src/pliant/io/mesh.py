@@ -140,7 +140,10 @@ def cell_array(source, block) -> np.ndarray:
     cell) int64; an empty block as (0, nodes a cell). MeshError naming ``source`` for a block of
     another shape (meshio reads some truncated files into one)."""
     width = _CELL_NODES[block.type]
-    data = np.asarray(block.data, np.int64)
+    try:
+        data = np.asarray(block.data, np.int64)
+    except (OverflowError, ValueError, TypeError) as e:  # meshio's Tecplot reader keeps Python ints
+        raise MeshError(f"{source}: {block.type} node numbers unreadable ({e}); expected integers") from None
     if data.size == 0:
         return data.reshape(0, width)
     if data.ndim != 2 or data.shape[1] != width:
