@@ -253,6 +253,11 @@ _TECPLOT_HUGE = (  # meshio's Tecplot reader keeps node numbers as Python ints, 
         ("cut.msh", _GMSH41_CUT, "a block of tetra cells holds 2 node numbers in rows of 2; expected 4"),
         ("nopoints.vtk", _VTK_NO_POINTS, "no points; expected (N, 3) node coordinates"),
         ("huge.dat", _TECPLOT_HUGE, "tetra node numbers unreadable (Python int too large"),
+        (
+            "beyond.inp",
+            _INP_NODES.replace("2, 1, 0, 0", "2, 1e+900, 0, 0") + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n",
+            "node 1 has a non-finite coordinate [inf, 0.0, 0.0]; expected finite",
+        ),
     ],
     ids=[
         "abaqus-empty-element-block",
@@ -260,12 +265,14 @@ _TECPLOT_HUGE = (  # meshio's Tecplot reader keeps node numbers as Python ints, 
         "gmsh41-cut-in-a-cell",
         "vtk-no-points",
         "tecplot-index-beyond-64-bits",
+        "abaqus-coordinate-beyond-float64",
     ],
 )
 def test_malformed_volume_mesh_files_are_refused_on_one_line(tmp_path, name, text, says):
     """Found by fuzzing meshio's formats (mutated word by word and line by line): these ended in
     numpy's AxisError, ValueError ("cannot reshape array of size 2 into shape (4)"), IndexError and
-    OverflowError, or in a message of three lines (meshio's own, holding newlines)."""
+    OverflowError, or in a message of three lines (meshio's own, holding newlines); a coordinate
+    beyond float64's range was read as infinite and returned (found by changing single bytes)."""
     p = tmp_path / name
     p.write_text(text)
     with pytest.raises(pl.errors.MeshError) as e:

@@ -175,6 +175,18 @@ def test_a_broken_glb_is_refused_naming_it(tmp_path):
         read_surface(p)
 
 
+def test_a_glb_index_beyond_its_vertices_is_refused_naming_it(tmp_path):
+    """A glTF index accessor may name a vertex the file does not hold (found by changing single
+    bytes of a .glb); trimesh, asked not to process the mesh, passes the index on, and the join of
+    coincident vertices ended in numpy's IndexError. A .glb of one triangle (0, 1, 7) over 3
+    vertices, written by trimesh."""
+    bad = trimesh.Trimesh(np.eye(3), np.array([[0, 1, 7]]), process=False, validate=False)
+    p = tmp_path / "oor.glb"
+    p.write_bytes(bad.export(file_type="glb"))
+    with pytest.raises(MeshError, match=r"oor.glb: face index out of range 0..2 \(a glTF index accessor\)"):
+        read_surface(p)
+
+
 def test_a_glb_scene_mesh_is_tetrahedralized(tmp_path):
     """A scene's [mesh] file in glTF is a surface, meshed like an .obj: a 10 × 5 × 2 cm box becomes
     tets filling its volume (fTetWild's envelope keeps the boundary within 1e-3 of the diagonal,

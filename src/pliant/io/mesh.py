@@ -125,13 +125,19 @@ def _warn_coincident(path: Path, X: np.ndarray, tets: np.ndarray) -> None:
 def mesh_points(mesh, source) -> np.ndarray:
     """A meshio mesh's points as (N, 3) floats [file units] (2-D points get z = 0; a file without
     points gives none, and its cells then refer to nodes it lacks). MeshError naming ``source``
-    for points of another shape."""
+    for points of another shape, and the first node with a non-finite coordinate (a value beyond
+    float64's range, "1e+900", reads as infinite)."""
     X = np.asarray(mesh.points if mesh.points is not None else np.zeros((0, 3)), dtype=float)
     if X.size == 0:
         return np.zeros((0, 3))
     if X.ndim != 2 or not 1 <= X.shape[1] <= 3:
         shape = f"points of shape {X.shape}" if X.ndim else "no points"
         raise MeshError(f"{source}: {shape}; expected (N, 3) node coordinates")
+    if not np.all(np.isfinite(X)):
+        node = int(np.argwhere(~np.isfinite(X))[0, 0])
+        raise MeshError(
+            f"{source}: node {node} has a non-finite coordinate {X[node].tolist()}; expected finite"
+        )
     return np.pad(X, ((0, 0), (0, 3 - X.shape[1])))
 
 

@@ -78,6 +78,8 @@ def _read_gltf(path: Path) -> tuple[np.ndarray, np.ndarray]:
         np.asarray(m.vertices, dtype=np.float64).reshape(-1, 3),
         np.asarray(m.faces, np.int64).reshape(-1, 3),
     )
+    if len(F) and (F.min() < 0 or F.max() >= len(V)):  # trimesh does not check without process
+        raise MeshError(f"{path}: face index out of range 0..{len(V) - 1} (a glTF index accessor)")
     return join_coincident(V, F) if len(F) else (V, F)
 
 
