@@ -1,6 +1,7 @@
 """Mesh files no one here wrote (NiftySim's tetrahedral sphere, BSD; meshes gmsh wrote) read
 through meshio."""
 
+import sys
 import warnings
 from pathlib import Path
 
@@ -434,3 +435,42 @@ def test_every_cut_of_a_written_file_reads_or_is_refused_by_name(tmp_path, suffi
     t.join(120)
     assert len(done) == len(whole), f"the read of cut {len(done)} did not return"
     assert not wrong, wrong[:5]
+
+
+@pytest.mark.skipif(
+    sys.platform != "linux", reason="the bound is Linux's RLIMIT_DATA; elsewhere reads are unbounded"
+)
+def test_a_count_beyond_what_a_file_holds_is_refused_not_allocated(tmp_path):
+    """meshio allocates arrays by the counts a file states. A gmsh 4.1 binary file of 300 bytes
+    whose node count reads a billion asked for 24 GB, which Linux grants lazily and then answers
+    by killing the process when it is touched (this is how a byte-changing fuzz run ended, in the
+    kernel's out-of-memory kill). The read is now bounded (2 GiB beyond what the process held,
+    more for large files): the file is refused by name, and the process's own bound is restored."""
+    import resource
+
+    p = tmp_path / "billion.msh"
+    meshio.write(p, _TWO_TETS, file_format="gmsh", binary=True)
+    data = bytearray(p.read_bytes())
+    at = data.index(b"$Nodes\n") + 7 + 8  # the header's 4 size_t: blocks, nodes, min and max tag
+    assert np.frombuffer(data[at : at + 8], np.uint64)[0] == 5
+    data[at : at + 8] = np.uint64(10**9).tobytes()
+    p.write_bytes(bytes(data))
+    before = resource.getrlimit(resource.RLIMIT_DATA)
+    with pytest.raises(
+        pl.errors.MeshError, match=r"billion.msh: cannot read .*MemoryError.*a count in the file"
+    ):
+        pl.io.read_volume_mesh(p)
+    assert resource.getrlimit(resource.RLIMIT_DATA) == before
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="the bound is Linux's RLIMIT_DATA")
+def test_the_read_bound_refuses_only_inside_and_scales_with_the_file():
+    """Inside the bound an allocation of 3 GiB (untouched: Linux grants it lazily) fails, as
+    2 GiB is the bound for a small file; after it the same allocation succeeds; a 100 MB file is
+    given 64 bytes a byte (6.4 GB)."""
+    from pliant.io.files import _bounded_memory, _read_memory
+
+    with _bounded_memory(1000), pytest.raises(MemoryError):
+        np.empty(3 << 30, np.uint8)
+    assert np.empty(3 << 30, np.uint8).nbytes == 3 << 30
+    assert _read_memory(1000) == 2 << 30 and _read_memory(100_000_000) == 6_400_000_000

@@ -110,13 +110,79 @@ def _meshio_read(path: Path):
     if file_format == "tetgen":
         _tetgen_headers(path)
     mode = _LOOPS_AT_END.get(file_format or "")
-    if mode is None:
-        return meshio.read(path, file_format=file_format)
-    with _EndOfFileRaises(io.FileIO(path, "rb")) as f:
-        if mode == "rb":
-            return meshio.read(f, file_format=file_format)
-        with io.TextIOWrapper(f) as text:
-            return meshio.read(text, file_format=file_format)
+    with _bounded_memory(_bounded_size(path, file_format)):
+        if mode is None:
+            return meshio.read(path, file_format=file_format)
+        with _EndOfFileRaises(io.FileIO(path, "rb")) as f:
+            if mode == "rb":
+                return meshio.read(f, file_format=file_format)
+            with io.TextIOWrapper(f) as text:
+                return meshio.read(text, file_format=file_format)
+
+
+# A read's memory beyond what the process used before it: meshio's readers allocate arrays by the
+# counts a file states, so a damaged count in a file of a few hundred bytes asked for 21 GiB, which
+# Linux grants and then kills the process for when it is touched. Generous for what a file of
+# ``size`` bytes holds (ASCII parsed through Python lists: about 40 bytes a number of 10 or more).
+def _read_memory(size: int) -> int:
+    return max(2 << 30, 64 * size)
+
+
+# Formats whose data may lie in other files or be compressed beyond that (HDF5, netCDF, XDMF).
+_UNBOUNDED = {"xdmf", "exodus", "cgns", "med", "h5m", "hmf"}
+
+
+def _bounded_size(path: Path, file_format: str | None) -> int | None:
+    """The bytes a meshio read of ``path`` parses (TetGen's .node and .ele together), or None where
+    its memory is left unbounded (the formats above, gzipped files, a format meshio guesses)."""
+    if file_format is None or file_format in _UNBOUNDED or path.suffix.lower() == ".gz":
+        return None
+    if file_format == "tetgen":
+        return sum(path.with_suffix(s).stat().st_size for s in (".node", ".ele"))
+    return path.stat().st_size
+
+
+_BOUND_LOCK = threading.Lock()  # one bounded read at a time: the bound is the process's
+
+
+def _data_bytes() -> int | None:
+    """The process's data segment (Linux's VmData, what RLIMIT_DATA bounds) [bytes]; None where
+    /proc does not tell it."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmData:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+@contextlib.contextmanager
+def _bounded_memory(size: int | None):
+    """Within it (unless size is None), allocations beyond _read_memory(size) more than the
+    process holds fail with a MemoryError instead of succeeding and ending in the kernel's
+    out-of-memory kill. Linux only
+    (RLIMIT_DATA counts anonymous memory since 4.7); elsewhere, or under a tighter bound of the
+    user's own, nothing changes."""
+    try:
+        import resource
+    except ImportError:  # Windows
+        yield
+        return
+    with _BOUND_LOCK:
+        used = _data_bytes()
+        soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
+        limit = None if used is None or size is None else used + _read_memory(size)
+        unbounded = resource.RLIM_INFINITY
+        if limit is None or (soft != unbounded and soft <= limit) or (hard != unbounded and hard < limit):
+            yield
+            return
+        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+        try:
+            yield
+        finally:
+            resource.setrlimit(resource.RLIMIT_DATA, (soft, hard))
 
 
 def read_meshio(path, what: str = "mesh"):
@@ -138,6 +204,8 @@ def read_meshio(path, what: str = "mesh"):
             else (said or type(e).__name__)
         )
         reason = " ".join(reason.split())  # one line (meshio's messages may hold newlines)
+        if isinstance(e, MemoryError):
+            reason += "; a count in the file larger than what it holds?"
         raise MeshError(f"{path}: cannot read as a {what} ({reason[:300]})") from None
 
 
