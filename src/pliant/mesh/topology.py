@@ -143,13 +143,14 @@ def boundary_nodes(tets: np.ndarray) -> np.ndarray:
     return np.unique(boundary_faces(tets)[0])
 
 
-def _sorted_positions(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _sorted_positions(P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions (N, 3) in lexicographic order (-0.0 and 0.0 alike; np.unique(axis=0)'s order,
-    by lexsort, where np.unique's row sort takes seconds a million rows): the order (N,) and
-    whether each position in it equals the one before (N − 1,)."""
+    by lexsort, where np.unique's row sort takes seconds a million rows): the positions as float64
+    with -0.0 made 0.0 (N, 3), the order (N,) and whether each position in it equals the one
+    before (N − 1,)."""
     P = np.asarray(P, dtype=np.float64) + 0.0
     order = np.lexsort(P.T[::-1])
-    return order, np.all(P[order[1:]] == P[order[:-1]], axis=1)
+    return P, order, np.all(P[order[1:]] == P[order[:-1]], axis=1)
 
 
 def join_coincident(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -158,11 +159,11 @@ def join_coincident(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarra
     (STL) or split vertices at seams (glTF)."""
     if not len(V):
         return V, F
-    order, same = _sorted_positions(V)
+    P, order, same = _sorted_positions(V)
     new = np.concatenate([[True], ~same])
     rank = np.empty(len(V), dtype=np.int64)
     rank[order] = np.cumsum(new) - 1
-    return np.asarray(V, dtype=np.float64)[order[new]] + 0.0, rank[F]
+    return P[order[new]], rank[F]
 
 
 def coincident_nodes(nodes: np.ndarray, tets: np.ndarray) -> tuple[int, int, int]:
@@ -171,7 +172,7 @@ def coincident_nodes(nodes: np.ndarray, tets: np.ndarray) -> tuple[int, int, int
     or (0, -1, -1). Such nodes do not join the elements on either side: a file written one node
     per element corner, or bodies meant to be separate."""
     used = np.unique(np.asarray(tets, np.int64))
-    order, same = _sorted_positions(np.asarray(nodes, float)[used])
+    _, order, same = _sorted_positions(np.asarray(nodes, float)[used])
     if not same.any():
         return 0, -1, -1
     later = np.maximum(used[order[1:]], used[order[:-1]])[same]
