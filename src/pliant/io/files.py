@@ -162,9 +162,8 @@ def _data_bytes() -> int | None:
 def _bounded_memory(size: int | None):
     """Within it (unless size is None), allocations beyond _read_memory(size) more than the
     process holds fail with a MemoryError instead of succeeding and ending in the kernel's
-    out-of-memory kill. Linux only
-    (RLIMIT_DATA counts anonymous memory since 4.7); elsewhere, or under a tighter bound of the
-    user's own, nothing changes."""
+    out-of-memory kill. Linux only (RLIMIT_DATA counts anonymous memory since 4.7); elsewhere, or
+    under a tighter bound of the user's own, nothing changes."""
     try:
         import resource
     except ImportError:  # Windows
