@@ -16,17 +16,28 @@ MODEL_BYTES_PER_TET = 300  # ModelBuilder.finalize on top of its mesh, float32 o
 OUTPUT_BYTES_PER_TET = 700  # a scene run's frames and picture on top of its model (about 560)
 
 
-def available_memory() -> int | None:
-    """Memory [bytes] the machine can give without swapping: Linux's MemAvailable (page cache that
-    can be dropped included); None where /proc/meminfo does not say (other systems: not checked)."""
+def _proc_bytes(file: str, key: str) -> int | None:
+    """The figure of a ``key: N kB`` line of a Linux /proc file [bytes]; None where there is none."""
     try:
-        with open("/proc/meminfo", encoding="ascii") as f:
+        with open(file, encoding="ascii", errors="replace") as f:  # a process name may be any bytes
             for line in f:
-                if line.startswith("MemAvailable:"):
+                if line.startswith(key + ":"):
                     return int(line.split()[1]) * 1024
     except (OSError, ValueError, IndexError):
         return None
     return None
+
+
+def available_memory() -> int | None:
+    """Memory [bytes] the machine can give without swapping: Linux's MemAvailable (page cache that
+    can be dropped included); None where /proc/meminfo does not say (other systems: not checked)."""
+    return _proc_bytes("/proc/meminfo", "MemAvailable")
+
+
+def data_segment() -> int | None:
+    """This process's data segment [bytes]: Linux's VmData, what RLIMIT_DATA bounds (anonymous
+    writable memory); None where /proc does not say."""
+    return _proc_bytes("/proc/self/status", "VmData")
 
 
 def require_memory(n_tets: float, bytes_per_tet: float, what: str) -> None:

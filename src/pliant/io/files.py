@@ -15,6 +15,7 @@ import threading
 from pathlib import Path
 
 from ..errors import InputError, MeshError
+from ..memory import data_segment
 
 
 # file_problem's answers that callers tell apart (the others are only shown).
@@ -145,19 +146,6 @@ def _bounded_size(path: Path, file_format: str | None) -> int | None:
 _BOUND_LOCK = threading.Lock()  # one bounded read at a time: the bound is the process's
 
 
-def _data_bytes() -> int | None:
-    """The process's data segment (Linux's VmData, what RLIMIT_DATA bounds) [bytes]; None where
-    /proc does not tell it."""
-    try:
-        with open("/proc/self/status") as f:
-            for line in f:
-                if line.startswith("VmData:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        return None
-    return None
-
-
 @contextlib.contextmanager
 def _bounded_memory(size: int | None):
     """Within it (unless size is None), allocations beyond _read_memory(size) more than the
@@ -170,7 +158,7 @@ def _bounded_memory(size: int | None):
         yield
         return
     with _BOUND_LOCK:
-        used = _data_bytes()
+        used = data_segment()
         soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
         limit = None if used is None or size is None else used + _read_memory(size)
         unbounded = resource.RLIM_INFINITY
