@@ -57,6 +57,9 @@ def test_a_failing_check_exits_1_naming_it(tmp_path, monkeypatch):
     wrong = Check("made up", "two against one", 2.0, 1.0, "1", "a check that must fail", 0.1)
     monkeypatch.setattr(cases, "CASES", {"bad": lambda quick: ([wrong], {})})
     monkeypatch.setattr("pliant.validate.report.CASES", cases.CASES)
+    # Nor NiftySim's models nor the peers: the quick run above runs them (here they cost 30 s).
+    monkeypatch.setattr("pliant.validate.report.run_cross_checks", lambda niftysim: ([], []))
+    monkeypatch.setattr("pliant.validate.report.run_peers", lambda quick: ([], []))
     # An earlier report in the folder: its plot goes (this run has none), other files stay.
     for name in ("results.json", "cantilever.png", "notes.txt"):
         (tmp_path / name).write_text("earlier")

@@ -1,7 +1,7 @@
 // pliant — the backends that run on the host: the CPU (OpenMP + SIMD) and the emulated CUDA device.
 // Both are the one engine of engine.hpp; only the device differs. Each backend and precision is
-// instantiated in its own translation unit (host_cpu_f32.cpp, ...), so that a build compiles the
-// four in parallel.
+// instantiated in its own translation unit (host_cpu_f32.cpp, ...), so that a build compiles them
+// in parallel; the CPU's per instruction-set module, the emulated device's once (CMakeLists.txt).
 #pragma once
 
 #include "device_emulated.hpp"
