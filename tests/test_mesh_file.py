@@ -226,6 +226,67 @@ def test_nodes_written_once_per_element_corner_are_warned_of(tmp_path):
         pl.io.read_volume_mesh(SPHERE)
 
 
+def test_nodes_all_but_at_another_are_warned_of_and_nodes_a_gap_apart_are_not(tmp_path):
+    """The sphere written one node per element corner, each corner's position moved by up to 1e-7
+    of the sphere's size (a writer that computes each element's corners on its own and rounds
+    them): the reader warns of the 4 × 789 − 278 repeated nodes, all but coincident. Two copies of
+    the sphere a hundredth of its shortest edge apart (bodies meant to be separate, closer than any
+    element) draw no warning: the fraction, a thousandth, lies between."""
+    from pliant.mesh.topology import CLOSE_FRACTION, _edge_lengths
+
+    X, T, _ = pl.io.read_volume_mesh(SPHERE)
+    rng = np.random.default_rng(5)
+    corners = X[T].reshape(-1, 3)
+    corners += rng.uniform(-1e-7, 1e-7, corners.shape) * np.ptp(X, axis=0).max()
+    soup = tmp_path / "soup.vtu"
+    meshio.write(soup, meshio.Mesh(corners, [("tetra", np.arange(T.size).reshape(-1, 4))]))
+    with pytest.warns(pl.PliantWarning) as record:
+        pl.io.read_volume_mesh(soup)
+    (message,) = [str(w.message) for w in record]
+    assert f"{4 * 789 - 278} node(s) lie where another node lies or within {CLOSE_FRACTION:g}" in message
+    shortest = _edge_lengths(X, T).min()
+    # Two copies, the second moved by 10 × the fraction of the shortest edge: each node of the
+    # second lies that far from its twin.
+    apart = tmp_path / "apart.vtu"
+    two = np.concatenate([X, X + [10 * CLOSE_FRACTION * shortest, 0, 0]])
+    meshio.write(apart, meshio.Mesh(two, [("tetra", np.concatenate([T, T + len(X)]))]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pl.io.read_volume_mesh(apart)
+
+
+def test_coincident_nodes_are_the_pairs_a_brute_force_search_finds():
+    """Random jittered boxes with nodes planted near others (some at, some just inside and some
+    just outside the fraction of the shortest edge) against every pair's distance computed
+    directly: the same count, first pair and largest distance."""
+    from pliant.mesh.topology import CLOSE_FRACTION, _edge_lengths, coincident_nodes
+
+    for seed in range(8):
+        rng = np.random.default_rng(seed)
+        X, T = pl.mesh.box_tets((0.1, 0.05, 0.02), (6, 4, 3), jitter=0.25, seed=seed)
+        tol = CLOSE_FRACTION * _edge_lengths(X, T).min()
+        k = int(rng.integers(0, 6))
+        twins = rng.choice(len(X), k, replace=False)
+        gap = tol * rng.choice([0.0, 0.5, 0.999, 1.001, 3.0], k)
+        direction = rng.normal(size=(k, 3))
+        extra = X[twins] + gap[:, None] * direction / np.linalg.norm(direction, axis=1)[:, None]
+        Y = np.concatenate([X, extra])
+        # Each planted node becomes the corner of a copy of a tet of its twin.
+        owner = np.array([np.nonzero((T == t).any(axis=1))[0][0] for t in twins], dtype=np.int64)
+        U = np.concatenate(
+            [T, np.where(T[owner] == twins[:, None], len(X) + np.arange(k)[:, None], T[owner])]
+        )
+        d = np.linalg.norm(Y[:, None] - Y[None], axis=2)
+        i, j = np.nonzero(np.triu(d <= CLOSE_FRACTION * _edge_lengths(Y, U).min(), 1))
+        got = coincident_nodes(Y, U)
+        if not len(i):
+            assert got == (0, -1, -1, 0.0)
+            continue
+        first = np.lexsort((i, j))[0]
+        assert got[:3] == (np.unique(j).size, i[first], j[first])
+        assert got[3] == pytest.approx(d[i, j].max(), rel=1e-12)
+
+
 _INP_NODES = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n"
 _VTK_NO_POINTS = (
     "# vtk DataFile Version 5.1\nno points\nASCII\nDATASET UNSTRUCTURED_GRID\nCELLS 2 4\n"

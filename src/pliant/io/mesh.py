@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import MeshError, PliantWarning
 from ..mesh.split import SPLIT_CELLS, refine_tetra10, split_cells
-from ..mesh.topology import coincident_nodes
+from ..mesh.topology import CLOSE_FRACTION, coincident_nodes
 from .vtk_grid import read_meshio_or_grid
 
 
@@ -107,16 +107,22 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
 
 
 def _warn_coincident(path: Path, X: np.ndarray, tets: np.ndarray) -> None:
-    """Warn of element nodes at exactly another's position (topology.coincident_nodes): the
-    elements on either side are not joined there, which a file written with one node per element
-    corner does silently (every element then moves on its own)."""
-    n, a, b = coincident_nodes(X, tets)
+    """Warn of element nodes at another's position, or all but at it (topology.coincident_nodes):
+    the elements on either side are not joined there, which a file written with one node per
+    element corner does silently (every element then moves on its own)."""
+    n, a, b, d = coincident_nodes(X, tets)
     if n:
+        where = (
+            "lie exactly where another node lies"
+            if d == 0
+            else f"lie where another node lies or within {CLOSE_FRACTION:g} of the shortest element "
+            f"edge of it (up to {d:.3g} apart)"
+        )
         warnings.warn(
             PliantWarning(
-                f"{path}: {n} node(s) lie exactly where another node lies (first: nodes {a} and {b} "
-                f"at {X[a].tolist()}), so the elements on either side are not joined there; merge "
-                "duplicate nodes if the mesh is one body (separate bodies may touch this way)"
+                f"{path}: {n} node(s) {where} (first: nodes {a} and {b} at {X[a].tolist()}), so the "
+                "elements on either side are not joined there; merge duplicate nodes if the mesh is "
+                "one body (separate bodies may touch this way)"
             ),
             stacklevel=3,
         )

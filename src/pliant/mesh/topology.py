@@ -166,16 +166,46 @@ def join_coincident(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return P[order[new]], rank[F]
 
 
-def coincident_nodes(nodes: np.ndarray, tets: np.ndarray) -> tuple[int, int, int]:
-    """Nodes of tetrahedra (M, 4) at exactly the position [m] (N, 3) of another node of theirs:
-    (how many nodes share their position with a lower-numbered node, the first such pair a < b),
-    or (0, -1, -1). Such nodes do not join the elements on either side: a file written one node
-    per element corner, or bodies meant to be separate."""
-    used = np.unique(np.asarray(tets, np.int64))
-    _, order, same = _sorted_positions(np.asarray(nodes, float)[used])
-    if not same.any():
-        return 0, -1, -1
-    later = np.maximum(used[order[1:]], used[order[:-1]])[same]
-    lower = np.minimum(used[order[1:]], used[order[:-1]])[same]
-    k = int(np.argmin(later))
-    return int(same.sum()), int(lower[k]), int(later[k])
+# Nodes closer than this fraction of the mesh's shortest element edge are taken as one position
+# written twice (a writer's rounding: 6 significant digits move a node by up to 5e-7 of its
+# coordinates), not as two: no element of a sound mesh comes near so short an edge.
+CLOSE_FRACTION = 1e-3
+
+
+def coincident_nodes(nodes: np.ndarray, tets: np.ndarray) -> tuple[int, int, int, float]:
+    """Nodes of tetrahedra (M, 4) at, or closer than CLOSE_FRACTION of the shortest element edge
+    to, the position [m] (N, 3) of another node of theirs: (how many nodes have such a
+    lower-numbered partner, the first such pair a < b, the largest distance of such a pair [m]), or
+    (0, -1, -1, 0.0). Such nodes do not join the elements on either side: a file written one node
+    per element corner (its positions rounded, or not), or bodies meant to be separate."""
+    from scipy.spatial import cKDTree
+
+    T = np.asarray(tets, np.int64).reshape(-1, 4)
+    X = np.asarray(nodes, float)
+    if not len(T) or T.min() < 0 or T.max() >= len(X):
+        return 0, -1, -1, 0.0  # no elements, or indices the mesh's own check names
+    used = np.flatnonzero(np.bincount(T.ravel(), minlength=len(X)))
+    if not np.all(np.isfinite(X[used])):
+        return 0, -1, -1, 0.0  # the builder names a non-finite node
+    # Candidates within the fraction of a sample's median edge (at least the shortest edge's), then
+    # the pairs within the fraction of the shortest edge of all, measured only when there are any.
+    sample = T[np.linspace(0, len(T) - 1, min(len(T), 1000)).astype(np.int64)]
+    wide = CLOSE_FRACTION * float(np.median(_edge_lengths(X, sample)))
+    pairs = used[cKDTree(X[used]).query_pairs(wide, output_type="ndarray")]
+    if len(pairs):
+        d = np.linalg.norm(X[pairs[:, 0]] - X[pairs[:, 1]], axis=1)
+        pairs = pairs[d <= CLOSE_FRACTION * _edge_lengths(X, T).min()]
+    if not len(pairs):
+        return 0, -1, -1, 0.0
+    lower, later = pairs.min(axis=1), pairs.max(axis=1)
+    first = np.lexsort((lower, later))[0]
+    largest = float(np.linalg.norm(X[pairs[:, 0]] - X[pairs[:, 1]], axis=1).max())
+    return int(np.unique(later).size), int(lower[first]), int(later[first]), largest
+
+
+def _edge_lengths(X: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """The six edge lengths [m] of each tetrahedron (M, 4) of nodes X (N, 3), shape (M, 6)."""
+    out = np.empty((len(T), 6))
+    for k, (i, j) in enumerate(((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))):
+        out[:, k] = np.linalg.norm(X[T[:, j]] - X[T[:, i]], axis=1)
+    return out
