@@ -97,7 +97,7 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
     }
     node_sets = _node_sets(mesh)
     if set(split) & set(LINEARIZED):  # mid-edge nodes dropped: keep the nodes the tets use
-        used = np.unique(tets)
+        used = np.flatnonzero(np.bincount(tets.ravel(), minlength=len(X)))  # indices checked
         new = np.full(len(X), -1)
         new[used] = np.arange(used.size)
         X, tets = X[used], new[tets]
