@@ -1,6 +1,7 @@
 """Mesh files no one here wrote (NiftySim's tetrahedral sphere, BSD; meshes gmsh wrote) read
 through meshio."""
 
+import itertools
 import sys
 import warnings
 from pathlib import Path
@@ -226,13 +227,20 @@ def test_nodes_written_once_per_element_corner_are_warned_of(tmp_path):
         pl.io.read_volume_mesh(SPHERE)
 
 
+def _shortest_edge(X, T):
+    """The shortest of the tetrahedra's edges [m], every pair of corners measured."""
+    return min(
+        np.linalg.norm(X[T[:, a]] - X[T[:, b]], axis=1).min() for a, b in itertools.combinations(range(4), 2)
+    )
+
+
 def test_nodes_all_but_at_another_are_warned_of_and_nodes_a_gap_apart_are_not(tmp_path):
     """The sphere written one node per element corner, each corner's position moved by up to 1e-7
     of the sphere's size (a writer that computes each element's corners on its own and rounds
     them): the reader warns of the 4 × 789 − 278 repeated nodes, all but coincident. Two copies of
     the sphere a hundredth of its shortest edge apart (bodies meant to be separate, closer than any
     element) draw no warning: the fraction, a thousandth, lies between."""
-    from pliant.mesh.topology import CLOSE_FRACTION, _edge_lengths
+    from pliant.mesh.topology import CLOSE_FRACTION
 
     X, T, _ = pl.io.read_volume_mesh(SPHERE)
     rng = np.random.default_rng(5)
@@ -244,7 +252,7 @@ def test_nodes_all_but_at_another_are_warned_of_and_nodes_a_gap_apart_are_not(tm
         pl.io.read_volume_mesh(soup)
     (message,) = [str(w.message) for w in record]
     assert f"{4 * 789 - 278} node(s) lie where another node lies or within {CLOSE_FRACTION:g}" in message
-    shortest = _edge_lengths(X, T).min()
+    shortest = _shortest_edge(X, T)
     # Two copies, the second moved by 10 × the fraction of the shortest edge: each node of the
     # second lies that far from its twin.
     apart = tmp_path / "apart.vtu"
@@ -259,12 +267,12 @@ def test_coincident_nodes_are_the_pairs_a_brute_force_search_finds():
     """Random jittered boxes with nodes planted near others (some at, some just inside and some
     just outside the fraction of the shortest edge) against every pair's distance computed
     directly: the same count, first pair and largest distance."""
-    from pliant.mesh.topology import CLOSE_FRACTION, _edge_lengths, coincident_nodes
+    from pliant.mesh.topology import CLOSE_FRACTION, coincident_nodes
 
     for seed in range(8):
         rng = np.random.default_rng(seed)
         X, T = pl.mesh.box_tets((0.1, 0.05, 0.02), (6, 4, 3), jitter=0.25, seed=seed)
-        tol = CLOSE_FRACTION * _edge_lengths(X, T).min()
+        tol = CLOSE_FRACTION * _shortest_edge(X, T)
         k = int(rng.integers(0, 6))
         twins = rng.choice(len(X), k, replace=False)
         gap = tol * rng.choice([0.0, 0.5, 0.999, 1.001, 3.0], k)
@@ -277,7 +285,7 @@ def test_coincident_nodes_are_the_pairs_a_brute_force_search_finds():
             [T, np.where(T[owner] == twins[:, None], len(X) + np.arange(k)[:, None], T[owner])]
         )
         d = np.linalg.norm(Y[:, None] - Y[None], axis=2)
-        i, j = np.nonzero(np.triu(d <= CLOSE_FRACTION * _edge_lengths(Y, U).min(), 1))
+        i, j = np.nonzero(np.triu(d <= CLOSE_FRACTION * _shortest_edge(Y, U), 1))
         got = coincident_nodes(Y, U)
         if not len(i):
             assert got == (0, -1, -1, 0.0)
