@@ -251,7 +251,7 @@ def test_nodes_all_but_at_another_are_warned_of_and_nodes_a_gap_apart_are_not(tm
     with pytest.warns(pl.PliantWarning) as record:
         pl.io.read_volume_mesh(soup)
     (message,) = [str(w.message) for w in record]
-    assert f"{4 * 789 - 278} node(s) lie where another node lies or within {CLOSE_FRACTION:g}" in message
+    assert f"{4 * 789 - 278} node(s) lie where another node lies or closer to it than 0.1% of" in message
     shortest = _shortest_edge(X, T)
     # Two copies, the second moved by 10 × the fraction of the shortest edge: each node of the
     # second lies that far from its twin.

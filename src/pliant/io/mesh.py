@@ -115,8 +115,8 @@ def _warn_coincident(path: Path, X: np.ndarray, tets: np.ndarray) -> None:
         where = (
             "lie exactly where another node lies"
             if d == 0
-            else f"lie where another node lies or within {CLOSE_FRACTION:g} of the shortest element "
-            f"edge of it (up to {d:.3g} apart)"
+            else f"lie where another node lies or closer to it than {CLOSE_FRACTION:.1%} of the "
+            f"shortest element edge (up to {d:.3g} apart)"
         )
         warnings.warn(
             PliantWarning(
