@@ -15,6 +15,7 @@ import numpy as np
 
 from .materials import NeoHookean
 from .mesh import box_tets
+from .mesh.topology import drop_unused
 from .tled import ModelBuilder, Solver
 
 STUDY = {7456: (2.88, 298.0), 12584: (5.21, 667.0), 27918: (8.74, 1186.0)}
@@ -53,10 +54,8 @@ def exact_count_mesh(n_tets: int, size: float | None = None, seed: int = 0):
     cz = X[T].mean(axis=1)
     order = np.lexsort((cz[:, 0], cz[:, 1], np.floor(cz[:, 2] / (size / n))))
     T = T[order[:n_tets]]
-    used = np.unique(T)
-    remap = np.full(len(X), -1, dtype=np.int64)
-    remap[used] = np.arange(used.size)
-    return X[used], remap[T]
+    X, T, _ = drop_unused(X, T)
+    return X, T
 
 
 def timed_run(solver: Solver, steps: int, warmup: int = 50):

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import MeshError, PliantWarning
 from ..mesh.split import SPLIT_CELLS, refine_tetra10, split_cells
-from ..mesh.topology import CLOSE_FRACTION, coincident_nodes
+from ..mesh.topology import CLOSE_FRACTION, coincident_nodes, drop_unused
 from .vtk_grid import read_meshio_or_grid
 
 
@@ -97,10 +97,7 @@ def read_volume_mesh_file(path) -> VolumeMeshFile:
     }
     node_sets = _node_sets(mesh)
     if set(split) & set(LINEARIZED):  # mid-edge nodes dropped: keep the nodes the tets use
-        used = np.flatnonzero(np.bincount(tets.ravel(), minlength=len(X)))  # indices checked
-        new = np.full(len(X), -1)
-        new[used] = np.arange(used.size)
-        X, tets = X[used], new[tets]
+        X, tets, new = drop_unused(X, tets)  # indices checked
         node_sets = {k: new[v[new[v] >= 0]] for k, v in node_sets.items() if np.any(new[v] >= 0)}
     _warn_coincident(path, X, tets)
     return VolumeMeshFile(X, tets, sets, node_sets, split)

@@ -28,6 +28,18 @@ def tet_volumes(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), P[:, 3] - P[:, 0]) / 6.0
 
 
+TET_EDGES = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))  # a tet's corner pairs
+
+
+def tet_edge_lengths(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """The six edge lengths [m] (M, 6) of tets (M, 4) on nodes [m] (N, 3), in TET_EDGES' order."""
+    X, T = np.asarray(nodes, float), np.asarray(tets, np.int64)
+    out = np.empty((len(T), 6))
+    for k, (i, j) in enumerate(TET_EDGES):
+        out[:, k] = np.linalg.norm(X[T[:, j]] - X[T[:, i]], axis=1)
+    return out
+
+
 def triangle_measures(nodes: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Area [m²] and longest edge [m] of each triangle ``faces`` (F, 3) over ``nodes`` (N, 3)."""
     P = np.asarray(nodes, float)[np.asarray(faces)]

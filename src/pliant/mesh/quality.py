@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
+from .primitives import TET_EDGES, tet_edge_lengths
 
 
 def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
@@ -28,14 +29,13 @@ def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
     )
     with np.errstate(divide="ignore", invalid="ignore"):
         R = np.linalg.norm(num, axis=1) / np.abs(det)
-    pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
-    edges = np.stack([np.linalg.norm(P[:, j] - P[:, i], axis=1) for i, j in pairs], 1)
+    edges = tet_edge_lengths(X, T)
     # Dihedral angle at each edge from the outward normals of the two faces sharing it.
     faces = [(1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)]  # face k is opposite corner k
     n = np.stack([np.cross(P[:, f[1]] - P[:, f[0]], P[:, f[2]] - P[:, f[0]]) for f in faces], 1)
     n /= np.maximum(np.linalg.norm(n, axis=2, keepdims=True), 1e-300)
     dih_list = []
-    for i, j in pairs:  # edge (i, j) is shared by the faces opposite the two other corners
+    for i, j in TET_EDGES:  # edge (i, j) is shared by the faces opposite the two other corners
         k, l = [c for c in range(4) if c not in (i, j)]
         cosang = -np.einsum("ij,ij->i", n[:, k], n[:, l])
         dih_list.append(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))))

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from .topology import unique_rows
+from .topology import drop_unused, unique_rows
 from . import ftetwild
 from .primitives import orient_positive, tet_volumes, triangle_measures, unit_scale
 
@@ -129,10 +129,7 @@ def tetrahedralize(
     # Drop unused nodes and (near-)zero-volume slivers.
     tets = tets[tet_volumes(nodes, tets) > 1e-9 * el**3]
     tets = largest_component(tets, keep_all)
-    used = np.unique(tets)
-    remap = np.full(len(nodes), -1, dtype=np.int64)
-    remap[used] = np.arange(used.size)
-    nodes, tets = nodes[used], remap[tets]
+    nodes, tets, _ = drop_unused(nodes, tets)
     if cache:
         tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
         np.savez(tmp, nodes=nodes, tets=tets)

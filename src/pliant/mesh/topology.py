@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .primitives import tet_edge_lengths
+
 
 def boundary_faces(tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Boundary triangles (F, 3), outward for positive tets, and the element of each (F,)."""
@@ -184,28 +186,35 @@ def coincident_nodes(nodes: np.ndarray, tets: np.ndarray) -> tuple[int, int, int
     X = np.asarray(nodes, float)
     if not len(T) or T.min() < 0 or T.max() >= len(X):
         return 0, -1, -1, 0.0  # no elements, or indices the mesh's own check names
-    used = np.flatnonzero(np.bincount(T.ravel(), minlength=len(X)))
+    used = used_nodes(T, len(X))
     if not np.all(np.isfinite(X[used])):
         return 0, -1, -1, 0.0  # the builder names a non-finite node
     # Candidates within the fraction of a sample's median edge (at least the shortest edge's), then
     # the pairs within the fraction of the shortest edge of all, measured only when there are any.
     sample = T[np.linspace(0, len(T) - 1, min(len(T), 1000)).astype(np.int64)]
-    wide = CLOSE_FRACTION * float(np.median(_edge_lengths(X, sample)))
+    wide = CLOSE_FRACTION * float(np.median(tet_edge_lengths(X, sample)))
     pairs = used[cKDTree(X[used]).query_pairs(wide, output_type="ndarray")]
+    d = np.linalg.norm(X[pairs[:, 0]] - X[pairs[:, 1]], axis=1)
     if len(pairs):
-        d = np.linalg.norm(X[pairs[:, 0]] - X[pairs[:, 1]], axis=1)
-        pairs = pairs[d <= CLOSE_FRACTION * _edge_lengths(X, T).min()]
+        keep = d <= CLOSE_FRACTION * tet_edge_lengths(X, T).min()
+        pairs, d = pairs[keep], d[keep]
     if not len(pairs):
         return 0, -1, -1, 0.0
     lower, later = pairs.min(axis=1), pairs.max(axis=1)
     first = np.lexsort((lower, later))[0]
-    largest = float(np.linalg.norm(X[pairs[:, 0]] - X[pairs[:, 1]], axis=1).max())
-    return int(np.unique(later).size), int(lower[first]), int(later[first]), largest
+    return int(np.unique(later).size), int(lower[first]), int(later[first]), float(d.max())
 
 
-def _edge_lengths(X: np.ndarray, T: np.ndarray) -> np.ndarray:
-    """The six edge lengths [m] of each tetrahedron (M, 4) of nodes X (N, 3), shape (M, 6)."""
-    out = np.empty((len(T), 6))
-    for k, (i, j) in enumerate(((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))):
-        out[:, k] = np.linalg.norm(X[T[:, j]] - X[T[:, i]], axis=1)
-    return out
+def used_nodes(tets: np.ndarray, n_nodes: int) -> np.ndarray:
+    """The nodes tets (M, 4) refer to, ascending (K,): what np.unique(tets) gives, by counting
+    (indices checked to lie in 0..n_nodes − 1)."""
+    return np.flatnonzero(np.bincount(np.asarray(tets, np.int64).ravel(), minlength=n_nodes))
+
+
+def drop_unused(nodes: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nodes (N, 3) no tet (M, 4) refers to removed: (the nodes kept, the tets renumbered, each old
+    node's new number (N,), −1 for one removed)."""
+    used = used_nodes(tets, len(nodes))
+    new = np.full(len(nodes), -1, dtype=np.int64)
+    new[used] = np.arange(used.size)
+    return nodes[used], new[tets], new
