@@ -210,8 +210,8 @@ def test_a_run_replaces_an_earlier_runs_files_and_keeps_the_users(tmp_path):
     (out / "frame_1.vtu").write_text("")  # not a name a run gives a frame: stays
     assert len(list(out.glob("frame_*.vtu"))) == 13
     with pytest.warns(
-        pl.PliantWarning, match="replaced the 14 files of an earlier run"
-    ):  # 12 frames, .pvd, .json
+        pl.PliantWarning, match="replaced the 15 files of an earlier run"
+    ):  # 12 frames, .pvd, summary.json, reactions.json
         run_mod.run_scene(load_scene(_write(tmp_path, text.replace("[output]", "[output]\nframes = 3"))), out)
     frames = [f"frame_{k:05d}.vtu" for k in range(4)]
     assert sorted(f.name for f in out.glob("frame_*.vtu")) == frames + ["frame_1.vtu"]

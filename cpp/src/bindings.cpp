@@ -89,6 +89,11 @@ std::vector<T> gather_nodes(const std::vector<T>& soa, index_t n, index_t P) {
         for (int d = 0; d < 3; ++d) out[3 * i + d] = soa[d * P + i];
     return out;
 }
+// Node field (3, P) → (N, 3) numpy array.
+template <class T>
+nb::ndarray<nb::numpy, T> node_array(const std::vector<T>& soa, index_t n, index_t P) {
+    return to_numpy(gather_nodes(soa, n, P), {size_t(n), 3});
+}
 template <class T>
 void scatter_nodes(const In<double>& a, std::vector<T>& soa, index_t n, index_t P) {
     if (a.ndim() != 2 || a.shape(0) != static_cast<size_t>(n) || a.shape(1) != 3)
@@ -122,17 +127,17 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
         .def("get_u",
              [](const S& s) {
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);
-                 return to_numpy(gather_nodes(s.s.u, s.n_nodes, P), {size_t(s.n_nodes), 3});
+                 return node_array(s.s.u, s.n_nodes, P);
              })
         .def("get_u_prev",
              [](const S& s) {
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);
-                 return to_numpy(gather_nodes(s.s.u_prev, s.n_nodes, P), {size_t(s.n_nodes), 3});
+                 return node_array(s.s.u_prev, s.n_nodes, P);
              })
         .def("get_du",  // the last step's increment before rounding (State::du: velocity × Δt)
              [](const S& s) {
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);
-                 return to_numpy(gather_nodes(s.s.du, s.n_nodes, P), {size_t(s.n_nodes), 3});
+                 return node_array(s.s.du, s.n_nodes, P);
              })
         .def("set_u",
              [](S& s, In<double> a) {
@@ -427,10 +432,14 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                      membrane_measures(k, md, s.s.u.data(), P, &out[w * k]);
                  return to_numpy(std::move(out), {size_t(md.count), w});
              })
-        .def("internal_forces", [](B& e, const S& s) {
-            std::vector<T> f = e->internal_forces(s.s);
-            return to_numpy(gather_nodes(f, e.engine->model.n_nodes, e.engine->model.n_pad),
-                            {size_t(e.engine->model.n_nodes), 3});
+        .def("internal_forces",
+             [](B& e, const S& s) {
+                 std::vector<T> f = e->internal_forces(s.s);
+                 return node_array(f, e.engine->model.n_nodes, e.engine->model.n_pad);
+             })
+        .def("external_forces", [](B& e, const S& s, double t) {
+            std::vector<T> f = e->external_forces(s.s, t);
+            return node_array(f, e.engine->model.n_nodes, e.engine->model.n_pad);
         });
 }
 

@@ -37,6 +37,19 @@ NIFTYSIM_OUTPUTS = {
 }
 
 
+def keep_reactions(kept: dict[str, dict], model, state) -> None:
+    """Adds each support's reaction [N] at the state (Model.support_reactions) to ``kept``: per
+    support name its DOFs, node count, and the times [s] and forces of the frames so far."""
+    if not model.supports or not np.all(np.isfinite(state.displacements)):
+        return
+    forces = model.support_reactions(state)
+    for name, ids, dofs in model.supports:
+        row = kept.setdefault(name, {"dofs": dofs, "nodes": 0, "time": [], "force": []})
+        row["nodes"] = int(ids.size)  # after a cut, with the copies of its nodes
+        row["time"].append(state.time)
+        row["force"].append(forces[name].tolist())
+
+
 def write_niftysim_text(path: Path, frames: list[np.ndarray]) -> None:
     """NiftySim's U.txt or F.txt (tledSolutionWriter): a row per DOF (x, y, z of node 0 first), a
     column per output frame after the first, to 9 digits. pliant's frame k is at k·Freq·Δt,
@@ -143,7 +156,16 @@ def _membrane_energy(model, state, nodes: slice) -> float:
 
 
 # What a run writes into its folder (run_scene): an earlier run's are replaced as a whole.
-RUN_FILES = (INDEX, SURFACE_INDEX, "summary.json", "result.png", "tools.json", "U.txt", "F.txt")
+RUN_FILES = (
+    INDEX,
+    SURFACE_INDEX,
+    "summary.json",
+    "result.png",
+    "tools.json",
+    "reactions.json",
+    "U.txt",
+    "F.txt",
+)
 
 
 def clear_earlier_run(out: Path) -> int:
@@ -228,6 +250,16 @@ def run_scene(
     texts: dict[str, list[np.ndarray]] = {
         v: [] for v in scene.meta.get("niftysim_outputs", ()) if out is not None
     }
+    reactions: dict[str, dict] = {}  # per support: its force [N] at each frame (reactions.json)
+
+    def keep_frame(first: bool = False) -> None:
+        """Writes the frame and keeps its support reactions and (after the first) its NiftySim text
+        outputs."""
+        writer.write(state)
+        for v, kept in texts.items() if not first else ():
+            kept.append(NIFTYSIM_OUTPUTS[v](model, state))
+        keep_reactions(reactions, model, state)
+
     build_s = time.perf_counter() - t_build
     summary = {
         "pliant": __version__,
@@ -261,7 +293,7 @@ def run_scene(
             )
     t0 = time.perf_counter()
     try:
-        writer.write(state)  # frame 0, inside: a Ctrl-C while it is written still ends with a summary
+        keep_frame(first=True)  # frame 0, inside: a Ctrl-C while it is written still ends with a summary
         if scene.static:
             info = solver.relax(
                 state, at_time=scene.duration, tol=scene.tol, increments=scene.increments, strict=False
@@ -271,9 +303,7 @@ def run_scene(
                 summary["warnings"].append(
                     f"quasi-static solve stopped at residual {info.residual:.3g} (tolerance {scene.tol:g})"
                 )
-            writer.write(state)
-            for v, kept in texts.items():
-                kept.append(NIFTYSIM_OUTPUTS[v](model, state))
+            keep_frame()
         else:
             every = _frame_steps(scene, solver.dt, total)
             if scene.meta.get("frames_given") and scene.frames > total:
@@ -309,9 +339,7 @@ def run_scene(
                         bar.update(task, total=total)
                     done += n
                     if done % every == 0 or done == total:
-                        writer.write(state)
-                        for v, kept in texts.items():
-                            kept.append(NIFTYSIM_OUTPUTS[v](model, state))
+                        keep_frame()
                     el = time.perf_counter() - t0
                     bar.update(task, completed=done, t=state.time, rate=done / max(el, 1e-9))
     except KeyboardInterrupt:
@@ -377,6 +405,14 @@ def run_scene(
             if out is not None:
                 write_niftysim_text(out / f"{v}.txt", kept)
                 summary["files"].append(f"{v}.txt")
+        if reactions:
+            summary["reactions"] = [
+                {"name": k, "dofs": r["dofs"], "nodes": r["nodes"], "force": r["force"][-1]}
+                for k, r in reactions.items()
+            ]
+            if out is not None:
+                atomic_write_text(out / "reactions.json", json.dumps(reactions))
+                summary["files"].append("reactions.json")
         if inspect is not None and np.all(np.isfinite(u)):
             summary.update(inspect(model, solver, state))
         if out is None:

@@ -355,6 +355,23 @@ PLIANT_HD void pressure_force(index_t n, const NodeData<T>& nd, const T* factors
     }
 }
 
+/// External load r [N] (3) on node n at the pattern factors given: follower pressure and surface
+/// traction (pressure_force) plus the load patterns (point forces and gravity, each pattern's
+/// vector times its factor). What node_update drives the node with, and with the internal force
+/// what a support holds at equilibrium (Engine::external_forces: reactions = f − r there).
+/// Inputs: node data, pattern factors (slot per face and pattern), u [m] SoA (3, P).
+template <class T>
+PLIANT_HD void applied_loads(index_t n, const NodeData<T>& nd, const T* pattern_factors, const T* u,
+                             index_t P, T r[3]) {
+    pressure_force(n, nd, pattern_factors, u, P, r);
+    for (int k = 0; k < nd.n_patterns; ++k) {
+        const T s = pattern_factors[k];
+        const T* lp = nd.load_patterns + static_cast<std::size_t>(k) * 3 * P + n;
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) r[d] += s * lp[d * P];
+    }
+}
+
 /// Node n's internal force f [N] (3): the sum of its incidences' element forces (corner_force), in
 /// a fixed order (no atomics: the same bits on every device and thread count): four partial sums,
 /// s_j over the incidences begin + 4i + j of the list's whole groups of four, the last 0–3 into s_0,
@@ -421,16 +438,10 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
     gather_forces(n, nd, f_elem, f);
     if (nd.mem.count) membrane_force(n, nd.mem, u, P, f);
     const T w = it.g1 * nd.inv_mass[n];
-    T r[3];
-    pressure_force(n, nd, pattern_factors, u, P, r);
     // Every load before the first store: the stores could alias them as far as the compiler knows,
     // and it would load them again after each.
-    for (int k = 0; k < nd.n_patterns; ++k) {
-        const T s = pattern_factors[k];
-        const T* lp = nd.load_patterns + static_cast<std::size_t>(k) * 3 * P + n;
-        PLIANT_UNROLL
-        for (int d = 0; d < 3; ++d) r[d] += s * lp[d * P];
-    }
+    T r[3];
+    applied_loads(n, nd, pattern_factors, u, P, r);
     T un[3], inc[3];
     PLIANT_UNROLL
     for (int d = 0; d < 3; ++d) {

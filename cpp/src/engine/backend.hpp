@@ -65,6 +65,9 @@ public:
     virtual ElementResults<T> measures(const State<T>& s) = 0;
     /// Internal nodal forces f(u) [N], SoA (3, P).
     virtual std::vector<T> internal_forces(const State<T>& s) = 0;
+    /// External loads [N] on the nodes at the state's displacements and the load curves at t [s]
+    /// (load patterns, gravity, follower pressure and traction; not contact), SoA (3, P).
+    virtual std::vector<T> external_forces(const State<T>& s, double t) = 0;
     /// Force [N] and torque [N·m] each tool received at each step of the last run, (steps, tools, 6);
     /// after a relaxation, the last step's only.
     virtual std::vector<double> tool_history() = 0;

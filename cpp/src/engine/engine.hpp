@@ -161,6 +161,7 @@ public:
                     double blowup) override;
     ElementResults<T> measures(const State<T>& s) override;
     std::vector<T> internal_forces(const State<T>& s) override;
+    std::vector<T> external_forces(const State<T>& s, double t) override;
     std::vector<double> tool_history() override;
     std::vector<double> pair_history() override;
     ContactReport contact_report() override;
@@ -196,6 +197,7 @@ public:
     template <class M, int kMode>
     void launch_visco_edge_stress(const Span& sp, ViscoMode visco_mode, double dt);
     void node_pass(const Phase& ph, bool relaxing, T* f_node_out);
+    void load_pass(double t, const T* u, T* f_out);
     void contact_pass(const Phase& ph, bool relaxing);
     void soft_pass(const Phase& ph, bool relaxing);
     void soft_lists(const T* u);

@@ -418,6 +418,16 @@ std::vector<T> Engine<T, Dev>::internal_forces(const State<T>& s) {
     return f_node_[0].to_host();
 }
 
+/// The external loads [N] at the state's u and the curves at t [s], SoA (3, P): the pattern factors
+/// at t, then applied_loads per node (what the node pass drives each node with).
+template <class T, class Dev>
+std::vector<T> Engine<T, Dev>::external_forces(const State<T>& s, double t) {
+    load(s);
+    const Phase ph = phase_;
+    dev_.region([&] { load_pass(t, v_.u[ph.cur], v_.f_node[0]); });
+    return f_node_[0].to_host();
+}
+
 /// Columns [begin, begin + width) of the last run's history rows (tools: 6 each, then pairs: 3 each).
 template <class T, class Dev>
 std::vector<double> Engine<T, Dev>::history_columns(std::size_t begin, std::size_t width) {

@@ -306,6 +306,22 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     });
 }
 
+/// External loads: the load-pattern factors at t [s], then each node's applied_loads at u into
+/// f_out [N] SoA (3, P).
+template <class T, class Dev>
+void Engine<T, Dev>::load_pass(double t, const T* u, T* f_out) {
+    const DeviceView<T> v = v_;
+    dev_.serial([=] PLIANT_KERNEL() {
+        for (int p = 0; p < v.n_factors; ++p)
+            v.pf[p] = T(curve_value(v.curves[v.pattern_curve[p]], t, v.tt, v.tv));
+    });
+    dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
+        T r[3];
+        applied_loads(n, v.nodes, v.pf, u, v.P, r);
+        for (int d = 0; d < 3; ++d) f_out[d * v.P + n] = r[d];
+    });
+}
+
 /// Contact of the surface nodes with the rigid tools (and grasping), one thread per node; then
 /// chunks of nodes (chunk_size) each sum their per-tool force and torque, node by node, and one
 /// thread adds the chunks in order into the step's history row (the same bits for any thread count).

@@ -565,7 +565,7 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
         b.add_gravity(g * d / np.linalg.norm(d), ids, curve)
         return
     if ctype == "Fix":
-        b.fix(ids, dofs)
+        b.fix(ids, dofs, name=key)
         return
     mag = c.find("Magnitudes")
     if mag is None:
@@ -583,7 +583,7 @@ def _constraint(c, b: ModelBuilder, T, shapes: dict, f: str, key: str, unsupport
         raise NiftySimError(f"Magnitudes {mtype}: {vals.size} values for {ids.size} nodes", f, key)
     ndof = len(dofs)
     if ctype == "Disp":
-        b.prescribe(ids, np.repeat(v[:, None], ndof, axis=1), dofs, curve)
+        b.prescribe(ids, np.repeat(v[:, None], ndof, axis=1), dofs, curve, name=key)
     else:
         force = np.zeros((ids.size, 3))
         for d in dofs:

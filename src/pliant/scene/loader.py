@@ -310,16 +310,21 @@ def _constraints(ctx: Ctx, tables: list, b: ModelBuilder, X, T, scene: Scene) ->
         )
         ids = select_nodes(ctx, c["nodes"], f"{p}.nodes", X, T, scene.node_sets)
         dofs = c.get("dofs", "xyz")
+        name = c.get("name") or p  # its reaction's label (reactions.json)
         with ctx.under(p):
             if c["type"] == "fix":
                 if "value" in c or "curve" in c:
                     raise ctx.error(p, "a 'fix' constraint takes no value or curve")
-                b.fix(ids, dofs)
+                b.fix(ids, dofs, name=name)
             elif c["type"] == "displacement":
                 if "value" not in c:
                     raise ctx.error(p, "a 'displacement' constraint needs 'value' [m]")
                 b.prescribe(
-                    ids, c["value"], dofs, make_curve(ctx, c.get("curve"), f"{p}.curve", scene.duration)
+                    ids,
+                    c["value"],
+                    dofs,
+                    make_curve(ctx, c.get("curve"), f"{p}.curve", scene.duration),
+                    name=name,
                 )
             else:
                 raise ctx.error(

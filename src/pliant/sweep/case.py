@@ -93,10 +93,13 @@ class SceneCase:
 
 
 def _flatten(summary: dict) -> dict[str, Any]:
-    """The summary's scalars and per-tool figures as flat columns; inspect's entries as they are."""
+    """The summary's scalars, per-tool figures and support reactions as flat columns; inspect's
+    entries as they are."""
     out = {k: summary.get(k) for k in SUMMARY_OUTPUTS}
     for t in summary.get("tools", []):
         out[f"tool.{t['name']}.max_force"] = t["max_force"]
         out.update({f"tool.{t['name']}.f{c}": t["force"][j] for j, c in enumerate("xyz")})
+    for r in summary.get("reactions", []):
+        out.update({f"reaction.{r['name']}.f{c}": r["force"][j] for j, c in enumerate("xyz")})
     out.update({k: v for k, v in summary.items() if k.startswith(("point.", "tool."))})
     return out

@@ -84,6 +84,9 @@ class ModelBuilder:
         self.nodes = np.zeros((0, 3))
         self.tets = np.zeros((0, 4), dtype=np.int64)
         self.sets: list[_ElementSet] = []
+        # Supports: (name, user node ids, DOFs) per fix / prescribe call, for their reactions
+        # (Model.support_reactions).
+        self.supports: list[tuple[str, np.ndarray, str]] = []
         self.damping = 0.0  # mass-proportional damping α [1/s]
         # Stiffness-proportional (Rayleigh β) damping [s]: a viscous stress β C0 : Ė per element
         # that spares rigid motion; the critical time step shrinks with it (see Model.dt_critical).
@@ -214,20 +217,33 @@ class ModelBuilder:
             raise InputError(f"{what}: node {int(bad)} out of range; expected 0..{self.n_nodes - 1}")
         return ids
 
-    def fix(self, nodes, dofs="xyz"):
+    def fix(self, nodes, dofs="xyz", name: str | None = None):
         """Fix the given DOFs of the nodes (zero displacement). Node selections here and in
-        prescribe, add_force, add_gravity and add_tool may not be empty (InputError)."""
-        self._constrain(nodes, 0.0, dofs, Constant(), "fix")
+        prescribe, add_force, add_gravity and add_tool may not be empty (InputError). ``name``
+        labels the support's reaction (Model.support_reactions; default "support K")."""
+        self._support(name, self._constrain(nodes, 0.0, dofs, Constant(), "fix"), dofs)
 
-    def prescribe(self, nodes, displacement, dofs="xyz", curve: LoadCurve | None = None):
+    def prescribe(
+        self, nodes, displacement, dofs="xyz", curve: LoadCurve | None = None, name: str | None = None
+    ):
         """Prescribe displacements [m] on DOFs of nodes, scaled in time by ``curve`` (default 1).
 
         ``displacement``: a scalar (all DOFs), a vector per DOF in ``dofs`` (len(dofs),), or per
-        node (n, len(dofs)). A DOF prescribed twice with different values or curves is an error."""
-        self._constrain(nodes, displacement, dofs, curve, "prescribe")
+        node (n, len(dofs)). A DOF prescribed twice with different values or curves is an error.
+        ``name`` labels the support's reaction, as fix's."""
+        self._support(name, self._constrain(nodes, displacement, dofs, curve, "prescribe"), dofs)
 
-    def _constrain(self, nodes, displacement, dofs, curve: LoadCurve | None, what: str):
-        """prescribe (or fix: ``what`` names the call in errors)."""
+    def _support(self, name: str | None, ids: np.ndarray, dofs: str) -> None:
+        """Records a support for its reaction; a name given twice is numbered ("base (2)")."""
+        label = name or f"support {len(self.supports)}"
+        taken = {n for n, _, _ in self.supports}
+        k = 2
+        while label in taken:
+            label, k = f"{name or 'support'} ({k})", k + 1
+        self.supports.append((label, ids, "".join("xyz"[d] for d in _dofs(dofs))))
+
+    def _constrain(self, nodes, displacement, dofs, curve: LoadCurve | None, what: str) -> np.ndarray:
+        """prescribe (or fix: ``what`` names the call in errors); the node ids."""
         ids = self._node_ids(nodes, what, empty=False)
         ds = _dofs(dofs)
         given = "non-numeric"
@@ -259,6 +275,7 @@ class ModelBuilder:
                         f"{shown(new[1])}"
                     )
                 self._cons[key] = new
+        return ids
 
     def add_force(self, nodes, force, curve: LoadCurve | None = None):
         """Add a force [N] on each node: (3,) for all, or (n, 3) per node; scaled by ``curve``."""
@@ -453,6 +470,7 @@ class ModelBuilder:
         b._node_gravity, b._tractions = list(self._node_gravity), list(self._tractions)
         b._membranes = list(self._membranes)
         b._cons, b.tools, b.tool_nodes = dict(self._cons), list(self.tools), list(self.tool_nodes)
+        b.supports = list(self.supports)
         return b
 
     def split(self, tets, parent) -> "ModelBuilder":
@@ -480,6 +498,10 @@ class ModelBuilder:
         b.tool_nodes = [
             None if s is None else np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]]))
             for s in self.tool_nodes
+        ]
+        b.supports = [  # a support's copies hold what it held
+            (name, np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]])), dofs)
+            for name, s, dofs in self.supports
         ]
         b._node_gravity = [
             (np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]])), g, c)

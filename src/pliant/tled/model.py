@@ -29,6 +29,11 @@ if TYPE_CHECKING:
 __all__ = ["Model"]
 
 
+def _held_sum(held: np.ndarray, ids: np.ndarray, dofs: str) -> np.ndarray:
+    """Σ over the nodes ``ids`` of f − r [N] (N, 3), the components outside ``dofs`` zeroed."""
+    return held[ids].sum(axis=0) * np.array([d in dofs for d in "xyz"], dtype=float)
+
+
 def _lumped_mass(n_nodes: int, T: np.ndarray, volume: np.ndarray, density: np.ndarray) -> np.ndarray:
     """Lumped nodal masses [kg] (n_nodes,): a quarter of each element's ρ V0 to each of its nodes
     (T (M, 4), V0 (M,) [m³] as the engine computed them (tet_geometry), density (M,) [kg/m³])."""
@@ -620,6 +625,33 @@ class Model:
         constrained DOFs of an equilibrium state, less the loads applied there, the forces the
         supports exert on the body (a bar hanging under gravity: its weight, upward, at the top)."""
         return self.to_user_nodes(np.asarray(self._results().internal_forces(state._s), dtype=float))
+
+    def external_forces(self, state: "State", t: float | None = None) -> np.ndarray:
+        """External loads [N], (N, 3), at the state's displacements and the load curves at ``t`` [s]
+        (default: the state's time): load patterns (point forces, gravity m g), follower pressure
+        and surface traction on the current faces; contact forces are not loads here. The engine's
+        own per-node loads (applied_loads, tled.hpp), those the step drives the nodes with."""
+        when = state.time if t is None else float(t)
+        return self.to_user_nodes(np.asarray(self._results().external_forces(state._s, when), dtype=float))
+
+    def reactions(self, state: "State", nodes, dofs: str = "xyz", t: float | None = None) -> np.ndarray:
+        """Total force [N], (3,), the supports exert on the body at ``nodes`` (user node ids) along
+        ``dofs`` (the others 0): Σ (f − r) over them, internal forces less the external loads (a
+        bar hanging under gravity: its weight, upward, at its fixed top). Exact at equilibrium and at
+        fixed supports; on nodes a prescribed displacement moves, their own inertia m a and mass
+        damping are not counted (docs/scenes.md, "Reactions")."""
+        held = self.internal_forces(state) - self.external_forces(state, t)
+        return _held_sum(held, np.asarray(nodes, dtype=np.int64).reshape(-1), dofs)
+
+    @property
+    def supports(self) -> list[tuple[str, np.ndarray, str]]:
+        """The supports (name, user node ids, DOFs), one per ModelBuilder.fix / prescribe call."""
+        return list(self._builder.supports)
+
+    def support_reactions(self, state: "State", t: float | None = None) -> dict[str, np.ndarray]:
+        """Each support's reaction [N], (3,), by its name (``reactions`` over its nodes and DOFs)."""
+        held = self.internal_forces(state) - self.external_forces(state, t)
+        return {name: _held_sum(held, ids, dofs) for name, ids, dofs in self._builder.supports}
 
     def strain_energy(self, state: "State") -> float:
         """Total strain energy [J]: Σ V0 W of the tets and Σ A0 h W of the membranes."""

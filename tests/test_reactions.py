@@ -1,0 +1,176 @@
+"""Support reactions: Model.external_forces, Model.reactions and Model.support_reactions (the force
+each fix / prescribe call's nodes receive from their support, f − r over its DOFs), and their file,
+reactions.json, from `pliant run`. References: statics (a body's weight and the loads on it are
+carried by its supports), and the uniaxial nominal stress of the strain energy in principal
+stretches (Ogden 1984, §4.3), computed apart from the engine's stress code."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import pliant as pl
+from pliant.mesh import box_tets
+from pliant.validate.models import cube_with_symmetry_bcs
+from pliant.validate.references import UNIAXIAL, uniaxial_reference
+
+RHO, G = 1000.0, 9.81
+
+
+def _hanging_block(backend: str, dtype: str = "float64"):
+    """A 4 × 2 × 2 cm block, fixed at its top face, hanging under gravity with a 0.05 N point load
+    on its bottom face (along −z and +x), relaxed: (model, state, top ids, bottom ids)."""
+    X, T = box_tets((0.04, 0.02, 0.02), (4, 2, 2), jitter=0.2, seed=4)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=2e4, nu=0.4), density=RHO)
+    b.set_gravity((0.0, 0.0, -G))
+    top = np.nonzero(X[:, 2] > 0.02 - 1e-9)[0]
+    bottom = np.nonzero(X[:, 2] < 1e-9)[0]
+    b.fix(top, name="ceiling")
+    b.add_force(bottom, np.array([0.01, 0.0, -0.05]) / len(bottom))
+    sim = pl.Simulation(b.finalize(dtype, backend=backend))
+    sim.relax(tol=1e-9)
+    return sim.model, sim.state, top, bottom
+
+
+def test_a_hanging_block_hangs_from_its_support_by_its_weight_and_load(backend):
+    """The ceiling holds the block's weight ρ V g and the point load: (−0.01, 0, 0.05 + ρ V g) N.
+    Tolerance 1e-7 of the weight: the relaxation's residual (1e-9 of the loads and reactions) and
+    float64 sums."""
+    model, state, top, _ = _hanging_block(backend)
+    weight = RHO * 0.04 * 0.02 * 0.02 * G
+    expected = np.array([-0.01, 0.0, 0.05 + weight])
+    reaction = model.support_reactions(state)["ceiling"]
+    np.testing.assert_allclose(reaction, expected, rtol=0, atol=1e-7 * weight)
+    np.testing.assert_array_equal(model.reactions(state, top), reaction)
+    # Along z only: the other components left out.
+    assert model.reactions(state, top, "z")[:2].tolist() == [0.0, 0.0]
+
+
+def test_the_external_forces_are_the_weight_and_the_loads(backend):
+    """Σ r = m g + the point loads (gravity is m_a g on each node, with the lumped masses, whose
+    sum is ρ V); 1e-12 relative, float64 sums."""
+    model, state, _, bottom = _hanging_block(backend)
+    r = model.external_forces(state)
+    weight = RHO * 0.04 * 0.02 * 0.02 * G
+    np.testing.assert_allclose(r.sum(axis=0), [0.01, 0.0, -0.05 - weight], rtol=0, atol=1e-12 * weight)
+    np.testing.assert_allclose(
+        r[:, 2], -model.mass * G - np.isin(np.arange(len(r)), bottom) * 0.05 / len(bottom)
+    )
+
+
+def test_a_stretched_cube_meets_the_nominal_stress_at_both_ends(backend):
+    """A unit cube of Neo-Hookean stretched 20 % along x between symmetry planes: the support that
+    pulls it (x = 1) holds P_x · 1 m² along x, the plane x = 0 as much back (Ogden's ∂W/∂λ with the
+    lateral stretch that frees the sides). Tolerance 5e-3 of P, as the validation's uniaxial rows
+    (relaxation residual 1e-8, the reference's finite difference)."""
+    material, W, _ = UNIAXIAL["NeoHookean"]
+    _, model, right = cube_with_symmetry_bcs(material, 1.2, dtype="float64")
+    sim = pl.Simulation(model, backend=backend)
+    sim.relax(tol=1e-8, increments=10)
+    P_ref, _ = uniaxial_reference(W, 1.2)
+    by_name = model.support_reactions(sim.state)
+    pulled = next(name for name, ids, _ in model.supports if np.array_equal(np.sort(ids), np.sort(right)))
+    assert by_name[pulled][0] == pytest.approx(P_ref, rel=5e-3)
+    assert by_name[pulled][1:].tolist() == [0.0, 0.0]
+    assert by_name["support 0"][0] == pytest.approx(-P_ref, rel=5e-3)  # the plane x = 0, fixed first
+
+
+def test_support_names_are_unique_and_follow_a_cut():
+    """Unnamed supports are numbered, a repeated name gets "(2)"; after node splitting (a cut) the
+    copies of a support's nodes are the support's too (they keep its constraints)."""
+    X, T = box_tets((0.02, 0.01, 0.01), (2, 1, 1))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.fix([0, 1], "z")
+    b.fix([2], name="clamp")
+    b.prescribe([3], 0.001, "x", name="clamp")
+    assert [(n, ids.tolist(), d) for n, ids, d in b.supports] == [
+        ("support 0", [0, 1], "z"),
+        ("clamp", [2], "xyz"),
+        ("clamp (2)", [3], "x"),
+    ]
+    n = len(X)
+    split = b.split(T, np.array([1, 5]))  # node n copies 1, node n + 1 copies 5
+    assert split.supports[0][1].tolist() == [0, 1, n]
+    assert split.supports[1][1].tolist() == [2]
+
+
+SCENE = """
+title = "hanging block"
+[mesh]
+primitive = "box"
+size = [0.04, 0.02, 0.02]
+cells = [4, 2, 2]
+[[material]]
+type = "neo-hookean"
+E = 2.0e4
+nu = 0.4
+density = 1000.0
+[solver]
+duration = 0.1
+static = true
+tol = 1e-9
+dtype = "float64"
+[[constraint]]
+type = "fix"
+name = "ceiling"
+nodes = { plane = { point = [0, 0, 0.01], normal = [0, 0, 1] } }
+[[constraint]]
+type = "fix"
+dofs = "z"
+nodes = { plane = { point = [0, 0, 0.01], normal = [0, 0, 1] } }
+[[load]]
+type = "gravity"
+"""
+
+
+def test_a_run_writes_each_supports_reaction(tmp_path):
+    """`pliant run` writes reactions.json (per support: DOFs, node count, the force at each frame)
+    and the last one in summary.json; a support's name is its 'name', else constraint[i]. The
+    static block's ceiling holds its weight (tolerance as above), and so does the second support,
+    the same nodes held along z only (each support sums its own nodes' f − r)."""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    scene = tmp_path / "block.toml"
+    scene.write_text(SCENE)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(scene), "-o", str(out), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    kept = json.loads((out / "reactions.json").read_text())
+    assert sorted(kept) == ["ceiling", "constraint[1]"]
+    weight = RHO * 0.04 * 0.02 * 0.02 * G
+    ceiling = kept["ceiling"]
+    assert ceiling["dofs"] == "xyz" and ceiling["nodes"] == 15
+    assert len(ceiling["time"]) == len(ceiling["force"]) == 2  # frame 0 and the solution
+    np.testing.assert_allclose(ceiling["force"][-1], [0.0, 0.0, weight], rtol=0, atol=1e-7 * weight)
+    np.testing.assert_allclose(
+        kept["constraint[1]"]["force"][-1], [0.0, 0.0, weight], rtol=0, atol=1e-7 * weight
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    assert "reactions.json" in summary["files"]
+    assert summary["reactions"][0] == {
+        "name": "ceiling",
+        "dofs": "xyz",
+        "nodes": 15,
+        "force": ceiling["force"][-1],
+    }
+
+
+def test_a_sweep_collects_each_supports_reaction(tmp_path):
+    """A sweep's run (SceneCase, what each Dask task calls) has reaction.NAME.fx|fy|fz at the end:
+    the static block's ceiling holds its weight (tolerance as above)."""
+    from pliant.sweep.case import SceneCase
+
+    scene = tmp_path / "block.toml"
+    scene.write_text(SCENE)
+    row = SceneCase(str(scene))({})
+    weight = RHO * 0.04 * 0.02 * 0.02 * G
+    assert row["reaction.ceiling.fz"] == pytest.approx(weight, rel=1e-7)
+    assert abs(row["reaction.ceiling.fx"]) < 1e-7 * weight
+    assert row["reaction.constraint[1].fz"] == pytest.approx(weight, rel=1e-7)
