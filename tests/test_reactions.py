@@ -174,3 +174,95 @@ def test_a_sweep_collects_each_supports_reaction(tmp_path):
     assert row["reaction.ceiling.fz"] == pytest.approx(weight, rel=1e-7)
     assert abs(row["reaction.ceiling.fx"]) < 1e-7 * weight
     assert row["reaction.constraint[1].fz"] == pytest.approx(weight, rel=1e-7)
+
+
+CUBE = """
+title = "stretched cube"
+[mesh]
+primitive = "box"
+size = [1.0, 1.0, 1.0]
+cells = [3, 3, 3]
+translate = [0.5, 0.5, 0.5]
+[[material]]
+type = "neo-hookean"
+mu = 1.0e3
+K = 1.0e4
+density = 1000.0
+[solver]
+duration = 1.0
+static = true
+tol = 1e-10
+increments = 5
+dtype = "float64"
+[[constraint]]
+type = "fix"
+dofs = "x"
+nodes = { plane = { point = [0, 0, 0], normal = [1, 0, 0] } }
+[[constraint]]
+type = "fix"
+dofs = "y"
+nodes = { plane = { point = [0, 0, 0], normal = [0, 1, 0] } }
+[[constraint]]
+type = "fix"
+dofs = "z"
+nodes = { plane = { point = [0, 0, 0], normal = [0, 0, 1] } }
+[[constraint]]
+type = "displacement"
+name = "pull"
+dofs = "x"
+value = 0.2
+curve = "ramp"
+nodes = { plane = { point = [1, 0, 0], normal = [1, 0, 0] } }
+[output]
+points = { corner = [1.0, 1.0, 1.0], origin = [0.01, 0.0, -0.01] }
+"""
+
+
+def test_a_runs_output_points_and_pull_follow_uniaxial_stress(tmp_path):
+    """A unit cube (μ = 1 kPa, K = 10 kPa) pulled 20 % along x between symmetry planes, as a
+    scene: points.json gives the displacement of the node nearest each [output] point at every
+    frame, and reactions.json the pull. The far corner moves (λ − 1, λ_t − 1, λ_t − 1) m with the
+    lateral stretch λ_t of Ogden's uniaxial stress (the homogeneous field, which linear tets hold
+    exactly: 1e-6, the relaxation's residual 1e-10 and the reference's finite difference); the
+    origin (the nearest node to a point 1.4 cm off it) does not move; the pull's reaction is the
+    nominal stress times 1 m² (5e-3, as the uniaxial validation)."""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+    from pliant.validate.references import W_nh
+
+    scene = tmp_path / "cube.toml"
+    scene.write_text(CUBE)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(scene), "-o", str(out), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    P_ref, lt = uniaxial_reference(W_nh, 1.2)
+    points = json.loads((out / "points.json").read_text())
+    corner, origin = points["corner"], points["origin"]
+    assert corner["position"] == [1.0, 1.0, 1.0] and origin["position"] == [0.0, 0.0, 0.0]
+    assert corner["time"] == [0.0, 1.0] and corner["displacement"][0] == [0.0, 0.0, 0.0]
+    np.testing.assert_allclose(corner["displacement"][-1], [0.2, lt - 1, lt - 1], rtol=1e-6)
+    assert origin["displacement"][-1] == [0.0, 0.0, 0.0]
+    pull = json.loads((out / "reactions.json").read_text())["pull"]
+    assert pull["force"][-1][0] == pytest.approx(P_ref, rel=5e-3)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["points"][0] == {
+        "name": "corner",
+        "node": corner["node"],
+        "displacement": corner["displacement"][-1],
+    }
+
+
+def test_an_output_point_far_from_the_mesh_is_warned_of(tmp_path):
+    """Its displacement is the nearest node's: a point given in millimetres (1000 for 1 m) is named,
+    with its distance, and the run goes on."""
+    from pliant.errors import PliantWarning
+    from pliant.scene import load_scene
+
+    scene = tmp_path / "cube.toml"
+    scene.write_text(CUBE.replace("corner = [1.0, 1.0, 1.0]", "corner = [1000.0, 1000.0, 1000.0]"))
+    with pytest.warns(
+        PliantWarning, match=r"\[output.points.corner\]: \[1000.0, 1000.0, 1000.0\] is 1.73e\+03 m"
+    ):
+        loaded = load_scene(scene)
+    assert loaded.points["corner"] == int(np.argmax(loaded.builder.nodes.sum(axis=1)))

@@ -39,6 +39,7 @@ class Scene:
     meta: dict = field(default_factory=dict)
     blades: list = field(default_factory=list)  # pliant.cutting.Blade: they cut while it runs
     node_sets: dict = field(default_factory=dict)  # name → node indices, from the mesh files
+    points: dict = field(default_factory=dict)  # probes: name → node, its displacement per frame
 
 
 def load_job(path, ignore=None, overrides: dict | None = None) -> Scene:

@@ -163,6 +163,7 @@ RUN_FILES = (
     "result.png",
     "tools.json",
     "reactions.json",
+    "points.json",
     "U.txt",
     "F.txt",
 )
@@ -251,14 +252,27 @@ def run_scene(
         v: [] for v in scene.meta.get("niftysim_outputs", ()) if out is not None
     }
     reactions: dict[str, dict] = {}  # per support: its force [N] at each frame (reactions.json)
+    probes: dict[str, dict] = {  # per output point: its node's displacement [m] at each frame
+        name: {
+            "node": node,
+            "position": model.reference_positions[node].tolist(),
+            "time": [],
+            "displacement": [],
+        }
+        for name, node in scene.points.items()
+    }
 
     def keep_frame(first: bool = False) -> None:
-        """Writes the frame and keeps its support reactions and (after the first) its NiftySim text
-        outputs."""
+        """Writes the frame and keeps its support reactions, its output points' displacements and
+        (after the first) its NiftySim text outputs."""
         writer.write(state)
         for v, kept in texts.items() if not first else ():
             kept.append(NIFTYSIM_OUTPUTS[v](model, state))
         keep_reactions(reactions, model, state)
+        u = state.displacements
+        for row in probes.values():
+            row["time"].append(state.time)
+            row["displacement"].append(u[row["node"]].tolist())
 
     build_s = time.perf_counter() - t_build
     summary = {
@@ -413,6 +427,14 @@ def run_scene(
             if out is not None:
                 atomic_write_text(out / "reactions.json", json.dumps(reactions))
                 summary["files"].append("reactions.json")
+        if probes:
+            summary["points"] = [
+                {"name": k, "node": r["node"], "displacement": r["displacement"][-1] if r["time"] else None}
+                for k, r in probes.items()
+            ]
+            if out is not None:
+                atomic_write_text(out / "points.json", json.dumps(probes))
+                summary["files"].append("points.json")
         if inspect is not None and np.all(np.isfinite(u)):
             summary.update(inspect(model, solver, state))
         if out is None:

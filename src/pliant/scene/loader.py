@@ -24,7 +24,7 @@ from .membranes import add_membranes
 from .keys import apply_overrides
 from .schema import Ctx, check_keys, read_toml, vector
 from .tools import make_tool
-from .select import select_elements, select_faces, select_nodes
+from .select import nearest_node, select_elements, select_faces, select_nodes
 
 
 __all__ = ["load_scene", "make_curve"]
@@ -123,7 +123,7 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     _constraints(ctx, data.get("constraint", []), b, X, T, scene)
     _loads(ctx, data.get("load", []), b, X, T, scene)
     _tools(ctx, data.get("tool", []), b, X, T, path.parent, scene)
-    _output(ctx, data, scene)
+    _output(ctx, data, scene, X)
     if scene.blades and scene.static:
         raise ctx.error(
             "tool", "a blade cuts while a dynamic run steps; a quasi-static solve has no motion to cut along"
@@ -424,14 +424,25 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
         )
 
 
-def _output(ctx: Ctx, data: dict, scene: Scene) -> None:
-    """The [output] table."""
+def _output(ctx: Ctx, data: dict, scene: Scene, X: np.ndarray) -> None:
+    """The [output] table; its points (probes) resolved to the nodes nearest them in X [m]."""
     out = check_keys(
         ctx,
         data.get("output", {}),
         "output",
-        {"every": "int", "interval": "number", "frames": "int", "png": "bool", "fields": "list"},
+        {
+            "every": "int",
+            "interval": "number",
+            "frames": "int",
+            "png": "bool",
+            "fields": "list",
+            "points": "table",
+        },
     )
+    scene.points = {
+        str(name): nearest_node(ctx, vector(ctx, v, f"output.points.{name}"), f"output.points.{name}", X)
+        for name, v in out.get("points", {}).items()
+    }
     from ..io.results import FIELDS
 
     fields = out.get("fields", list(FIELDS[:5]))

@@ -29,7 +29,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -37,9 +36,9 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from ..errors import PliantWarning
 from ..io.files import file_problem
 from ..scene.schema import Ctx, SceneError, check_keys, read_toml, vector
+from ..scene.select import nearest_node
 
 
 __all__ = ["Parameter", "Design", "Outputs", "SweepSpec", "load_sweep", "DESIGNS"]
@@ -267,22 +266,9 @@ def _check_values(ctx: Ctx, spec: SweepSpec) -> None:
 
 def _check_points(ctx: Ctx, spec: SweepSpec, X: np.ndarray) -> None:
     """Warn of an output point farther than a tenth of the body's size from every node of the base
-    mesh X [m] (N, 3): its displacement is the nearest node's, so such a point is most likely a
-    typo or in other units."""
-    size = float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))) if len(X) else 0.0
+    mesh X [m] (N, 3) (scene.select.nearest_node)."""
     for name, p in spec.outputs.points.items():
-        d2 = np.einsum("ij,ij->i", X - p, X - p)
-        node = int(np.argmin(d2))
-        if math.sqrt(d2[node]) > 0.1 * size:
-            warnings.warn(
-                PliantWarning(
-                    f"{ctx.file}:{ctx.line_of('output.points')} [output.points.{name}]: {list(p)} is "
-                    f"{math.sqrt(d2[node]):.3g} m from the nearest node ({node}, at "
-                    f"{np.round(X[node], 6).tolist()}) of a mesh {size:.3g} m across; its "
-                    "displacement is that node's (SI metres expected)"
-                ),
-                stacklevel=2,
-            )
+        nearest_node(ctx, p, f"output.points.{name}", X)
 
 
 def _run_count(design: Design, params: list[Parameter]) -> int:
