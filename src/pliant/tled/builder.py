@@ -476,8 +476,8 @@ class ModelBuilder:
     def split(self, tets, parent) -> "ModelBuilder":
         """A builder of the same model after node splitting (pliant.cutting): ``tets`` (M, 4) the
         elements over the old nodes and the new ones, ``parent`` (K,) the node each new node
-        (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints and
-        node-set memberships (tools' and add_gravity's nodes); point forces stay on the parent
+        (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints, supports
+        (their reactions) and node-set memberships (tools' and add_gravity's nodes); point forces stay on the parent
         (their total is unchanged); each pressure, traction or membrane face moves to the copies its
         element now uses."""
         parent = np.asarray(parent, np.int64)
@@ -495,18 +495,13 @@ class ModelBuilder:
         if self.soft_contact is not None:  # cut pieces keep their body's number
             b.soft_contact = copy.copy(self.soft_contact)
             b.soft_contact.labels = self.bodies()
-        b.tool_nodes = [
-            None if s is None else np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]]))
-            for s in self.tool_nodes
-        ]
-        b.supports = [  # a support's copies hold what it held
-            (name, np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]])), dofs)
-            for name, s, dofs in self.supports
-        ]
-        b._node_gravity = [
-            (np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]])), g, c)
-            for s, g, c in self._node_gravity
-        ]
+
+        def grown(s: np.ndarray) -> np.ndarray:  # a node set with the copies of its nodes
+            return np.unique(np.concatenate([s, n0 + np.nonzero(np.isin(parent, s))[0]]))
+
+        b.tool_nodes = [None if s is None else grown(s) for s in self.tool_nodes]
+        b.supports = [(name, grown(s), dofs) for name, s, dofs in self.supports]  # copies hold too
+        b._node_gravity = [(grown(s), g, c) for s, g, c in self._node_gravity]
         if self._pressures or self._tractions or self._membranes:
             from ..cutting.split import LOCAL_FACES
 
