@@ -398,6 +398,19 @@ def test_png_false_does_not_announce_a_picture(tmp_path):
     assert not (tmp_path / "o" / "result.png").exists()
 
 
+def _with_signals(disposition: str, argv: list[str]) -> list[str]:
+    """``argv`` run with SIGINT at its default ("default": as from a terminal) or ignored
+    ("ignore": as a shell's background job), whatever this process has (a test runner started in
+    the background ignores SIGINT, and its children inherit that): a launcher sets it and execs
+    the command in its place (the same process, so its pid gets the signals sent)."""
+    launcher = (
+        "import os, signal, sys; "
+        f"signal.signal(signal.SIGINT, signal.{'SIG_DFL' if disposition == 'default' else 'SIG_IGN'}); "
+        "os.execv(sys.argv[1], sys.argv[1:])"
+    )
+    return [sys.executable, "-c", launcher, *argv]
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
 def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path, sig):
     """Ctrl-C between a frame's file and the index left result.pvd one frame short. SIGTERM (a
@@ -407,7 +420,7 @@ def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path, sig):
         tmp_path, SCENE.replace("duration = 0.001", "duration = 100.0") + "[output]\nevery = 1\npng = false\n"
     )
     proc = subprocess.Popen(
-        [str(PLIANT), "run", str(p), "-o", str(tmp_path / "o"), "--no-progress"],
+        _with_signals("default", [str(PLIANT), "run", str(p), "-o", str(tmp_path / "o"), "--no-progress"]),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -430,6 +443,35 @@ def test_interrupted_run_indexes_every_frame_it_wrote(tmp_path, sig):
     listed = re.findall(r'file="([^"]+)"', (tmp_path / "o" / "result.pvd").read_text())
     assert len(frames) >= 20 and listed == frames
     assert not list((tmp_path / "o").glob(".*tmp*"))  # nothing half-written left behind
+
+
+def test_a_run_that_ignores_ctrl_c_is_not_interrupted_by_it(tmp_path):
+    """A run started with SIGINT ignored (a shell's background job) runs to its end whatever SIGINTs
+    arrive, even while frames are written (where the interrupt is held and raised after the frame:
+    such a run was interrupted by a SIGINT that landed there). 200 frames of a short run, a SIGINT
+    every 20 ms from its 10th frame on."""
+    p = scene(
+        tmp_path,
+        SCENE.replace("duration = 0.001", "duration = 0.05") + "[output]\nframes = 200\npng = false\n",
+    )
+    proc = subprocess.Popen(
+        _with_signals("ignore", [str(PLIANT), "run", str(p), "-o", str(tmp_path / "o"), "--no-progress"]),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.time() + 60
+    while time.time() < deadline and len(list((tmp_path / "o").glob("frame_*.vtu"))) < 10:
+        time.sleep(0.02)
+    sent = 0
+    while proc.poll() is None and time.time() < deadline:
+        proc.send_signal(signal.SIGINT)
+        sent += 1
+        time.sleep(0.02)
+    out, err = proc.communicate(timeout=60)
+    assert sent > 5, "the run ended before the SIGINTs"
+    assert proc.returncode == 0, (out, err)
+    assert not json.loads((tmp_path / "o" / "summary.json").read_text())["interrupted"]
 
 
 def test_an_interrupt_before_frame_0_is_on_disk_still_ends_with_a_summary(tmp_path, monkeypatch):

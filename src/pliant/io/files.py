@@ -308,12 +308,14 @@ def make_output_dir(path, what: str = "output folder") -> Path:
 def deferred_interrupt():
     """Hold Ctrl-C (SIGINT) and SIGTERM while a group of files is committed, so that an index never
     lists one frame fewer than was written; the interrupt is raised when the block ends. Main
-    thread only (elsewhere a plain block)."""
+    thread only (elsewhere a plain block). A signal the process ignores stays ignored: a job a
+    shell started in the background ignores SIGINT (POSIX), and was interrupted by one that
+    landed while a frame was written, running on through the others."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     got: list[int] = []
-    held = (signal.SIGINT, signal.SIGTERM)
+    held = [s for s in (signal.SIGINT, signal.SIGTERM) if signal.getsignal(s) is not signal.SIG_IGN]
     old = [signal.signal(s, lambda s, f: got.append(s)) for s in held]
     try:
         yield

@@ -477,9 +477,9 @@ class ModelBuilder:
         """A builder of the same model after node splitting (pliant.cutting): ``tets`` (M, 4) the
         elements over the old nodes and the new ones, ``parent`` (K,) the node each new node
         (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints, supports
-        (their reactions) and node-set memberships (tools' and add_gravity's nodes); point forces stay on the parent
-        (their total is unchanged); each pressure, traction or membrane face moves to the copies its
-        element now uses."""
+        (their reactions) and node-set memberships (tools' and add_gravity's nodes); point forces
+        stay on the parent (their total is unchanged); each pressure, traction or membrane face
+        moves to the copies its element now uses."""
         parent = np.asarray(parent, np.int64)
         tets = np.asarray(tets, np.int64)
         b = self.snapshot()
