@@ -26,6 +26,13 @@ void Engine<T, Dev>::step_once(const Phase& ph, double dt, double time_dt, bool 
     }
 }
 
+/// The load-pattern factors at t [s] (load patterns and pressure slots) into v.pf; one thread.
+template <class T>
+PLIANT_HD void pattern_factors_at(const DeviceView<T>& v, double t) {
+    for (int p = 0; p < v.n_factors; ++p)
+        v.pf[p] = T(curve_value(v.curves[v.pattern_curve[p]], t, v.tt, v.tv));
+}
+
 /// Load-curve factors at t (load patterns, pressure) and t + Δt (prescribed displacements), tool
 /// poses at t and t + Δt, t = t0 + step · time_dt; then the step counter advances.
 template <class T, class Dev>
@@ -36,8 +43,7 @@ void Engine<T, Dev>::step_scalars(double time_dt, bool fixed_row) {
         const double t = s.t0 + static_cast<double>(s.step) * time_dt;
         for (int c = 0; c < v.n_curves; ++c)
             v.cnext[c] = T(curve_value(v.curves[c], t + time_dt, v.tt, v.tv));
-        for (int p = 0; p < v.n_factors; ++p)
-            v.pf[p] = T(curve_value(v.curves[v.pattern_curve[p]], t, v.tt, v.tv));
+        pattern_factors_at(v, t);
         for (int k = 0; k < v.n_tools; ++k) {
             v.pose0[k] = tool_pose(v.tools[k], t, v.keys);
             v.pose1[k] = tool_pose(v.tools[k], t + time_dt, v.keys);
@@ -311,10 +317,7 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
 template <class T, class Dev>
 void Engine<T, Dev>::load_pass(double t, const T* u, T* f_out) {
     const DeviceView<T> v = v_;
-    dev_.serial([=] PLIANT_KERNEL() {
-        for (int p = 0; p < v.n_factors; ++p)
-            v.pf[p] = T(curve_value(v.curves[v.pattern_curve[p]], t, v.tt, v.tv));
-    });
+    dev_.serial([=] PLIANT_KERNEL() { pattern_factors_at(v, t); });
     dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
         T r[3];
         applied_loads(n, v.nodes, v.pf, u, v.P, r);
