@@ -150,25 +150,30 @@ def select_faces(
     return faces
 
 
+def closest_node(X: np.ndarray, point) -> tuple[int, float]:
+    """The node of X [m] (N, 3) nearest ``point`` [m] (the first on ties) and its distance [m]."""
+    p = np.asarray(point, dtype=float)
+    d2 = np.einsum("ij,ij->i", X - p, X - p)
+    node = int(np.argmin(d2))
+    return node, float(np.sqrt(d2[node]))
+
+
 def nearest_node(ctx: Ctx, point, path: str, X: np.ndarray) -> int:
     """The node of X [m] (N, 3) nearest ``point`` [m] (the first on ties): an output point's (a
     probe's) node. Warns, naming the key at ``path``, of a point farther than a tenth of the mesh's
     size from every node: its displacement is that node's, so such a point is most likely a typo or
     in other units."""
-    import math
     import warnings
 
     from ..errors import PliantWarning
 
-    p = np.asarray(point, dtype=float)
-    d2 = np.einsum("ij,ij->i", X - p, X - p)
-    node = int(np.argmin(d2))
+    node, dist = closest_node(X, point)
     size = float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))) if len(X) else 0.0
-    if math.sqrt(d2[node]) > 0.1 * size:
+    if dist > 0.1 * size:
         warnings.warn(
             PliantWarning(
-                f"{ctx.file}:{ctx.line_of(path)} [{path}]: {p.tolist()} is {math.sqrt(d2[node]):.3g} m "
-                f"from the nearest node ({node}, at {np.round(X[node], 6).tolist()}) of a mesh "
+                f"{ctx.file}:{ctx.line_of(path)} [{path}]: {np.asarray(point, dtype=float).tolist()} is "
+                f"{dist:.3g} m from the nearest node ({node}, at {np.round(X[node], 6).tolist()}) of a mesh "
                 f"{size:.3g} m across; its displacement is that node's (SI metres expected)"
             ),
             stacklevel=3,

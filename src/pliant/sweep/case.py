@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ..scene.select import closest_node
 from .spec import Outputs, SweepSpec
 
 __all__ = ["SceneCase", "SUMMARY_OUTPUTS"]
@@ -65,7 +66,7 @@ class SceneCase:
         reference positions X [m] and displacements u [m], shapes (N, 3)."""
         out: dict[str, Any] = {}
         for name, p in self.outputs.points.items():
-            node = int(np.argmin(np.einsum("ij,ij->i", X - p, X - p)))
+            node = closest_node(X, p)[0]
             out.update({f"point.{name}.u{c}": float(u[node, j]) for j, c in enumerate("xyz")})
             out[f"point.{name}.node"] = node
         return out
