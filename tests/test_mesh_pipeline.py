@@ -194,6 +194,31 @@ def test_bodies_touching_along_an_edge_or_a_face_are_split_there():
     assert surface_volume(Vr, Fr) == pytest.approx(exact, rel=1e-12)
 
 
+def test_holes_that_meet_at_a_vertex_are_filled():
+    """An octahedron without two faces that share only a vertex (its boundary passes that vertex
+    twice, a figure eight) and a cube's surface without two such faces: repair closes each hole by
+    itself (a three-edge hole's only triangle is the face removed), so the surface encloses the
+    solid's volume again (4/3 for the octahedron of unit radius, 1 for the cube; round-off only)."""
+    octa = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.0]])
+    octa_faces = np.array(
+        [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]]
+    )
+    cube = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    cube_faces = np.array(
+        [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6]]
+        + [[0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+    )
+    # octahedron: faces 0 (0, 2, 4) and 6 (3, 1, 5) share no vertex; 0 and 2 (1, 3, 4) share vertex 4
+    for V, F, drop, volume in [(octa, octa_faces, [0, 2], 4 / 3), (cube, cube_faces, [0, 8], 1.0)]:
+        keep = np.setdiff1d(np.arange(len(F)), drop)
+        shared = set(F[drop[0]].tolist()) & set(F[drop[1]].tolist())
+        assert len(shared) == 1  # the two holes meet at one vertex
+        Vr, Fr, actions = pl.mesh.repair_surface(V, F[keep])
+        assert "filled 2 hole(s) (6 boundary edges) by minimum-area triangulation" in actions
+        assert pl.mesh.check_surface(Vr, Fr).ok
+        assert surface_volume(Vr, Fr) == pytest.approx(volume, rel=1e-12)
+
+
 def test_repair_reports_every_change_it_makes():
     """A tetrahedron's four faces, one of them wound against the others, then all four inward: the
     repaired surface is closed with outward faces (positive volume: 1/6 of the unit cube's corner)

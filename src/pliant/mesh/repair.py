@@ -58,25 +58,40 @@ def _edges(F: np.ndarray):
 
 
 def boundary_loops(F: np.ndarray) -> list[np.ndarray]:
-    """Closed loops of boundary edges (edges used by one face), as ordered vertex lists."""
+    """Closed loops of boundary edges (edges used by one face), as ordered vertex lists. A boundary
+    that passes a vertex twice (two holes meeting at a vertex, a hole pinched to a figure eight) is
+    cut there into simple loops, each of which fill_loop can close: the walk follows unused edges and
+    cuts off a loop whenever it comes back to a vertex already on it."""
     directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     key = np.sort(directed, axis=1)
     uniq, inv, count = unique_rows(key, return_inverse=True, return_counts=True)
-    b = directed[count[inv] == 1]
-    nxt: dict[int, list[int]] = {}
-    for a, c in b:
-        nxt.setdefault(int(a), []).append(int(c))
-    loops, seen = [], set()
-    for start in list(nxt):
-        if start in seen:
+    b = directed[count[inv] == 1].tolist()
+    out: dict[int, list[int]] = {}  # vertex → its outgoing boundary edges
+    for k, (a, _) in enumerate(b):
+        out.setdefault(int(a), []).append(k)
+    used = [False] * len(b)
+    loops = []
+    for e0 in range(len(b)):
+        if used[e0]:
             continue
-        loop, v = [], start
-        while v not in seen and v in nxt:
-            seen.add(v)
-            loop.append(v)
-            v = nxt[v][0]
-        if len(loop) >= 3:
-            loops.append(np.array(loop))
+        walk = [int(b[e0][0])]
+        where = {walk[0]: 0}  # vertex → its place on the walk
+        e: int | None = e0
+        while e is not None:
+            used[e] = True
+            v = int(b[e][1])
+            if v in where:  # back at a vertex of the walk: cut the loop off, go on from v
+                i = where[v]
+                loop = walk[i:]
+                for u in loop[1:]:
+                    del where[u]
+                del walk[i + 1 :]
+                if len(loop) >= 3:
+                    loops.append(np.array(loop))
+            else:
+                where[v] = len(walk)
+                walk.append(v)
+            e = next((k for k in out.get(v, ()) if not used[k]), None)
     return loops
 
 
