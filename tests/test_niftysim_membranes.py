@@ -1,7 +1,7 @@
 """NiftySim membranes (<ShellElements> with <ShellElementSet>, user guide v2.4 §3.6;
 pliant.io.niftysim_membranes): an H8 bar wrapped in Linear membranes (listed as quadrilaterals and
 as triangles) stretched to the uniaxial closed form of both; SURFACE's facets and their mass; the
-file's mistakes named."""
+file's mistakes named; NiftySim's shell test model without bending stiffness against the closed form."""
 
 from __future__ import annotations
 
@@ -164,6 +164,14 @@ def test_surface_membranes_cover_the_boundary_and_add_their_mass(tmp_path):
             r"'1e400' \(number 2 of 2\) is inf; expected finite numbers",
         ),
         (_shells("Q8", [0, 1, 2], LINEAR), "expected T3, Q4 or SURFACE"),
+        (
+            _shells(
+                "T3",
+                [0, 1, 2],
+                '<Material Type="LinearShell">1 0.3 0<Density>1</Density><Thickness>1</Thickness></Material>',
+            ),
+            r"LinearShell takes 4 parameter\(s\) \(E, nu, E_b, nu_b\); got 3",
+        ),
     ],
 )
 def test_membrane_mistakes_are_named(tmp_path, shells, match):
@@ -261,6 +269,31 @@ def test_niftysims_membrane_only_test_model_runs_as_niftysim_ran_it(tmp_path):
     assert view.exit_code == 2 and "membranes alone (198 triangles, no tetrahedra)" in view.output
     view = CliRunner().invoke(app, ["view", str(out)])
     assert view.exit_code == 2 and "membranes alone, no tetrahedra" in view.output
+
+
+def test_niftysims_shell_test_model_without_bending_stretches_as_its_closed_form(tmp_path):
+    """NiftySim's testing/data/membrane_force_stretch_shell.xml: a 1 m square sheet of its
+    rotation-free shell triangles ("LinearShell", E = 1000 Pa, ν = 0.495, 1 m thick, no bending
+    stiffness: E_b = 0), the edge x = 0 on rollers, 25 N pulling the edge x = 1 (damped, 30 s):
+    imported as the St Venant–Kirchhoff membrane it is without bending, it settles at the uniaxial
+    closed form, λ (E (λ² − 1)/2) h = 25 N/m with the sides free to contract by
+    √(1 − ν (λ² − 1)): both to 1e-5 (float32, settled)."""
+    from scipy.optimize import brentq
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    model = Path(__file__).parent / "data" / "niftysim_membrane_force_stretch_shell.xml"
+    out = tmp_path / "out"
+    r = CliRunner().invoke(app, ["run", str(model), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    u = np.loadtxt(out / "U.txt")[:, -1].reshape(-1, 3)  # the last frame, 121 nodes (11 × 11)
+    X = np.array([[i / 10, j / 10, 0.0] for i in range(11) for j in range(11)])
+    lam = brentq(lambda l: l * 1000 * (l * l - 1) / 2 - 25, 1.0, 2.0)
+    pulled = np.isclose(X[:, 0], 1.0)
+    np.testing.assert_allclose(u[pulled, 0], lam - 1, rtol=1e-5)
+    width = np.ptp((X[:, 1] + u[:, 1])[pulled])
+    np.testing.assert_allclose(width, np.sqrt(1 - 0.495 * (lam**2 - 1)), rtol=1e-5)
 
 
 def test_a_sub_models_surface_membranes_run_as_niftysim_ran_them(tmp_path):

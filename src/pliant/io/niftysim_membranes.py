@@ -4,8 +4,10 @@ diagonal through its smallest node) or the solid mesh's whole boundary (Type="SU
 their <ShellElementSet>s, each a set of them (listed, Size="all", or Size consecutive ones from
 the one listed) with a <Material>: "Linear" (E ν; pliant's StVKMembrane, NiftySim's geometrically
 linear membrane at small displacement) or "NeoHookean" (μ; NeoHookeanMembrane, the same
-incompressible membrane), with <Density> and <Thickness>. Shells with bending stiffness
-("LinearShell", "LinearThickShell": NiftySim's rotation-free shells) are refused by name.
+incompressible membrane), with <Density> and <Thickness>; "LinearShell" (E ν E_b ν_b, NiftySim's
+rotation-free shell triangle: a linear membrane that also bends with E_b, ν_b) without bending
+(E_b = 0, as most of NiftySim's shell test models) is the same membrane, StVKMembrane. Shells with
+bending stiffness (LinearShell with E_b ≠ 0, "LinearThickShell") are refused by name.
 A <SubModel>'s membranes are merged into the model first (niftysim_submodels.py), their sets
 marked with where they came from (ORIGIN), for the messages."""
 
@@ -63,7 +65,7 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
 
             with _named(f, key):
                 b.add_membrane(faces[members], material)
-            if isinstance(material, StVKMembrane):
+            if es.find("Material").get("Type") == "Linear":  # not LinearShell: its forces have A h
                 warnings.append(_linear_note(f, key, b.nodes, faces[members], material.thickness))
     if np.any(owner < 0):
         raise NiftySimError(
@@ -146,6 +148,16 @@ def _set_members(es, n: int, kind: str | None, f: str, key: str) -> np.ndarray:
     return np.asarray(members, np.int64)
 
 
+def _shell_bends(m, f: str, key: str) -> bool:
+    """Whether a LinearShell <Material> (E ν E_b ν_b) has bending stiffness: its third number is not
+    0 (other counts of numbers: the material's own check names them)."""
+    from .niftysim import _numbers
+
+    ep = m.find("ElasticParams")
+    vals = _numbers(m if ep is None else ep, f, f"{key}/Material")
+    return vals.size == 4 and vals[2] != 0.0
+
+
 def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     """The membrane material of a <ShellElementSet>, or None where an unsupported one is ignored."""
     from .niftysim import NiftySimError, _numbers, _scalar, _named
@@ -154,18 +166,20 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     if m is None:
         raise NiftySimError("<ShellElementSet> without <Material>", f, key)
     mtype = m.get("Type")
-    if mtype in ("LinearShell", "LinearThickShell"):
+    if mtype == "LinearShell" and _shell_bends(m, f, key):
+        mtype = "LinearShell with bending"
+    if mtype in ("LinearShell with bending", "LinearThickShell"):
         unsupported(
-            f"ShellElementSet Material Type={mtype}",
+            f"ShellElementSet Material Type={mtype.split()[0]}",
             "shells with bending stiffness (NiftySim's rotation-free shell triangles) are not implemented; "
             "skipping the set leaves its facets without a membrane",
         )
         warnings.append(f"{f}: {key}: its shell elements skipped (no membrane)")
         return None
-    if mtype not in ("Linear", "NeoHookean"):
+    if mtype not in ("Linear", "NeoHookean", "LinearShell"):
         raise NiftySimError(
-            f"<Material Type={mtype!r}> in a shell element set: expected Linear, NeoHookean (membranes) or "
-            "LinearShell, LinearThickShell (shells, not implemented)",
+            f"<Material Type={mtype!r}> in a shell element set: expected Linear, NeoHookean (membranes), "
+            "LinearShell (without bending: a membrane) or LinearThickShell (not implemented)",
             f,
             f"{key}/Material",
         )
@@ -179,15 +193,15 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
         sheet[name] = _scalar(child.text, f, f"{key}/Material/{name}", float, 0.0)
     ep = m.find("ElasticParams")  # NiftySim reads the <Material>'s own text; the solids' form too
     vals = _numbers(m if ep is None else ep, f, f"{key}/Material")
-    want = 2 if mtype == "Linear" else 1
+    want = {"Linear": 2, "NeoHookean": 1, "LinearShell": 4}[mtype]
     if vals.size != want:
-        names = "E, nu" if mtype == "Linear" else "mu"
+        names = {"Linear": "E, nu", "NeoHookean": "mu", "LinearShell": "E, nu, E_b, nu_b"}[mtype]
         raise NiftySimError(
             f"{mtype} takes {want} parameter(s) ({names}); got {vals.size}", f, f"{key}/Material"
         )
     if es.find("ClampedNodes") is not None:
         warnings.append(f"{f}: {key}: <ClampedNodes> ignored: a membrane has no bending to clamp")
     with _named(f, f"{key}/Material"):
-        if mtype == "Linear":
+        if mtype in ("Linear", "LinearShell"):
             return StVKMembrane(vals[0], vals[1], sheet["Thickness"], sheet["Density"])
         return NeoHookeanMembrane(vals[0], sheet["Thickness"], sheet["Density"])
