@@ -302,6 +302,31 @@ def test_niftysims_shell_test_model_without_bending_stretches_as_its_closed_form
     np.testing.assert_allclose(width, np.sqrt(1 - 0.495 * (lam**2 - 1)), rtol=1e-5)
 
 
+def test_a_shell_models_step_beyond_its_membranes_is_divided(tmp_path):
+    """The same model with NiftySim's TimeStep set to 5 ms, above the stable step of its membranes
+    (about 1.9 ms: NiftySim's step suits its own shell elements): `pliant run` runs each step as
+    the fewest steps that are stable (3), says so, and writes U.txt at NiftySim's times (every
+    3000 of its steps: 15 and 30 s); the
+    sheet settles at the same closed form (1e-5)."""
+    from scipy.optimize import brentq
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    model = Path(__file__).parent / "data" / "niftysim_membrane_force_stretch_shell.xml"
+    out = tmp_path / "out"
+    r = CliRunner().invoke(app, ["run", str(model), "-o", str(out), "--set", "SystemParams.TimeStep=5e-3"])
+    assert r.exit_code == 0, r.output
+    said = json.loads((out / "summary.json").read_text())["warnings"]
+    assert any(
+        "shell triangles run as constant-strain membranes; each step runs as 3 steps" in w for w in said
+    )
+    U = np.loadtxt(out / "U.txt")
+    assert U.shape == (363, 2)  # Freq = 3000 of its 6000 steps: 15 s and 30 s, as NiftySim's
+    lam = brentq(lambda l: l * 1000 * (l * l - 1) / 2 - 25, 1.0, 2.0)
+    np.testing.assert_allclose(U[3 * 110 :: 3][:11, -1], lam - 1, rtol=1e-5)
+
+
 def test_a_sub_models_surface_membranes_run_as_niftysim_ran_them(tmp_path):
     """tests/data/niftysim_box_submodels.xml: box_membrane_nonlin.xml as the second of two
     sub-models, after a fixed cube wrapped in its own SURFACE membranes, against the U.txt NiftySim

@@ -299,8 +299,14 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
             f"{f}: <Output> Variable {', '.join(other)} not written as NiftySim's text files (pliant writes "
             "U.txt and F.txt; each frame holds stresses and strains: fields cauchy, green_strain)"
         )
-    if etype == "H8":  # NiftySim's step suits its hexahedra; the split mesh's may be smaller
-        scene.meta["dt_divides"] = "H8 elements split into tetrahedra"
+    # NiftySim's step suits its own elements; pliant's in their place may need a smaller one: the
+    # tets of a split hexahedral mesh, the constant-strain membranes of its shell triangles (its
+    # assumed-strain membrane is softer in its highest mode).
+    reasons = ["H8 elements split into tetrahedra"] if etype == "H8" else []
+    if any(m.get("Type") == "LinearShell" for m in root.findall("ShellElementSet/Material")):
+        reasons.append("shell triangles run as constant-strain membranes")
+    if reasons:
+        scene.meta["dt_divides"] = " and the ".join(reasons)
     return scene
 
 
