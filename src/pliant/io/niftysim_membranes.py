@@ -148,19 +148,25 @@ def _set_members(es, n: int, kind: str | None, f: str, key: str) -> np.ndarray:
     return np.asarray(members, np.int64)
 
 
-def _shell_bends(m, f: str, key: str) -> bool:
-    """Whether a LinearShell <Material> (E ν E_b ν_b) has bending stiffness: its third number is not
-    0 (other counts of numbers: the material's own check names them)."""
+def _params(m, f: str, key: str) -> np.ndarray:
+    """A shell set's <Material> parameters: its own text, as NiftySim reads them, or an
+    <ElasticParams> child, as solids have it."""
     from .niftysim import _numbers
 
     ep = m.find("ElasticParams")
-    vals = _numbers(m if ep is None else ep, f, f"{key}/Material")
+    return _numbers(m if ep is None else ep, f, f"{key}/Material")
+
+
+def _shell_bends(m, f: str, key: str) -> bool:
+    """Whether a LinearShell <Material> (E ν E_b ν_b) has bending stiffness: its third number is not
+    0 (other counts of numbers: the material's own check names them)."""
+    vals = _params(m, f, key)
     return vals.size == 4 and vals[2] != 0.0
 
 
 def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     """The membrane material of a <ShellElementSet>, or None where an unsupported one is ignored."""
-    from .niftysim import NiftySimError, _numbers, _scalar, _named
+    from .niftysim import NiftySimError, _scalar, _named
 
     m = es.find("Material")
     if m is None:
@@ -191,8 +197,7 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
                 f"<{name}> is missing: a membrane needs its density and thickness", f, f"{key}/Material"
             )
         sheet[name] = _scalar(child.text, f, f"{key}/Material/{name}", float, 0.0)
-    ep = m.find("ElasticParams")  # NiftySim reads the <Material>'s own text; the solids' form too
-    vals = _numbers(m if ep is None else ep, f, f"{key}/Material")
+    vals = _params(m, f, key)
     want = {"Linear": 2, "NeoHookean": 1, "LinearShell": 4}[mtype]
     if vals.size != want:
         names = {"Linear": "E, nu", "NeoHookean": "mu", "LinearShell": "E, nu, E_b, nu_b"}[mtype]
