@@ -234,10 +234,11 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     b.damping = damping
     b.nodal_pressure_stabilization = 0.0  # NiftySim's T4ANP: the plain average
     _element_sets(root, b, owner, len(E), default_rho, f, unsupported)
+    shells_as_membranes = False
     if not skip_membranes:
         from .niftysim_membranes import add_membranes
 
-        add_membranes(root, b, T, f, unsupported, warnings)
+        shells_as_membranes = add_membranes(root, b, T, f, unsupported, warnings)
     b.nodal_pressure = etype == "T4ANP"  # average nodal pressure tetrahedra
     if etype == "H8":
         b.nodal_pressure = h8_as_t4anp(b, len(E), len(T), f, warnings)
@@ -303,7 +304,7 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
     # tets of a split hexahedral mesh, the constant-strain membranes of its shell triangles (NiftySim
     # runs membrane_stretch_shell_irregular.xml's shells at 1 ms, pliant's membranes need 0.86).
     reasons = ["H8 elements split into tetrahedra"] if etype == "H8" else []
-    if any(m.get("Type") == "LinearShell" for m in root.findall("ShellElementSet/Material")):
+    if shells_as_membranes:
         reasons.append("shell triangles run as constant-strain membranes")
     if reasons:
         scene.meta["dt_divides"] = " and the ".join(reasons)

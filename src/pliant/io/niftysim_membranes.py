@@ -28,14 +28,15 @@ __all__ = ["add_membranes", "ORIGIN"]
 ORIGIN = "pliant-origin"
 
 
-def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, warnings: list[str]) -> None:
+def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, warnings: list[str]) -> bool:
     """The model's membranes onto the builder ``b`` (its tets T (M, 4) give SURFACE's facets);
-    ``unsupported(name, why)`` refuses (or, when ignored, skips) a feature by name."""
+    ``unsupported(name, why)`` refuses (or, when ignored, skips) a feature by name. Returns whether
+    a set of NiftySim's shell triangles (LinearShell) became membranes: their step may need dividing."""
     from .niftysim import NiftySimError
 
     shells, sets = root.findall("ShellElements"), root.findall("ShellElementSet")
     if not shells and not sets:
-        return
+        return False
     if len(shells) != 1 or not sets:
         raise NiftySimError(
             f"{len(shells)} <ShellElements> and {len(sets)} <ShellElementSet>: expected one "
@@ -46,6 +47,7 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
     kind = shells[0].get("Type", shells[0].get("type"))  # NiftySim's own models write type="SURFACE"
     faces, per_listed = _facets(shells[0], kind, T, b.n_nodes, f)
     owner = np.full(len(faces), -1, np.int64)
+    shells_as_membranes = False
     for k, es in enumerate(sets):
         key = es.get(ORIGIN, f"ShellElementSet[{k}]")
         material = _material(es, f, key, unsupported, warnings)
@@ -65,8 +67,10 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
 
             with _named(f, key):
                 b.add_membrane(faces[members], material)
-            if es.find("Material").get("Type") == "Linear":  # not LinearShell: its forces have A h
+            mtype = es.find("Material").get("Type")
+            if mtype == "Linear":  # not LinearShell: its forces have A h
                 warnings.append(_linear_note(f, key, b.nodes, faces[members], material.thickness))
+            shells_as_membranes |= mtype == "LinearShell"
     if np.any(owner < 0):
         raise NiftySimError(
             f"shell element {int(np.argmax(owner < 0)) // per_listed} is in no <ShellElementSet>: "
@@ -74,6 +78,7 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
             f,
             "ShellElementSet",
         )
+    return shells_as_membranes
 
 
 def _linear_note(f: str, key: str, X: np.ndarray, F: np.ndarray, h: float) -> str:
@@ -172,11 +177,9 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     if m is None:
         raise NiftySimError("<ShellElementSet> without <Material>", f, key)
     mtype = m.get("Type")
-    if mtype == "LinearShell" and _shell_bends(m, f, key):
-        mtype = "LinearShell with bending"
-    if mtype in ("LinearShell with bending", "LinearThickShell"):
+    if mtype == "LinearThickShell" or (mtype == "LinearShell" and _shell_bends(m, f, key)):
         unsupported(
-            f"ShellElementSet Material Type={mtype.split()[0]}",
+            f"ShellElementSet Material Type={mtype}",
             "shells with bending stiffness (NiftySim's rotation-free shell triangles) are not implemented; "
             "skipping the set leaves its facets without a membrane",
         )
