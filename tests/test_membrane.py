@@ -179,6 +179,38 @@ def test_the_membrane_mass_is_rho_h_area():
     np.testing.assert_allclose(moved.displacements[:, 2], -9.81 * dt**2, rtol=1e-9)
 
 
+@pytest.mark.parametrize("kind", sorted(MATERIALS))
+def test_the_stiffness_scale_reaches_the_membranes(kind, backend):
+    """Solver.scale_materials(k), the viewer's stiffness slider, multiplies every material's moduli,
+    the membranes' too: the box under a membrane on its top, stretched by diag(1.3, 0.9, 1) and let
+    go from rest, first moves so that Σ m Δu_x / Δt² over the nodes on x = L is −k (P11 W H + P11ᵐ W),
+    the closed-form resultants of the solid (St Venant–Kirchhoff) and of the membrane, at k = 1 and
+    3 (float64, no damping: round-off, 1e-9). Before the scale reached membranes, k = 3 gave
+    −(3 P11 W H + P11ᵐ W)."""
+    X, T = _box()
+    material = MATERIALS[kind]
+    l1, l2 = 1.3, 0.9
+    E, nu = 1e3, 0.3  # _builder's solid
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    E11, E22 = (l1**2 - 1) / 2, (l2**2 - 1) / 2
+    P11_solid = l1 * (lam * (E11 + E22) + 2 * mu * E11)
+    P11_membrane = _resultants(material, l1, l2)[0]
+    b = _builder(X, T)
+    b.add_membrane(_faces_on(X, T, 2, H), material)
+    m = b.finalize("float64", backend=backend)
+    right = np.isclose(X[:, 0], L)
+    dt = 1e-5  # well below the stable step (about 1e-3 s); Δu about 1e-6 m, u 1e-2: 1e-12 round-off
+    for k in (1.0, 3.0):
+        rest, moved = m.state(), m.state()
+        rest.set_displacements(X * [l1 - 1, l2 - 1, 0.0])
+        solver = pl.Solver(m, dt=dt, damping=0.0)
+        solver.scale_materials(k)
+        solver.step(rest, moved, dt)
+        du = moved.displacements - rest.displacements
+        pull = (m.mass[right] * du[right, 0]).sum() / dt**2
+        np.testing.assert_allclose(pull, -k * (P11_solid * W * H + P11_membrane * W), rtol=1e-9)
+
+
 def test_a_stiff_membrane_sets_the_critical_step():
     """A membrane far stiffer than the solid under it limits the step: its smallest altitude over
     √(E/((1 − ν²) ρ)) (plane stress), named by the model."""

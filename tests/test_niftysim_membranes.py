@@ -265,10 +265,7 @@ def test_niftysims_membrane_only_test_model_runs_as_niftysim_ran_it(tmp_path):
     np.testing.assert_allclose(energy.sum(), summary["strain_energy"], rtol=1e-5)
     assert summary["strain_energy"] > 0
     assert (out / "result.png").stat().st_size > 0
-    view = CliRunner().invoke(app, ["view", str(model)])
-    assert view.exit_code == 2 and "membranes alone (198 triangles, no tetrahedra)" in view.output
-    view = CliRunner().invoke(app, ["view", str(out)])
-    assert view.exit_code == 2 and "membranes alone, no tetrahedra" in view.output
+    # pliant view draws it, live and played back: tests/test_viewer.py
 
 
 def test_niftysims_shell_test_model_without_bending_stretches_as_its_closed_form(tmp_path):

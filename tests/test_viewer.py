@@ -391,3 +391,72 @@ def test_the_live_viewer_grasps_and_releases(tmp_path):
     finally:
         v.stop_event.set()
         v.server.stop()
+
+
+def _drawn(viewer):
+    """The meshes the viewer sends to the browser (add_mesh_trimesh's), in order."""
+    sent = []
+    add = viewer.server.scene.add_mesh_trimesh
+    viewer.server.scene.add_mesh_trimesh = lambda name, mesh, **kw: (
+        sent.append(mesh),
+        add(name, mesh, **kw),
+    )[1]
+    return sent
+
+
+def _two_sided(mesh, n_triangles: int, n_nodes: int):
+    """A sheet drawn from both sides: each triangle twice, the second turned over on a copy of the
+    vertices at the same places."""
+    F, V = np.asarray(mesh.faces), np.asarray(mesh.vertices)
+    assert F.shape == (2 * n_triangles, 3) and V.shape == (2 * n_nodes, 3)
+    np.testing.assert_array_equal(F[n_triangles:], F[:n_triangles, ::-1] + n_nodes)
+    np.testing.assert_array_equal(V[n_nodes:], V[:n_nodes])
+
+
+def test_the_viewer_draws_membranes_alone(tmp_path):
+    """NiftySim's membrane_stretch_nonlinear_irregular.xml (tests/data: 198 Neo-Hookean membrane
+    triangles, no tets, one edge pulled 1 cm along the sheet; its displacements against NiftySim's
+    run: tests/test_niftysim_membranes.py): the live viewer draws the sheet itself, from both
+    sides, coloured by the membranes' larger principal tension averaged at the nodes, so the range
+    shown lies within the membranes' own (to the 3 digits shown) and its top is a pull (> 0). Its
+    results folder plays back the same way, from the frames' membrane_max_tension."""
+    import re
+
+    import meshio
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+    from pliant.io.niftysim import load_niftysim
+    from pliant.view.viewer import TENSION_FIELD, LiveViewer, PlaybackViewer
+
+    def within(text, tension):  # text: "field: lo (dark blue) … hi (yellow)" or "...; field lo … hi"
+        lo, hi = (float(x) for x in re.search(r"(\S+) (?:\(dark blue\) )?… (\S+)", text).groups())
+        slack = 5e-3 * np.abs(tension).max()  # 3 significant digits
+        return tension.min() - slack <= lo <= hi <= tension.max() + slack and hi > 0
+
+    model = Path(__file__).parent / "data" / "niftysim_membrane_stretch_nonlinear_irregular.xml"
+    scene = load_niftysim(model)
+    v = LiveViewer(scene, port=_free_port())
+    n_nodes = np.unique(v.model.membrane_faces).size
+    try:
+        sent = _drawn(v)
+        assert v.field_dropdown.options[0] == TENSION_FIELD == v.field
+        v.sim.run(until=scene.duration)  # the edge pulled
+        v.draw()
+        _two_sided(sent[-1], 198, n_nodes)
+        tension = v.model.membrane_results(v.sim.state)["max_tension"]
+        assert v.colourbar.content.startswith(TENSION_FIELD) and within(v.colourbar.content, tension)
+    finally:
+        v.stop_event.set()
+        v.server.stop()
+    out = tmp_path / "out"
+    assert CliRunner().invoke(app, ["run", str(model), "-o", str(out)]).exit_code == 0
+    p = PlaybackViewer(out, port=_free_port())
+    try:
+        sent = _drawn(p)
+        p.show(len(p.files) - 1)
+        _two_sided(sent[-1], 198, n_nodes)
+        tension = meshio.read(p.files[-1]).cell_data["membrane_max_tension"][0]
+        assert "tension [N/m]" in p.label.content and within(p.label.content, tension)
+    finally:
+        p.server.stop()

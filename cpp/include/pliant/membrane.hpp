@@ -35,6 +35,8 @@ enum class MembraneKind : int {
 /// reference metric G^11, G^22, G^12 [1/m²] (3), and two coefficients (A0 h λ', A0 h μ) [N·m] for
 /// StVenantKirchhoff, (A0 h μ, 0) for NeoHookean.
 constexpr int kMembraneValues = 11;
+/// The first of the two values that carry the material's moduli (scaled by scale_materials).
+constexpr int kMembraneModuli = 9;
 
 /// Node → membrane corners (CSR over nodes: offsets N + 1, index holds 3 m + corner), and per
 /// membrane its nodes (3), kind and kMembraneValues values. count == 0: no membranes.

@@ -77,6 +77,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     anp_gamma_ = DeviceBuffer<T, Dev>(dev_, ng);
     anp_gamma_.upload(gamma.data(), ng);
     d_mats_ = DeviceBuffer<MaterialParams<T>, Dev>(dev_, ng);
+    d_mem_geom_ = DeviceBuffer<T, Dev>(dev_, m.mem_geom.size());
     upload_materials();
     ensure_history(1);
     refresh_view();
@@ -165,7 +166,7 @@ void Engine<T, Dev>::refresh_view() {
                mb_.pslot.data(),
                mb_.ptraction.data(),
                {static_cast<index_t>(m.mem_kind.size()), mb_.mem_off.data(), mb_.mem_idx.data(),
-                mb_.mem_nodes.data(), mb_.mem_kind.data(), mb_.mem_geom.data()}};
+                mb_.mem_nodes.data(), mb_.mem_kind.data(), d_mem_geom_.data()}};
     v.relax_nodes = v.nodes;
     v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
     v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();
@@ -504,15 +505,22 @@ void Engine<T, Dev>::scale_materials(double factor) {
         for (int k = 0; k < kMaterialParams; ++k)
             mat.p[k] = T(double(m_.groups[g].material.p[k]) * (is_modulus(mat.kind, k) ? factor : 1.0));
     }
+    material_scale_ = factor;
     upload_materials();
 }
 
-/// The groups' material parameters to the device (where the element kernels read them).
+/// The groups' material parameters to the device (where the element kernels read them), and the
+/// membranes' values with their moduli times material_scale_ (membrane.hpp, kMembraneModuli).
 template <class T, class Dev>
 void Engine<T, Dev>::upload_materials() {
     std::vector<MaterialParams<T>> mats(groups_.size());
     for (std::size_t g = 0; g < groups_.size(); ++g) mats[g] = groups_[g].material;
     d_mats_.upload(mats.data(), mats.size());
+    std::vector<T> geom = m_.mem_geom;
+    for (std::size_t i = kMembraneModuli; i < geom.size(); i += kMembraneValues)
+        for (int k = 0; k < kMembraneValues - kMembraneModuli; ++k)
+            geom[i + k] = T(double(geom[i + k]) * material_scale_);
+    d_mem_geom_.upload(geom.data(), geom.size());
 }
 
 }  // namespace pliant

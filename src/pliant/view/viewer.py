@@ -24,6 +24,9 @@ from ..io.results import INDEX
 from ..mesh.topology import boundary_faces
 
 BODY_FIELD = "body"  # the colour choice that tells a scene's bodies apart (Model.bodies)
+STRESS_FIELD = "von Mises stress [Pa]"  # the tets' (Model.element_results)
+TENSION_FIELD = "membrane tension [N/m]"  # membranes alone: the larger principal (Model.membrane_results)
+DISPLACEMENT_FIELD = "displacement [m]"
 
 
 def _colours(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -76,16 +79,46 @@ def check_address(host: str, port: int) -> None:
     raise InputError(f"cannot listen on {host}:{port}: {reason}")
 
 
-class _Surface:
-    """The boundary of a tet mesh as a compact triangle mesh, with node → vertex mapping."""
+def _coloured_mesh(V: np.ndarray, F: np.ndarray, values: np.ndarray, two_sided: bool = False):
+    """A trimesh of vertices V (n, 3) [m] and triangles F (k, 3) coloured by ``values`` (n,)
+    (viridis over their range), and that range (lo, hi). ``two_sided`` (a sheet of membranes): each
+    triangle comes twice, the second turned over on its own copy of the vertices, so that both
+    sides are lit and seen."""
+    import trimesh
 
-    def __init__(self, tets: np.ndarray):
-        faces, owner = boundary_faces(tets)
+    lo, hi = float(values.min()), float(values.max())
+    colours = _colours(values, lo, hi)
+    if two_sided:
+        V, colours, F = np.vstack([V, V]), np.vstack([colours, colours]), np.vstack([F, F[:, ::-1] + len(V)])
+    return trimesh.Trimesh(V, F, process=False, vertex_colors=colours), (lo, hi)
+
+
+class _Surface:
+    """What the viewer draws as a compact triangle mesh, with node → vertex mapping: the boundary
+    of a tet mesh, or, for membranes alone, the membrane triangles themselves (``sheet``: drawn
+    from both sides)."""
+
+    def __init__(self, faces: np.ndarray, owner: np.ndarray, sheet: bool = False):
         self.nodes = np.unique(faces)
-        remap = np.full(int(tets.max()) + 1, -1)
+        remap = np.full(int(faces.max()) + 1, -1)
         remap[self.nodes] = np.arange(self.nodes.size)
         self.faces = remap[faces]
-        self.owner = owner  # element behind each face
+        self.owner = owner  # element (tet or membrane) behind each face
+        self.sheet = sheet
+
+    @classmethod
+    def of_tets(cls, tets: np.ndarray) -> "_Surface":
+        return cls(*boundary_faces(tets))
+
+    @classmethod
+    def of_sheet(cls, triangles: np.ndarray) -> "_Surface":
+        """Membrane triangles (K, 3) (node ids), each its own face."""
+        return cls(np.asarray(triangles), np.arange(len(triangles)), sheet=True)
+
+    @classmethod
+    def of_model(cls, model) -> "_Surface":
+        """A model's tets' boundary (membranes on it lie on those faces), or its membranes alone."""
+        return cls.of_tets(model.tets) if model.n_elements else cls.of_sheet(model.membrane_faces)
 
     def node_values(self, element_values: np.ndarray) -> np.ndarray:
         """Average of the adjacent faces' element values at each surface vertex."""
@@ -139,11 +172,6 @@ class LiveViewer:
         auto = max(1, min(_auto_threads(scene.builder.n_elements), _core.max_threads() - 1))
         threads = threads if threads is not None else scene.threads or auto  # 0 is refused, not automatic
         self.model = scene.builder.finalize(scene.dtype, threads=threads)  # at reset
-        if not self.model.n_elements:
-            raise InputError(
-                f"{scene.source}: membranes alone ({self.model.n_membranes} triangles, no tetrahedra): the "
-                "viewer shows tet meshes; run it (pliant run) and open result.pvd in ParaView"
-            )
         # An interactive session may run for hours: keep the last 100,000 steps of tool forces.
         from ..runner import scene_step
 
@@ -154,7 +182,7 @@ class LiveViewer:
         self._solver0 = self.sim.solver
         self.dt0 = self.sim.solver.dt
         self._dt_model = self.model  # the model dt0 belongs to (a cut may lower the step)
-        self._surface = (self.model, _Surface(self.model.tets))
+        self._surface = (self.model, _Surface.of_model(self.model))
         self.embedding = None  # the fine surface of the scene, when it has one
         if scene.meta.get("embed_surface"):
             from ..mesh import embed_surface
@@ -168,7 +196,11 @@ class LiveViewer:
         self.stop_event = threading.Event()
         self.steps_per_second = 0.0
         self.realtime_factor = 0.0
-        self.field = "von Mises stress [Pa]"
+        # Membranes alone (a NiftySim shell model): coloured by their tension, not by tets' stress.
+        self.fields = [TENSION_FIELD if self.model.n_elements == 0 else STRESS_FIELD, DISPLACEMENT_FIELD]
+        if self.model.bodies is not None:  # soft contact: several bodies, told apart by colour
+            self.fields.append(BODY_FIELD)
+        self.field = self.fields[0]
         self.error = ""
         self.server = serve_on(host, port)
         _frame_camera(self.server, self.model.reference_positions)
@@ -178,17 +210,13 @@ class LiveViewer:
     # --- GUI ------------------------------------------------------------------------------
     def _build_gui(self):
         g = self.server.gui
-        g.add_markdown(
-            f"**pliant** — {self.scene.title}: {self.model.n_elements:,} tets, "
-            f"Δt = {self.sim.solver.dt:.3g} s"
-        )
+        m = self.model
+        size = f"{m.n_elements:,} tets" if m.n_elements else f"{m.n_membranes:,} membranes"
+        g.add_markdown(f"**pliant** — {self.scene.title}: {size}, Δt = {self.sim.solver.dt:.3g} s")
         self.play_button = g.add_button("Pause")
         self.step_button = g.add_button("Single step")
         self.reset_button = g.add_button("Reset")
-        fields = ["von Mises stress [Pa]", "displacement [m]"]
-        if self.model.bodies is not None:  # soft contact: several bodies, told apart by colour
-            fields.append(BODY_FIELD)
-        self.field_dropdown = g.add_dropdown("Colour by", fields)
+        self.field_dropdown = g.add_dropdown("Colour by", self.fields)
         self.stiffness = g.add_slider("Stiffness × (live)", 0.25, 4.0, 0.05, 1.0)
         self.damping = g.add_slider("Damping α [1/s] (live)", 0.0, 100.0, 0.5, float(self.sim.solver.damping))
         self.grasp_buttons = {}
@@ -370,18 +398,18 @@ class LiveViewer:
             time.sleep(0.001)
 
     def _element_values(self, model) -> np.ndarray | None:
-        """The colour field per element (von Mises stress [Pa] or body number), or None for the
-        displacement (per node). Call under the lock."""
+        """The colour field per element (von Mises stress [Pa], a membrane's larger principal
+        tension [N/m] or body number), or None for the displacement (per node). Call under the lock."""
         if self.field == BODY_FIELD and model.bodies is not None:
             return np.asarray(model.bodies, dtype=float)
-        if self.field.startswith("von"):
+        if self.field == STRESS_FIELD:
             return model.element_results(self.sim.state)["von_mises"]
+        if self.field == TENSION_FIELD:
+            return model.membrane_results(self.sim.state)["max_tension"]
         return None
 
     def draw(self):
         """Send the current surface, colours, status and tool forces to the browser."""
-        import trimesh
-
         with self.lock:
             model = self.sim.model  # after a cut, a new topology
             P = self.sim.positions
@@ -395,7 +423,7 @@ class LiveViewer:
             held = len(self.sim.state.held) if model.tools else 0
             cuts = len(self.sim.cutter.events) if self.sim.cutter is not None else 0
         if self._surface[0] is not model:
-            self._surface = (model, _Surface(model.tets))
+            self._surface = (model, _Surface.of_model(model))
         surface = self._surface[1]
         if emb is not None:  # the fine surface follows the tets
             V, F = emb.positions(model.tets, P), emb.faces
@@ -403,8 +431,7 @@ class LiveViewer:
         else:
             V, F = P[surface.nodes], surface.faces
             vals = surface.node_values(ev) if ev is not None else np.linalg.norm(u[surface.nodes], axis=1)
-        lo, hi = float(vals.min()), float(vals.max())
-        mesh = trimesh.Trimesh(V, F, process=False, vertex_colors=_colours(vals, lo, hi))
+        mesh, (lo, hi) = _coloured_mesh(V, F, vals, two_sided=emb is None and surface.sheet)
         self.server.scene.add_mesh_trimesh("/body", mesh)
         self.status.content = (
             f"t = {t:.3f} s · {self.steps_per_second:,.0f} steps/s · "
@@ -480,15 +507,9 @@ class PlaybackViewer:
         if missing:
             raise InputError(f"{pvd}: lists {missing[0].name}, which is not in {out}")
         first = read_meshio(self.files[0], "result frame")
-        if "tetra" not in first.cells_dict and "triangle" in first.cells_dict:
-            raise InputError(
-                f"{self.files[0]}: membranes alone, no tetrahedra: the viewer draws tet meshes; open "
-                f"{pvd.name} in ParaView"
-            )
-        if "tetra" not in first.cells_dict:
-            raise InputError(f"{self.files[0]}: no tetrahedra; expected a pliant result frame")
-        self.X, self._tets = first.points, first.cells_dict["tetra"]
-        self.surface = _Surface(self._tets)  # of the frame shown (frames after a cut differ)
+        self._cells, self._kind = np.empty((0, 4), np.int64), ""  # none shown yet
+        self.X = first.points
+        self._frame_cells(first, self.files[0])  # of the frame shown (frames after a cut differ)
         self.server = serve_on(host, port)
         _frame_camera(self.server, self.X)
         self.slider = self.server.gui.add_slider("frame", 0, len(self.files) - 1, 1, 0)
@@ -510,31 +531,37 @@ class PlaybackViewer:
             return False
         return True
 
-    def show(self, i: int):
-        import trimesh
+    def _frame_cells(self, m, path: Path) -> str:
+        """The frame's cell kind ("tetra", or "triangle" for membranes alone) after taking its
+        surface where its topology differs from the frame shown last (a cut)."""
+        kind = next((k for k in ("tetra", "triangle") if k in m.cells_dict), None)
+        if kind is None:
+            raise InputError(f"{path}: no tetrahedra or triangles; expected a pliant result frame")
+        cells = m.cells_dict[kind]
+        if kind != self._kind or len(m.points) != len(self.X) or not np.array_equal(cells, self._cells):
+            self._kind, self._cells, self.X = kind, cells, m.points
+            self.surface = _Surface.of_tets(cells) if kind == "tetra" else _Surface.of_sheet(cells)
+        return kind
 
+    def show(self, i: int):
+        """Frame i on the surface, coloured by the tets' von Mises stress [Pa] (membranes alone:
+        their larger principal tension [N/m]; frames without either: the displacement [m])."""
         m = read_meshio(self.files[i], "result frame")
-        X = m.points
-        tets = m.cells_dict.get("tetra")
-        if tets is None:
-            raise InputError(f"{self.files[i]}: no tetrahedra; expected a pliant result frame")
-        if len(X) != len(self.X) or not np.array_equal(tets, self._tets):  # a cut: a new topology
-            self.X, self._tets, self.surface = X, tets, _Surface(tets)
-        u = m.point_data.get("displacement", np.zeros_like(X))
-        vm = m.cell_data_dict.get("von_mises", {}).get("tetra")
-        vals = (
-            self.surface.node_values(vm) if vm is not None else np.linalg.norm(u[self.surface.nodes], axis=1)
+        kind = self._frame_cells(m, self.files[i])
+        u = m.point_data.get("displacement", np.zeros_like(m.points))
+        field, what = (
+            ("von_mises", "von Mises [Pa]") if kind == "tetra" else ("membrane_max_tension", "tension [N/m]")
         )
-        lo, hi = float(vals.min()), float(vals.max())
-        mesh = trimesh.Trimesh(
-            (X + u)[self.surface.nodes],
-            self.surface.faces,
-            process=False,
-            vertex_colors=_colours(vals, lo, hi),
-        )
+        ev = m.cell_data_dict.get(field, {}).get(kind)
+        if ev is None:
+            vals, what = np.linalg.norm(u[self.surface.nodes], axis=1), "displacement [m]"
+        else:
+            vals = self.surface.node_values(ev)
+        V = (m.points + u)[self.surface.nodes]
+        mesh, (lo, hi) = _coloured_mesh(V, self.surface.faces, vals, self.surface.sheet)
         self.server.scene.add_mesh_trimesh("/body", mesh)
         self.label.content = (
-            f"t = {self.times[i]:.4g} s (frame {i + 1}/{len(self.files)}); von Mises {lo:.3g} … {hi:.3g} Pa"
+            f"t = {self.times[i]:.4g} s (frame {i + 1}/{len(self.files)}); {what} {lo:.3g} … {hi:.3g}"
         )
 
     def serve(self, duration: float | None = None):
