@@ -172,6 +172,15 @@ def test_surface_membranes_cover_the_boundary_and_add_their_mass(tmp_path):
             ),
             r"LinearShell takes 4 parameter\(s\) \(E, nu, E_b, nu_b\); got 3",
         ),
+        (  # as a solid's <ElasticParams> is checked
+            _shells(
+                "T3",
+                [0, 1, 2],
+                '<Material Type="LinearShell"><ElasticParams NumParams="2">1 0.3 0 0</ElasticParams>'
+                "<Density>1</Density><Thickness>1</Thickness></Material>",
+            ),
+            r'<ElasticParams NumParams="2"> holds 4 value\(s\); expected as many as it declares',
+        ),
     ],
 )
 def test_membrane_mistakes_are_named(tmp_path, shells, match):

@@ -469,6 +469,21 @@ def facets_facing(X: np.ndarray, B: np.ndarray, normal: np.ndarray, angle: float
     return B[cosang >= np.cos(np.radians(angle)) - 1e-12]
 
 
+def elastic_params(ep, f: str, key: str) -> np.ndarray:
+    """The numbers of an <ElasticParams> element (``key`` names it), as many as its NumParams
+    declares where it does."""
+    vals = _numbers(ep, f, key)
+    declared = ep.get("NumParams")
+    if declared is not None and declared.strip() != str(vals.size):
+        raise NiftySimError(
+            f'<ElasticParams NumParams="{declared[:20]}"> holds {vals.size} value(s); expected as many as '
+            "it declares",
+            f,
+            key,
+        )
+    return vals
+
+
 def _element_sets(root, b: ModelBuilder, owner: np.ndarray, M: int, default_rho, f: str, unsupported) -> None:
     """<ElementSet>s: a material and a density on listed (or all) of the model's M elements (the
     tets of element e are those whose ``owner`` is e)."""
@@ -482,15 +497,7 @@ def _element_sets(root, b: ModelBuilder, owner: np.ndarray, M: int, default_rho,
             raise NiftySimError("<ElementSet> without <Material>", f, key)
         mtype = m.get("Type")
         ep = m.find("ElasticParams")
-        vals = _numbers(ep, f, f"{key}/ElasticParams") if ep is not None else np.zeros(0)
-        declared = ep.get("NumParams") if ep is not None else None
-        if declared is not None and declared.strip() != str(vals.size):
-            raise NiftySimError(
-                f'<ElasticParams NumParams="{declared[:20]}"> holds {vals.size} value(s); expected as '
-                "many as it declares",
-                f,
-                f"{key}/ElasticParams",
-            )
+        vals = elastic_params(ep, f, f"{key}/ElasticParams") if ep is not None else np.zeros(0)
         rho_el = m.find("Density")
         rho = (
             _scalar(rho_el.text, f, f"{key}/Material/Density", float, 0.0)

@@ -156,10 +156,10 @@ def _set_members(es, n: int, kind: str | None, f: str, key: str) -> np.ndarray:
 def _params(m, f: str, key: str) -> np.ndarray:
     """A shell set's <Material> parameters: its own text, as NiftySim reads them, or an
     <ElasticParams> child, as solids have it."""
-    from .niftysim import _numbers
+    from .niftysim import _numbers, elastic_params
 
     ep = m.find("ElasticParams")
-    return _numbers(m if ep is None else ep, f, f"{key}/Material")
+    return _numbers(m, f, f"{key}/Material") if ep is None else elastic_params(ep, f, f"{key}/Material")
 
 
 def _shell_bends(m, f: str, key: str) -> bool:
