@@ -285,7 +285,8 @@ def test_niftysims_shell_test_model_without_bending_stretches_as_its_closed_form
     closed form, λ (E (λ² − 1)/2) h = 25 N/m with the sides free to contract by
     √(1 − ν (λ² − 1)): both to 1e-5 (float32, settled); and NiftySim's own U.txt for it (its shell
     element, tests/data/README.md): every frame within one step's motion plus 0.5 %, the last
-    within 1e-4 of the largest displacement (measured 1.7e-5: both float32)."""
+    within 1e-4 of the largest displacement (measured 1.7e-5: both float32); the summary's
+    membrane tension is the pull over the contracted width."""
     from scipy.optimize import brentq
     from typer.testing import CliRunner
 
@@ -306,6 +307,13 @@ def test_niftysims_shell_test_model_without_bending_stretches_as_its_closed_form
     np.testing.assert_allclose(u[pulled, 0], lam - 1, rtol=1e-5)
     width = np.ptp((X[:, 1] + u[:, 1])[pulled])
     np.testing.assert_allclose(width, np.sqrt(1 - 0.495 * (lam**2 - 1)), rtol=1e-5)
+    # The summary's tension is Cauchy's, per current width: 25 N over the contracted width,
+    # uniform (float32, settled: 1e-4; measured 8e-6).
+    summary = json.loads((out / "summary.json").read_text())
+    np.testing.assert_allclose(
+        summary["max_membrane_tension"], 25 / np.sqrt(1 - 0.495 * (lam**2 - 1)), rtol=1e-4
+    )
+    assert summary["max_von_mises"] == 0.0  # no tets
 
 
 def test_a_shell_models_step_beyond_its_membranes_is_divided(tmp_path):

@@ -133,26 +133,31 @@ def total_steps(duration: float, dt: float) -> int:
 
 def body_measures(model, state, res: dict, nodes=slice(None), elements=slice(None)) -> dict:
     """A run's closing figures, of the whole model or of one body of a batch (its node and element
-    ranges): max displacement [m], max von Mises [Pa] of the tets (0 without), kinetic energy
-    ½ Σ m v² [J] (half-step velocity) and strain energy [J], Σ V0 W of the tets and Σ A0 h W of
-    the membranes. ``res``: ``model.element_results(state)``."""
+    ranges): max displacement [m], max von Mises [Pa] of the tets (0 without), the membranes'
+    largest principal tension [N/m] (0 without), kinetic energy ½ Σ m v² [J] (half-step velocity)
+    and strain energy [J], Σ V0 W of the tets and Σ A0 h W of the membranes. ``res``:
+    ``model.element_results(state)``."""
     u, v = state.displacements[nodes], state.velocities[nodes]
     tets = float(np.dot(model.element_volumes()[elements], res["energy_density"][elements]))
+    membranes = _membrane_results(model, state, nodes)
     return {
         "max_displacement": float(np.linalg.norm(u, axis=1).max()),
         "max_von_mises": float(res["von_mises"][elements].max(initial=0.0)),  # 0: membranes alone
+        "max_membrane_tension": float(membranes["max_tension"].max(initial=0.0)),  # 0: no membranes
         "kinetic_energy": float(0.5 * np.sum(model.mass[nodes, None] * v * v)),
-        "strain_energy": tets + _membrane_energy(model, state, nodes),
+        "strain_energy": tets + float(membranes["energy"].sum()),
     }
 
 
-def _membrane_energy(model, state, nodes: slice) -> float:
-    """Σ A0 h W [J] of the membranes whose nodes lie in the node range ``nodes`` (a body's)."""
+def _membrane_results(model, state, nodes: slice) -> dict[str, np.ndarray]:
+    """Model.membrane_results of the membranes whose nodes lie in the node range ``nodes`` (a
+    body's): their ``max_tension`` [N/m] and ``energy`` A0 h W [J] (empty without membranes)."""
     if not model.n_membranes:
-        return 0.0
+        return {"max_tension": np.zeros(0), "energy": np.zeros(0)}
     lo, hi, _ = nodes.indices(model.n_nodes)
     first = model.membrane_faces[:, 0]
-    return float(model.membrane_results(state)["energy"][(first >= lo) & (first < hi)].sum())
+    mine = (first >= lo) & (first < hi)
+    return {k: v[mine] for k, v in model.membrane_results(state).items() if k in ("max_tension", "energy")}
 
 
 # What a run writes into its folder (run_scene): an earlier run's are replaced as a whole.

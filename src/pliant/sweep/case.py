@@ -17,10 +17,12 @@ from .spec import Outputs, SweepSpec
 __all__ = ["SceneCase", "SUMMARY_OUTPUTS"]
 
 # Scalars of a run's summary that every sweep collects: max displacement [m], max von Mises [Pa],
-# kinetic and strain energy [J] at the end, steps, simulated time [s], time step [s].
+# max membrane tension [N/m], kinetic and strain energy [J] at the end, steps, simulated time [s],
+# time step [s].
 SUMMARY_OUTPUTS = (
     "max_displacement",
     "max_von_mises",
+    "max_membrane_tension",
     "kinetic_energy",
     "strain_energy",
     "steps",
