@@ -386,11 +386,11 @@ def run_scene(
                 if embedding is not None:  # the fine surface, as the viewer and surface.pvd show
                     Pe = embedding.positions(model.tets, state.positions)
                     surface = (Pe, embedding.faces, embedding.tet[embedding.faces[:, 0]])
-                elif not model.n_elements:  # membranes alone: each coloured by its mean displacement
+                elif not model.n_elements:  # membranes alone: coloured by their tension, as in the viewer
                     F = model.membrane_faces
                     surface = (state.positions, F, np.arange(len(F)))
-                    field = np.linalg.norm(u, axis=1)[F].mean(axis=1)
-                    label = "displacement [m]"
+                    field = model.membrane_results(state)["max_tension"]
+                    label = "membrane tension [N/m]"
                 render_png(
                     out / "result.png",
                     state.positions,
