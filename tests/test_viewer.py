@@ -413,6 +413,17 @@ def _two_sided(mesh, n_triangles: int, n_nodes: int):
     np.testing.assert_array_equal(V[n_nodes:], V[:n_nodes])
 
 
+def _range_within(text: str, tension: np.ndarray) -> bool:
+    """Whether the first range shown in ``text`` ("field: lo (dark blue) … hi (yellow)" or
+    "...; field lo … hi") lies within the membranes' own tensions, to the 3 digits shown, and its
+    top is a pull (> 0): node averages of the membranes' values."""
+    import re
+
+    lo, hi = (float(x) for x in re.search(r"(\S+) (?:\(dark blue\) )?… (\S+)", text).groups())
+    slack = 5e-3 * np.abs(tension).max()
+    return tension.min() - slack <= lo <= hi <= tension.max() + slack and hi > 0
+
+
 def test_the_viewer_draws_membranes_alone(tmp_path):
     """NiftySim's membrane_stretch_nonlinear_irregular.xml (tests/data: 198 Neo-Hookean membrane
     triangles, no tets, one edge pulled 1 cm along the sheet; its displacements against NiftySim's
@@ -420,19 +431,12 @@ def test_the_viewer_draws_membranes_alone(tmp_path):
     sides, coloured by the membranes' larger principal tension averaged at the nodes, so the range
     shown lies within the membranes' own (to the 3 digits shown) and its top is a pull (> 0). Its
     results folder plays back the same way, from the frames' membrane_max_tension."""
-    import re
-
     import meshio
     from typer.testing import CliRunner
 
     from pliant.cli import app
     from pliant.io.niftysim import load_niftysim
     from pliant.view.viewer import TENSION_FIELD, LiveViewer, PlaybackViewer
-
-    def within(text, tension):  # text: "field: lo (dark blue) … hi (yellow)" or "...; field lo … hi"
-        lo, hi = (float(x) for x in re.search(r"(\S+) (?:\(dark blue\) )?… (\S+)", text).groups())
-        slack = 5e-3 * np.abs(tension).max()  # 3 significant digits
-        return tension.min() - slack <= lo <= hi <= tension.max() + slack and hi > 0
 
     model = Path(__file__).parent / "data" / "niftysim_membrane_stretch_nonlinear_irregular.xml"
     scene = load_niftysim(model)
@@ -445,7 +449,7 @@ def test_the_viewer_draws_membranes_alone(tmp_path):
         v.draw()
         _two_sided(sent[-1], 198, n_nodes)
         tension = v.model.membrane_results(v.sim.state)["max_tension"]
-        assert v.colourbar.content.startswith(TENSION_FIELD) and within(v.colourbar.content, tension)
+        assert v.colourbar.content.startswith(TENSION_FIELD) and _range_within(v.colourbar.content, tension)
     finally:
         v.stop_event.set()
         v.server.stop()
@@ -457,6 +461,65 @@ def test_the_viewer_draws_membranes_alone(tmp_path):
         p.show(len(p.files) - 1)
         _two_sided(sent[-1], 198, n_nodes)
         tension = meshio.read(p.files[-1]).cell_data["membrane_max_tension"][0]
-        assert "tension [N/m]" in p.label.content and within(p.label.content, tension)
+        assert "tension [N/m]" in p.label.content and _range_within(p.label.content, tension)
+    finally:
+        p.server.stop()
+
+
+def _cube_and_sheet():
+    """A 2 cm cube of 2 × 2 × 2 cells fixed at its base, and beside it (3 cm above, a node of it
+    off the cube) a 4 cm sheet of 32 Neo-Hookean membrane triangles pinned at its corners, both
+    under gravity: the scene a NiftySim model such as two_cubes_sheet.xml becomes without contact."""
+    from pliant.job import Scene
+    from pliant.mesh import grid_tets
+
+    X, T = grid_tets(np.linspace(0, 0.02, 3), np.linspace(0, 0.02, 3), np.linspace(0, 0.02, 3))
+    n, g = 5, np.linspace(0, 0.04, 5)
+    S = np.array([[x, y, 0.05] for y in g for x in g])
+    F = [[a, a + 1, a + n + 1] for a in range(n * n - n) if a % n < n - 1]
+    F += [[a, a + n + 1, a + n] for a in range(n * n - n) if a % n < n - 1]
+    b = pl.ModelBuilder()
+    b.add_mesh(np.vstack([X, S]), T)
+    b.set_material(pl.NeoHookean(E=1e4, nu=0.3), density=1000.0)
+    b.add_membrane(np.array(F) + len(X), pl.NeoHookeanMembrane(mu=1e3, thickness=1e-3, density=1000.0))
+    corners = len(X) + np.array([0, n - 1, n * (n - 1), n * n - 1])
+    b.fix(np.concatenate([corners, np.nonzero(X[:, 2] == 0)[0]]))
+    b.add_gravity((0, 0, -9.81), np.arange(len(X) + len(S)))
+    return Scene("cube and sheet", b, duration=0.05, frames=2)
+
+
+def test_the_viewer_draws_a_sheet_beside_a_solid(tmp_path):
+    """Membranes with a node off the tets (a sheet beside a solid) are drawn too, from both
+    sides, coloured by their tension (sagging under gravity between pinned corners: a pull),
+    beside the solid's boundary (6 faces × 4 squares × 2 = 48 triangles), live and played back;
+    before, only the solid was drawn."""
+    import meshio
+
+    from pliant.runner import run_scene
+    from pliant.view.viewer import LiveViewer, PlaybackViewer
+
+    scene = _cube_and_sheet()
+    v = LiveViewer(scene, port=_free_port())
+    try:
+        sent = _drawn(v)
+        v.sim.run(until=scene.duration)
+        v.draw()
+        body, sheet = sent[-2:]
+        assert len(body.faces) == 48
+        _two_sided(sheet, 32, 25)
+        tension = v.model.membrane_results(v.sim.state)["max_tension"]
+        assert _range_within(v.colourbar.content.split("sheets beside it")[1], tension)
+    finally:
+        v.stop_event.set()
+        v.server.stop()
+    run_scene(scene, tmp_path, progress=False)
+    p = PlaybackViewer(tmp_path, port=_free_port())
+    try:
+        sent = _drawn(p)
+        p.show(len(p.files) - 1)
+        _two_sided(sent[-1], 32, 25)
+        frame = meshio.read(p.files[-1])
+        tension = frame.cell_data_dict["membrane_max_tension"]["triangle"]
+        assert _range_within(p.label.content.split("sheets beside it")[1], tension)
     finally:
         p.server.stop()

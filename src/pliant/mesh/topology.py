@@ -140,6 +140,13 @@ def conformity_problem(nodes: np.ndarray, tets: np.ndarray) -> str | None:
     return None
 
 
+def faces_off(faces: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Indices of the faces (K, 3) with a node that no tet (M, 4) uses: a sheet of its own, not a
+    skin on the solid, ascending."""
+    F = np.asarray(faces, np.int64).reshape(-1, 3)
+    return np.nonzero(~np.isin(F, np.asarray(tets, np.int64)).all(axis=1))[0]
+
+
 def boundary_nodes(tets: np.ndarray) -> np.ndarray:
     """Indices of the nodes on the boundary faces, ascending."""
     return np.unique(boundary_faces(tets)[0])

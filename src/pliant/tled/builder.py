@@ -532,10 +532,11 @@ class ModelBuilder:
     def free_membranes(self) -> np.ndarray:
         """Indices of the membranes with a node that no tet uses (a sheet of its own, not a skin on
         a solid): soft contact, whose surfaces are the tets' boundaries, does not see them."""
+        from ..mesh.topology import faces_off
+
         if not self._membranes:
             return np.zeros(0, np.int64)
-        F = np.concatenate([F for F, _ in self._membranes])
-        return np.nonzero(~np.isin(F, self.tets).all(axis=1))[0]
+        return faces_off(np.concatenate([F for F, _ in self._membranes]), self.tets)
 
     def _warn_membranes_out_of_contact(self):
         if self.soft_contact is None or self.n_elements == 0:

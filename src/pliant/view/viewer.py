@@ -21,7 +21,7 @@ from ..contact import quat_from_matrix
 from ..errors import InputError, PliantError
 from ..io.files import MISSING, file_problem, read_meshio
 from ..io.results import INDEX
-from ..mesh.topology import boundary_faces
+from ..mesh.topology import boundary_faces, faces_off
 
 BODY_FIELD = "body"  # the colour choice that tells a scene's bodies apart (Model.bodies)
 STRESS_FIELD = "von Mises stress [Pa]"  # the tets' (Model.element_results)
@@ -120,6 +120,16 @@ class _Surface:
         """A model's tets' boundary (membranes on it lie on those faces), or its membranes alone."""
         return cls.of_tets(model.tets) if model.n_elements else cls.of_sheet(model.membrane_faces)
 
+    @classmethod
+    def sheets_beside(cls, triangles: np.ndarray, tets: np.ndarray) -> "_Surface | None":
+        """The membrane triangles (K, 3) with a node off the tets (M, 4), a sheet beside a solid
+        (NiftySim's two_cubes_sheet.xml run with --ignore MembraneContact), owned by their index
+        among ``triangles``; None where there are none or no tets (membranes alone: of_sheet)."""
+        if not len(tets) or not len(triangles):
+            return None
+        free = faces_off(triangles, tets)
+        return cls(np.asarray(triangles)[free], free, sheet=True) if free.size else None
+
     def node_values(self, element_values: np.ndarray) -> np.ndarray:
         """Average of the adjacent faces' element values at each surface vertex."""
         acc = np.zeros(self.nodes.size)
@@ -182,7 +192,7 @@ class LiveViewer:
         self._solver0 = self.sim.solver
         self.dt0 = self.sim.solver.dt
         self._dt_model = self.model  # the model dt0 belongs to (a cut may lower the step)
-        self._surface = (self.model, _Surface.of_model(self.model))
+        self._surface = self._surfaces(self.model)
         self.embedding = None  # the fine surface of the scene, when it has one
         if scene.meta.get("embed_surface"):
             from ..mesh import embed_surface
@@ -408,6 +418,11 @@ class LiveViewer:
             return model.membrane_results(self.sim.state)["max_tension"]
         return None
 
+    @staticmethod
+    def _surfaces(model) -> tuple:
+        """(model, the surface drawn, membranes beside its tets or None)."""
+        return model, _Surface.of_model(model), _Surface.sheets_beside(model.membrane_faces, model.tets)
+
     def draw(self):
         """Send the current surface, colours, status and tool forces to the browser."""
         with self.lock:
@@ -416,6 +431,7 @@ class LiveViewer:
             ev = self._element_values(model)
             u = self.sim.displacements
             t = self.sim.time
+            tension = model.membrane_results(self.sim.state)["max_tension"] if model.n_membranes else None
             forces = [self.sim.tool_force(k) for k in range(len(model.tools))]
             poses = [tool.pose(t) for tool in self.sim.solver.tools]
             blade_poses = [b.pose(t) for b in self.scene.blades]
@@ -423,8 +439,8 @@ class LiveViewer:
             held = len(self.sim.state.held) if model.tools else 0
             cuts = len(self.sim.cutter.events) if self.sim.cutter is not None else 0
         if self._surface[0] is not model:
-            self._surface = (model, _Surface.of_model(model))
-        surface = self._surface[1]
+            self._surface = self._surfaces(model)
+        surface, sheets = self._surface[1], self._surface[2]
         if emb is not None:  # the fine surface follows the tets
             V, F = emb.positions(model.tets, P), emb.faces
             vals = ev[emb.tet] if ev is not None else np.linalg.norm(emb.positions(model.tets, u), axis=1)
@@ -441,6 +457,13 @@ class LiveViewer:
             + (f"  \n**stopped:** {self.error}" if self.error else "")
         )
         self.colourbar.content = f"{self.field}: {lo:.3g} (dark blue) … {hi:.3g} (yellow)"
+        if sheets is not None:  # membranes beside the solid: their tension, or the displacement
+            by_tension = self.field != DISPLACEMENT_FIELD
+            sv = sheets.node_values(tension) if by_tension else np.linalg.norm(u[sheets.nodes], axis=1)
+            sheet_mesh, (slo, shi) = _coloured_mesh(P[sheets.nodes], sheets.faces, sv, two_sided=True)
+            self.server.scene.add_mesh_trimesh("/sheets", sheet_mesh)
+            shown = TENSION_FIELD if by_tension else DISPLACEMENT_FIELD
+            self.colourbar.content += f"  \nsheets beside it, {shown}: {slo:.3g} … {shi:.3g}"
         lines = []
         ext = float(np.ptp(self.model.reference_positions, axis=0).max())
         for k, ((f, _), (R, p)) in enumerate(zip(forces, poses)):
@@ -508,6 +531,7 @@ class PlaybackViewer:
             raise InputError(f"{pvd}: lists {missing[0].name}, which is not in {out}")
         first = read_meshio(self.files[0], "result frame")
         self._cells, self._kind = np.empty((0, 4), np.int64), ""  # none shown yet
+        self.sheets: _Surface | None = None  # membranes beside the tets
         self.X = first.points
         self._frame_cells(first, self.files[0])  # of the frame shown (frames after a cut differ)
         self.server = serve_on(host, port)
@@ -541,6 +565,11 @@ class PlaybackViewer:
         if kind != self._kind or len(m.points) != len(self.X) or not np.array_equal(cells, self._cells):
             self._kind, self._cells, self.X = kind, cells, m.points
             self.surface = _Surface.of_tets(cells) if kind == "tetra" else _Surface.of_sheet(cells)
+            self.sheets = (
+                _Surface.sheets_beside(m.cells_dict["triangle"], cells)
+                if kind == "tetra" and "triangle" in m.cells_dict
+                else None
+            )
         return kind
 
     def show(self, i: int):
@@ -563,6 +592,14 @@ class PlaybackViewer:
         self.label.content = (
             f"t = {self.times[i]:.4g} s (frame {i + 1}/{len(self.files)}); {what} {lo:.3g} … {hi:.3g}"
         )
+        if self.sheets is not None:  # membranes beside the solid: their tension
+            st = m.cell_data_dict.get("membrane_max_tension", {}).get("triangle")
+            sheets = self.sheets
+            sv = sheets.node_values(st) if st is not None else np.linalg.norm(u[sheets.nodes], axis=1)
+            sheet_mesh, (slo, shi) = _coloured_mesh((m.points + u)[sheets.nodes], sheets.faces, sv, True)
+            self.server.scene.add_mesh_trimesh("/sheets", sheet_mesh)
+            shown = "tension [N/m]" if st is not None else "displacement [m]"
+            self.label.content += f"; sheets beside it, {shown} {slo:.3g} … {shi:.3g}"
 
     def serve(self, duration: float | None = None):
         end = None if duration is None else time.perf_counter() + duration
