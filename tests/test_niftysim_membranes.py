@@ -367,11 +367,13 @@ def test_a_sub_models_surface_membranes_run_as_niftysim_ran_them(tmp_path):
     _assert_frames_follow(mine, theirs, steps_a_frame=100)
 
 
-def test_deformable_contact_with_free_membranes_is_refused_by_name(tmp_path):
+def test_deformable_contact_takes_a_sheet_apart_and_refuses_one_joined_by_name(tmp_path):
     """NiftySim's deformable contact holds its membranes (two_cubes_sheet.xml drops two cubes onto
-    a sheet); pliant's soft contact is between tets' boundaries, so a membrane sheet off the solid
-    would let bodies pass through it: refused naming MembraneContact; ignored, it runs with a
-    warning from the builder. Membranes on the solid's own surface (SURFACE) are no such case."""
+    a sheet). A sheet apart from the tets is a body of its own in pliant's soft contact (the
+    cube body 0, the sheet body 1; tests/test_sheet_contact.py); a sheet joined to the solid by a
+    node (a flap) is not, so bodies would pass through it: refused naming MembraneContact;
+    ignored, it runs with a warning from the builder. Membranes on the solid's own surface
+    (SURFACE) are no such case."""
     X, T = pl.mesh.box_tets((0.02, 0.02, 0.02), (1, 1, 1))
     sheet = np.array([[0, 0, 0.03], [0.02, 0, 0.03], [0, 0.02, 0.03]])
     nh = '<Material Type="NH"><ElasticParams NumParams="2">1000 20000</ElasticParams></Material>'
@@ -390,10 +392,12 @@ def test_deformable_contact_with_free_membranes_is_refused_by_name(tmp_path):
 
     p = tmp_path / "sheet.xml"
     p.write_text(model(np.vstack([X, sheet]), _shells("T3", [[8, 9, 10]], neo)))
+    assert load_niftysim(p).builder.finalize("float64").contact_pairs == [(0, 1)]
+    p.write_text(model(np.vstack([X, sheet]), _shells("T3", [[7, 9, 10]], neo)))  # node 7: the cube's
     with pytest.raises(NiftySimError, match="MembraneContact: 1 membrane"):
         load_niftysim(p)
     sc = load_niftysim(p, ignore=("MembraneContact",))
-    with pytest.warns(pl.PliantWarning, match="1 membrane.*take no part in soft contact"):
+    with pytest.warns(pl.PliantWarning, match="1 membrane.*joined to them.*take no part in soft contact"):
         sc.builder.finalize("float64")
     p.write_text(model(X, _shells("SURFACE", [], neo)))
     assert load_niftysim(p).builder.n_membranes == 12

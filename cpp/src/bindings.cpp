@@ -219,7 +219,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<index_t> soft_nodes, std::vector<index_t> soft_label,
                std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
                std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads,
-               std::vector<index_t> mem_nodes, std::vector<int> mem_kind, std::vector<double> mem_params) {
+               std::vector<index_t> mem_nodes, std::vector<int> mem_kind, std::vector<double> mem_params,
+               std::vector<double> soft_sheet_h) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -262,6 +263,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.soft_labels = soft_labels;
                 in.soft_mu = std::move(soft_mu);
                 in.soft_skin = soft_skin;
+                in.soft_sheet_h = std::move(soft_sheet_h);
                 in.mem_nodes = std::move(mem_nodes);
                 in.mem_kind = std::move(mem_kind);
                 in.mem_params = std::move(mem_params);
@@ -295,7 +297,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "stiffness_damping"_a, "anp_stabilization"_a, "anp_shear_stabilization"_a, "tool_grips"_a,
             "tool_reach"_a, "soft_nodes"_a, "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a,
             "soft_mu"_a, "soft_skin"_a, "smoothing"_a, "threads"_a, "mem_nodes"_a = std::vector<index_t>{},
-            "mem_kind"_a = std::vector<int>{}, "mem_params"_a = std::vector<double>{})
+            "mem_kind"_a = std::vector<int>{}, "mem_params"_a = std::vector<double>{},
+            "soft_sheet_h"_a = std::vector<double>{})
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })

@@ -435,8 +435,11 @@ void Model<T>::build_soft_contact(const ModelInput& in) {
     const std::size_t L = static_cast<std::size_t>(in.soft_labels);
     if (ns == 0) return;
     if (in.soft_label.size() != ns || in.soft_tris.size() % 3 || in.soft_pair.size() != L * L ||
-        !(in.soft_skin > 0.0))
+        !(in.soft_skin > 0.0) || (!in.soft_sheet_h.empty() && in.soft_sheet_h.size() != L))
         throw std::invalid_argument("soft contact: inconsistent surface arrays");
+    for (double h : in.soft_sheet_h)
+        if (!(h >= 0.0 && std::isfinite(h)))
+            throw std::invalid_argument("soft contact: a sheet's half thickness must be finite and >= 0");
     for (std::size_t i = 0; i < ns; ++i)
         if (in.soft_nodes[i] < 0 || in.soft_nodes[i] >= n_nodes || in.soft_label[i] < 0 ||
             in.soft_label[i] >= in.soft_labels)
@@ -452,6 +455,7 @@ void Model<T>::build_soft_contact(const ModelInput& in) {
     soft_nodes = in.soft_nodes, soft_label = in.soft_label, soft_tris = in.soft_tris;
     soft_pair = in.soft_pair, soft_mu = in.soft_mu, soft_labels = in.soft_labels, soft_pairs = pairs;
     soft_skin = in.soft_skin;
+    soft_sheet_h = in.soft_sheet_h.empty() ? std::vector<double>(L, 0.0) : in.soft_sheet_h;
     soft_bits.assign(ns, 0);
     for (std::size_t i = 0; i < ns; ++i)
         for (int d = 0; d < 3; ++d)
@@ -468,8 +472,11 @@ void Model<T>::build_soft_contact(const ModelInput& in) {
             longest = std::sqrt(e2) > longest ? std::sqrt(e2) : longest;
         }
     }
-    soft_band = 0.0;
-    for (double h : soft_tri_h) soft_band = kSoftBehind * h > soft_band ? kSoftBehind * h : soft_band;
+    soft_band = 0.0;  // the farthest a contact's closest point lies: the band, and a sheet's half thickness
+    for (std::size_t t = 0; t < nt; ++t) {
+        const double b = kSoftBehind * soft_tri_h[t] + soft_sheet_h[soft_label[soft_tris[3 * t]]];
+        soft_band = b > soft_band ? b : soft_band;
+    }
     // A triangle's bounding radius is at most 2/3 of its longest edge, so with cells this large the
     // candidates of an undeformed surface lie in the 27 cells around a node (soft_candidates' reach).
     const double reach = 2.0 / 3.0 * longest + soft_skin + soft_band;
@@ -532,7 +539,12 @@ void Model<T>::build_soft_edges() {
     for (std::size_t i = 0; i < half.size();) {
         std::size_t j = i;
         while (j < half.size() && half[j].a == half[i].a && half[j].b == half[i].b) ++j;
-        if (j - i == 2) {  // a manifold edge: sharp if its faces meet at an angle
+        const bool sheet = soft_sheet_h[soft_label[half[i].a]] > 0.0;
+        if (sheet && j - i == 1) {  // a sheet's boundary: no contact beside it (soft_sheet_target)
+            soft_tri_edge[3 * half[i].t + half[i].k] = kSoftSheetEdge;
+            soft_bits[half[i].a] |= kSoftSheetRim;
+            soft_bits[half[i].b] |= kSoftSheetRim;
+        } else if (!sheet && j - i == 2) {  // a manifold edge: sharp if its faces meet at an angle
             double n0[3], n1[3];
             normal(static_cast<std::size_t>(half[i].t), n0);
             normal(static_cast<std::size_t>(half[i + 1].t), n1);

@@ -74,6 +74,7 @@ struct ModelInput {
     // (labels × labels, pair index or −1), μs and μk per pair, the Verlet skin [m].
     std::vector<index_t> soft_nodes, soft_label, soft_tris, soft_pair;
     std::vector<double> soft_mu;
+    std::vector<double> soft_sheet_h;  // per label: half a sheet's thickness [m] (two-sided); 0: a solid
     index_t soft_labels = 0;
     double soft_skin = 0.0;
 };
@@ -134,6 +135,7 @@ struct Model {
     std::vector<index_t> soft_edges;     // sharp surface edges: 2 surface nodes each (soft_contact.hpp)
     std::vector<index_t> soft_tri_edge;  // per triangle, its edge k (v_k, v_k+1): sharp edge or −1
     std::vector<double> soft_mu, soft_tri_h;
+    std::vector<double> soft_sheet_h;  // per label: half a sheet's thickness [m]; 0: a solid's surface
     index_t soft_labels = 0, soft_pairs = 0, soft_hash_mask = 0;
     double soft_skin = 0.0, soft_cell = 0.0;
     double soft_band = 0.0;    // kSoftBehind × the longest mean edge of a surface triangle [m]

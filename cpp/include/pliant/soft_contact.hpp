@@ -56,11 +56,17 @@ constexpr int kSoftRelaxSweeps = 3;
 /// the nodes.
 constexpr double kSoftSharpCos = 0.766;
 
+/// A sheet of membranes (two-sided, SoftSurface::sheet_h > 0) marks its boundary: each triangle's
+/// boundary edge in tri_edge, and its nodes on the boundary in bits (beside the DOF bits 0–2). A
+/// node whose closest point on a sheet lies on that boundary passes beside the sheet.
+constexpr index_t kSoftSheetEdge = -2;
+constexpr index_t kSoftSheetRim = 8;
+
 /// The contact surface and its settings, as device pointers (trivially copyable).
 struct SoftSurface {
     index_t n_nodes = 0, n_tris = 0, labels = 0, hash_mask = 0;
     const index_t* node = nullptr;      // surface node → engine node
-    const index_t* bits = nullptr;      // surface node: bit d set if DOF d is free
+    const index_t* bits = nullptr;      // surface node: bit d set if DOF d is free; kSoftSheetRim
     const index_t* label = nullptr;     // surface node → body label
     const index_t* tri = nullptr;       // 3 surface-node indices per triangle, outward (right hand)
     const double* tri_h = nullptr;      // mean reference edge per triangle [m]
@@ -68,7 +74,9 @@ struct SoftSurface {
     const index_t* vtri = nullptr;      //   vtri[vtri_off[i] .. vtri_off[i + 1]), ascending
     index_t n_edges = 0;                // sharp surface edges (kSoftSharpCos)
     const index_t* edge = nullptr;      // 2 surface nodes per sharp edge
-    const index_t* tri_edge = nullptr;  // per triangle, its edge k (v_k, v_k+1): sharp edge or −1
+    const index_t* tri_edge = nullptr;  // per triangle, its edge k (v_k, v_k+1): sharp edge, −1 or
+                                        // kSoftSheetEdge
+    const double* sheet_h = nullptr;    // per label: half a sheet's thickness [m]; 0: a solid
     const index_t* pair = nullptr;      // labels × labels: pair index of (slave, master), −1: none
     const double* mu = nullptr;         // per pair: μs, μk
     double skin = 0.0, cell = 0.0;      // Verlet skin and grid cell size [m]
@@ -305,7 +313,7 @@ PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X,
                         const double dx = x[0] - tc[3 * t], dy = x[1] - tc[3 * t + 1],
                                      dz = x[2] - tc[3 * t + 2];
                         const double sphere = std::sqrt(dx * dx + dy * dy + dz * dz) - tr[t];
-                        const double reach_t = s.skin + kSoftBehind * s.tri_h[t];
+                        const double reach_t = s.skin + kSoftBehind * s.tri_h[t] + s.sheet_h[s.label[v[0]]];
                         if (!(sphere <= reach_t)) continue;
                         bool seen = false;  // two cells of one bucket list a triangle twice
                         for (int q = 0; q < n; ++q) seen = seen || out[q] == t;
@@ -424,6 +432,59 @@ PLIANT_HD void soft_friction(const double rel[3], const double n[3], double lamb
     for (int d = 0; d < 3; ++d) p[d] -= lt * t[d];
 }
 
+/// Contact of node i with a sheet of membranes (two-sided, half thickness h [m]) at its closest
+/// point c on triangle t (feature f, weights w) to the node at u⁺, x1: the node keeps to the side
+/// of the sheet's mid-surface it was on at u, x0 (the sign σ of (x0 − c0)·n0, c0 the same point and
+/// n0 the face's normal at u), at least h from it. On that side within h of c, the target is h from
+/// c along x1 − c; through the mid-surface, h beyond c on σ's side, c + σ h n1 (n1 the normal at
+/// u⁺). Writes the unit vector e from x1 to the target and the distance gap [m] to it; false where
+/// the node is farther than h on its side, its closest point lies on the sheet's boundary (the node
+/// is beside the sheet: kSoftSheetEdge, kSoftSheetRim), or the face is degenerate. The offset
+/// surface of a sheet with thickness, as NiftySim's membrane contact surfaces are (Taylor et al.
+/// 2008, IEEE TMI 27(5):650, §IV-C; NiftySim's tledDeformableMembraneContactSurface).
+template <class T>
+PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, const SoftSurface& s,
+                                 const double* X, const T* u, index_t P, const double* xs, const double x0[3],
+                                 const double x1[3], double e[3], double& gap) {
+    const index_t* v = s.tri + 3 * t;
+    if (f >= 3 && f < 6 && s.tri_edge[3 * t + f - 3] == kSoftSheetEdge) return false;
+    if (f < 3 && (s.bits[v[f]] & kSoftSheetRim)) return false;
+    double y0[3][3], n0[3], n1[3];
+    for (int j = 0; j < 3; ++j) soft_position(v[j], s, X, u, P, y0[j]);
+    const double a[3] = {y0[1][0] - y0[0][0], y0[1][1] - y0[0][1], y0[1][2] - y0[0][2]};
+    const double b[3] = {y0[2][0] - y0[0][0], y0[2][1] - y0[0][1], y0[2][2] - y0[0][2]};
+    n0[0] = a[1] * b[2] - a[2] * b[1], n0[1] = a[2] * b[0] - a[0] * b[2], n0[2] = a[0] * b[1] - a[1] * b[0];
+    if (!soft_face(t, 0, s, xs, n1, nullptr)) return false;
+    double y1[3][3], side0 = 0.0, side1 = 0.0, r[3], c[3], dist2 = 0.0;
+    for (int j = 0; j < 3; ++j) soft_current(v[j], xs, y1[j]);
+    for (int d = 0; d < 3; ++d) {
+        c[d] = w[0] * y1[0][d] + w[1] * y1[1][d] + w[2] * y1[2][d];
+        const double c0 = w[0] * y0[0][d] + w[1] * y0[1][d] + w[2] * y0[2][d];
+        side0 += (x0[d] - c0) * n0[d];
+        r[d] = x1[d] - c[d];
+        side1 += r[d] * n1[d];
+        dist2 += r[d] * r[d];
+    }
+    const double sigma = side0 >= 0.0 ? 1.0 : -1.0;
+    double target[3];
+    if (sigma * side1 > 0.0) {  // on its side: within h of the closest point
+        if (!(dist2 < h * h)) return false;
+        const double dist = std::sqrt(dist2);
+        for (int d = 0; d < 3; ++d) target[d] = c[d] + h * r[d] / dist;
+    } else {  // through the mid-surface
+        for (int d = 0; d < 3; ++d) target[d] = c[d] + sigma * h * n1[d];
+    }
+    double g2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+        e[d] = target[d] - x1[d];
+        g2 += e[d] * e[d];
+    }
+    gap = std::sqrt(g2);
+    if (!(gap > 0.0)) return false;
+    for (int d = 0; d < 3; ++d) e[d] /= gap;
+    return true;
+}
+
 /// Narrow phase and response of surface node i (the slave). For each body among its candidates,
 /// the closest point c on that body's candidate triangles to x⁺; the node is inside the body if
 /// (x⁺ − c)·n < 0 for the pseudo-normal n there (soft_pseudo_normal) and it lies at most
@@ -468,6 +529,16 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
     double best_d = -INFINITY, best_n[3] = {0.0, 0.0, 0.0}, best_w[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < n_bodies; ++k) {
         const index_t t = near[k];
+        const double h = s.sheet_h[body[k]];
+        if (h > 0.0) {  // a sheet of membranes: two-sided
+            double e[3], gap;
+            if (!(near_d2[k] <= (kSoftBehind * s.tri_h[t] + h) * (kSoftBehind * s.tri_h[t] + h))) continue;
+            if (!soft_sheet_target(t, near_f[k], near_w[k], h, s, X, u, P, xs, x0, x1, e, gap)) continue;
+            if (!(-gap > best_d || (-gap == best_d && t < best))) continue;
+            best = t, best_d = -gap;
+            for (int d = 0; d < 3; ++d) best_n[d] = e[d], best_w[d] = near_w[k][d];
+            continue;
+        }
         const double band = kSoftBehind * s.tri_h[t];
         if (!(near_d2[k] > 0.0 && near_d2[k] <= band * band)) continue;
         const double gap = std::sqrt(near_d2[k]);

@@ -76,7 +76,7 @@ struct ModelBuffers {
     DeviceBuffer<T, Dev> edge_w, elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
         patterns, cval, pedges, pvalue, ptraction, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
-    DeviceBuffer<double, Dev> tt, tv, X, grid, stri_h;
+    DeviceBuffer<double, Dev> tt, tv, X, grid, stri_h, ssheet_h;
 
     ModelBuffers() = default;
     ModelBuffers(Dev& d, const Model<T>& m) {
@@ -98,6 +98,7 @@ struct ModelBuffers {
         tt = D(m.table_t), tv = D(m.table_v), X = D(m.X), grid = D(m.tool_grid);
         snodes = I(m.soft_nodes), sbits = I(m.soft_bits), slabel = I(m.soft_label), stris = I(m.soft_tris);
         spair = I(m.soft_pair), stri_h = D(m.soft_tri_h), svtri_off = I(m.soft_vtri_off);
+        ssheet_h = D(m.soft_sheet_h);
         svtri = I(m.soft_vtri), sedges = I(m.soft_edges), stri_edge = I(m.soft_tri_edge);
         edge_off = I(m.edge_off), edge_slot = I(m.edge_slot), edge_group = I(m.edge_group);
         elem_edges = I(m.elem_edges), edge_w = R(m.edge_w);

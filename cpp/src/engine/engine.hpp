@@ -50,6 +50,7 @@ struct Scalars {
     // atomic maximum; non-negative doubles order as their bits do)
     std::int64_t soft_rmax;
     index_t soft_active, soft_touched;  // soft contact: nodes with candidates; nodes of a sweep's contacts
+    index_t soft_contacts;              // soft contact: a sweep's contacts (soft_count)
     index_t soft_edges_active;          // soft contact: sharp edges with an end node that has candidates
     index_t soft_items;                 // soft contact: the larger of soft_active and soft_edges_active
     index_t soft_redo;                  // soft contact: soft_items if the last sweep moved a node, else 0

@@ -196,6 +196,7 @@ void Engine<T, Dev>::refresh_view() {
     sf.n_edges = static_cast<index_t>(m.soft_edges.size() / 2);
     sf.edge = mb_.sedges.data(), sf.tri_edge = mb_.stri_edge.data();
     sf.mu = d_soft_mu_.data(), sf.skin = m.soft_skin, sf.cell = m.soft_cell;
+    sf.sheet_h = mb_.ssheet_h.data();
     sf.band_max = m.soft_band;
     v.sb = sb_.data(), v.sx = sx_.data(), v.stc = stc_.data(), v.str = str_.data();
     v.srec_w = srec_w_.data(), v.srec_p = srec_p_.data(), v.sacc = sacc_.data(), v.sforce = sforce_.data();

@@ -168,11 +168,13 @@ PLIANT_HD bool soft_reaches(double w) { return w > 0.0 || w < 0.0; }
 
 /// Step (3a) of soft_pass for contact c: each node it reaches adds |w| to its share of the sweep's
 /// contacts (sshare, fixed point: kSoftShareUnits), the contact first reaching it lists it in
-/// stouched, and its impulse's largest component raises the sweep's (soft_pmax).
+/// stouched, it counts itself (soft_contacts), and its impulse's largest component raises the
+/// sweep's (soft_pmax).
 template <class T, class Team>
 PLIANT_HD void soft_count(const DeviceView<T>& v, const SoftSurface& s, const Team& team, index_t c) {
     SoftContact k;
     if (!soft_contact_at(v, s, c, k)) return;
+    team.add(&v.sc->soft_contacts, index_t(1));
     for (int j = 0; j < 4; ++j) {
         if (!soft_reaches(k.w[j])) continue;
         std::int64_t q = soft_fixed(std::fabs(k.w[j]), kSoftShareUnits);
@@ -240,12 +242,15 @@ PLIANT_HD void soft_spread(const DeviceView<T>& v, const SoftSurface& s, const T
 template <class T, class Team>
 PLIANT_HD void soft_gather(const DeviceView<T>& v, const SoftSurface& s, bool first, const Team& team) {
     Scalars<T>& sc = *v.sc;
-    team.one([&] { sc.soft_touched = 0; });
+    team.one([&] { sc.soft_touched = 0, sc.soft_contacts = 0; });
     team.sync();
     const index_t m = sc.soft_active + sc.soft_edges_active;
     team.each(m, [&](index_t c) { soft_count(v, s, team, c); });
     team.sync();
-    const double unit = soft_unit(sc.soft_pmax, m);
+    // The unit from the contacts found, not from the nodes and edges that could have one: those
+    // depend on when the candidate lists were last rebuilt (a run's start rebuilds them), the
+    // contacts do not, so a run split in two (or saved and restored) gives the same bits.
+    const double unit = soft_unit(sc.soft_pmax, sc.soft_contacts);
     team.each(m, [&](index_t c) { soft_spread(v, s, team, c, unit); });
     team.sync();
     team.one([&] {

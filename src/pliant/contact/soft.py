@@ -22,7 +22,7 @@ import numpy as np
 from ..checks import as_index, finite_number, real_array, shown
 from ..errors import InputError
 
-__all__ = ["SoftContact", "body_labels"]
+__all__ = ["SoftContact", "body_labels", "sheets_apart"]
 
 # Most bodies soft contact takes (its pair table holds one entry per ordered pair of bodies).
 MAX_BODIES = 2048
@@ -34,14 +34,14 @@ SKIN_FRACTION = 0.3
 
 def body_labels(tets: np.ndarray, n_nodes: int) -> np.ndarray:
     """Body of each element (M,): connected components of the mesh through shared nodes, numbered
-    in the order of their first element."""
+    in the order of their first element (tets (M, 4), or any cells: a sheet's triangles (K, 3))."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
     T = np.asarray(tets, np.int64)
     M = T.shape[0]
-    rows = np.repeat(np.arange(M), 4)
-    g = coo_matrix((np.ones(4 * M), (rows, T.ravel())), shape=(M, n_nodes)).tocsr()
+    rows = np.repeat(np.arange(M), T.shape[1])
+    g = coo_matrix((np.ones(T.size), (rows, T.ravel())), shape=(M, n_nodes)).tocsr()
     _, comp = connected_components(g @ g.T, directed=False)
     first = np.full(comp.max() + 1, M)
     np.minimum.at(first, comp, np.arange(M))
@@ -107,9 +107,14 @@ class SoftContact:
                 raise InputError(f"soft contact skin = {shown(skin)}; expected > 0 [m]")
         return SoftContact(mu_s, mu_k, pairs, self_contact, skin)
 
-    def pair_table(self, n_bodies: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    def pair_table(
+        self, n_bodies: int, n_solid: int | None = None
+    ) -> tuple[np.ndarray, list[tuple[int, int]]]:
         """The engine's pair table (n_bodies, n_bodies): pair index of (slave body, master body), −1
-        where they do not touch; and the pairs (a ≤ b) in index order."""
+        where they do not touch; and the pairs (a ≤ b) in index order. Bodies from ``n_solid`` on
+        are sheets of membranes, which have no self contact (``self_contact=True`` leaves them
+        out; naming one is an InputError)."""
+        n_solid = n_bodies if n_solid is None else n_solid
         if n_bodies > MAX_BODIES:
             raise InputError(
                 f"soft contact: the mesh has {n_bodies} separate bodies (connected parts); expected at "
@@ -127,10 +132,15 @@ class SoftContact:
                             f"{n_bodies} bodies (0 to {n_bodies - 1}; ModelBuilder.bodies())"
                         )
                 wanted.add((min(a, b), max(a, b)))
-        selfs = range(n_bodies) if self.self_contact is True else (self.self_contact or ())
+        selfs = range(n_solid) if self.self_contact is True else (self.self_contact or ())
         for b in selfs:
             if not 0 <= b < n_bodies:
                 raise InputError(f"self_contact body {b} does not exist; the mesh has {n_bodies} bodies")
+            if b >= n_solid:
+                raise InputError(
+                    f"self_contact body {b} is a sheet of membranes (bodies {n_solid} to {n_bodies - 1}); "
+                    "a sheet's contact with itself is not implemented (docs/contact.md)"
+                )
             wanted.add((b, b))
         order = sorted(wanted)
         table = np.full((n_bodies, n_bodies), -1, np.int64)
@@ -155,19 +165,47 @@ def on_rollers(X: np.ndarray, faces: np.ndarray, held: np.ndarray) -> np.ndarray
     return aligned & held_normal & ~all_held
 
 
+def sheets_apart(F: np.ndarray, tets: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Of membranes F (K, 3) with a node off the tets (M, 4), (ModelBuilder.free_membranes): the
+    indices of those in sheets apart from the tets, which take part in soft contact as bodies of
+    their own, and of those in sheets that share a node with the tets (a flap on a solid), which
+    do not (their nodes would belong to two bodies). Both ascending."""
+    from ..mesh.topology import faces_off
+
+    F = np.asarray(F, np.int64).reshape(-1, 3)
+    off = faces_off(F, tets)
+    if not off.size:
+        return off, off
+    comp = body_labels(F[off], n_nodes)
+    touches = np.isin(F[off], np.asarray(tets, np.int64)).any(axis=1)
+    joined = np.zeros(int(comp.max()) + 1, bool)
+    joined[comp[touches]] = True
+    return off[~joined[comp]], off[joined[comp]]
+
+
 def engine_surface(
-    contact: SoftContact, X: np.ndarray, T: np.ndarray, node_rank: np.ndarray, held: np.ndarray | None = None
+    contact: SoftContact,
+    X: np.ndarray,
+    T: np.ndarray,
+    node_rank: np.ndarray,
+    held: np.ndarray | None = None,
+    sheets: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> dict:
     """The engine's soft-contact arrays (Model → _core.Engine): the boundary triangles of the bodies
     that touch something (outward) but those on rollers or symmetry planes (:func:`on_rollers`;
     ``held``: (N, 3) bool, DOFs held), their nodes in engine numbering with body labels, the pair
-    table and friction per pair, the skin [m]. Also 'pairs' (the pairs in index order) and
-    'labels' (body per element)."""
+    table and friction per pair, the skin [m]. ``sheets``: membranes apart from the tets, as their
+    triangles (K, 3) and thicknesses [m] (K,): each connected sheet is a body, numbered after the
+    tets' bodies, two-sided (soft_contact.hpp, soft_sheet_target), its half thickness the largest
+    of its membranes'. Also 'pairs' (the pairs in index order) and 'labels' (body per element)."""
     from ..mesh.topology import boundary_faces
 
     labels = contact.labels if contact.labels is not None else body_labels(T, X.shape[0])
-    n_bodies = int(labels.max()) + 1 if labels.size else 0
-    table, pairs = contact.pair_table(n_bodies)
+    n_solid = int(labels.max()) + 1 if labels.size else 0
+    sheet_F, sheet_t = sheets if sheets is not None else (np.zeros((0, 3), np.int64), np.zeros(0))
+    sheet_body = n_solid + body_labels(sheet_F, X.shape[0]) if len(sheet_F) else np.zeros(0, np.int64)
+    n_bodies = int(sheet_body.max()) + 1 if sheet_body.size else n_solid
+    table, pairs = contact.pair_table(n_bodies, n_solid)
     if not pairs:  # one body without self contact: nothing to touch
         return dict(no_surface(), pairs=[], labels=labels)
     active = np.nonzero((table >= 0).any(axis=1))[0]
@@ -175,7 +213,11 @@ def engine_surface(
     touching = np.isin(labels[owner], active)
     if held is not None:
         touching &= ~on_rollers(X, faces, held)
-    faces, face_body = faces[touching], labels[owner[touching]]
+    on_sheet = np.isin(sheet_body, active)
+    faces = np.vstack([faces[touching], np.asarray(sheet_F, np.int64)[on_sheet]])
+    face_body = np.concatenate([labels[owner[touching]], sheet_body[on_sheet]])
+    half = np.zeros(n_bodies)
+    np.maximum.at(half, sheet_body, 0.5 * np.asarray(sheet_t, float))
     nodes = np.unique(faces)
     node_body = np.zeros(X.shape[0], np.int64)
     node_body[faces.ravel()] = np.repeat(face_body, 3)
@@ -203,6 +245,7 @@ def engine_surface(
         soft_labels=int(n_bodies),
         soft_mu=[m for _ in pairs for m in (contact.mu_s, contact.mu_k)],
         soft_skin=float(skin),
+        soft_sheet_h=[float(h) for h in half],
         pairs=pairs,
         labels=labels,
     )
@@ -225,7 +268,8 @@ def initial_overlap(X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs) -> 
     n_bodies = int(labels.max()) + 1
     touch = np.zeros((n_bodies, n_bodies), bool)
     for a, b in pairs:
-        touch[a, b] = touch[b, a] = a != b
+        if a < n_bodies and b < n_bodies:  # sheets of membranes (numbered after) are not checked
+            touch[a, b] = touch[b, a] = a != b
     if not touch.any():
         return None
     faces, owner = boundary_faces(T)
@@ -289,5 +333,12 @@ def _deepest(X, nodes, node_body, faces, other: int, band_fraction: float, worst
 def no_surface() -> dict:
     """The engine's soft-contact arrays of a model without soft contact."""
     return dict(
-        soft_nodes=[], soft_label=[], soft_tris=[], soft_pair=[], soft_labels=0, soft_mu=[], soft_skin=0.0
+        soft_nodes=[],
+        soft_label=[],
+        soft_tris=[],
+        soft_pair=[],
+        soft_labels=0,
+        soft_mu=[],
+        soft_skin=0.0,
+        soft_sheet_h=[],
     )

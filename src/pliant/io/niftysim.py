@@ -260,13 +260,17 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
         _rigid_surfaces(root, b, path, total, f, unsupported)
     deformable, self_collide, mu = collide
     if deformable or self_collide:  # frictionless unless <DeformableFrictionCoefficient> says
+        from ..contact.soft import sheets_apart
+
         free = b.free_membranes()
-        if free.size:  # NiftySim's contact holds them (tledDeformableMembraneContactSurface)
+        joined = sheets_apart(b.membrane_faces(), b.tets, b.n_nodes)[1] if free.size else free
+        if joined.size:  # NiftySim's contact holds them (tledDeformableMembraneContactSurface)
             unsupported(
                 "MembraneContact",
-                f"{free.size} membrane(s) off the solid's surface would take part in NiftySim's deformable "
-                "contact; pliant's soft contact is between tets' boundaries, so bodies would pass through "
-                "them; skipping it runs the model with those membranes out of contact",
+                f"{joined.size} membrane(s) off the solid's surface but joined to it would take part in "
+                "NiftySim's deformable contact; pliant's soft contact takes sheets of membranes apart from "
+                "the tets, not joined to them, so bodies would pass through these; skipping it runs the "
+                "model with those membranes out of contact",
             )
         b.set_soft_contact(friction=mu, pairs=None if deformable else [], self_contact=self_collide)
     elif mu:

@@ -529,24 +529,32 @@ class ModelBuilder:
             moved.append([int(tets[e, j]) for j in local])
         return np.array(moved, np.int64).reshape(-1, 3)
 
+    def membrane_faces(self) -> np.ndarray:
+        """The membranes' triangles (K, 3), node ids, in add_membrane's order."""
+        return (
+            np.concatenate([F for F, _ in self._membranes]) if self._membranes else np.zeros((0, 3), np.int64)
+        )
+
     def free_membranes(self) -> np.ndarray:
         """Indices of the membranes with a node that no tet uses (a sheet of its own, not a skin on
-        a solid): soft contact, whose surfaces are the tets' boundaries, does not see them."""
+        a solid). In soft contact, a sheet of them apart from the tets is a body of its own;
+        one joined to the tets (a flap) takes no part (pliant.contact.soft.sheets_apart)."""
         from ..mesh.topology import faces_off
 
-        if not self._membranes:
-            return np.zeros(0, np.int64)
-        return faces_off(np.concatenate([F for F, _ in self._membranes]), self.tets)
+        return faces_off(self.membrane_faces(), self.tets)
 
     def _warn_membranes_out_of_contact(self):
-        if self.soft_contact is None or self.n_elements == 0:
+        from ..contact.soft import sheets_apart
+
+        if self.soft_contact is None or self.n_elements == 0 or not self._membranes:
             return
-        free = self.free_membranes()
-        if free.size:
+        joined = sheets_apart(self.membrane_faces(), self.tets, self.n_nodes)[1]
+        if joined.size:
             warnings.warn(
                 PliantWarning(
-                    f"{self.source}: {free.size} membrane(s) off the tets (first: {int(free[0])}) take no "
-                    "part in soft contact, whose surfaces are the tets' boundaries: bodies pass through them"
+                    f"{self.source}: {joined.size} membrane(s) off the tets but joined to them (first: "
+                    f"{int(joined[0])}) take no part in soft contact (a sheet apart from the tets does: "
+                    "docs/contact.md): bodies pass through them"
                 ),
                 stacklevel=3,
             )

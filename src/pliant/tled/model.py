@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import _core
 from ..checks import shown
-from ..contact.soft import engine_surface, no_surface
+from ..contact.soft import engine_surface, no_surface, sheets_apart
 from ..errors import InputError, MaterialError, MeshError, PliantWarning
 from .curves import Constant, LoadCurve
 from .anp import anp_stabilization
@@ -346,11 +346,11 @@ class Model:
         cn_order = np.argsort(node_rank[cn], kind="stable")
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
-        soft = (
-            engine_surface(builder.soft_contact, X, T, node_rank, held)
-            if builder.soft_contact is not None
-            else dict(no_surface(), pairs=[], labels=None)
-        )
+        soft = dict(no_surface(), pairs=[], labels=None)
+        if builder.soft_contact is not None:
+            apart = sheets_apart(mem_F, T, X.shape[0])[0]  # free sheets: bodies of their own
+            thickness = np.array([mem_mat[k].thickness for k in apart])
+            soft = engine_surface(builder.soft_contact, X, T, node_rank, held, (mem_F[apart], thickness))
         self.contact_pairs = soft.pop("pairs")  # soft-contact pairs of bodies (a <= b), index order
         self.bodies = soft.pop("labels")  # body of each element (user order), or None
         if self.contact_pairs:

@@ -123,7 +123,7 @@ class _Surface:
     @classmethod
     def sheets_beside(cls, triangles: np.ndarray, tets: np.ndarray) -> "_Surface | None":
         """The membrane triangles (K, 3) with a node off the tets (M, 4), a sheet beside a solid
-        (NiftySim's two_cubes_sheet.xml run with --ignore MembraneContact), owned by their index
+        (NiftySim's two_cubes_sheet.xml), owned by their index
         among ``triangles``; None where there are none or no tets (membranes alone: of_sheet)."""
         if not len(tets) or not len(triangles):
             return None
