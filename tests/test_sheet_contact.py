@@ -179,3 +179,20 @@ def test_a_sheet_has_no_self_contact():
     b.set_soft_contact(self_contact=[1])
     with pytest.raises(pl.InputError, match="self_contact body 1 is a sheet of membranes"):
         b.finalize("float64")
+
+
+def test_a_sheet_through_a_solid_at_the_start_is_refused_by_name():
+    """The block placed across the drum's mid-plane: the drum's centre node starts 5 mm inside the
+    block (half its side), deeper than the contact band, where contact would never push it out:
+    an InputError naming that node, the sheet (body 1) and the block (body 0)."""
+    X, T = _block(1)
+    X[:, 2] -= X[:, 2].mean()  # centred on z = 0
+    S, F, rim = _drum()
+    b = pl.ModelBuilder()
+    b.add_mesh(np.vstack([X, S]), T)
+    b.set_material(pl.NeoHookean(E=2e4, nu=0.3), density=1000.0)
+    b.add_membrane(F + len(X), pl.NeoHookeanMembrane(mu=1e3, thickness=H, density=1000.0))
+    b.set_soft_contact()
+    centre = len(X) + int(np.argmin(np.linalg.norm(S, axis=1)))
+    with pytest.raises(pl.InputError, match=f"node {centre} of body 1 starts 0.005 m inside body 0, deeper"):
+        b.finalize("float64")

@@ -207,7 +207,7 @@ def engine_surface(
     n_bodies = int(sheet_body.max()) + 1 if sheet_body.size else n_solid
     table, pairs = contact.pair_table(n_bodies, n_solid)
     if not pairs:  # one body without self contact: nothing to touch
-        return dict(no_surface(), pairs=[], labels=labels)
+        return dict(no_surface(), pairs=[], labels=labels, sheet_nodes=None, sheet_labels=None)
     active = np.nonzero((table >= 0).any(axis=1))[0]
     faces, owner = boundary_faces(T)
     touching = np.isin(labels[owner], active)
@@ -218,6 +218,9 @@ def engine_surface(
     face_body = np.concatenate([labels[owner[touching]], sheet_body[on_sheet]])
     half = np.zeros(n_bodies)
     np.maximum.at(half, sheet_body, 0.5 * np.asarray(sheet_t, float))
+    sheet_node_body = np.full(X.shape[0], -1, np.int64)  # for initial_overlap
+    sheet_node_body[np.asarray(sheet_F, np.int64).ravel()] = np.repeat(sheet_body, 3)
+    sheet_nodes = np.nonzero(sheet_node_body >= 0)[0]
     nodes = np.unique(faces)
     node_body = np.zeros(X.shape[0], np.int64)
     node_body[faces.ravel()] = np.repeat(face_body, 3)
@@ -248,34 +251,42 @@ def engine_surface(
         soft_sheet_h=[float(h) for h in half],
         pairs=pairs,
         labels=labels,
+        sheet_nodes=sheet_nodes,
+        sheet_labels=sheet_node_body[sheet_nodes],
     )
 
 
-def initial_overlap(X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs) -> dict | None:
+def initial_overlap(
+    X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs, sheet_nodes=None, sheet_labels=None
+) -> dict | None:
     """The deepest node that starts inside another body it touches: a dict with ``node``,
     its ``body``, the ``other`` body, ``depth`` [m] (distance to the other's surface) and ``band``
     [m] (the soft-contact band at the closest triangle: ``_core.soft_band`` × its mean edge, the
     deepest a node inside counts as a contact); None if no node starts inside. X: reference nodes
     [m] (N, 3); T: tets (M, 4); labels: body per element (M,); pairs: the touching (a, b), a <= b
-    (pairs of one body, self contact, are not checked: a body's own surface is where it starts).
-    Each node is located among the 8 tets with the nearest centroids, of all bodies at once."""
+    (pairs of one body, self contact, are not checked: a body's own surface is where it starts);
+    sheet_nodes, sheet_labels: the nodes of sheets of membranes and their bodies (a sheet that
+    starts through a solid has nodes inside it; a solid's nodes cannot be inside a sheet). Each
+    node is located among the 8 tets with the nearest centroids, of all bodies at once."""
     from scipy.spatial import cKDTree
 
     from .. import _core
     from ..mesh.embed import barycentric
     from ..mesh.topology import boundary_faces
 
-    n_bodies = int(labels.max()) + 1
+    sheet_nodes = np.zeros(0, np.int64) if sheet_nodes is None else np.asarray(sheet_nodes, np.int64)
+    sheet_labels = np.zeros(0, np.int64) if sheet_labels is None else np.asarray(sheet_labels, np.int64)
+    n_bodies = max(int(labels.max()) + 1, int(sheet_labels.max(initial=-1)) + 1)
     touch = np.zeros((n_bodies, n_bodies), bool)
     for a, b in pairs:
-        if a < n_bodies and b < n_bodies:  # sheets of membranes (numbered after) are not checked
-            touch[a, b] = touch[b, a] = a != b
+        touch[a, b] = touch[b, a] = a != b
     if not touch.any():
         return None
     faces, owner = boundary_faces(T)
     face_body = labels[owner]
     node_body = np.full(X.shape[0], -1, np.int64)
     node_body[T.ravel()] = np.repeat(labels, 4)
+    node_body[sheet_nodes] = sheet_labels
     # Every node, not only the surface's: a body given twice (a copied [[body]] without its
     # translate) has its surface on the other's, and its inner nodes deep inside.
     nodes = np.nonzero(node_body >= 0)[0]

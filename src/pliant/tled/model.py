@@ -143,14 +143,15 @@ def _check_wave_speeds(source: str, dt: np.ndarray, sets: list, owner: np.ndarra
 
 
 def _check_initial_overlap(
-    source: str, X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs, contact
+    source: str, X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs, contact, sheets=(None, None)
 ) -> None:
     """Soft contact needs the bodies it pairs to start apart or touching: a node that starts inside
     another body deeper than the contact band is never pushed out (an InputError), a shallower
-    one is pushed out in the first step, a jolt (a PliantWarning)."""
+    one is pushed out in the first step, a jolt (a PliantWarning). ``sheets``: the nodes of sheets
+    of membranes and their bodies."""
     from ..contact.soft import initial_overlap
 
-    o = initial_overlap(X, T, labels, pairs)
+    o = initial_overlap(X, T, labels, pairs, *sheets)
     if o is None:
         return
     where = (
@@ -353,9 +354,10 @@ class Model:
             soft = engine_surface(builder.soft_contact, X, T, node_rank, held, (mem_F[apart], thickness))
         self.contact_pairs = soft.pop("pairs")  # soft-contact pairs of bodies (a <= b), index order
         self.bodies = soft.pop("labels")  # body of each element (user order), or None
+        sheets = soft.pop("sheet_nodes", None), soft.pop("sheet_labels", None)  # bodies after the tets'
         if self.contact_pairs:
             _check_initial_overlap(
-                builder.source, X, T, self.bodies, self.contact_pairs, builder.soft_contact
+                builder.source, X, T, self.bodies, self.contact_pairs, builder.soft_contact, sheets
             )
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
