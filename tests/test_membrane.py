@@ -185,8 +185,8 @@ def test_the_stiffness_scale_reaches_the_membranes(kind, backend):
     the membranes' too: the box under a membrane on its top, stretched by diag(1.3, 0.9, 1) and let
     go from rest, first moves so that Σ m Δu_x / Δt² over the nodes on x = L is −k (P11 W H + P11ᵐ W),
     the closed-form resultants of the solid (St Venant–Kirchhoff) and of the membrane, at k = 1 and
-    3 (float64, no damping: round-off, 1e-9). Before the scale reached membranes, k = 3 gave
-    −(3 P11 W H + P11ᵐ W)."""
+    3 (float64, no damping: round-off, 1e-9). Membranes left unscaled would give
+    −(3 P11 W H + P11ᵐ W) at k = 3."""
     X, T = _box()
     material = MATERIALS[kind]
     l1, l2 = 1.3, 0.9

@@ -427,20 +427,20 @@ class LiveViewer:
         """Send the current surface, colours, status and tool forces to the browser."""
         with self.lock:
             model = self.sim.model  # after a cut, a new topology
+            if self._surface[0] is not model:
+                self._surface = self._surfaces(model)
+            surface, sheets = self._surface[1], self._surface[2]
             P = self.sim.positions
             ev = self._element_values(model)
             u = self.sim.displacements
             t = self.sim.time
-            tension = model.membrane_results(self.sim.state)["max_tension"] if model.n_membranes else None
+            tension = model.membrane_results(self.sim.state)["max_tension"] if sheets is not None else None
             forces = [self.sim.tool_force(k) for k in range(len(model.tools))]
             poses = [tool.pose(t) for tool in self.sim.solver.tools]
             blade_poses = [b.pose(t) for b in self.scene.blades]
             emb = self.sim.cutter.embedding if self.sim.cutter is not None else self.embedding
             held = len(self.sim.state.held) if model.tools else 0
             cuts = len(self.sim.cutter.events) if self.sim.cutter is not None else 0
-        if self._surface[0] is not model:
-            self._surface = self._surfaces(model)
-        surface, sheets = self._surface[1], self._surface[2]
         if emb is not None:  # the fine surface follows the tets
             V, F = emb.positions(model.tets, P), emb.faces
             vals = ev[emb.tet] if ev is not None else np.linalg.norm(emb.positions(model.tets, u), axis=1)
