@@ -252,11 +252,7 @@ class Model:
         group_end = np.cumsum(np.bincount(owner[elem_order], minlength=len(self.sets)))
         keep = np.diff(np.concatenate([[0], group_end])) > 0
         # Node order: first use in element order, then in membrane order; orphan nodes last.
-        mem_F = (
-            np.concatenate([F for F, _ in builder._membranes])
-            if builder._membranes
-            else np.zeros((0, 3), np.int64)
-        )
+        mem_F = builder.membrane_faces()
         mem_mat = [m for F, m in builder._membranes for _ in range(len(F))]
         flat = np.concatenate([T[elem_order].ravel(), mem_F.ravel()])
         _, first = np.unique(flat, return_index=True)
