@@ -383,6 +383,7 @@ def run_scene(
                 from .view import render_png
 
                 surface, field, label = None, res["von_mises"], "von Mises stress [Pa]"
+                sheets = None  # membranes apart from the tets, drawn grey beside them
                 if embedding is not None:  # the fine surface, as the viewer and surface.pvd show
                     Pe = embedding.positions(model.tets, state.positions)
                     surface = (Pe, embedding.faces, embedding.tet[embedding.faces[:, 0]])
@@ -391,6 +392,10 @@ def run_scene(
                     surface = (state.positions, F, np.arange(len(F)))
                     field = model.membrane_results(state)["max_tension"]
                     label = "membrane tension [N/m]"
+                elif model.n_membranes:
+                    from .mesh.topology import faces_off
+
+                    sheets = model.membrane_faces[faces_off(model.membrane_faces, model.tets)]
                 render_png(
                     out / "result.png",
                     state.positions,
@@ -399,6 +404,7 @@ def run_scene(
                     label=label,
                     title=f"{scene.title[:200]}: t = {state.time:.4g} s",
                     surface=surface,
+                    sheets=sheets,
                 )
                 summary["files"].append("result.png")
         if model.tools:

@@ -22,7 +22,7 @@ import numpy as np
 from ..checks import as_index, finite_number, real_array, shown
 from ..errors import InputError
 
-__all__ = ["SoftContact", "body_labels", "sheets_apart"]
+__all__ = ["SoftContact", "body_labels", "sheet_labels", "sheets_apart"]
 
 # Most bodies soft contact takes (its pair table holds one entry per ordered pair of bodies).
 MAX_BODIES = 2048
@@ -183,6 +183,14 @@ def sheets_apart(F: np.ndarray, tets: np.ndarray, n_nodes: int) -> tuple[np.ndar
     return off[~joined[comp]], off[joined[comp]]
 
 
+def sheet_labels(F: np.ndarray, n_nodes: int, n_solid: int) -> np.ndarray:
+    """Body number (K,) of each membrane of the sheets apart from the tets, F (K, 3) (sheets_apart):
+    each connected sheet a body, numbered after the ``n_solid`` bodies of the tets in the order of
+    its first membrane."""
+    F = np.asarray(F, np.int64).reshape(-1, 3)
+    return n_solid + body_labels(F, n_nodes) if len(F) else np.zeros(0, np.int64)
+
+
 def engine_surface(
     contact: SoftContact,
     X: np.ndarray,
@@ -203,7 +211,7 @@ def engine_surface(
     labels = contact.labels if contact.labels is not None else body_labels(T, X.shape[0])
     n_solid = int(labels.max()) + 1 if labels.size else 0
     sheet_F, sheet_t = sheets if sheets is not None else (np.zeros((0, 3), np.int64), np.zeros(0))
-    sheet_body = n_solid + body_labels(sheet_F, X.shape[0]) if len(sheet_F) else np.zeros(0, np.int64)
+    sheet_body = sheet_labels(sheet_F, X.shape[0], n_solid)
     n_bodies = int(sheet_body.max()) + 1 if sheet_body.size else n_solid
     table, pairs = contact.pair_table(n_bodies, n_solid)
     if not pairs:  # one body without self contact: nothing to touch

@@ -8,7 +8,7 @@
     translate = [0.0, 0.0, -0.05]
     [contact]
     friction = 0.2              # μ, or [μs, μk]
-    pairs = [["liver", "kidney"]]   # default: every pair of bodies
+    pairs = [["liver", "kidney"]]   # default: every pair of bodies (sheets too: [[sheet]])
     self = ["liver"]            # or true (every body); default false
     skin = 0.001                # [m], optional (ModelBuilder.set_soft_contact)
 
@@ -78,8 +78,9 @@ def _add(ctx: Ctx, b: ModelBuilder, X, T, source: str, key: str) -> np.ndarray:
         raise ctx.error(key, str(e)) from None
 
 
-def set_contact(ctx: Ctx, spec, b: ModelBuilder, sets: dict, names: list[str]) -> None:
-    """The [contact] table: soft contact between the named bodies (ModelBuilder.set_soft_contact)."""
+def set_contact(ctx: Ctx, spec, b: ModelBuilder, sets: dict, names: list[str], sheets: dict) -> None:
+    """The [contact] table: soft contact between the named bodies and sheets
+    (ModelBuilder.set_soft_contact); ``sheets``: each sheet's membranes (scene.sheets)."""
     check_keys(
         ctx,
         spec,
@@ -87,10 +88,13 @@ def set_contact(ctx: Ctx, spec, b: ModelBuilder, sets: dict, names: list[str]) -
         {"friction": "list|number", "pairs": "list", "self": "bool|list", "skin": "number"},
     )
     labels = b.bodies()
+    apart, sheet_labels = b.sheet_bodies()
 
     def body_numbers(name, key: str) -> list[int]:
         if name not in names:
             raise ctx.error(key, f"unknown body {name!r}; the scene has: {', '.join(names)}")
+        if name in sheets:
+            return sorted({int(x) for x in sheet_labels[np.isin(apart, sheets[name])]})
         return sorted({int(x) for x in labels[sets[name]]})
 
     pairs = None
@@ -103,9 +107,16 @@ def set_contact(ctx: Ctx, spec, b: ModelBuilder, sets: dict, names: list[str]) -
             pairs += [(a, c) for a in body_numbers(pr[0], key) for c in body_numbers(pr[1], key)]
     selfs = spec.get("self", False)
     if isinstance(selfs, list):
+        for k, name in enumerate(selfs):
+            if name in sheets:
+                raise ctx.error(
+                    f"contact.self[{k}]",
+                    f"{name!r} is a sheet: a sheet's contact with itself is not implemented "
+                    "(docs/contact.md)",
+                )
         selfs = [n for k, name in enumerate(selfs) for n in body_numbers(name, f"contact.self[{k}]")]
     try:
         b.set_soft_contact(spec.get("friction", 0.0), pairs=pairs, self_contact=selfs, skin=spec.get("skin"))
     except InputError as e:
         raise ctx.error("contact", str(e)) from None
-    b.soft_contact.names = {int(x): name for name in names for x in np.unique(labels[sets[name]])}
+    b.soft_contact.names = {int(x): name for name in names for x in body_numbers(name, "contact")}

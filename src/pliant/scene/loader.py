@@ -21,6 +21,7 @@ from ..job import Scene
 from ..cutting.cut import check_cuttable
 from .bodies import load_bodies, set_contact
 from .membranes import add_membranes
+from .sheets import load_sheets
 from .keys import apply_overrides
 from .schema import Ctx, check_keys, read_toml, vector
 from .tools import make_tool
@@ -109,6 +110,7 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
             "body": "list",
             "contact": "table",
             "membrane": "list",
+            "sheet": "list",
         },
         ("mesh", "material"),
     )
@@ -118,8 +120,9 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     X, T, sets, names, scene.node_sets = load_bodies(ctx, data, path.parent, scene, b)
     _materials(ctx, data["material"], b, X, T, sets)
     add_membranes(ctx, data.get("membrane", []), b, X, T, scene.node_sets)
+    X, sheets = load_sheets(ctx, data.get("sheet", []), path.parent, b, X, names, scene.node_sets)
     if "contact" in data:
-        set_contact(ctx, data["contact"], b, sets, names)
+        set_contact(ctx, data["contact"], b, sets, names, sheets)
     _constraints(ctx, data.get("constraint", []), b, X, T, scene)
     _loads(ctx, data.get("load", []), b, X, T, scene)
     _tools(ctx, data.get("tool", []), b, X, T, path.parent, scene)

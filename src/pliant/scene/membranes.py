@@ -19,7 +19,7 @@ from ..tled import ModelBuilder
 from .schema import Ctx, check_keys
 from .select import select_faces
 
-__all__ = ["add_membranes", "MEMBRANES"]
+__all__ = ["MATERIAL_KEYS", "MEMBRANES", "add_membranes", "membrane_material"]
 
 # Scene type → (class, its parameters besides thickness and density, in the constructor's order).
 MEMBRANES = {
@@ -34,23 +34,41 @@ def add_membranes(ctx: Ctx, tables: list, b: ModelBuilder, X, T, node_sets) -> N
         raise ctx.error("membrane", "expected [[membrane]] tables")
     for i, m in enumerate(tables):
         p = f"membrane[{i}]"
-        allowed = {"type": "str", "E": "number", "nu": "number", "mu": "number", "thickness": "number"}
-        allowed |= {"density": "number", "nodes": "table"}
-        check_keys(ctx, m, p, allowed, ("type", "thickness", "density"))
-        if m["type"] not in MEMBRANES:
-            raise ctx.error(
-                f"{p}.type", f"unknown membrane {m['type']!r}; expected one of {', '.join(MEMBRANES)}"
-            )
-        cls, params = MEMBRANES[m["type"]]
-        given = set(m) - {"type", "thickness", "density", "nodes"}
-        if given != set(params):
-            raise ctx.error(
-                p, f"{m['type']} takes ({', '.join(params)}); got ({', '.join(sorted(given)) or 'nothing'})"
-            )
+        check_keys(ctx, m, p, MATERIAL_KEYS | {"nodes": "table"}, ("type", "thickness", "density"))
+        material = membrane_material(ctx, m, p, {"nodes"})
         faces = (
             select_faces(ctx, m["nodes"], f"{p}.nodes", X, T, node_sets)
             if "nodes" in m
             else boundary_faces(T)[0]
         )
         with ctx.under(p):
-            b.add_membrane(faces, cls(*[m[k] for k in params], m["thickness"], m["density"]))
+            b.add_membrane(faces, material)
+
+
+# The keys of a membrane material in a [[membrane]] or [[sheet]] table.
+MATERIAL_KEYS = {
+    "type": "str",
+    "E": "number",
+    "nu": "number",
+    "mu": "number",
+    "thickness": "number",
+    "density": "number",
+}
+
+
+def membrane_material(ctx: Ctx, m: dict, p: str, other: set[str]):
+    """The membrane material of table ``m`` (``p``, its key; its keys checked): ``type`` and that
+    type's parameters, thickness [m] and density [kg/m³]; ``other``: the table's keys that are not
+    the material's."""
+    if m["type"] not in MEMBRANES:
+        raise ctx.error(
+            f"{p}.type", f"unknown membrane {m['type']!r}; expected one of {', '.join(MEMBRANES)}"
+        )
+    cls, params = MEMBRANES[m["type"]]
+    given = set(m) - {"type", "thickness", "density"} - other
+    if given != set(params):
+        raise ctx.error(
+            p, f"{m['type']} takes ({', '.join(params)}); got ({', '.join(sorted(given)) or 'nothing'})"
+        )
+    with ctx.under(p):
+        return cls(*[m[k] for k in params], m["thickness"], m["density"])

@@ -31,6 +31,16 @@ def _rotation(deg) -> np.ndarray:
     return R
 
 
+def placed(ctx: Ctx, spec: dict, key: str, X: np.ndarray) -> np.ndarray:
+    """Points X [m] (N, 3) of a [mesh], [[body]] or [[sheet]] table ``spec`` (``key``) placed as it
+    says: turned by ``rotate`` (degrees about x, then y, then z), then moved by ``translate`` [m]."""
+    if "rotate" in spec:
+        X = X @ _rotation(vector(ctx, spec["rotate"], f"{key}.rotate")).T
+    if "translate" in spec:
+        X = X + np.array(vector(ctx, spec["translate"], f"{key}.translate"))
+    return X
+
+
 def _split_note(f, split: dict[str, int], tets: int) -> str:
     """The note that a mesh file's cells other than linear tets were split into tetrahedra."""
     from ..io.mesh import LINEARIZED
@@ -187,17 +197,10 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                 f"{key}.primitive", f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus"
             )
         scene.meta["mesh_source"] = f"primitive {kind}"
-    X = np.asarray(X, float) * scale
+    X = placed(ctx, spec, key, np.asarray(X, float) * scale)
     emb = scene.meta.get("embed_surface")
-    if "rotate" in spec:
-        R = _rotation(vector(ctx, spec["rotate"], f"{key}.rotate"))
-        X = X @ R.T
-        if emb:
-            emb[0] = emb[0] @ R.T
-    if "translate" in spec:
-        X = X + np.array(vector(ctx, spec["translate"], f"{key}.translate"))
-        if emb:
-            emb[0] = emb[0] + np.array(spec["translate"], float)
+    if emb:
+        emb[0] = placed(ctx, spec, key, emb[0])
     hint = metres_hint(X, str(ctx.file), "set mesh.scale = 0.001")
     if hint:
         scene.warnings.append(hint)

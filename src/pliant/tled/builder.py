@@ -543,6 +543,18 @@ class ModelBuilder:
 
         return faces_off(self.membrane_faces(), self.tets)
 
+    def sheet_bodies(self) -> tuple[np.ndarray, np.ndarray]:
+        """The membranes of the sheets apart from the tets, which soft contact takes as bodies of
+        their own (indices into membrane_faces(), ascending; pliant.contact.soft.sheets_apart), and
+        the body number of each: each connected sheet one, numbered after the tets' bodies
+        (:meth:`bodies`), in the order of its first membrane."""
+        from ..contact.soft import sheet_labels, sheets_apart
+
+        F = self.membrane_faces()
+        apart = sheets_apart(F, self.tets, self.n_nodes)[0]
+        n_solid = int(self.bodies().max()) + 1 if self.n_elements else 0
+        return apart, sheet_labels(F[apart], self.n_nodes, n_solid)
+
     def _warn_membranes_out_of_contact(self):
         from ..contact.soft import sheets_apart
 

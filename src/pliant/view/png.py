@@ -19,11 +19,13 @@ def render_png(
     title: str = "",
     max_faces: int = 60000,
     surface: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    sheets: np.ndarray | None = None,
 ) -> Path:
     """Write a PNG [path] of the surface of the mesh at ``positions`` [m] (N, 3), coloured by
     ``element_field`` (M,). ``surface``: draw this surface instead of the mesh's boundary, as
     (vertex positions [m] (V, 3), faces (F, 3), the element each face lies in (F,)): an embedded
-    fine surface following a coarse simulation mesh. Written atomically."""
+    fine surface following a coarse simulation mesh. ``sheets``: triangles (K, 3) of ``positions``
+    drawn beside it in grey (sheets of membranes apart from the tets). Written atomically."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -49,11 +51,16 @@ def render_png(
     norm = matplotlib.colors.Normalize(vmin=float(lo_v), vmax=top)
     cmap = matplotlib.colormaps["viridis"]
     tri = P[faces]
+    colours = cmap(norm(vals))
+    if sheets is not None and len(sheets):  # one collection: matplotlib orders its faces by depth
+        S = np.asarray(positions, float)[np.asarray(sheets)[:max_faces]]
+        tri = np.concatenate([tri, S])
+        colours = np.concatenate([colours, np.tile([0.75, 0.75, 0.75, 1.0], (len(S), 1))])
+        P = np.concatenate([P, S.reshape(-1, 3)])
     # Simple Lambert shading from a fixed light, on top of the field colours.
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
     shade = 0.55 + 0.45 * np.abs(n @ np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8]))
-    colours = cmap(norm(vals))
     colours[:, :3] *= shade[:, None]
     ax.add_collection3d(Poly3DCollection(tri, facecolors=colours, edgecolors="none"))
     lo, hi = P.min(axis=0), P.max(axis=0)
