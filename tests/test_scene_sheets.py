@@ -136,6 +136,14 @@ def test_contact_pairs_name_a_sheet(tmp_path):
     np.testing.assert_allclose(last.mean(), model.mass[:27].sum() * 9.81, rtol=1e-3)
 
 
+def test_self_contact_names_a_sheet(tmp_path):
+    """self = ["drum"]: the drum's own pair (a sheet folding onto itself; tests/test_sheet_layers.py)
+    beside the block's pair with it."""
+    p = _write(tmp_path, BLOCK + DRUM + '[contact]\nself = ["drum"]\npairs = [["block", "drum"]]\n')
+    sc = load_scene(p)
+    assert sc.builder.finalize("float64").contact_pairs == [(0, 1), (1, 1)]
+
+
 def test_a_sheet_from_a_file_is_the_same_drum(tmp_path):
     """The drum as an OBJ file of 9 × 9 vertices (written here, in millimetres, with scale = 0.001,
     and one vertex no triangle uses, which the sheet drops): the same nodes, mass and rim (the 32
@@ -202,10 +210,9 @@ def test_bad_sheet_tables_are_refused_by_name(tmp_path, change, key, words):
     assert key in str(err.value) and words in str(err.value) and "s.toml" in str(err.value)
 
 
-def test_sheet_files_and_self_contact_errors(tmp_path):
-    """A missing surface file names the key and the file; a sheet named for self contact is refused
-    (a sheet's contact with itself is not implemented), as is a size for a surface file; the command
-    line says so with exit code 2, without a traceback."""
+def test_sheet_file_errors(tmp_path):
+    """A missing surface file names the key and the file, a size for a surface file is refused; the
+    command line says so with exit code 2, without a traceback."""
     from typer.testing import CliRunner
 
     from pliant.cli import app
@@ -215,7 +222,6 @@ def test_sheet_files_and_self_contact_errors(tmp_path):
     )
     cases = [
         (file_drum, "sheet[0].file", "none.obj"),
-        (DRUM + '[contact]\nself = ["drum"]\n', "contact.self[0]", "is a sheet"),
         (
             file_drum.replace('file = "none.obj"', 'file = "none.obj"\nsize = [1, 1]'),
             "sheet[0].size",

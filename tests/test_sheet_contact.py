@@ -165,22 +165,6 @@ def test_same_bits_for_any_thread_count_and_after_save_restore(tmp_path):
     np.testing.assert_array_equal(again.positions, runs[0])
 
 
-def test_a_sheet_has_no_self_contact():
-    """Self contact of every body leaves the sheet (body 1) out: the pairs are the block's own
-    and the block with the sheet; naming the sheet is an error that says why."""
-    X, T = _block(1)
-    S, F, _ = _drum()
-    b = pl.ModelBuilder()
-    b.add_mesh(np.vstack([X, S]), T)
-    b.set_material(pl.NeoHookean(E=2e4, nu=0.3), density=1000.0)
-    b.add_membrane(F + len(X), pl.NeoHookeanMembrane(mu=1e3, thickness=H, density=1000.0))
-    b.set_soft_contact(self_contact=True)
-    assert b.finalize("float64").contact_pairs == [(0, 0), (0, 1)]
-    b.set_soft_contact(self_contact=[1])
-    with pytest.raises(pl.InputError, match="self_contact body 1 is a sheet of membranes"):
-        b.finalize("float64")
-
-
 def test_a_sheet_through_a_solid_at_the_start_is_refused_by_name():
     """The block placed across the drum's mid-plane: the drum's centre node starts 5 mm inside the
     block (half its side), deeper than the contact band, where contact would never push it out:

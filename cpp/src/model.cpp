@@ -472,11 +472,17 @@ void Model<T>::build_soft_contact(const ModelInput& in) {
             longest = std::sqrt(e2) > longest ? std::sqrt(e2) : longest;
         }
     }
-    soft_band = 0.0;  // the farthest a contact's closest point lies: the band, and a sheet's half thickness
+    // The farthest a contact's closest point lies: the band and a sheet's half thickness, and the
+    // half thickness of the sheet the node is on (soft_detect).
+    soft_band = 0.0;
+    double thickest = 0.0;
     for (std::size_t t = 0; t < nt; ++t) {
-        const double b = kSoftBehind * soft_tri_h[t] + soft_sheet_h[soft_label[soft_tris[3 * t]]];
+        const double h = soft_sheet_h[soft_label[soft_tris[3 * t]]];
+        const double b = kSoftBehind * soft_tri_h[t] + h;
         soft_band = b > soft_band ? b : soft_band;
+        thickest = h > thickest ? h : thickest;
     }
+    soft_band += thickest;
     // A triangle's bounding radius is at most 2/3 of its longest edge, so with cells this large the
     // candidates of an undeformed surface lie in the 27 cells around a node (soft_candidates' reach).
     const double reach = 2.0 / 3.0 * longest + soft_skin + soft_band;

@@ -138,7 +138,7 @@ struct Model {
     std::vector<double> soft_sheet_h;  // per label: half a sheet's thickness [m]; 0: a solid's surface
     index_t soft_labels = 0, soft_pairs = 0, soft_hash_mask = 0;
     double soft_skin = 0.0, soft_cell = 0.0;
-    double soft_band = 0.0;    // kSoftBehind × the longest mean edge of a surface triangle [m]
+    double soft_band = 0.0;    // farthest a contact's closest point lies [m]: band + sheets' half thicknesses
     double dt_critical = 0.0;  // min over elements of h_min / c_d [s]
     index_t dt_critical_elem = -1;
     std::vector<double> elem_dt;  // per builder element: h_min / c_d [s] (host only, for reports)

@@ -246,8 +246,10 @@ struct SoftClosestStored {
 };
 
 /// Whether surface node i lay within a mean edge of triangle t in the reference configuration X
-/// [m] (a cut's two sides coincide there): the self contact of edges is for surfaces that
-/// deformation brought together (soft_edge_detect).
+/// [m] (a cut's two sides coincide there), plus the half thicknesses of the sheets the two belong to
+/// (0 for a solid's): the self contact of edges is for surfaces that deformation brought together
+/// (soft_edge_detect), and so is a sheet's self contact (soft_detect: a sheet lies in its own plane,
+/// its next triangles but one within the band and its thickness of a node).
 PLIANT_HD bool soft_near_reference(index_t i, index_t t, const SoftSurface& s, const double* X) {
     double v[3][3], x[3], w[3], d2;
     for (int d = 0; d < 3; ++d) {
@@ -255,7 +257,8 @@ PLIANT_HD bool soft_near_reference(index_t i, index_t t, const SoftSurface& s, c
         for (int k = 0; k < 3; ++k) v[k][d] = X[3 * s.node[s.tri[3 * t + k]] + d];
     }
     soft_closest_d2(v[0], v[1], v[2], x, w, d2);
-    return d2 < s.tri_h[t] * s.tri_h[t];
+    const double r = s.tri_h[t] + s.sheet_h[s.label[s.tri[3 * t]]] + s.sheet_h[s.label[i]];
+    return d2 < r * r;
 }
 
 /// Distance [m] from x to the triangle of surface nodes v[0..3) at displacements u (X + u; a
@@ -313,7 +316,8 @@ PLIANT_HD void soft_candidates(index_t i, const SoftSurface& s, const double* X,
                         const double dx = x[0] - tc[3 * t], dy = x[1] - tc[3 * t + 1],
                                      dz = x[2] - tc[3 * t + 2];
                         const double sphere = std::sqrt(dx * dx + dy * dy + dz * dz) - tr[t];
-                        const double reach_t = s.skin + kSoftBehind * s.tri_h[t] + s.sheet_h[s.label[v[0]]];
+                        const double reach_t = s.skin + kSoftBehind * s.tri_h[t] + s.sheet_h[s.label[v[0]]] +
+                                               s.sheet_h[s.label[i]];
                         if (!(sphere <= reach_t)) continue;
                         bool seen = false;  // two cells of one bucket list a triangle twice
                         for (int q = 0; q < n; ++q) seen = seen || out[q] == t;
@@ -492,17 +496,25 @@ PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, 
 /// position impulse p [kg·m] on the node that puts it back on c (along the unit vector from x⁺ to c,
 /// λ = gap / (eᵀW_s e + Σ w_j² eᵀW_j e)) with Coulomb friction on the relative tangential motion
 /// over the step (stick if the impulse that removes it is within μs λ, else μk λ against it).
+/// A sheet of membranes is met two-sided (soft_sheet_target), at the half thicknesses of both the
+/// sheet and, if the node is a sheet's, the node's own; a sheet's own triangles that lay near the
+/// node in the reference configuration (near, soft_near_reference) are no contact of it.
 /// Outputs rec_tri[i] (−1: no contact), rec_w (3 weights of c), rec_p (3). Inputs: reference X
 /// [m] AoS, mass [kg], u and u⁺ [m] SoA (3, P) (u⁺ after the tool contact), xs the surface
-/// positions at u⁺ [m] (soft_current), cand (soft_candidates), closest: the closest points of the
-/// node's candidates (SoftClosestComputed, or SoftClosestStored).
+/// positions at u⁺ [m] (soft_current), cand and near (soft_candidates), closest: the closest points
+/// of the node's candidates (SoftClosestComputed, or SoftClosestStored).
 template <class T, class Closest>
 PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, const T* mass, const T* u,
                            const T* u_next, index_t P, const double* xs, const index_t* cand,
-                           const Closest& closest, index_t* rec_tri, double* rec_w, double* rec_p) {
+                           const index_t* near_ref, const Closest& closest, index_t* rec_tri, double* rec_w,
+                           double* rec_p) {
     rec_tri[i] = -1;
     const index_t* list = cand + static_cast<std::size_t>(i) * kSoftCandidates;
     if (list[0] < 0) return;
+    const index_t own = s.label[i];
+    const double own_h = s.sheet_h[own];  // half the node's sheet's thickness; 0: a solid's node
+    // Candidates of the node's own sheet that were near it in the reference: its sheet around it.
+    const unsigned skip = own_h > 0.0 ? static_cast<unsigned>(near_ref[i]) : 0u;
     double x0[3], x1[3];
     soft_position(i, s, X, u, P, x0);
     soft_current(i, xs, x1);
@@ -512,6 +524,7 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
     int near_f[kSoftCandidates], n_bodies = 0;
     for (int q = 0; q < kSoftCandidates && list[q] >= 0; ++q) {
         const index_t t = list[q];
+        if ((skip >> q) & 1u) continue;  // bit q: of the node's own body (soft_candidates)
         double w[3], d2;
         const int feature = closest(q, t, x1, w, d2);
         if (feature < 0) continue;
@@ -529,8 +542,8 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
     double best_d = -INFINITY, best_n[3] = {0.0, 0.0, 0.0}, best_w[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < n_bodies; ++k) {
         const index_t t = near[k];
-        const double h = s.sheet_h[body[k]];
-        if (h > 0.0) {  // a sheet of membranes: two-sided
+        if (s.sheet_h[body[k]] > 0.0) {  // a sheet of membranes: two-sided
+            const double h = s.sheet_h[body[k]] + own_h;
             double e[3], gap;
             if (!(near_d2[k] <= (kSoftBehind * s.tri_h[t] + h) * (kSoftBehind * s.tri_h[t] + h))) continue;
             if (!soft_sheet_target(t, near_f[k], near_w[k], h, s, X, u, P, xs, x0, x1, e, gap)) continue;

@@ -290,13 +290,13 @@ PLIANT_HD void soft_detect_active(const DeviceView<T>& v, const SoftSurface& s, 
                                   const T* un, index_t a) {
     const index_t i = v.sactive[a];
     if constexpr (split)
-        soft_detect(i, s, v.X, mass, uc, un, v.P, v.sx, v.scand,
+        soft_detect(i, s, v.X, mass, uc, un, v.P, v.sx, v.scand, v.snear,
                     SoftClosestStored{v.slane_f, v.slane_d2, v.slane_w,
                                       static_cast<std::size_t>(a) * kSoftCandidates},
                     v.srec, v.srec_w, v.srec_p);
     else
-        soft_detect(i, s, v.X, mass, uc, un, v.P, v.sx, v.scand, SoftClosestComputed{&s, v.sx}, v.srec,
-                    v.srec_w, v.srec_p);
+        soft_detect(i, s, v.X, mass, uc, un, v.P, v.sx, v.scand, v.snear, SoftClosestComputed{&s, v.sx},
+                    v.srec, v.srec_w, v.srec_p);
 }
 
 /// Step (4) of soft_pass for touched surface node i, on the team after its sums: the correction W p

@@ -40,6 +40,8 @@ def body_labels(tets: np.ndarray, n_nodes: int) -> np.ndarray:
 
     T = np.asarray(tets, np.int64)
     M = T.shape[0]
+    if M == 0:  # membranes alone: no tets, no bodies of them
+        return np.zeros(0, np.int64)
     rows = np.repeat(np.arange(M), T.shape[1])
     g = coo_matrix((np.ones(T.size), (rows, T.ravel())), shape=(M, n_nodes)).tocsr()
     _, comp = connected_components(g @ g.T, directed=False)
@@ -112,8 +114,7 @@ class SoftContact:
     ) -> tuple[np.ndarray, list[tuple[int, int]]]:
         """The engine's pair table (n_bodies, n_bodies): pair index of (slave body, master body), −1
         where they do not touch; and the pairs (a ≤ b) in index order. Bodies from ``n_solid`` on
-        are sheets of membranes, which have no self contact (``self_contact=True`` leaves them
-        out; naming one is an InputError)."""
+        are sheets of membranes (``n_solid`` is kept for messages)."""
         n_solid = n_bodies if n_solid is None else n_solid
         if n_bodies > MAX_BODIES:
             raise InputError(
@@ -132,14 +133,12 @@ class SoftContact:
                             f"{n_bodies} bodies (0 to {n_bodies - 1}; ModelBuilder.bodies())"
                         )
                 wanted.add((min(a, b), max(a, b)))
-        selfs = range(n_solid) if self.self_contact is True else (self.self_contact or ())
+        selfs = range(n_bodies) if self.self_contact is True else (self.self_contact or ())
         for b in selfs:
             if not 0 <= b < n_bodies:
-                raise InputError(f"self_contact body {b} does not exist; the mesh has {n_bodies} bodies")
-            if b >= n_solid:
                 raise InputError(
-                    f"self_contact body {b} is a sheet of membranes (bodies {n_solid} to {n_bodies - 1}); "
-                    "a sheet's contact with itself is not implemented (docs/contact.md)"
+                    f"self_contact body {b} does not exist; the mesh has {n_bodies} bodies"
+                    + (f" (sheets of membranes from {n_solid})" if n_solid < n_bodies else "")
                 )
             wanted.add((b, b))
         order = sorted(wanted)
@@ -284,11 +283,11 @@ def initial_overlap(
 
     sheet_nodes = np.zeros(0, np.int64) if sheet_nodes is None else np.asarray(sheet_nodes, np.int64)
     sheet_labels = np.zeros(0, np.int64) if sheet_labels is None else np.asarray(sheet_labels, np.int64)
-    n_bodies = max(int(labels.max()) + 1, int(sheet_labels.max(initial=-1)) + 1)
+    n_bodies = max(int(labels.max(initial=-1)) + 1, int(sheet_labels.max(initial=-1)) + 1)
     touch = np.zeros((n_bodies, n_bodies), bool)
     for a, b in pairs:
         touch[a, b] = touch[b, a] = a != b
-    if not touch.any():
+    if not touch.any() or len(T) == 0:  # sheets alone: nothing to start inside
         return None
     faces, owner = boundary_faces(T)
     face_body = labels[owner]

@@ -107,13 +107,6 @@ def set_contact(ctx: Ctx, spec, b: ModelBuilder, sets: dict, names: list[str], s
             pairs += [(a, c) for a in body_numbers(pr[0], key) for c in body_numbers(pr[1], key)]
     selfs = spec.get("self", False)
     if isinstance(selfs, list):
-        for k, name in enumerate(selfs):
-            if name in sheets:
-                raise ctx.error(
-                    f"contact.self[{k}]",
-                    f"{name!r} is a sheet: a sheet's contact with itself is not implemented "
-                    "(docs/contact.md)",
-                )
         selfs = [n for k, name in enumerate(selfs) for n in body_numbers(name, f"contact.self[{k}]")]
     try:
         b.set_soft_contact(spec.get("friction", 0.0), pairs=pairs, self_contact=selfs, skin=spec.get("skin"))

@@ -582,11 +582,6 @@ class ModelBuilder:
 
         if self.n_elements == 0 and not self._membranes:
             raise MeshError(f"{self.source}: no tetrahedra and no membranes; add a mesh before finalize()")
-        if self.n_elements == 0 and self.soft_contact is not None:
-            raise InputError(
-                f"{self.source}: soft contact between membranes alone: contact surfaces are the tets' "
-                "boundaries, and this model has no tets"
-            )
         self._warn_membranes_out_of_contact()
         require_memory(
             self.n_elements, MODEL_BYTES_PER_TET, f"{self.source}: a model of {self.n_elements:,} tets"
