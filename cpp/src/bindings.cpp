@@ -416,11 +416,16 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
              })
         .def("contact_state",
              [](const B& e) {
+                 // Tool contact nodes, the tool on each and its force; soft-contact surface nodes
+                 // (engine numbering) and the force on each [N] (the last step's).
                  std::vector<index_t> nodes = e.engine->model.contact_nodes;
+                 std::vector<index_t> soft = e.engine->model.soft_nodes;
                  ContactReport c = e->contact_report();
-                 const size_t n = nodes.size();
+                 const size_t n = nodes.size(), ns = soft.size();
+                 if (c.soft_force.size() != 3 * ns) c.soft_force.assign(3 * ns, 0.0);
                  return nb::make_tuple(to_numpy(std::move(nodes), {n}), to_numpy(std::move(c.tool), {n}),
-                                       to_numpy(std::move(c.force), {n, 3}));
+                                       to_numpy(std::move(c.force), {n, 3}), to_numpy(std::move(soft), {ns}),
+                                       to_numpy(std::move(c.soft_force), {ns, 3}));
              })
         .def("membrane_measures",
              [](const B& e, const S& s) {

@@ -48,6 +48,7 @@ struct ElementResults {
 struct ContactReport {
     std::vector<index_t> tool;
     std::vector<double> force;
+    std::vector<double> soft_force;  // per soft-contact surface node (3): the last step's force [N]
 };
 
 template <class T>

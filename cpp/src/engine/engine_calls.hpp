@@ -454,7 +454,7 @@ std::vector<double> Engine<T, Dev>::pair_history() {
 
 template <class T, class Dev>
 ContactReport Engine<T, Dev>::contact_report() {
-    return {ctool_.to_host(), cforce_.to_host()};
+    return {ctool_.to_host(), cforce_.to_host(), sforce_.to_host()};
 }
 
 template <class T, class Dev>

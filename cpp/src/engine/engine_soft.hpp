@@ -301,8 +301,9 @@ PLIANT_HD void soft_detect_active(const DeviceView<T>& v, const SoftSurface& s, 
 
 /// Step (4) of soft_pass for touched surface node i, on the team after its sums: the correction W p
 /// [m] of its summed impulse p (sacc, in the sweep's unit) added to u⁺ [m] (un) and to the step's
-/// increment (dun), its force p/γ1 [N] kept for reports (sforce), its surface position (sx)
-/// refreshed, its sums cleared for the next sweep. Each touched node once: no two items write one node.
+/// increment (dun), its force p/γ1 [N] kept for reports (sforce: on held DOFs too, which the
+/// supports carry), its surface position (sx) refreshed, its sums cleared for the next sweep. Each
+/// touched node once: no two items write one node.
 template <class T>
 PLIANT_HD void soft_correct(const DeviceView<T>& v, const SoftSurface& s, const T* mass, index_t i, T* un,
                             T* dun) {
@@ -318,7 +319,7 @@ PLIANT_HD void soft_correct(const DeviceView<T>& v, const SoftSurface& s, const 
         // loses the digits the increment keeps; in float64 it destabilized the relaxation
         // of validate's two soft paraboloids, whose 1 ulp disturbances grew).
         dun[d * v.P + n] = T(double(dun[d * v.P + n]) + W[d] * p);
-        v.sforce[3 * i + d] += W[d] > 0.0 ? p / g1 : 0.0;
+        v.sforce[3 * i + d] += p / g1;
         v.sacc[3 * i + d] = 0;
     }
     soft_position(i, s, v.X, un, v.P, v.sx + 3 * i);

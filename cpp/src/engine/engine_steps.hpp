@@ -418,7 +418,10 @@ void Engine<T, Dev>::relax_measure(const T* u_cur, const T* u_prev, const T* f_c
             for (int d = 0; d < 3; ++d) v.fcon[d * v.P + v.cnodes[c]] = v.cforce[3 * c + d];
         });
         dev_.each(v.soft.n_nodes, [=] PLIANT_KERNEL(index_t i) {  // after the tools: a node may have both
-            for (int d = 0; d < 3; ++d) v.fcon[d * v.P + v.soft.node[i]] += v.sforce[3 * i + d];
+            for (int d = 0; d < 3; ++d) {  // on free DOFs: a held DOF's contact force is its support's
+                const std::size_t k = static_cast<std::size_t>(d) * v.P + v.soft.node[i];
+                v.fcon[k] += v.free_mask[k] * v.sforce[3 * i + d];
+            }
         });
     }
     const index_t chunks = (v.n_nodes + kMeasureChunk - 1) / kMeasureChunk;

@@ -647,8 +647,15 @@ class Model:
         return list(self._builder.supports)
 
     def support_reactions(self, state: "State", t: float | None = None) -> dict[str, np.ndarray]:
-        """Each support's reaction [N], (3,), by its name (``reactions`` over its nodes and DOFs)."""
+        """Each support's reaction [N], (3,), by its name (``reactions`` over its nodes and DOFs):
+        internal less external forces on its held DOFs, less the soft-contact force on them at the
+        last step of the solver that last ran this model (a body resting on a held surface: the
+        support carries it through the contact)."""
         held = self.internal_forces(state) - self.external_forces(state, t)
+        solver = self._solver() if self._solver and self.contact_pairs else None
+        if solver is not None:
+            report = solver.contact_report()
+            np.subtract.at(held, report.soft_nodes, report.soft_force)
         return {name: _held_sum(held, ids, dofs) for name, ids, dofs in self._builder.supports}
 
     def strain_energy(self, state: "State") -> float:

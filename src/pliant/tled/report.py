@@ -56,6 +56,9 @@ class ContactReport:
     (n,); ``node_force``: the force that tool exerts on it [N] (n, 3). ``relaxed``: after
     ``Solver.relax``, per tool (force [N], torque [N·m]) at the equilibrium; else None.
     ``pairs``: a :class:`PairHistory` per pair of bodies in soft contact (``Model.contact_pairs``).
+    ``soft_nodes``: the soft-contact surface nodes (user numbering) (k,); ``soft_force``: the force
+    soft contact exerted on each at the last step [N] (k, 3) (on held DOFs too: what the supports
+    carry, ``Model.support_reactions``).
     """
 
     tools: list[ToolHistory]
@@ -64,6 +67,8 @@ class ContactReport:
     node_force: np.ndarray
     relaxed: list[tuple[np.ndarray, np.ndarray]] | None = None
     pairs: list[PairHistory] = field(default_factory=list)
+    soft_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    soft_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def force(self, k: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """(force [N], torque [N·m]) tool k received: at the equilibrium if the last call was a

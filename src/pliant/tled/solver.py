@@ -224,11 +224,19 @@ class Solver:
     def contact_report(self) -> ContactReport:
         """The tools' force histories, the last step's contact forces per node and, after a
         relaxation, the equilibrium tool forces (:class:`ContactReport`)."""
-        nodes, tool, f = self._backend.contact_state()
+        nodes, tool, f, soft, soft_f = self._backend.contact_state()
         tool, f = np.asarray(tool), np.array(f)
         f[tool < 0] = 0.0
+        order = self.model._node_order
         return ContactReport(
-            self._histories, self.model._node_order[np.asarray(nodes)], tool, f, self._relaxed, self._pairs
+            self._histories,
+            order[np.asarray(nodes)],
+            tool,
+            f,
+            self._relaxed,
+            self._pairs,
+            order[np.asarray(soft)],
+            np.array(soft_f),
         )
 
     @property
