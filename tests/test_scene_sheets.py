@@ -194,6 +194,7 @@ def test_a_rectangle_covers_its_area_facing_up_with_alternating_diagonals():
         (("cells = [8, 8]", "cells = [8, 8]\nedge_length = 0.01"), "sheet[0].cells", "not both"),
         (("cells = [8, 8]", "cells = [8, 0]"), "sheet[0].cells", "integers >= 1"),
         (("cells = [8, 8]", "cells = [100000, 100000]"), "sheet[0].cells", "at most"),
+        (("cells = [8, 8]", "edge_length = 1e-9"), "sheet[0].edge_length", "at most"),
         (('primitive = "rectangle"', 'primitive = "rectangle"\nfile = "d.obj"'), "sheet[0]", "exactly one"),
         (("mu = 1e3", "E = 1e3"), "sheet[0]", "takes (mu)"),
         (("thickness = 1e-3", "thickness = -1e-3"), "sheet[0]", "thickness"),

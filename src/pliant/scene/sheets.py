@@ -17,7 +17,8 @@ tissue, a free capsule), each a triangle surface or a rectangle with a membrane 
 
 Each sheet's nodes form the node set of its name, and those on its open edges "<name>.rim"
 (constraints: ``nodes = { set = "drape.rim" }``). With a [contact] table a sheet touches the other
-bodies from either side, at half its thickness (docs/contact.md); [contact] pairs name it as a body.
+bodies from either side, at half its thickness (docs/contact.md); [contact] pairs and self name it
+as a body.
 """
 
 from __future__ import annotations
@@ -119,8 +120,9 @@ def _geometry(ctx: Ctx, spec: dict, p: str, base: Path) -> tuple[np.ndarray, np.
     size = vector(ctx, size, f"{p}.size", 2)
     if not min(size) > 0:
         raise ctx.error(f"{p}.size", "expected lengths > 0 [m]")
-    cells = spec.get("cells")
+    cells, key = spec.get("cells"), f"{p}.cells"
     if cells is None:
+        key = f"{p}.edge_length"
         el = spec.get("edge_length", min(size) / 10)
         if not el > 0:
             raise ctx.error(f"{p}.edge_length", "expected a length > 0 [m]")
@@ -132,7 +134,7 @@ def _geometry(ctx: Ctx, spec: dict, p: str, base: Path) -> tuple[np.ndarray, np.
     ):
         raise ctx.error(f"{p}.cells", "expected two integers >= 1")
     if (cells[0] + 1) * (cells[1] + 1) > MAX_SHEET_NODES:
-        raise ctx.error(f"{p}.cells", f"{cells} cells: expected at most {MAX_SHEET_NODES:,} nodes")
+        raise ctx.error(key, f"{cells} cells: expected at most {MAX_SHEET_NODES:,} nodes")
     V, F = rectangle(size[0] * scale, size[1] * scale, cells[0], cells[1])
     return V, F, f"{ctx.file} [{p}]"
 
