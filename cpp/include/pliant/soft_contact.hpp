@@ -489,6 +489,42 @@ PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, 
     return true;
 }
 
+/// Contact of a sheet's node (half thickness h [m]) with a solid at its closest point c on triangle t
+/// (feature f, weights w) to the node at u⁺, x1: the node keeps h outside the solid's surface, as a
+/// solid's node keeps a sheet's h from the sheet's mid-surface. Outside ((x1 − c)·n > 0, n the
+/// pseudo-normal at c) within h of c, the target is h from c along x1 − c; inside, c + h n/|n|.
+/// Writes e and gap as soft_sheet_target; false where the node is h or more outside, or n vanishes.
+PLIANT_HD bool soft_offset_target(index_t t, int f, const double w[3], double h, const SoftSurface& s,
+                                  const double* xs, const double x1[3], double e[3], double& gap) {
+    double pn[3], y[3][3], c[3], r[3], side = 0.0, r2 = 0.0, n2 = 0.0;
+    soft_pseudo_normal(t, f, s, xs, pn);
+    for (int j = 0; j < 3; ++j) soft_current(s.tri[3 * t + j], xs, y[j]);
+    for (int d = 0; d < 3; ++d) {
+        c[d] = w[0] * y[0][d] + w[1] * y[1][d] + w[2] * y[2][d];
+        r[d] = x1[d] - c[d];
+        side += r[d] * pn[d], r2 += r[d] * r[d], n2 += pn[d] * pn[d];
+    }
+    if (!(n2 > 0.0)) return false;
+    double target[3];
+    if (side > 0.0) {  // outside: within h of c
+        if (!(r2 < h * h)) return false;
+        const double dist = std::sqrt(r2);
+        for (int d = 0; d < 3; ++d) target[d] = c[d] + h * r[d] / dist;
+    } else {  // inside
+        const double nn = std::sqrt(n2);
+        for (int d = 0; d < 3; ++d) target[d] = c[d] + h * pn[d] / nn;
+    }
+    double g2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+        e[d] = target[d] - x1[d];
+        g2 += e[d] * e[d];
+    }
+    gap = std::sqrt(g2);
+    if (!(gap > 0.0)) return false;
+    for (int d = 0; d < 3; ++d) e[d] /= gap;
+    return true;
+}
+
 /// Narrow phase and response of surface node i (the slave). For each body among its candidates,
 /// the closest point c on that body's candidate triangles to x⁺; the node is inside the body if
 /// (x⁺ − c)·n < 0 for the pseudo-normal n there (soft_pseudo_normal) and it lies at most
@@ -497,8 +533,9 @@ PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, 
 /// λ = gap / (eᵀW_s e + Σ w_j² eᵀW_j e)) with Coulomb friction on the relative tangential motion
 /// over the step (stick if the impulse that removes it is within μs λ, else μk λ against it).
 /// A sheet of membranes is met two-sided (soft_sheet_target), at the half thicknesses of both the
-/// sheet and, if the node is a sheet's, the node's own; a sheet's own triangles that lay near the
-/// node in the reference configuration (near, soft_near_reference) are no contact of it.
+/// sheet and, if the node is a sheet's, the node's own; a sheet's node keeps its half thickness
+/// outside a solid too (soft_offset_target); a sheet's own triangles that lay near the node in the
+/// reference configuration (near, soft_near_reference) are no contact of it.
 /// Outputs rec_tri[i] (−1: no contact), rec_w (3 weights of c), rec_p (3). Inputs: reference X
 /// [m] AoS, mass [kg], u and u⁺ [m] SoA (3, P) (u⁺ after the tool contact), xs the surface
 /// positions at u⁺ [m] (soft_current), cand and near (soft_candidates), closest: the closest points
@@ -547,6 +584,16 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
             double e[3], gap;
             if (!(near_d2[k] <= (kSoftBehind * s.tri_h[t] + h) * (kSoftBehind * s.tri_h[t] + h))) continue;
             if (!soft_sheet_target(t, near_f[k], near_w[k], h, s, X, u, P, xs, x0, x1, e, gap)) continue;
+            if (!(-gap > best_d || (-gap == best_d && t < best))) continue;
+            best = t, best_d = -gap;
+            for (int d = 0; d < 3; ++d) best_n[d] = e[d], best_w[d] = near_w[k][d];
+            continue;
+        }
+        if (own_h > 0.0) {  // a sheet's node against a solid: its half thickness outside it
+            const double reach = kSoftBehind * s.tri_h[t] + own_h;
+            double e[3], gap;
+            if (!(near_d2[k] <= reach * reach)) continue;
+            if (!soft_offset_target(t, near_f[k], near_w[k], own_h, s, xs, x1, e, gap)) continue;
             if (!(-gap > best_d || (-gap == best_d && t < best))) continue;
             best = t, best_d = -gap;
             for (int d = 0; d < 3; ++d) best_n[d] = e[d], best_w[d] = near_w[k][d];
