@@ -136,6 +136,26 @@ def test_contact_pairs_name_a_sheet(tmp_path):
     np.testing.assert_allclose(last.mean(), model.mass[:27].sum() * 9.81, rtol=1e-3)
 
 
+def test_a_run_reports_each_pairs_force(tmp_path):
+    """`pliant run`'s contact_pairs.json and summary.json's contact_pairs for the drum scene with
+    its pair named: the block (body 0) and the drum (body 1) by their names, and the force on the
+    block averaged over the last 0.2 s is its weight (1e-3, as above), the largest at least that."""
+    import json
+
+    from pliant.runner import run_scene
+
+    sc = load_scene(_write(tmp_path, BLOCK + DRUM + '[contact]\npairs = [["block", "drum"]]\n'))
+    summary = run_scene(sc, tmp_path / "out", progress=False)
+    (pair,) = json.loads((tmp_path / "out" / "contact_pairs.json").read_text())
+    assert pair["bodies"] == [0, 1] and pair["names"] == ["block", "drum"]
+    t, f = np.array(pair["time"]), np.array(pair["force"])
+    weight = RHO * 0.01**3 * 9.81
+    np.testing.assert_allclose(f[t > 0.8, 2].mean(), weight, rtol=1e-3)
+    (last,) = summary["contact_pairs"]
+    assert last["names"] == ["block", "drum"] and last["force"] == f[-1].tolist()
+    assert last["max_force"] >= weight and "contact_pairs.json" in summary["files"]
+
+
 def test_self_contact_names_a_sheet(tmp_path):
     """self = ["drum"]: the drum's own pair (a sheet folding onto itself; tests/test_sheet_layers.py)
     beside the block's pair with it."""

@@ -167,6 +167,7 @@ RUN_FILES = (
     "summary.json",
     "result.png",
     "tools.json",
+    "contact_pairs.json",
     "reactions.json",
     "points.json",
     "U.txt",
@@ -188,6 +189,33 @@ def clear_earlier_run(out: Path) -> int:
         except OSError as e:
             raise InputError(f"{f}: cannot replace an earlier run's file: {e.strerror or e}") from None
     return len(old)
+
+
+def _pair_results(model, solver, summary: dict, out: Path | None) -> None:
+    """Soft contact's pairs of bodies (Model.contact_pairs): per pair its bodies, their names (the
+    scene's, else "body N"), the force [N] its first body received from the second at the last step
+    and the largest, in summary.json's ``contact_pairs``, and at every step in contact_pairs.json."""
+    contact = model._builder.soft_contact
+    known = (contact.names if contact is not None else None) or {}
+    summary["contact_pairs"], steps = [], []
+    for pair in solver.contact_report().pairs:
+        names = [known.get(b, f"body {b}") for b in pair.bodies]
+        last = pair.force[-1].tolist() if len(pair.time) else [0.0, 0.0, 0.0]
+        peak = float(np.linalg.norm(pair.force, axis=1).max()) if len(pair.time) else 0.0
+        summary["contact_pairs"].append(
+            {"bodies": list(pair.bodies), "names": names, "force": last, "max_force": peak}
+        )
+        steps.append(
+            {
+                "bodies": list(pair.bodies),
+                "names": names,
+                "time": pair.time.tolist(),
+                "force": pair.force.tolist(),
+            }
+        )
+    if out is not None:
+        atomic_write_text(out / "contact_pairs.json", json.dumps(steps))
+        summary["files"].append("contact_pairs.json")
 
 
 def _extra_args(e: Exception) -> tuple:
@@ -426,6 +454,8 @@ def run_scene(
             if out is not None:
                 atomic_write_text(out / "tools.json", json.dumps(hist))
                 summary["files"].append("tools.json")
+        if model.contact_pairs:
+            _pair_results(model, solver, summary, out)
         for v, kept in texts.items():
             if out is not None:
                 write_niftysim_text(out / f"{v}.txt", kept)
