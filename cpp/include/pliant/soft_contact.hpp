@@ -436,6 +436,20 @@ PLIANT_HD void soft_friction(const double rel[3], const double n[3], double lamb
     for (int d = 0; d < 3; ++d) p[d] -= lt * t[d];
 }
 
+/// The unit vector e from x1 to target (out) and the distance gap [m] between them; false where they
+/// coincide (or either is not finite).
+PLIANT_HD bool soft_toward(const double target[3], const double x1[3], double e[3], double& gap) {
+    double g2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+        e[d] = target[d] - x1[d];
+        g2 += e[d] * e[d];
+    }
+    gap = std::sqrt(g2);
+    if (!(gap > 0.0)) return false;
+    for (int d = 0; d < 3; ++d) e[d] /= gap;
+    return true;
+}
+
 /// Contact of node i with a sheet of membranes (two-sided, half thickness h [m]) at its closest
 /// point c on triangle t (feature f, weights w) to the node at u⁺, x1: the node keeps to the side
 /// of the sheet's mid-surface it was on at u, x0 (the sign σ of (x0 − c0)·n0, c0 the same point and
@@ -478,15 +492,7 @@ PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, 
     } else {  // through the mid-surface
         for (int d = 0; d < 3; ++d) target[d] = c[d] + sigma * h * n1[d];
     }
-    double g2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-        e[d] = target[d] - x1[d];
-        g2 += e[d] * e[d];
-    }
-    gap = std::sqrt(g2);
-    if (!(gap > 0.0)) return false;
-    for (int d = 0; d < 3; ++d) e[d] /= gap;
-    return true;
+    return soft_toward(target, x1, e, gap);
 }
 
 /// Contact of a sheet's node (half thickness h [m]) with a solid at its closest point c on triangle t
@@ -514,15 +520,7 @@ PLIANT_HD bool soft_offset_target(index_t t, int f, const double w[3], double h,
         const double nn = std::sqrt(n2);
         for (int d = 0; d < 3; ++d) target[d] = c[d] + h * pn[d] / nn;
     }
-    double g2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-        e[d] = target[d] - x1[d];
-        g2 += e[d] * e[d];
-    }
-    gap = std::sqrt(g2);
-    if (!(gap > 0.0)) return false;
-    for (int d = 0; d < 3; ++d) e[d] /= gap;
-    return true;
+    return soft_toward(target, x1, e, gap);
 }
 
 /// Narrow phase and response of surface node i (the slave). For each body among its candidates,
@@ -577,26 +575,29 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
     }
     index_t best = -1;
     double best_d = -INFINITY, best_n[3] = {0.0, 0.0, 0.0}, best_w[3] = {0.0, 0.0, 0.0};
+    // The contact of triangle t (distance gap [m] to its target along e, weights w) if the
+    // shallowest so far (ties: the lower triangle).
+    auto keep = [&](index_t t, double gap, const double e[3], const double w[3]) {
+        if (!(-gap > best_d || (-gap == best_d && t < best))) return;
+        best = t, best_d = -gap;
+        for (int d = 0; d < 3; ++d) best_n[d] = e[d], best_w[d] = w[d];
+    };
     for (int k = 0; k < n_bodies; ++k) {
         const index_t t = near[k];
         if (s.sheet_h[body[k]] > 0.0) {  // a sheet of membranes: two-sided
             const double h = s.sheet_h[body[k]] + own_h;
             double e[3], gap;
             if (!(near_d2[k] <= (kSoftBehind * s.tri_h[t] + h) * (kSoftBehind * s.tri_h[t] + h))) continue;
-            if (!soft_sheet_target(t, near_f[k], near_w[k], h, s, X, u, P, xs, x0, x1, e, gap)) continue;
-            if (!(-gap > best_d || (-gap == best_d && t < best))) continue;
-            best = t, best_d = -gap;
-            for (int d = 0; d < 3; ++d) best_n[d] = e[d], best_w[d] = near_w[k][d];
+            if (soft_sheet_target(t, near_f[k], near_w[k], h, s, X, u, P, xs, x0, x1, e, gap))
+                keep(t, gap, e, near_w[k]);
             continue;
         }
         if (own_h > 0.0) {  // a sheet's node against a solid: its half thickness outside it
             const double reach = kSoftBehind * s.tri_h[t] + own_h;
             double e[3], gap;
             if (!(near_d2[k] <= reach * reach)) continue;
-            if (!soft_offset_target(t, near_f[k], near_w[k], own_h, s, xs, x1, e, gap)) continue;
-            if (!(-gap > best_d || (-gap == best_d && t < best))) continue;
-            best = t, best_d = -gap;
-            for (int d = 0; d < 3; ++d) best_n[d] = e[d], best_w[d] = near_w[k][d];
+            if (soft_offset_target(t, near_f[k], near_w[k], own_h, s, xs, x1, e, gap))
+                keep(t, gap, e, near_w[k]);
             continue;
         }
         const double band = kSoftBehind * s.tri_h[t];
@@ -611,12 +612,7 @@ PLIANT_HD void soft_detect(index_t i, const SoftSurface& s, const double* X, con
             e[d] = (c - x1[d]) / gap;  // from the node to c: out of the body if the node is inside
             side -= e[d] * pn[d];
         }
-        if (!(side < 0.0)) continue;  // outside this body
-        best = t, best_d = -gap;
-        for (int d = 0; d < 3; ++d) {
-            best_n[d] = e[d];
-            best_w[d] = near_w[k][d];
-        }
+        if (side < 0.0) keep(t, gap, e, near_w[k]);  // inside this body
     }
     if (best < 0) return;
     const double wsum = best_w[0] + best_w[1] + best_w[2];
