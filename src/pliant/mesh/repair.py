@@ -52,7 +52,9 @@ class SurfaceReport:
         return d
 
 
-def _edges(F: np.ndarray):
+def edge_counts(F: np.ndarray):
+    """The edges (E, 2) of triangles F (K, 3), each once (ascending node ids), and how many
+    triangles share each (E,): 1 on an open edge, 2 inside a manifold surface."""
     e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
     return unique_rows(e, return_counts=True)
 
@@ -102,7 +104,7 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
 
     V, F = np.asarray(V, float), np.asarray(F, np.int64)
     m = trimesh.Trimesh(V, F, process=False, validate=False)
-    uniq, count = _edges(F)
+    uniq, count = edge_counts(F)
     boundary = int((count == 1).sum())
     nonman = int((count > 2).sum())
     area = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1) / 2
@@ -374,12 +376,12 @@ def _split_touching(F: np.ndarray, pieces: list, actions: list[str]) -> int:
     apart there, each with its own copy of the edge, and hole filling closes the open ones (each
     region over the interface); a piece that still holds such an edge more than twice raises
     MeshError. Returns how many edges were split."""
-    uniq, count = _edges(F[np.concatenate(pieces)])
+    uniq, count = edge_counts(F[np.concatenate(pieces)])
     shared = {tuple(e) for e in uniq[count > 2].tolist()}
     if not shared:
         return 0
     for g in pieces:
-        e, c = _edges(F[g])
+        e, c = edge_counts(F[g])
         held = np.array([tuple(x) in shared for x in e.tolist()], bool)
         if (c[held] > 2).any():
             raise MeshError(
@@ -441,7 +443,7 @@ def _close_body(m, fill_holes: bool, actions: list[str]):
     if fill_holes:
         loops = boundary_loops(Fr)
         if loops:
-            uniq, _ = _edges(Fr)
+            uniq, _ = edge_counts(Fr)
             existing = set(map(tuple, uniq.tolist()))
             Fr = np.concatenate([Fr] + [fill_loop(Vr, loop, existing) for loop in loops])
             actions.append(
@@ -545,7 +547,7 @@ def simplify(
         raise MeshError(f"simplify: target of {target_faces} faces; expected >= 4")
     if target_faces >= len(F):
         return np.asarray(V, float), np.asarray(F, np.int64)
-    _, count = _edges(np.asarray(F))
+    _, count = edge_counts(np.asarray(F))
     open_mesh = bool((count == 1).any())
     for agg in (7.0, 3.0, 1.0):
         Vs, Fs = fast_simplification.simplify(
@@ -556,7 +558,7 @@ def simplify(
             preserve_border=bool(preserve_boundary and open_mesh),
         )
         Fs = np.asarray(Fs, np.int64)
-        if not (_edges(Fs)[1] > 2).any():
+        if not (edge_counts(Fs)[1] > 2).any():
             used = np.unique(Fs)  # drop vertices no face uses any more
             remap = np.full(len(Vs), -1, dtype=np.int64)
             remap[used] = np.arange(used.size)

@@ -162,6 +162,7 @@ def rectangle(lx: float, ly: float, nx: int, ny: int) -> tuple[np.ndarray, np.nd
 
 def _rim(F: np.ndarray) -> np.ndarray:
     """The vertices on a triangle surface's open edges (edges of one triangle), ascending."""
-    e = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edges, count = np.unique(e, axis=0, return_counts=True)
+    from ..mesh.repair import edge_counts
+
+    edges, count = edge_counts(F)
     return np.unique(edges[count == 1])
