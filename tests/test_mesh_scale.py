@@ -40,7 +40,7 @@ def test_a_body_thinner_than_its_volume_edge_is_refused_quickly(tmp_path):
     of 0.1 mm, 4 million surface triangles, which fTetWild worked on for hours; the edge of 500
     surface triangles (8.5 mm) makes fTetWild answer at once, and the envelope (2e-4 m) swallows
     the disc: a MeshError. In a subprocess so that a hang fails by its time-out (a guard, not a
-    speed target: it takes about 3 s)."""
+    speed target: it takes under a second)."""
     code = (
         "import trimesh, pliant as pl\n"
         "s = trimesh.creation.icosphere(subdivisions=2, radius=0.05)\n"
@@ -58,6 +58,21 @@ def test_a_body_thinner_than_its_volume_edge_is_refused_quickly(tmp_path):
         env={**__import__("os").environ, "PLIANT_CACHE": str(tmp_path)},
     )
     assert r.returncode == 0 and "refused:" in r.stdout, r.stdout + r.stderr[-2000:]
+
+
+def test_the_envelope_is_halved_only_where_halving_can_follow_the_walls():
+    """wall_envelope against its rule, by hand: the kidney scan's walls (0.34 mm on a 15 cm
+    diagonal) need one halving of 2e-3 (0.3 mm → 0.15 mm, at most half a wall); a solid sphere
+    (2V/A = r/3·2) none; a wall just within four halvings gets all four; the disc above (5 nm) is
+    beyond any: the default, which swallows it at once (1/16 of it kept fTetWild on it for 22 s)."""
+    from pliant.mesh.pipeline import WALL_HALVINGS, wall_envelope
+
+    assert wall_envelope(2e-3, 0.34e-3, 0.15) == 1e-3
+    assert wall_envelope(2e-3, 2 * 0.05 / 3, 0.2) == 2e-3
+    smallest = 2e-3 / 2**WALL_HALVINGS
+    assert wall_envelope(2e-3, 2 * smallest * 0.1, 0.1) == smallest
+    assert wall_envelope(2e-3, 1.9 * smallest * 0.1, 0.1) == 2e-3
+    assert wall_envelope(2e-3, 5e-9, 0.1) == 2e-3
 
 
 def test_a_stray_vertex_is_named_in_the_refusal():
