@@ -80,6 +80,33 @@ def test_a_napkin_rests_on_a_drum_at_both_half_thicknesses(backend):
     np.testing.assert_allclose(gap, 1.5e-3, rtol=1e-2)
 
 
+def test_two_equal_sheets_stacked_rim_on_rim_rest_on_each_other(backend):
+    """The drum of the test above with a napkin of its own size 2 mm thick dropped (from 3 mm)
+    squarely onto it, each napkin rim node over a drum rim node, damped, 1 s: every napkin node
+    rests at the two half thicknesses, 1.5 mm, from the drum (its rim nodes on the drum's rounded
+    rim; 1e-2 as above), and the rim carries the weight of both (1e-4). Before, a node whose
+    closest point lay on a sheet's rim passed beside it: the napkin's rim fell past the drum's,
+    the two sheets crossed there and the run blew up at 0.29 s."""
+    D, FD = _grid(8, 8, (-0.02, -0.02, 0.0), (0.005, 0, 0), (0, 0.005, 0))
+    N, FN = _grid(8, 8, (-0.02, -0.02, 0.003), (0.005, 0, 0), (0, 0.005, 0))
+    b = pl.ModelBuilder()
+    b.add_mesh(np.vstack([D, N]), np.zeros((0, 4), np.int64))
+    b.add_membrane(FD, pl.NeoHookeanMembrane(mu=MU, thickness=1e-3, density=RHO))
+    b.add_membrane(FN + len(D), pl.NeoHookeanMembrane(mu=MU, thickness=2e-3, density=RHO))
+    b.fix(np.nonzero(np.abs(D[:, :2]).max(axis=1) > 0.02 - 1e-9)[0], name="rim")
+    b.add_gravity((0, 0, -9.81), np.arange(len(D) + len(N)))
+    b.set_soft_contact()
+    b.damping = 30.0
+    m = b.finalize("float64", backend=backend)
+    sim = pl.Simulation(m)
+    sim.run(until=1.0)
+    x = sim.state.positions
+    np.testing.assert_allclose(m.support_reactions(sim.state)["rim"][2], m.mass.sum() * 9.81, rtol=1e-4)
+    gap, above = _gap_above(x[len(D) :], x[: len(D)], FD)
+    assert above.all()
+    np.testing.assert_allclose(gap, 1.5e-3, rtol=1e-2)
+
+
 def test_a_napkin_rests_on_a_block_at_its_half_thickness(backend):
     """The 2 cm napkin of membranes 2 mm thick dropped (from 3 mm) onto a 4 cm block (its base held),
     damped, 1 s: every napkin node rests 1 mm, its half thickness, above the block's top face (2e-2:

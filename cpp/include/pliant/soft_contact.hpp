@@ -58,7 +58,8 @@ constexpr double kSoftSharpCos = 0.766;
 
 /// A sheet of membranes (two-sided, SoftSurface::sheet_h > 0) marks its boundary: each triangle's
 /// boundary edge in tri_edge, and its nodes on the boundary in bits (beside the DOF bits 0–2). A
-/// node whose closest point on a sheet lies on that boundary passes beside the sheet.
+/// node whose closest point on a sheet lies on that boundary meets the sheet's rounded rim
+/// (soft_sheet_target).
 constexpr index_t kSoftSheetEdge = -2;
 constexpr index_t kSoftSheetRim = 8;
 
@@ -455,9 +456,13 @@ PLIANT_HD bool soft_toward(const double target[3], const double x1[3], double e[
 /// of the sheet's mid-surface it was on at u, x0 (the sign σ of (x0 − c0)·n0, c0 the same point and
 /// n0 the face's normal at u), at least h from it. On that side within h of c, the target is h from
 /// c along x1 − c; through the mid-surface, h beyond c on σ's side, c + σ h n1 (n1 the normal at
-/// u⁺). Writes the unit vector e from x1 to the target and the distance gap [m] to it; false where
-/// the node is farther than h on its side, its closest point lies on the sheet's boundary (the node
-/// is beside the sheet: kSoftSheetEdge, kSoftSheetRim), or the face is degenerate. The offset
+/// u⁺). Where c lies on the sheet's boundary (an edge of one triangle, kSoftSheetEdge, or a node
+/// on such an edge, kSoftSheetRim) the node is beside the sheet and meets its rim, rounded: within
+/// h of c, the target is h from c along x1 − c (c + σ h n1 if x1 is c). The sheet with its
+/// thickness is the set of points within h of its mid-surface: a slab over its faces, a
+/// half-cylinder along its rim (two equal sheets stacked rim on rim rest on each other there too).
+/// Writes the unit vector e from x1 to the target and the distance gap [m] to it; false where
+/// the node is farther than h on its side (or from the rim), or the face is degenerate. The offset
 /// surface of a sheet with thickness, as NiftySim's membrane contact surfaces are (Taylor et al.
 /// 2008, IEEE TMI 27(5):650, §IV-C; NiftySim's tledDeformableMembraneContactSurface).
 template <class T>
@@ -465,8 +470,8 @@ PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, 
                                  const double* X, const T* u, index_t P, const double* xs, const double x0[3],
                                  const double x1[3], double e[3], double& gap) {
     const index_t* v = s.tri + 3 * t;
-    if (f >= 3 && f < 6 && s.tri_edge[3 * t + f - 3] == kSoftSheetEdge) return false;
-    if (f < 3 && (s.bits[v[f]] & kSoftSheetRim)) return false;
+    const bool rim = (f >= 3 && f < 6 && s.tri_edge[3 * t + f - 3] == kSoftSheetEdge) ||
+                     (f < 3 && (s.bits[v[f]] & kSoftSheetRim));
     double y0[3][3], n0[3], n1[3];
     for (int j = 0; j < 3; ++j) soft_position(v[j], s, X, u, P, y0[j]);
     const double a[3] = {y0[1][0] - y0[0][0], y0[1][1] - y0[0][1], y0[1][2] - y0[0][2]};
@@ -485,7 +490,9 @@ PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, 
     }
     const double sigma = side0 >= 0.0 ? 1.0 : -1.0;
     double target[3];
-    if (sigma * side1 > 0.0) {  // on its side: within h of the closest point
+    if (rim && !(dist2 > 0.0)) {  // on the rim itself: out to σ's side
+        for (int d = 0; d < 3; ++d) target[d] = c[d] + sigma * h * n1[d];
+    } else if (rim || sigma * side1 > 0.0) {  // beside the rim, or on its side: within h of c
         if (!(dist2 < h * h)) return false;
         const double dist = std::sqrt(dist2);
         for (int d = 0; d < 3; ++d) target[d] = c[d] + h * r[d] / dist;
