@@ -195,3 +195,23 @@ def test_run_set_overrides_scene_keys_and_niftysim_paths(tmp_path):
     for item, says in [("solver.duration", "expected KEY=VALUE"), ("solver.durationx=1", "durationx")]:
         r = runner.invoke(app, ["run", scene, "-o", str(tmp_path / "bad"), "--set", item])
         assert r.exit_code == 2 and says in r.output and "Traceback" not in r.output
+
+
+def test_run_set_refuses_what_a_niftysim_path_cannot_hold(tmp_path):
+    """`--set` on a NiftySim model with a value its element cannot take exits 2 naming the path and
+    what was expected, never a traceback: a word where a number belongs (the import names the
+    element), a table, a date or a nested list, and an element of elements (whose text NiftySim
+    never reads: the set would have been ignored). Before, a word crashed the command (exit 3) and
+    an element of elements took the value silently."""
+    model = str(Path(__file__).resolve().parents[1] / "tests" / "data" / "niftysim_ball_ball.xml")
+    cases = [
+        ("SystemParams.TimeStep=abc", "'abc': expected a number"),
+        ("SystemParams.TimeStep={a=1}", "expected a number, a word or a list of numbers"),
+        ("SystemParams.TimeStep=2000-01-01", "expected a number, a word or a list of numbers"),
+        ("SystemParams.TimeStep=[[1e-4]]", "expected a number, a word or a list of numbers"),
+        ("SystemParams=1", "<SystemParams> holds elements"),
+    ]
+    for item, says in cases:
+        r = runner.invoke(app, ["run", model, "-o", str(tmp_path / "bad"), "--no-progress", "--set", item])
+        assert r.exit_code == 2, (item, r.output)
+        assert says in r.output and "Traceback" not in r.output, (item, r.output)

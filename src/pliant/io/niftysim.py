@@ -165,23 +165,40 @@ def set_xml_key(root, key: str, value, f: str = "") -> None:
                 key,
             )
     words = own_text(el).split()  # its numbers may follow its children (an <ElementSet>'s)
+    if len(el) and not words:
+        names = ", ".join(sorted({child.tag for child in el}))
+        raise NiftySimError(
+            f"<{el.tag}> holds elements ({names}), no value of its own; expected the path of a "
+            f"value, such as {key}.{el[0].tag}",
+            f,
+            key,
+        )
     if len(idx) == 2:
         if idx[1] >= len(words):
             raise NiftySimError(f"<{el.tag}> holds {len(words)} value(s); [{idx[1]}] is out of range", f, key)
-        words[idx[1]] = _word(value)
+        words[idx[1]] = _word(value, f, key)
         text = " ".join(words)
+    elif isinstance(value, (list, tuple)):
+        text = " ".join(_word(v, f, key) for v in value)
     else:
-        text = " ".join(map(_word, value)) if isinstance(value, (list, tuple)) else _word(value)
+        text = _word(value, f, key)
     el.text = text
     for child in el:  # the whole text is before the children now
         child.tail = None
 
 
-def _word(v) -> str:
-    """A number as NiftySim reads it: integers as integers, floats to the last bit."""
-    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
+def _word(v, f: str, key: str) -> str:
+    """A value as NiftySim reads it: integers as integers, floats to the last bit, true and false
+    as 1 and 0, a word as it is (the import names the element where it wanted a number)."""
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return "1" if v else "0"
+    if isinstance(v, (int, np.integer)):
         return str(int(v))
-    return repr(float(v))
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))
+    raise NiftySimError(f"value {v!r}: expected a number, a word or a list of numbers", f, key)
 
 
 def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = None) -> Scene:
