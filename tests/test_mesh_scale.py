@@ -63,7 +63,7 @@ def test_a_body_thinner_than_its_volume_edge_is_refused_quickly(tmp_path):
 def test_the_envelope_is_halved_only_where_halving_can_follow_the_walls():
     """wall_envelope against its rule, by hand: the kidney scan's walls (0.34 mm on a 15 cm
     diagonal) need one halving of 2e-3 (0.3 mm → 0.15 mm, at most half a wall); a solid sphere
-    (2V/A = r/3·2) none; a wall just within four halvings gets all four; the disc above (5 nm) is
+    (2V/A = 2r/3) none; a wall just within four halvings gets all four; the disc above (5 nm) is
     beyond any: the default, which swallows it at once (1/16 of it kept fTetWild on it for 22 s)."""
     from pliant.mesh.pipeline import WALL_HALVINGS, wall_envelope
 

@@ -202,7 +202,7 @@ def wall_envelope(eps: float, wall: float, diag: float) -> float:
     of its diagonal): unchanged. So is a body whose walls are thinner than WALL_HALVINGS halvings
     reach (a sheet crushed flat, a surface of no volume): no envelope follows them, and a smaller one
     only makes fTetWild work longer on what it swallows anyway (a 10 cm disc 5 nm thick: refused in
-    22 s at 1/16 of the envelope, in 2–3 s at the default)."""
+    22 s at 1/16 of the envelope, in 0.5 s at the default)."""
     if eps * diag / 2**WALL_HALVINGS > 0.5 * wall:
         return eps
     while eps * diag > 0.5 * wall:
