@@ -256,3 +256,20 @@ def test_sheet_file_errors(tmp_path):
         assert key in str(err.value) and words in str(err.value)
     r = CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / "out")])
     assert r.exit_code == 2 and "sheet[0].size" in r.output and "Traceback" not in r.output
+
+
+def test_a_sheet_laid_in_anothers_plane_is_refused_by_name(tmp_path):
+    """A napkin laid in the drum's plane: its nodes are on neither side of the drum (soft contact
+    keeps a node on the side it starts on), so `pliant run` exits 2 naming a node, both sheets by
+    their scene names and what to do, without a traceback (tests/test_sheet_layers.py: the same
+    through the API)."""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    napkin = DRUM.replace('name = "drum"', 'name = "napkin"').replace("[0.04, 0.04]", "[0.02, 0.02]")
+    p = _write(tmp_path, BLOCK + DRUM + napkin + "[contact]\n")
+    r = CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / "out"), "--no-progress"])
+    assert r.exit_code == 2 and "Traceback" not in r.output, r.output
+    said = " ".join(r.output.split())
+    assert "starts on the mid-surface of" in said and "'drum'" in said and "'napkin'" in said, said

@@ -107,6 +107,44 @@ def test_two_equal_sheets_stacked_rim_on_rim_rest_on_each_other(backend):
     np.testing.assert_allclose(gap, 1.5e-3, rtol=1e-2)
 
 
+def _napkin_on_drum(dz: float) -> pl.ModelBuilder:
+    """The drum of the tests above and the 2 cm napkin dz [m] above its mid-plane, in contact."""
+    D, FD = _grid(8, 8, (-0.02, -0.02, 0.0), (0.005, 0, 0), (0, 0.005, 0))
+    N, FN = _grid(4, 4, (-0.01, -0.01, dz), (0.005, 0, 0), (0, 0.005, 0))
+    b = pl.ModelBuilder()
+    b.add_mesh(np.vstack([D, N]), np.zeros((0, 4), np.int64))
+    b.add_membrane(FD, pl.NeoHookeanMembrane(mu=MU, thickness=1e-3, density=RHO))
+    b.add_membrane(FN + len(D), pl.NeoHookeanMembrane(mu=MU, thickness=2e-3, density=RHO))
+    b.set_soft_contact()
+    return b
+
+
+def test_a_node_on_a_sheets_mid_surface_at_the_start_is_refused_by_name():
+    """Contact keeps a node on the side of a sheet it starts on; a node on the sheet's mid-surface is
+    on neither. The napkin laid in the drum's plane, or 1e-12 m off it (round-off: within 1e-9 of an
+    edge), is refused naming the node, both sheets and what to do (before, both sheets' nodes were
+    pushed to the side the normal points to and the napkin ended tangled half below the drum); so
+    is a block whose top face lies in a sheet's plane. A napkin 1e-6 m above the plane, within the
+    thicknesses but on a side, is accepted (the first step puts it at their sum)."""
+    for dz in (0.0, 1e-12):
+        with pytest.raises(
+            pl.InputError, match=r"node \d+ of body [01] starts on the mid-surface of body [01]"
+        ):
+            _napkin_on_drum(dz).finalize("float64")
+    _napkin_on_drum(1e-6).finalize("float64")
+    X, T = pl.mesh.box_tets((0.01, 0.01, 0.01), (2, 2, 2), origin=(-0.005, -0.005, -0.01))
+    S, F = _grid(4, 4, (-0.01, -0.01, 0.0), (0.005, 0, 0), (0, 0.005, 0))
+    b = pl.ModelBuilder()
+    b.add_mesh(np.vstack([X, S]), T)
+    b.set_material(pl.NeoHookean(E=2e4, nu=0.3), density=RHO)
+    b.add_membrane(F + len(X), pl.NeoHookeanMembrane(mu=MU, thickness=1e-3, density=RHO))
+    b.set_soft_contact()
+    with pytest.raises(
+        pl.InputError, match="of body 0 starts on the mid-surface of body 1.*neither of its sides"
+    ):
+        b.finalize("float64")
+
+
 def test_a_napkin_rests_on_a_block_at_its_half_thickness(backend):
     """The 2 cm napkin of membranes 2 mm thick dropped (from 3 mm) onto a 4 cm block (its base held),
     damped, 1 s: every napkin node rests 1 mm, its half thickness, above the block's top face (2e-2:

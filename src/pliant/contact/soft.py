@@ -214,7 +214,9 @@ def engine_surface(
     n_bodies = int(sheet_body.max()) + 1 if sheet_body.size else n_solid
     table, pairs = contact.pair_table(n_bodies, n_solid)
     if not pairs:  # one body without self contact: nothing to touch
-        return dict(no_surface(), pairs=[], labels=labels, sheet_nodes=None, sheet_labels=None)
+        return dict(
+            no_surface(), pairs=[], labels=labels, sheet_nodes=None, sheet_labels=None, sheet_faces=None
+        )
     active = np.nonzero((table >= 0).any(axis=1))[0]
     faces, owner = boundary_faces(T)
     touching = np.isin(labels[owner], active)
@@ -260,6 +262,7 @@ def engine_surface(
         labels=labels,
         sheet_nodes=sheet_nodes,
         sheet_labels=sheet_node_body[sheet_nodes],
+        sheet_faces=(np.asarray(sheet_F, np.int64)[on_sheet], sheet_body[on_sheet]),
     )
 
 
@@ -312,6 +315,47 @@ def initial_overlap(
         sel = nodes[inside == other]
         worst = _deepest(X, sel, node_body, faces[face_body == other], int(other), _core.soft_band, worst)
     return worst
+
+
+def on_a_sheet(X, T, labels, pairs, sheet_nodes, sheet_labels, sheet_faces) -> dict | None:
+    """The lowest-numbered node that starts on the mid-surface of a sheet of membranes its body
+    touches (within 1e-9 of the sheet's median edge: round-off): a dict with ``node``, its
+    ``body``, the ``sheet`` and the ``distance`` [m]; None if no node does. Contact keeps a node on
+    the side of a sheet it was on (soft_sheet_target), and a node on the mid-surface is on neither:
+    two sheets laid in one plane, or a sheet on a solid's face, would tangle. X: reference nodes [m]
+    (N, 3); T: tets (M, 4) and labels: body per element (M,) (their boundary's nodes are a solid's);
+    pairs: the touching (a, b); sheet_nodes, sheet_labels: the sheets' nodes and bodies;
+    sheet_faces: their triangles (K, 3) and each one's body (K,)."""
+    from scipy.spatial import cKDTree
+
+    from ..mesh.topology import boundary_faces
+    from .sdf import point_triangle_distance
+
+    if sheet_faces is None or not len(sheet_faces[0]):
+        return None
+    tris, tri_body = sheet_faces
+    node_body = np.full(X.shape[0], -1, np.int64)
+    if len(T):
+        faces, owner = boundary_faces(T)
+        node_body[faces.ravel()] = np.repeat(labels[owner], 3)
+    node_body[np.asarray(sheet_nodes, np.int64)] = sheet_labels
+    found = None
+    for sheet, other in [(a, b) for a, b in pairs if a != b] + [(b, a) for a, b in pairs if a != b]:
+        tri = X[tris[tri_body == sheet]]
+        nodes = np.nonzero(node_body == other)[0]
+        if not len(tri) or not len(nodes):
+            continue
+        k = min(16, len(tri))
+        _, cand = cKDTree(tri.mean(axis=1)).query(X[nodes], k=k)
+        cand = cand.reshape(len(nodes), k)
+        d = np.full(len(nodes), np.inf)
+        for j in range(k):
+            d = np.minimum(d, point_triangle_distance(X[nodes], *(tri[cand[:, j], c] for c in range(3)))[0])
+        edge = float(np.median(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=-1)))
+        on = np.nonzero(d <= 1e-9 * edge)[0]
+        if len(on) and (found is None or nodes[on[0]] < found["node"]):
+            found = dict(node=int(nodes[on[0]]), body=int(other), sheet=int(sheet), distance=float(d[on[0]]))
+    return found
 
 
 def _deepest(X, nodes, node_body, faces, other: int, band_fraction: float, worst: dict | None) -> dict | None:

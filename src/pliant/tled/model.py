@@ -143,27 +143,43 @@ def _check_wave_speeds(source: str, dt: np.ndarray, sets: list, owner: np.ndarra
 
 
 def _check_initial_overlap(
-    source: str, X: np.ndarray, T: np.ndarray, labels: np.ndarray, pairs, contact, sheets=(None, None)
+    source: str,
+    X: np.ndarray,
+    T: np.ndarray,
+    labels: np.ndarray,
+    pairs,
+    contact,
+    sheets=(None, None),
+    sheet_faces=None,
 ) -> None:
     """Soft contact needs the bodies it pairs to start apart or touching: a node that starts inside
     another body deeper than the contact band is never pushed out (an InputError), a shallower
-    one is pushed out in the first step, a jolt (a PliantWarning). ``sheets``: the nodes of sheets
-    of membranes and their bodies."""
-    from ..contact.soft import initial_overlap
+    one is pushed out in the first step, a jolt (a PliantWarning); a node on a sheet's mid-surface
+    is on neither side of it (an InputError). ``sheets``: the nodes of sheets of membranes and
+    their bodies; ``sheet_faces``: their triangles and each one's body."""
+    from ..contact.soft import initial_overlap, on_a_sheet
 
     o = initial_overlap(X, T, labels, pairs, *sheets)
-    if o is None:
-        return
-    where = (
+    where = o and (
         f"{source}: soft contact: node {o['node']} of {contact.name(o['body'])} starts {o['depth']:.3g} m "
         f"inside {contact.name(o['other'])}"
     )
-    if o["depth"] > o["band"]:
+    if o and o["depth"] > o["band"]:
         raise InputError(
             f"{where}, deeper than the contact band there ({o['band']:.3g} m: {_core.soft_band:g} x the "
             "nearest triangle's mean edge), so contact would never push it out; expected the bodies apart or "
             "touching at the start (move them apart)"
         )
+    s = on_a_sheet(X, T, labels, pairs, sheets[0], sheets[1], sheet_faces)
+    if s is not None:
+        raise InputError(
+            f"{source}: soft contact: node {s['node']} of {contact.name(s['body'])} starts on the "
+            f"mid-surface of {contact.name(s['sheet'])} ({s['distance']:.3g} m from it), on neither of "
+            "its sides, and contact keeps a node on the side it starts on; expected the bodies apart "
+            "(move one to the side of the sheet it should be on)"
+        )
+    if o is None:
+        return
     warnings.warn(
         PliantWarning(f"{where}: contact pushes it out in the first step, a jolt; start the bodies apart"),
         stacklevel=4,
@@ -351,9 +367,17 @@ class Model:
         self.contact_pairs = soft.pop("pairs")  # soft-contact pairs of bodies (a <= b), index order
         self.bodies = soft.pop("labels")  # body of each element (user order), or None
         sheets = soft.pop("sheet_nodes", None), soft.pop("sheet_labels", None)  # bodies after the tets'
+        sheet_faces = soft.pop("sheet_faces", None)
         if self.contact_pairs:
             _check_initial_overlap(
-                builder.source, X, T, self.bodies, self.contact_pairs, builder.soft_contact, sheets
+                builder.source,
+                X,
+                T,
+                self.bodies,
+                self.contact_pairs,
+                builder.soft_contact,
+                sheets,
+                sheet_faces,
             )
         visco = []  # per group: n_iso, n_vol, (α, τ) × prony_max (isochoric first half)
         if any(getattr(self.sets[k].material, "prony", None) for k in np.nonzero(keep)[0]):
