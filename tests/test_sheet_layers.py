@@ -52,15 +52,14 @@ def _gap_above(P, S, F):
     return d[np.arange(n), j], P[:, 2] > Q[np.arange(n), j, 2]
 
 
-def test_a_napkin_rests_on_a_drum_at_both_half_thicknesses(backend):
-    """A 2 cm napkin of membranes 2 mm thick dropped (from 3 mm) onto a pinned 4 cm drum 1 mm thick,
-    damped, 1 s: the rim carries the weight of both, m g (1e-4: what of the motion the damping has
-    left), and every napkin node lies above the drum at the sum of the two half thicknesses from its
-    mid-surface, 1.5 mm (1e-2: each sheet's nodes meet the other's triangles and the Jacobi average
-    of the two leaves them within 0.15 % of it; measured 1.3e-3). Before, each node met a sheet at
-    that sheet's half thickness alone (0.5 mm: the two sheets overlapping by half)."""
+def _napkin_on_drum(dz: float, side: float = 0.02, cells: int = 4):
+    """A pinned 4 cm drum of membranes 1 mm thick (8 × 8 cells, its rim the support "rim") and a
+    napkin 2 mm thick of ``side`` [m] in ``cells`` × ``cells`` cells, centred ``dz`` [m] above the
+    drum's mid-plane, under gravity, damped, in soft contact. Returns the builder and the drum's
+    nodes (its first) and triangles."""
     D, FD = _grid(8, 8, (-0.02, -0.02, 0.0), (0.005, 0, 0), (0, 0.005, 0))
-    N, FN = _grid(4, 4, (-0.01, -0.01, 0.003), (0.005, 0, 0), (0, 0.005, 0))
+    a = side / cells
+    N, FN = _grid(cells, cells, (-side / 2, -side / 2, dz), (a, 0, 0), (0, a, 0))
     b = pl.ModelBuilder()
     b.add_mesh(np.vstack([D, N]), np.zeros((0, 4), np.int64))
     b.add_membrane(FD, pl.NeoHookeanMembrane(mu=MU, thickness=1e-3, density=RHO))
@@ -69,6 +68,17 @@ def test_a_napkin_rests_on_a_drum_at_both_half_thicknesses(backend):
     b.add_gravity((0, 0, -9.81), np.arange(len(D) + len(N)))
     b.set_soft_contact()
     b.damping = 30.0
+    return b, D, FD
+
+
+def test_a_napkin_rests_on_a_drum_at_both_half_thicknesses(backend):
+    """A 2 cm napkin of membranes 2 mm thick dropped (from 3 mm) onto a pinned 4 cm drum 1 mm thick,
+    damped, 1 s: the rim carries the weight of both, m g (1e-4: what of the motion the damping has
+    left), and every napkin node lies above the drum at the sum of the two half thicknesses from its
+    mid-surface, 1.5 mm (1e-2: each sheet's nodes meet the other's triangles and the Jacobi average
+    of the two leaves them within 0.15 % of it; measured 1.3e-3). Before, each node met a sheet at
+    that sheet's half thickness alone (0.5 mm: the two sheets overlapping by half)."""
+    b, D, FD = _napkin_on_drum(0.003)
     m = b.finalize("float64", backend=backend)
     assert m.contact_pairs == [(0, 1)]
     sim = pl.Simulation(m)
@@ -87,16 +97,7 @@ def test_two_equal_sheets_stacked_rim_on_rim_rest_on_each_other(backend):
     rim; 1e-2 as above), and the rim carries the weight of both (1e-4). Before, a node whose
     closest point lay on a sheet's rim passed beside it: the napkin's rim fell past the drum's,
     the two sheets crossed there and the run blew up at 0.29 s."""
-    D, FD = _grid(8, 8, (-0.02, -0.02, 0.0), (0.005, 0, 0), (0, 0.005, 0))
-    N, FN = _grid(8, 8, (-0.02, -0.02, 0.003), (0.005, 0, 0), (0, 0.005, 0))
-    b = pl.ModelBuilder()
-    b.add_mesh(np.vstack([D, N]), np.zeros((0, 4), np.int64))
-    b.add_membrane(FD, pl.NeoHookeanMembrane(mu=MU, thickness=1e-3, density=RHO))
-    b.add_membrane(FN + len(D), pl.NeoHookeanMembrane(mu=MU, thickness=2e-3, density=RHO))
-    b.fix(np.nonzero(np.abs(D[:, :2]).max(axis=1) > 0.02 - 1e-9)[0], name="rim")
-    b.add_gravity((0, 0, -9.81), np.arange(len(D) + len(N)))
-    b.set_soft_contact()
-    b.damping = 30.0
+    b, D, FD = _napkin_on_drum(0.003, side=0.04, cells=8)
     m = b.finalize("float64", backend=backend)
     sim = pl.Simulation(m)
     sim.run(until=1.0)
@@ -105,18 +106,6 @@ def test_two_equal_sheets_stacked_rim_on_rim_rest_on_each_other(backend):
     gap, above = _gap_above(x[len(D) :], x[: len(D)], FD)
     assert above.all()
     np.testing.assert_allclose(gap, 1.5e-3, rtol=1e-2)
-
-
-def _napkin_on_drum(dz: float) -> pl.ModelBuilder:
-    """The drum of the tests above and the 2 cm napkin dz [m] above its mid-plane, in contact."""
-    D, FD = _grid(8, 8, (-0.02, -0.02, 0.0), (0.005, 0, 0), (0, 0.005, 0))
-    N, FN = _grid(4, 4, (-0.01, -0.01, dz), (0.005, 0, 0), (0, 0.005, 0))
-    b = pl.ModelBuilder()
-    b.add_mesh(np.vstack([D, N]), np.zeros((0, 4), np.int64))
-    b.add_membrane(FD, pl.NeoHookeanMembrane(mu=MU, thickness=1e-3, density=RHO))
-    b.add_membrane(FN + len(D), pl.NeoHookeanMembrane(mu=MU, thickness=2e-3, density=RHO))
-    b.set_soft_contact()
-    return b
 
 
 def test_a_node_on_a_sheets_mid_surface_at_the_start_is_refused_by_name():
@@ -130,8 +119,8 @@ def test_a_node_on_a_sheets_mid_surface_at_the_start_is_refused_by_name():
         with pytest.raises(
             pl.InputError, match=r"node \d+ of body [01] starts on the mid-surface of body [01]"
         ):
-            _napkin_on_drum(dz).finalize("float64")
-    _napkin_on_drum(1e-6).finalize("float64")
+            _napkin_on_drum(dz)[0].finalize("float64")
+    _napkin_on_drum(1e-6)[0].finalize("float64")
     X, T = pl.mesh.box_tets((0.01, 0.01, 0.01), (2, 2, 2), origin=(-0.005, -0.005, -0.01))
     S, F = _grid(4, 4, (-0.01, -0.01, 0.0), (0.005, 0, 0), (0, 0.005, 0))
     b = pl.ModelBuilder()
