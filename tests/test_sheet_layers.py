@@ -94,6 +94,17 @@ def test_a_napkin_rests_on_a_drum_at_both_half_thicknesses(backend, side, cells)
     np.testing.assert_allclose(gap, 1.5e-3, rtol=1e-2)
 
 
+def _sheet_and_block(X, T, S, F, thickness: float) -> pl.ModelBuilder:
+    """A block (nodes X [m], tets T; Neo-Hookean, 5e4 Pa, ν = 0.3) and a sheet of membranes (nodes S
+    [m], triangles F) ``thickness`` [m] thick, in soft contact."""
+    b = pl.ModelBuilder()
+    b.add_mesh(np.vstack([X, S]), T)
+    b.set_material(pl.NeoHookean(E=5e4, nu=0.3), density=RHO)
+    b.add_membrane(F + len(X), pl.NeoHookeanMembrane(mu=MU, thickness=thickness, density=RHO))
+    b.set_soft_contact()
+    return b
+
+
 def test_a_node_on_a_sheets_mid_surface_at_the_start_is_refused_by_name():
     """Contact keeps a node on the side of a sheet it starts on; a node on the sheet's mid-surface is
     on neither. The napkin laid in the drum's plane, or 1e-12 m off it (round-off: within 1e-9 of an
@@ -108,12 +119,7 @@ def test_a_node_on_a_sheets_mid_surface_at_the_start_is_refused_by_name():
             _napkin_on_drum(dz)[0].finalize("float64")
     _napkin_on_drum(1e-6)[0].finalize("float64")
     X, T = pl.mesh.box_tets((0.01, 0.01, 0.01), (2, 2, 2), origin=(-0.005, -0.005, -0.01))
-    S, F = _grid(4, 4, (-0.01, -0.01, 0.0), (0.005, 0, 0), (0, 0.005, 0))
-    b = pl.ModelBuilder()
-    b.add_mesh(np.vstack([X, S]), T)
-    b.set_material(pl.NeoHookean(E=2e4, nu=0.3), density=RHO)
-    b.add_membrane(F + len(X), pl.NeoHookeanMembrane(mu=MU, thickness=1e-3, density=RHO))
-    b.set_soft_contact()
+    b = _sheet_and_block(X, T, *_grid(4, 4, (-0.01, -0.01, 0.0), (0.005, 0, 0), (0, 0.005, 0)), 1e-3)
     with pytest.raises(
         pl.InputError, match="of body 0 starts on the mid-surface of body 1.*neither of its sides"
     ):
@@ -130,13 +136,9 @@ def test_a_napkin_rests_on_a_block_at_its_half_thickness(backend):
     thickness from it: the napkin lay between 0 and 1 mm above the block."""
     X, T = pl.mesh.box_tets((0.04, 0.04, 0.01), (4, 4, 1), origin=(-0.02, -0.02, -0.01))
     N, FN = _grid(4, 4, (-0.01, -0.01, 0.003), (0.005, 0, 0), (0, 0.005, 0))
-    b = pl.ModelBuilder()
-    b.add_mesh(np.vstack([X, N]), T)
-    b.set_material(pl.NeoHookean(E=5e4, nu=0.3), density=RHO)
-    b.add_membrane(FN + len(X), pl.NeoHookeanMembrane(mu=MU, thickness=2e-3, density=RHO))
+    b = _sheet_and_block(X, T, N, FN, 2e-3)
     b.fix(np.nonzero(X[:, 2] < -0.01 + 1e-9)[0], name="base")
     b.add_gravity((0, 0, -9.81), np.arange(len(X) + len(N)))
-    b.set_soft_contact()
     b.damping = 30.0
     m = b.finalize("float64", backend=backend)
     sim = pl.Simulation(m)
