@@ -490,13 +490,12 @@ PLIANT_HD bool soft_sheet_target(index_t t, int f, const double w[3], double h, 
     }
     const double sigma = side0 >= 0.0 ? 1.0 : -1.0;
     double target[3];
-    if (rim && !(dist2 > 0.0)) {  // on the rim itself: out to σ's side
-        for (int d = 0; d < 3; ++d) target[d] = c[d] + sigma * h * n1[d];
-    } else if (rim || sigma * side1 > 0.0) {  // beside the rim, or on its side: within h of c
+    // Beside the rim (off it), or on its side of a face: within h of c, out along x1 − c.
+    if (rim ? dist2 > 0.0 : sigma * side1 > 0.0) {
         if (!(dist2 < h * h)) return false;
         const double dist = std::sqrt(dist2);
         for (int d = 0; d < 3; ++d) target[d] = c[d] + h * r[d] / dist;
-    } else {  // through the mid-surface
+    } else {  // through the mid-surface, or on the rim itself: h beyond c on σ's side
         for (int d = 0; d < 3; ++d) target[d] = c[d] + sigma * h * n1[d];
     }
     return soft_toward(target, x1, e, gap);
