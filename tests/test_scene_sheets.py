@@ -5,6 +5,8 @@ pairs naming a sheet, and the errors a bad table gives."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -273,3 +275,87 @@ def test_a_sheet_laid_in_anothers_plane_is_refused_by_name(tmp_path):
     assert r.exit_code == 2 and "Traceback" not in r.output, r.output
     said = " ".join(r.output.split())
     assert "starts on the mid-surface of" in said and "'drum'" in said and "'napkin'" in said, said
+
+
+DRAPE = """
+title = "a drape on a ball"
+[[sheet]]
+name = "drape"
+primitive = "rectangle"
+size = [0.2, 0.2]
+cells = [20, 20]
+translate = [0.0, 0.0, 0.06]
+type = "neo-hookean"
+mu = 2e4
+thickness = 1e-3
+density = 1000.0
+[[tool]]
+name = "ball"
+type = "sphere"
+radius = 0.05
+position = [0.0, 0.0, 0.0]
+mu_s = 0.5
+mu_k = 0.5
+[[load]]
+type = "gravity"
+g = [0.0, 0.0, -9.81]
+[solver]
+duration = 1.0
+damping = 5.0
+"""
+
+
+def test_a_scene_of_a_sheet_alone_drapes_a_ball(tmp_path):
+    """A scene without a [mesh]: a 20 cm drape dropped 1 cm onto a ball of 5 cm radius (μ = 0.5), in
+    float32 at the default step, wrinkling (the [[sheet]] default). `pliant run` exits 0 with no
+    elements; after 1 s the ball carries the drape's weight ρ h A g (2 %: the corners still swing;
+    measured 7e-5) and no node of it is inside the ball (1e-6 of the radius: the contact's round-off
+    in float32). (On a frictionless ball the drape that carries compression crumpled, stiffened and
+    blew up at 0.3–0.4 s; docs/engine.md, "Membranes".)"""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    p = _write(tmp_path, DRAPE)
+    r = CliRunner().invoke(app, ["run", str(p), "-o", str(tmp_path / "out"), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["elements"] == 0 and summary["nodes"] == 21 * 21 and summary["error"] is None
+    weight = 1000.0 * 1e-3 * 0.2 * 0.2 * 9.81
+    np.testing.assert_allclose(-summary["tools"][0]["force"][2], weight, rtol=2e-2)
+    model, sim = _run(p)
+    assert np.linalg.norm(sim.state.positions, axis=1).min() >= 0.05 * (1 - 1e-6)
+
+
+def test_a_scene_of_a_sheet_alone_hangs_from_its_rim(tmp_path):
+    """The drum alone ([[sheet]], no [mesh]) pinned at its rim under gravity: its rim carries ρ h L² g
+    after 1 s of damped settling (1e-4, as the drum under the block)."""
+    rim = '[[constraint]]\ntype = "fix"\nnodes = { set = "drum.rim" }\nname = "rim"\n'
+    rest = '[[load]]\ntype = "gravity"\ng = [0.0, 0.0, -9.81]\n[solver]\ndamping = 30.0\ndtype = "float64"\n'
+    model, sim = _run(_write(tmp_path, DRUM + rim + rest))
+    assert model.n_elements == 0
+    weight = RHO * H * L * L * 9.81
+    np.testing.assert_allclose(model.support_reactions(sim.state)["rim"][2], weight, rtol=1e-4)
+
+
+@pytest.mark.parametrize(
+    "text, key, words",
+    [
+        ('title = "nothing"\n', "", "a body of tets ([mesh]) or a sheet ([[sheet]])"),
+        (
+            DRUM + '[[material]]\ntype = "neo-hookean"\nE = 1e3\nnu = 0.3\ndensity = 1e3\n',
+            "material",
+            "no [mesh]",
+        ),
+        (DRUM + '[[body]]\nname = "b"\nprimitive = "box"\nsize = [1, 1, 1]\n', "body", "no [mesh]"),
+        (BLOCK.split("[[material]]")[0] + DRUM, "", "missing key 'material'"),
+    ],
+)
+def test_a_scene_without_a_mesh_is_refused_unless_it_has_sheets(tmp_path, text, key, words):
+    """A scene needs a [mesh] (with its [[material]]) or a [[sheet]]; [[body]] and [[material]]
+    tables need a [mesh]: a SceneError naming the file, the key and what to give."""
+    p = _write(tmp_path, text)
+    with pytest.raises(SceneError) as err:
+        load_scene(p)
+    assert words in str(err.value) and "s.toml" in str(err.value)
+    assert err.value.key == key

@@ -352,21 +352,21 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             },
             "state_in"_a, "state_out"_a, "dt"_a, "alpha"_a)
         .def("run",
-             [](B& e, S& s, long n, double dt, double alpha, int check_every, double blowup) {
+             [](B& e, S& s, long n, double dt, double alpha, int check_every, double size) {
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e->run(s.s, n, dt, alpha, check_every, blowup);
+                     r = e->run(s.s, n, dt, alpha, check_every, size);
                  }
                  return report(r);
              })
         .def("relax",
              [](B& e, S& s, double t_eval, double dt, double tol, long max_steps, int check_every,
-                double blowup) {
+                double size) {
                  RunReport r;
                  {
                      nb::gil_scoped_release g;
-                     r = e->relax(s.s, t_eval, dt, tol, max_steps, check_every, blowup);
+                     r = e->relax(s.s, t_eval, dt, tol, max_steps, check_every, size);
                  }
                  return report(r);
              })
@@ -467,6 +467,7 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
     bind_engine<float>(m, "EngineF32", "BackendF32", "StateF32");
     bind_engine<double>(m, "EngineF64", "BackendF64", "StateF64");
     m.attr("lanes") = kLanes;
+    m.attr("blow_up_sizes") = kBlowUpSizes;  // a displacement beyond this many body sizes: a blow-up
     // The backends use_backend accepts: one engine (engine/engine.hpp) on three devices.
     m.attr("backends") = nb::make_tuple("cpu", "cuda-emulated", "cuda");
     // Layout limits of the model description, so that Python restates none of them.
@@ -505,7 +506,8 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
         .value("Ok", RunStatus::Ok)
         .value("NonFinite", RunStatus::NonFinite)
         .value("Inverted", RunStatus::Inverted)
-        .value("BlowUp", RunStatus::BlowUp);
+        .value("BlowUp", RunStatus::BlowUp)
+        .value("Jump", RunStatus::Jump);
     nb::enum_<ViscoMode>(m, "ViscoMode", nb::is_arithmetic(),
                          "What a viscoelastic element does with its Prony state in a pass.")
         .value("Advance", ViscoMode::Advance)

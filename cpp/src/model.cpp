@@ -127,19 +127,19 @@ template <class T>
 void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
     const index_t nm = static_cast<index_t>(in.mem_kind.size());
     if (in.mem_nodes.size() != 3 * static_cast<std::size_t>(nm) ||
-        in.mem_params.size() != 4 * static_cast<std::size_t>(nm))
-        throw std::invalid_argument("membranes: expected 3 nodes and 4 parameters per membrane");
+        in.mem_params.size() != kMembraneParams * static_cast<std::size_t>(nm))
+        throw std::invalid_argument("membranes: expected 3 nodes and 5 parameters per membrane");
     mem_nodes = in.mem_nodes;
     mem_kind.assign(in.mem_kind.begin(), in.mem_kind.end());
     mem_geom.assign(static_cast<std::size_t>(kMembraneValues) * nm, T(0));
     mem_dt.assign(nm, 0.0);
     std::vector<index_t> count(static_cast<std::size_t>(n_nodes) + 1, 0);
     for (index_t m = 0; m < nm; ++m) {
-        const double* p = &in.mem_params[4 * static_cast<std::size_t>(m)];
+        const double* p = &in.mem_params[kMembraneParams * static_cast<std::size_t>(m)];
         const double h = p[0], rho = p[1];
         const bool nh = in.mem_kind[m] == static_cast<int>(MembraneKind::NeoHookean);
         const bool ok = h > 0.0 && rho > 0.0 && std::isfinite(h * rho) && p[2] > 0.0 && std::isfinite(p[2]) &&
-                        (nh || (p[3] > -1.0 && p[3] <= 0.5));
+                        (nh || (p[3] > -1.0 && p[3] <= 0.5)) && (p[4] == 0.0 || p[4] == 1.0);
         if (!ok || (!nh && in.mem_kind[m] != static_cast<int>(MembraneKind::StVenantKirchhoff)))
             throw std::invalid_argument("membrane " + std::to_string(m) +
                                         ": kind or parameters out of range");
@@ -167,6 +167,7 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
         const double E = p[2], nu = p[3];
         const double mu = nh ? E : E / (2.0 * (1.0 + nu)), lam = nh ? 0.0 : E * nu / (1.0 - nu * nu);
         q[9] = T(area * h * (nh ? mu : lam)), q[10] = T(nh ? 0.0 : area * h * mu);
+        q[11] = T(p[4] == 0.0 ? 0.0 : area * h * (nh ? mu : E));  // the wrinkled state's modulus
         const double modulus = nh ? 4.0 * mu : lam + 2.0 * mu;
         const double dt_m = alt / std::sqrt(modulus / rho);
         mem_dt[m] = dt_m;

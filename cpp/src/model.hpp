@@ -68,7 +68,7 @@ struct ModelInput {
     // thickness h [m], density ρ [kg/m³] and two moduli (E [Pa], ν; or μ [Pa], 0).
     std::vector<index_t> mem_nodes;
     std::vector<int> mem_kind;
-    std::vector<double> mem_params;  // 4 per membrane: h, ρ, p1, p2
+    std::vector<double> mem_params;  // kMembraneParams per membrane: h, ρ, p1, p2, wrinkles (0/1)
     // Contact between deformable surfaces (soft_contact.hpp): its surface nodes (engine nodes) with
     // their body labels, its triangles (3 surface-node indices each, outward), the pair table
     // (labels × labels, pair index or −1), μs and μk per pair, the Verlet skin [m].

@@ -32,11 +32,16 @@ enum class MembraneKind : int {
 };
 
 /// Values per membrane in MembraneData::geom: reference tangents G_1, G_2 [m] (6), the inverse
-/// reference metric G^11, G^22, G^12 [1/m²] (3), and two coefficients (A0 h λ', A0 h μ) [N·m] for
-/// StVenantKirchhoff, (A0 h μ, 0) for NeoHookean.
-constexpr int kMembraneValues = 11;
-/// The first of the two values that carry the material's moduli (scaled by scale_materials).
+/// reference metric G^11, G^22, G^12 [1/m²] (3), two coefficients (A0 h λ', A0 h μ) [N·m] for
+/// StVenantKirchhoff, (A0 h μ, 0) for NeoHookean, and the wrinkled state's (membrane_wrinkle):
+/// A0 h E (Young's modulus) for StVenantKirchhoff, A0 h μ for NeoHookean, 0 where the membrane
+/// does not wrinkle (it carries compression).
+constexpr int kMembraneValues = 12;
+/// The first of the three values that carry the material's moduli (scaled by scale_materials).
 constexpr int kMembraneModuli = 9;
+/// Parameters per membrane in a model's input: thickness h [m], density ρ [kg/m³], the material's
+/// two (E, ν or μ, 0) and whether it wrinkles (0 or 1).
+constexpr int kMembraneParams = 5;
 
 /// Node → membrane corners (CSR over nodes: offsets N + 1, index holds 3 m + corner), and per
 /// membrane its nodes (3), kind and kMembraneValues values. count == 0: no membranes.
@@ -50,6 +55,59 @@ struct MembraneData {
     const T* geom;
 };
 
+/// Green strain E_ij [1] (11, 22, 12) from reference tangents G1, G2 and displacement differences
+/// d1, d2 [m], formed from the differences so that small strains keep their digits in float32.
+template <class T>
+PLIANT_HD void membrane_strain(const T* G1, const T* G2, const T d1[3], const T d2[3], T E[3]) {
+    E[0] = E[1] = E[2] = T(0);
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) {
+        E[0] += G1[d] * d1[d] + T(0.5) * d1[d] * d1[d];
+        E[1] += G2[d] * d2[d] + T(0.5) * d2[d] * d2[d];
+        E[2] += T(0.5) * (G1[d] * d2[d] + d1[d] * G2[d] + d1[d] * d2[d]);
+    }
+}
+
+/// Wrinkling by tension-field theory (Roddeman, Drukker, Oomens & Janssen 1987, J. Appl. Mech.
+/// 54:884; the relaxed energy of Pipkin 1986, IMA J. Appl. Math. 36:85): a membrane without bending
+/// stiffness buckles under any compression, so it carries none. From the principal Green strains
+/// e1 ≥ e2 (the eigenvalues of the mixed strain G⁻¹E): taut where the material's smaller principal
+/// stress is ≥ 0 (St Venant–Kirchhoff: λ'(e1 + e2) + 2 μ e2 ≥ 0; Neo-Hookean: c1 c2² ≥ 1, c = 1 + 2e)
+/// and the stress is the material's; slack where e1 ≤ 0 (no stress); wrinkled otherwise: uniaxial
+/// tension S1 N⊗N along the major direction N, at the stretch the free width would take (St Venant–
+/// Kirchhoff: S1 = E e1; Neo-Hookean: S1 = μ (1 − c1^(−3/2)), its free width c2 = c1^(−1/2)).
+/// Returns 0 (taut), 1 (slack) or 2 (wrinkled) with, when wrinkled, A0 S1 [N·m] in s1 and the
+/// reference-unit major direction's contravariant components v (G_ij v^i v^j = 1).
+template <class T>
+PLIANT_HD int membrane_wrinkle(MembraneKind kind, const T* q, const T E[3], T& s1, T v[2]) {
+    const T Gi11 = q[6], Gi22 = q[7], Gi12 = q[8];
+    const T m11 = Gi11 * E[0] + Gi12 * E[2], m12 = Gi11 * E[2] + Gi12 * E[1];  // M = G⁻¹E (mixed)
+    const T m21 = Gi12 * E[0] + Gi22 * E[2], m22 = Gi12 * E[2] + Gi22 * E[1];
+    const T half = T(0.5) * (m11 + m22), dev = T(0.5) * (m11 - m22);
+    const T disc = std::sqrt(std::fmax(dev * dev + m12 * m21, T(0)));
+    const T e1 = half + disc, e2 = half - disc;
+    if (e1 <= T(0)) return 1;
+    const bool nh = kind == MembraneKind::NeoHookean;
+    const T c1 = T(1) + T(2) * e1, c2 = T(1) + T(2) * e2;
+    if (nh ? c1 * c2 * c2 >= T(1) : q[9] * (e1 + e2) + T(2) * q[10] * e2 >= T(0)) return 0;
+    if (nh) {
+        const T r = std::sqrt(c1), rm1 = T(2) * e1 / (r + T(1));  // √c1 − 1 without cancellation
+        s1 = q[11] * rm1 * (r * r + r + T(1)) / (r * r * r);      // 1 − c1^(−3/2)
+    } else {
+        s1 = q[11] * e1;
+    }
+    // An eigenvector of M for e1 from the row of M − e1 I that is not (nearly) zero: e1 > e2 here.
+    T a1 = m12, a2 = e1 - m11;
+    const T b1 = e1 - m22, b2 = m21;
+    if (b1 * b1 + b2 * b2 > a1 * a1 + a2 * a2) a1 = b1, a2 = b2;
+    T G11 = T(0), G22 = T(0), G12 = T(0);
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) G11 += q[d] * q[d], G22 += q[3 + d] * q[3 + d], G12 += q[d] * q[3 + d];
+    const T w = T(1) / std::sqrt(G11 * a1 * a1 + T(2) * G12 * a1 * a2 + G22 * a2 * a2);
+    v[0] = a1 * w, v[1] = a2 * w;
+    return 2;
+}
+
 /// Contravariant stress resultants times A0, S^11, S^22, S^12 [N·m], of membrane m at current
 /// tangents g1, g2 with displacement differences d1 = u1 − u0, d2 = u2 − u0 [m]: the Green strain
 /// is formed from the differences, E_ij = (G_i·d_j + d_i·G_j + d_i·d_j)/2, so that small strains keep
@@ -59,13 +117,17 @@ PLIANT_HD void membrane_stress(MembraneKind kind, const T* q, const T g1[3], con
                                const T d2[3], T S[3]) {
     const T *G1 = q, *G2 = q + 3;
     const T Gi11 = q[6], Gi22 = q[7], Gi12 = q[8];
-    T E11 = T(0), E22 = T(0), E12 = T(0);
-    PLIANT_UNROLL
-    for (int d = 0; d < 3; ++d) {
-        E11 += G1[d] * d1[d] + T(0.5) * d1[d] * d1[d];
-        E22 += G2[d] * d2[d] + T(0.5) * d2[d] * d2[d];
-        E12 += T(0.5) * (G1[d] * d2[d] + d1[d] * G2[d] + d1[d] * d2[d]);
+    T E[3];
+    membrane_strain(G1, G2, d1, d2, E);
+    if (q[11] != T(0)) {  // a membrane that wrinkles: slack or wrinkled states first
+        T s1 = T(0), v[2] = {T(0), T(0)};
+        const int state = membrane_wrinkle(kind, q, E, s1, v);
+        if (state != 0) {  // slack: s1 = 0 and v = 0
+            S[0] = s1 * v[0] * v[0], S[1] = s1 * v[1] * v[1], S[2] = s1 * v[0] * v[1];
+            return;
+        }
     }
+    const T E11 = E[0], E22 = E[1], E12 = E[2];
     if (kind == MembraneKind::NeoHookean) {
         // det g / det G from the metrics; g^ij = cofactor / det g.
         T G11 = T(0), G22 = T(0), G12 = T(0), g11 = T(0), g22 = T(0), g12 = T(0);
@@ -117,16 +179,27 @@ PLIANT_HD void membrane_tangents(index_t m, const MembraneData<T>& md, const T* 
 /// det g − 3) (Bonet et al. 2000, the energy of eq. 18's stress, λ3² = det G / det g), which with
 /// det g / det G = 1 + 2 tr M + 4 det M is 2 μ (tr(M)² − det M + 2 tr M det M) / (1 + 2 tr M +
 /// 4 det M): second order in the strain term by term, so small strains keep their digits in float32.
+/// A membrane that wrinkles has the relaxed energy of its state (membrane_wrinkle): 0 slack; the
+/// uniaxial state's wrinkled.
 template <class T>
 PLIANT_HD T membrane_energy(MembraneKind kind, const T* q, const T d1[3], const T d2[3]) {
-    const T *G1 = q, *G2 = q + 3;
     const T Gi11 = q[6], Gi22 = q[7], Gi12 = q[8];
-    T E11 = T(0), E22 = T(0), E12 = T(0);
-    for (int d = 0; d < 3; ++d) {
-        E11 += G1[d] * d1[d] + T(0.5) * d1[d] * d1[d];
-        E22 += G2[d] * d2[d] + T(0.5) * d2[d] * d2[d];
-        E12 += T(0.5) * (G1[d] * d2[d] + d1[d] * G2[d] + d1[d] * d2[d]);
+    T E[3];
+    membrane_strain(q, q + 3, d1, d2, E);
+    if (q[11] != T(0)) {  // wrinkling: the relaxed energy, 0 slack, of the uniaxial state wrinkled
+        T s1 = T(0), v[2] = {T(0), T(0)};
+        const int state = membrane_wrinkle(kind, q, E, s1, v);
+        if (state == 1) return T(0);
+        if (state == 2) {
+            // e1 = E_ij v^i v^j: St Venant–Kirchhoff E/2 e1²; Neo-Hookean μ/2 (c1 + 2/√c1 − 3)
+            // = μ/2 (√c1 − 1)² (√c1 + 2)/√c1.
+            const T e1 = E[0] * v[0] * v[0] + E[1] * v[1] * v[1] + T(2) * E[2] * v[0] * v[1];
+            if (kind != MembraneKind::NeoHookean) return T(0.5) * q[11] * e1 * e1;
+            const T r = std::sqrt(T(1) + T(2) * e1), rm1 = T(2) * e1 / (r + T(1));
+            return T(0.5) * q[11] * rm1 * rm1 * (r + T(2)) / r;
+        }
     }
+    const T E11 = E[0], E22 = E[1], E12 = E[2];
     const T m11 = Gi11 * E11 + Gi12 * E12, m12 = Gi11 * E12 + Gi12 * E22;
     const T m21 = Gi12 * E11 + Gi22 * E12, m22 = Gi12 * E12 + Gi22 * E22;
     const T tr = m11 + m22, det = m11 * m22 - m12 * m21;

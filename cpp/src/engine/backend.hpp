@@ -19,11 +19,16 @@ namespace pliant {
 /// → 1.26 s for 8,000 steps with them), and kernel 2 reads the forces from the caches.
 constexpr std::size_t kLargeModelBytes = std::size_t(32) << 20;
 
-/// What a run or relaxation ended with (bound to Python as RunStatus).
-enum class RunStatus : int { Ok = 0, NonFinite = 1, Inverted = 2, BlowUp = 3 };
+/// A displacement beyond this many times the body's size is a blow-up (Engine::check).
+constexpr double kBlowUpSizes = 100.0;
+
+/// What a run or relaxation ended with (bound to Python as RunStatus): a node moving more than the
+/// body's size in one step is a Jump (Engine::check).
+enum class RunStatus : int { Ok = 0, NonFinite = 1, Inverted = 2, BlowUp = 3, Jump = 4 };
 
 /// Outcome of a run: `where` is the builder's element (Inverted; also a NaN J) or the engine's
-/// node (NonFinite, BlowUp), `value` the offending quantity (J, or a displacement [m]), `t` the
+/// node (NonFinite, BlowUp, Jump), `value` the offending quantity (J, a displacement or, for a
+/// Jump, one step's displacement [m]), `t` the
 /// time [s] at which it was found.
 struct RunReport {
     long steps = 0;
@@ -56,13 +61,13 @@ class Backend {
 public:
     virtual ~Backend() = default;
     /// n central-difference steps of s in place (Δt [s], mass damping α [1/s]), checking stability
-    /// every check_every steps and at the end (|u| above blowup [m] is a blow-up).
-    virtual RunReport run(State<T>& s, long n, double dt, double alpha, int check_every, double blowup) = 0;
+    /// every check_every steps and at the end (Engine::check: size [m] is the body's size).
+    virtual RunReport run(State<T>& s, long n, double dt, double alpha, int check_every, double size) = 0;
     /// One step from `in` to `out` (distinct states).
     virtual RunReport step(const State<T>& in, State<T>& out, double dt, double alpha) = 0;
     /// Dynamic relaxation to the static equilibrium of the loads at time t_eval [s].
     virtual RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
-                            int check_every, double blowup) = 0;
+                            int check_every, double size) = 0;
     virtual ElementResults<T> measures(const State<T>& s) = 0;
     /// Internal nodal forces f(u) [N], SoA (3, P).
     virtual std::vector<T> internal_forces(const State<T>& s) = 0;

@@ -156,10 +156,10 @@ public:
     template <class... A>
     explicit Engine(const Model<T>& m, A&&... dev_args);
 
-    RunReport run(State<T>& s, long n, double dt, double alpha, int check_every, double blowup) override;
+    RunReport run(State<T>& s, long n, double dt, double alpha, int check_every, double size) override;
     RunReport step(const State<T>& in, State<T>& out, double dt, double alpha) override;
     RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps, int check_every,
-                    double blowup) override;
+                    double size) override;
     ElementResults<T> measures(const State<T>& s) override;
     std::vector<T> internal_forces(const State<T>& s) override;
     std::vector<T> external_forces(const State<T>& s, double t) override;
@@ -204,7 +204,8 @@ public:
     void soft_lists(const T* u);
     template <class Count, class Total, class Emit>
     void scan(index_t n, const int* flag, const Count& count, const Total& total, const Emit& emit);
-    Scalars<T> check(const T* u_new, double t_elem, double t_node, double blowup, RunReport& rep);
+    Scalars<T> check(const T* u_new, const T* u_old, double t_elem, double t_node, double size,
+                     RunReport& rep);
     void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt);
     void copy(T* dst, const T* src, std::size_t n);
     void fill(T* dst, T value, std::size_t n);

@@ -259,7 +259,7 @@ void Engine<T, Dev>::ensure_history(long rows) {
 }
 
 template <class T, class Dev>
-RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int check_every, double blowup) {
+RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int check_every, double size) {
     if (keep_velocity(s, dt)) s.touch();
     load(s);
     ensure_history(n);
@@ -278,8 +278,8 @@ RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int 
                 ph.rotate();
             });
             d += k;
-            // J belongs to the last step's input (t), the newest u to t + Δt.
-            if (check(v_.u[ph.cur], t0 + (d - 1) * dt, t0 + d * dt, blowup, rep).status) break;
+            // J belongs to the last step's input (t), the newest u to t + Δt; u[prev] is at t.
+            if (check(v_.u[ph.cur], v_.u[ph.prev], t0 + (d - 1) * dt, t0 + d * dt, size, rep).status) break;
         }
         if (dev_.lead()) {
             done = d;
@@ -313,7 +313,7 @@ RunReport Engine<T, Dev>::step(const State<T>& in, State<T>& out, double dt, dou
 /// falls below tol, or has not improved by 1 % over 1,000 checks (the round-off floor).
 template <class T, class Dev>
 RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
-                                int check_every, double blowup) {
+                                int check_every, double size) {
     load(s);
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // start at rest
     fill(v_.du[phase_.cur], T(0), du_[0].size());             // (no increment)
@@ -341,7 +341,8 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
             // before, u[next] (f_node[fc]).
             relax_measure(v_.u[ph.prev], v_.u[ph.next], v_.f_node[1 - fc], v_.f_node[fc], dt);
             // One read of the device scalars: the check's verdict and the measure's residual.
-            const Scalars<T> seen = check(v_.u[ph.prev], t_eval, t_eval, blowup, rep);
+            // (No step-size check: a relaxation's pseudo-time moves as its fictitious masses let it.)
+            const Scalars<T> seen = check(v_.u[ph.prev], nullptr, t_eval, t_eval, size, rep);
             const bool ok = seen.status == 0;
             const double residual = seen.residual;
             ++checks;

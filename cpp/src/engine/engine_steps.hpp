@@ -358,21 +358,39 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
     });
 }
 
+/// Engine::check's verdict on component d of node i: non-finite, beyond far [m], or (u_old given)
+/// moved more than size [m] in the step; Ok otherwise.
+template <class T>
+PLIANT_HD RunStatus node_verdict(const T* u_new, const T* u_old, index_t P, index_t i, int d, double far,
+                                 double size) {
+    const double x = double(u_new[d * P + i]);
+    if (!std::isfinite(x)) return RunStatus::NonFinite;
+    if (std::fabs(x) > far) return RunStatus::BlowUp;
+    if (u_old != nullptr && !(std::fabs(x - double(u_old[d * P + i])) <= size)) return RunStatus::Jump;
+    return RunStatus::Ok;
+}
+
 /// Stability check of the last step: an element slot with J ≤ 0 or NaN (J of the step's input, at
-/// t_elem), else a node whose new displacement is non-finite or beyond blowup [m] (at t_node); the
-/// smallest such index, so the verdict does not depend on the order of the search. Returns the
-/// device scalars as read back (status 0: fine), so that callers need no second round trip.
+/// t_elem), else a node (at t_node) whose new displacement is non-finite, beyond kBlowUpSizes ×
+/// size [m] (the body's size: an energy blow-up), or, where u_old (the step's input) is given, that
+/// moved more than size in the step (a jump): faster than size/Δt, far above every wave speed the
+/// step resolves (Δt ≲ h/c, h ≪ size), the sawtooth of an unstable step, which may stay bounded (a
+/// sheet's corner beating at 10 km/s within a metre of its place). The smallest such index, so the
+/// verdict does not depend on the order of the search. Returns the device scalars as read back
+/// (status 0: fine), so that callers need no second round trip.
 template <class T, class Dev>
-Scalars<T> Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, double blowup,
+Scalars<T> Engine<T, Dev>::check(const T* u_new, const T* u_old, double t_elem, double t_node, double size,
                                  RunReport& rep) {
     const DeviceView<T> v = v_;
+    const double far = kBlowUpSizes * size;
     dev_.serial([=] PLIANT_KERNEL() { v.sc->bad_slot = v.sc->bad_node = INT_MAX; });
     const index_t n = v.slots > v.n_nodes ? v.slots : v.n_nodes;
     dev_.each(n, [=] PLIANT_KERNEL(index_t i) {
         if (i < v.slots && v.elem_id[i] >= 0 && !(v.J[i] > T(0))) atomic_min(&v.sc->bad_slot, i);
         if (i < v.n_nodes)
             for (int d = 0; d < 3; ++d)
-                if (!(std::fabs(double(u_new[d * v.P + i])) <= blowup)) atomic_min(&v.sc->bad_node, i);
+                if (node_verdict(u_new, u_old, v.P, i, d, far, size) != RunStatus::Ok)
+                    atomic_min(&v.sc->bad_node, i);
     });
     dev_.serial([=] PLIANT_KERNEL() {
         Scalars<T>& s = *v.sc;
@@ -383,10 +401,11 @@ Scalars<T> Engine<T, Dev>::check(const T* u_new, double t_elem, double t_node, d
             s.value = double(v.J[s.bad_slot]);
         } else if (s.bad_node != INT_MAX) {
             for (int d = 2; d >= 0; --d) {  // the first offending component
+                const RunStatus r = node_verdict(u_new, u_old, v.P, s.bad_node, d, far, size);
+                if (r == RunStatus::Ok) continue;
                 const double x = double(u_new[d * v.P + s.bad_node]);
-                if (std::fabs(x) <= blowup) continue;
-                s.status = static_cast<int>(std::isfinite(x) ? RunStatus::BlowUp : RunStatus::NonFinite);
-                s.value = x;
+                s.status = static_cast<int>(r);
+                s.value = r == RunStatus::Jump ? x - double(u_old[d * v.P + s.bad_node]) : x;
             }
             s.where = s.bad_node;
         }

@@ -10,11 +10,22 @@ StVKMembrane           λ' tr(E) I + 2 μ E, λ' = E ν / (1 − ν²), plane st
 NeoHookeanMembrane     μ (I − C33 C⁻¹), C33 = 1 / det C: incompressible             mu
                        (Bonet et al. 2000; NiftySim's "NeoHookean" membrane)
 =====================  =========================================================  ==============
+
+``wrinkling=True`` (either class): the membrane carries no compression (tension-field theory,
+Roddeman et al. 1987; Pipkin's relaxed energy, 1986): slack where its major principal strain is
+≤ 0, uniaxial tension along the major direction where the material's minor principal stress would
+be negative (wrinkled: S1 = E e1, or μ (1 − c1^(−3/2)) incompressible), the material's stress
+otherwise (taut). A sheet without bending stiffness buckles at almost no compressive load; one that
+carries compression crumples and stiffens until its step is unstable (``membrane.hpp``,
+``membrane_wrinkle``).
 """
 
 from __future__ import annotations
 
+import copy
 import math
+
+import numpy as np
 
 from .. import _core
 from ..checks import as_real, shown
@@ -37,11 +48,15 @@ class MembraneMaterial:
     kind: _core.MembraneKind
     thickness: float
     density: float
+    wrinkling: bool
 
-    def _set_sheet(self, thickness, density) -> None:
+    def _set_sheet(self, thickness, density, wrinkling) -> None:
         cls = type(self).__name__
         self.thickness = _finite_positive(cls, "thickness", thickness, "m")
         self.density = _finite_positive(cls, "density", density, "kg/m^3")
+        if not isinstance(wrinkling, (bool, np.bool_)):
+            raise MaterialError(f"{cls}: wrinkling = {shown(wrinkling)}; expected True or False")
+        self.wrinkling = bool(wrinkling)
 
     @property
     def params(self) -> tuple[float, float]:
@@ -53,8 +68,18 @@ class MembraneMaterial:
         (the modulus in the membrane's stable time step)."""
         raise NotImplementedError
 
+    def taut(self) -> "MembraneMaterial":
+        """This material carrying compression (wrinkling off)."""
+        m = copy.copy(self)
+        m.wrinkling = False
+        return m
+
     def _key(self):
-        return (type(self), self.params, self.thickness, self.density)
+        return (type(self), self.params, self.thickness, self.density, self.wrinkling)
+
+    def _sheet_repr(self) -> str:
+        wrinkles = ", wrinkling=True" if self.wrinkling else ""
+        return f"thickness={self.thickness:g}, density={self.density:g}{wrinkles}"
 
     def __eq__(self, other):
         return isinstance(other, MembraneMaterial) and self._key() == other._key()
@@ -67,16 +92,17 @@ class StVKMembrane(MembraneMaterial):
     """Plane-stress St Venant–Kirchhoff membrane: S = λ' tr(E) I + 2 μ E in the membrane's plane,
     λ' = E ν/(1 − ν²) the plane-stress Lamé constant, μ = E/(2(1 + ν)) (Bonet & Wood, 2nd ed., §6.6
     for plane stress; E the in-plane Green strain). Young's modulus ``E`` [Pa], Poisson's ratio
-    ``nu`` (−1 < ν ≤ 0.5), ``thickness`` [m], ``density`` [kg/m³]."""
+    ``nu`` (−1 < ν ≤ 0.5), ``thickness`` [m], ``density`` [kg/m³]; ``wrinkling``: carries no
+    compression (the module's docstring)."""
 
     kind = _core.MembraneKind.StVenantKirchhoff
 
-    def __init__(self, E, nu, thickness, density):
+    def __init__(self, E, nu, thickness, density, wrinkling: bool = False):
         self.E = _finite_positive("StVKMembrane", "E", E, "Pa")
         self.nu = as_real(nu)
         if not math.isfinite(self.nu) or not -1.0 < self.nu <= 0.5:
             raise MaterialError(f"StVKMembrane: nu = {shown(nu)}; expected -1 < nu <= 0.5")
-        self._set_sheet(thickness, density)
+        self._set_sheet(thickness, density, wrinkling)
 
     @property
     def params(self) -> tuple[float, float]:
@@ -87,21 +113,21 @@ class StVKMembrane(MembraneMaterial):
         return self.E / (1.0 - self.nu**2)
 
     def __repr__(self):
-        sheet = f"thickness={self.thickness:g}, density={self.density:g}"
-        return f"StVKMembrane(E={self.E:g}, nu={self.nu:g}, {sheet})"
+        return f"StVKMembrane(E={self.E:g}, nu={self.nu:g}, {self._sheet_repr()})"
 
 
 class NeoHookeanMembrane(MembraneMaterial):
     """Incompressible Neo-Hookean membrane: W = μ/2 (tr C + 1/det C − 3) per reference volume,
     C the in-plane right Cauchy–Green tensor, the thickness stretch λ3 = 1/√det C; S = μ (I − C⁻¹/det C)
     (Bonet, Wood, Mahaney & Heywood 2000, CMAME 190:579, eq. 18). Shear modulus ``mu`` [Pa],
-    ``thickness`` [m], ``density`` [kg/m³]."""
+    ``thickness`` [m], ``density`` [kg/m³]; ``wrinkling``: carries no compression (the module's
+    docstring)."""
 
     kind = _core.MembraneKind.NeoHookean
 
-    def __init__(self, mu, thickness, density):
+    def __init__(self, mu, thickness, density, wrinkling: bool = False):
         self.mu = _finite_positive("NeoHookeanMembrane", "mu", mu, "Pa")
-        self._set_sheet(thickness, density)
+        self._set_sheet(thickness, density, wrinkling)
 
     @property
     def params(self) -> tuple[float, float]:
@@ -112,4 +138,4 @@ class NeoHookeanMembrane(MembraneMaterial):
         return 4.0 * self.mu
 
     def __repr__(self):
-        return f"NeoHookeanMembrane(mu={self.mu:g}, thickness={self.thickness:g}, density={self.density:g})"
+        return f"NeoHookeanMembrane(mu={self.mu:g}, {self._sheet_repr()})"

@@ -35,7 +35,10 @@ if TYPE_CHECKING:
 def load_bodies(ctx: Ctx, data: dict, base: Path, scene: Scene, b: ModelBuilder) -> tuple:
     """The first body ([mesh]) and every [[body]] into the builder; returns the combined nodes
     (N, 3), tets (M, 4), the element sets (each body's by its name), the body names and the node
-    sets of the bodies' files."""
+    sets of the bodies' files: none for a scene of sheets alone (no [mesh])."""
+    if "mesh" not in data:
+        scene.meta["mesh_source"] = ctx.file
+        return np.zeros((0, 3)), np.zeros((0, 4), np.int64), {}, [], {}
     with ctx.under("mesh"):
         X, T, sets, node_sets = load_mesh(ctx, data["mesh"], base, scene)
     names = [str(data["mesh"].get("name", "body0"))]

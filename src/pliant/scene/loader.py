@@ -112,13 +112,13 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
             "membrane": "list",
             "sheet": "list",
         },
-        ("mesh", "material"),
     )
+    _check_bodies_given(ctx, data)
     b = ModelBuilder()
     scene = Scene(str(path), b, title=data.get("title", path.stem))
     _solver_settings(ctx, data.get("solver", {}), scene)
     X, T, sets, names, scene.node_sets = load_bodies(ctx, data, path.parent, scene, b)
-    _materials(ctx, data["material"], b, X, T, sets)
+    _materials(ctx, data.get("material", []), b, X, T, sets)
     add_membranes(ctx, data.get("membrane", []), b, X, T, scene.node_sets)
     X, sheets = load_sheets(ctx, data.get("sheet", []), path.parent, b, X, names, scene.node_sets)
     if "contact" in data:
@@ -137,6 +137,29 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
         except InputError as e:
             raise ctx.error("solver.strain_smoothing", str(e)) from None
     return scene
+
+
+def _check_bodies_given(ctx: Ctx, data: dict) -> None:
+    """A scene simulates a body of tets ([mesh], with its [[material]]) or sheets alone ([[sheet]],
+    each with its own membrane material: a drape on a tool); [[body]] tables add to a [mesh]."""
+    if "mesh" in data:
+        if "material" not in data:
+            raise ctx.error("", "missing key 'material' (the [[material]] of the [mesh]'s tets)")
+        return
+    if "sheet" not in data:
+        raise ctx.error(
+            "", "missing key 'mesh': a scene needs a body of tets ([mesh]) or a sheet ([[sheet]])"
+        )
+    for key, what in (
+        ("body", "[[body]] tables add bodies to a [mesh]"),
+        ("material", "[[material]] gives the material of a [mesh]'s tets"),
+    ):
+        if key in data:
+            raise ctx.error(
+                key,
+                f"{what}; this scene has no [mesh] (give the first body as [mesh]; "
+                "a sheet's material is in its [[sheet]] table)",
+            )
 
 
 def _solver_settings(ctx: Ctx, solver: dict, scene: Scene) -> None:

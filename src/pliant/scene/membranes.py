@@ -8,6 +8,10 @@ boundary triangles whose three nodes are all selected (``nodes``; the whole boun
     thickness = 1e-4            # [m]
     density = 1100.0            # [kg/m^3]
     nodes = { box = [[-1, -1, 0.01], [1, 1, 1]] }
+    wrinkling = false           # true: carries no compression (tension-field theory)
+
+A membrane on a solid carries compression by default (the solid holds it flat, as NiftySim's do);
+a [[sheet]] apart from the tets wrinkles by default (pliant.scene.sheets).
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ def add_membranes(ctx: Ctx, tables: list, b: ModelBuilder, X, T, node_sets) -> N
     for i, m in enumerate(tables):
         p = f"membrane[{i}]"
         check_keys(ctx, m, p, MATERIAL_KEYS | {"nodes": "table"}, ("type", "thickness", "density"))
-        material = membrane_material(ctx, m, p, {"nodes"})
+        material = membrane_material(ctx, m, p, {"nodes"}, wrinkling=False)
         faces = (
             select_faces(ctx, m["nodes"], f"{p}.nodes", X, T, node_sets)
             if "nodes" in m
@@ -53,22 +57,25 @@ MATERIAL_KEYS = {
     "mu": "number",
     "thickness": "number",
     "density": "number",
+    "wrinkling": "bool",
 }
 
 
-def membrane_material(ctx: Ctx, m: dict, p: str, other: set[str]):
+def membrane_material(ctx: Ctx, m: dict, p: str, other: set[str], wrinkling: bool):
     """The membrane material of table ``m`` (``p``, its key; its keys checked): ``type`` and that
-    type's parameters, thickness [m] and density [kg/m³]; ``other``: the table's keys that are not
-    the material's."""
+    type's parameters, thickness [m], density [kg/m³] and ``wrinkling`` (default ``wrinkling``);
+    ``other``: the table's keys that are not the material's."""
     if m["type"] not in MEMBRANES:
         raise ctx.error(
             f"{p}.type", f"unknown membrane {m['type']!r}; expected one of {', '.join(MEMBRANES)}"
         )
     cls, params = MEMBRANES[m["type"]]
-    given = set(m) - {"type", "thickness", "density"} - other
+    given = set(m) - {"type", "thickness", "density", "wrinkling"} - other
     if given != set(params):
         raise ctx.error(
             p, f"{m['type']} takes ({', '.join(params)}); got ({', '.join(sorted(given)) or 'nothing'})"
         )
     with ctx.under(p):
-        return cls(*[m[k] for k in params], m["thickness"], m["density"])
+        return cls(
+            *[m[k] for k in params], m["thickness"], m["density"], wrinkling=m.get("wrinkling", wrinkling)
+        )

@@ -14,6 +14,12 @@ tissue, a free capsule), each a triangle surface or a rectangle with a membrane 
     mu = 2e4                    # [Pa]
     thickness = 1e-4            # [m]
     density = 1100.0            # [kg/m^3]
+    wrinkling = true            # default: it carries no compression (false: it does)
+
+A sheet has no bending stiffness: under compression a real one buckles into wrinkles at almost no
+load, so by default a sheet wrinkles (tension-field theory, docs/engine.md "Membranes"): it carries
+tension only, where a sheet that carries compression stiffens as it crumples until its step is
+unstable (a drape on a ball). A scene may be sheets alone (no [mesh]).
 
 Each sheet's nodes form the node set of its name, and those on its open edges "<name>.rim"
 (constraints: ``nodes = { set = "drape.rim" }``). With a [contact] table a sheet touches the other
@@ -69,7 +75,7 @@ def load_sheets(
         name = spec["name"]
         if not name or name in names:
             raise ctx.error(f"{p}.name", f"name {name!r}: expected a name no body or sheet has")
-        material = membrane_material(ctx, spec, p, set(_PLACE_KEYS))
+        material = membrane_material(ctx, spec, p, set(_PLACE_KEYS), wrinkling=True)
         V, F, source = _geometry(ctx, spec, p, base)
         V = placed(ctx, spec, p, V)
         first_node, first_membrane = b.n_nodes, b.n_membranes

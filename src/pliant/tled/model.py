@@ -436,7 +436,9 @@ class Model:
                 smoothing=strain_smoothing(builder.strain_smoothing),
                 mem_nodes=[int(v) for v in node_rank[mem_F].ravel()],
                 mem_kind=[int(m.kind) for m in mem_mat],
-                mem_params=[v for m in mem_mat for v in (m.thickness, m.density, *m.params)],
+                mem_params=[
+                    v for m in mem_mat for v in (m.thickness, m.density, *m.params, float(m.wrinkling))
+                ],
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on
@@ -474,20 +476,29 @@ class Model:
 
     def stable_step(self) -> float:
         """The mesh's own stable step 2/ω_max [s] about the reference state, β included (Lanczos on
-        M⁻¹K; a float32 model's forces are too noisy for it, so on a float64 copy; computed once)."""
+        M⁻¹K; a float32 model's forces are too noisy for it, so on a float64 copy; computed once).
+        Membranes that wrinkle count as taut: about the flat reference state a compressive
+        perturbation meets no stiffness, so differences there would halve the stiffness that a
+        stretched sheet has."""
         if self._stable_step is None:
             from ..cutting.stability import stable_step
 
-            exact = self if self.dtype == np.float64 else self.rebuilt("float64")
+            wrinkles = any(m.wrinkling for _, m in self._builder._membranes)
+            exact = self if self.dtype == np.float64 and not wrinkles else self.rebuilt("float64", taut=True)
             self._stable_step = stable_step(exact, exact.state())
         return self._stable_step
 
-    def rebuilt(self, dtype: str) -> "Model":
+    def rebuilt(self, dtype: str, taut: bool = False) -> "Model":
         """This model built again from its builder at ``dtype`` ("float32" or "float64"), on as many
-        threads (its warnings were given when it was first built)."""
+        threads (its warnings were given when it was first built); ``taut``: its membranes carry
+        compression (none wrinkles)."""
+        b = self._builder
+        if taut:
+            b = b.snapshot()
+            b._membranes = [(F, m.taut()) for F, m in b._membranes]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return self._builder.finalize(dtype, threads=self.threads)
+            return b.finalize(dtype, threads=self.threads)
 
     # --- numbering ----------------------------------------------------------------------------
     def to_user_nodes(self, a: np.ndarray) -> np.ndarray:

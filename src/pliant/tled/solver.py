@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _core
 from .._core import RunStatus
 from ..checks import as_real, finite_number, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
@@ -157,8 +158,9 @@ class Solver:
             raise InputError(f"check_every = {shown(check_every)}; expected >= 1")
         self.check_every = int(check_every)
         X = model.reference_positions
-        # Blow-up: any displacement beyond 100 × the body's size.
-        self.blowup = 100.0 * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+        # The body's size [m] (its bounding box's diagonal): a displacement beyond blow_up_sizes of
+        # it is a blow-up, a node moving more than it in one step a jump (the engine's check).
+        self.size = float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
         self._histories = [ToolHistory(t.name) for t in model.tools]
         self._pairs = [PairHistory(p) for p in model.contact_pairs]
         self._relaxed: list | None = None
@@ -263,6 +265,15 @@ class Solver:
         )
         return self._relaxed
 
+    def _jump_hint(self) -> str:
+        """For a jump: where membranes carry compression, that a sheet may need to wrinkle."""
+        if any(not m.wrinkling for _, m in self.model._builder._membranes):
+            return (
+                "; membranes that carry compression stiffen as they crumple: a free sheet should "
+                "wrinkle (wrinkling=True, the [[sheet]] default)"
+            )
+        return ""
+
     def _raise(self, rep: dict):
         m, t, v, status = self.model, rep["t"], rep["value"], rep["status"]
         if status == RunStatus.Inverted and not math.isfinite(v):
@@ -301,9 +312,19 @@ class Solver:
                 v,
                 node=node,
             )
+        if status == RunStatus.Jump:
+            raise InstabilityError(
+                f"unstable at t = {t:.6g} s: node {node} moved {abs(v):.3g} m in one step, more than "
+                f"the body's size ({self.size:.3g} m), the sawtooth of an unstable step; reduce dt "
+                f"(now {self.dt:.3g} s){self._jump_hint()}",
+                t,
+                "step displacement",
+                v,
+                node=node,
+            )
         raise InstabilityError(
-            f"unstable at t = {t:.6g} s: displacement {v:.3g} m at node {node} "
-            f"exceeds 100 x the body size (energy blow-up); dt = {self.dt:.3g} s",
+            f"unstable at t = {t:.6g} s: displacement {v:.3g} m at node {node} exceeds "
+            f"{_core.blow_up_sizes:g} x the body size (energy blow-up); dt = {self.dt:.3g} s",
             t,
             "displacement",
             v,
@@ -340,7 +361,7 @@ class Solver:
         if steps == 0:
             return RunInfo(0, state.time)
         t0 = state.time
-        rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every, self.blowup)
+        rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every, self.size)
         self._ran()
         self._relaxed = None
         self._record_tools(t0, int(rep["steps"]))
@@ -437,7 +458,7 @@ class Solver:
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
             rep = self._backend.relax(
-                state._s, float(t), self.dt, float(tol), int(max_steps), int(check_every), self.blowup
+                state._s, float(t), self.dt, float(tol), int(max_steps), int(check_every), self.size
             )
             self._ran()
             steps += int(rep["steps"])

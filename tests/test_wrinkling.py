@@ -1,0 +1,169 @@
+"""Membranes that wrinkle (``wrinkling=True``; cpp/include/pliant/membrane.hpp, membrane_wrinkle)
+against tension-field theory written here in Cartesian components (Roddeman et al. 1987; Pipkin's
+relaxed energy, 1986): a homogeneous in-plane deformation of a sheet, rotated in space, gives the
+material's stress where taut, none where slack, and uniaxial tension along the major principal
+direction where wrinkled, with the relaxed energy; the stable step counts the sheet as taut; a
+drape laid over a ball runs at the default step; and a step that is unstable on membranes alone
+is caught as a jump of a node."""
+
+import numpy as np
+import pytest
+
+import pliant as pl
+
+MATERIALS = {
+    "neo-hookean": lambda w: pl.NeoHookeanMembrane(mu=2e3, thickness=1e-3, density=1100.0, wrinkling=w),
+    "stvk": lambda w: pl.StVKMembrane(E=5e3, nu=0.35, thickness=2e-3, density=900.0, wrinkling=w),
+}
+
+# In-plane deformation gradients (x, y) and the state tension-field theory gives both materials.
+CASES = {
+    "simple shear": ([[1.0, 0.2], [0.0, 1.0]], "wrinkled"),
+    "stretched past its free width": ([[1.3, 0.0], [0.0, 0.8]], "wrinkled"),
+    "stretched, width held": ([[1.2, 0.0], [0.0, 1.0]], "taut"),
+    "stretched both ways, sheared": ([[1.1, 0.05], [0.0, 1.15]], "taut"),
+    "compressed both ways": ([[0.9, 0.0], [0.02, 0.95]], "slack"),
+}
+
+
+def _sheet(n=2):
+    """A 1 m square sheet in the plane z = 0, n × n squares of two triangles each."""
+    xs = np.linspace(0, 1, n + 1)
+    X = np.array([[x, y, 0.0] for x in xs for y in xs])
+    idx = lambda i, j: i * (n + 1) + j  # noqa: E731
+    F = [
+        t
+        for i in range(n)
+        for j in range(n)
+        for t in (
+            [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)],
+            [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)],
+        )
+    ]
+    return X, np.array(F)
+
+
+def _rotation():
+    """A rotation by 40° about the axis (1, 2, 3)/√14 (Rodrigues)."""
+    k = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    a = np.radians(40.0)
+    return np.eye(3) + np.sin(a) * K + (1 - np.cos(a)) * K @ K
+
+
+def _material(material, C):
+    """The material's own 2nd Piola–Kirchhoff resultant S h [N/m] (2 × 2) and energy per reference
+    area h W [J/m²] at C (2 × 2), compression carried: Neo-Hookean S = μ h (I − C⁻¹/det C),
+    W h = μ h/2 (tr C + 1/det C − 3); St Venant–Kirchhoff S = h (λ' tr E I + 2 μ E),
+    W h = h (λ'/2 tr² E + μ E:E)."""
+    h = material.thickness
+    if isinstance(material, pl.NeoHookeanMembrane):
+        mu, J2 = material.mu, np.linalg.det(C)
+        return mu * h * (np.eye(2) - np.linalg.inv(C) / J2), 0.5 * mu * h * (np.trace(C) + 1 / J2 - 3)
+    Y, nu = material.E, material.nu
+    lam, mu = Y * nu / (1 - nu**2), Y / (2 * (1 + nu))
+    E = 0.5 * (C - np.eye(2))
+    S = h * (lam * np.trace(E) * np.eye(2) + 2 * mu * E)
+    return S, h * (0.5 * lam * np.trace(E) ** 2 + mu * np.sum(E * E))
+
+
+def _tension_field(material, F2):
+    """Tension-field theory in Cartesian components for the in-plane gradient F2 (2 × 2): the state
+    ('taut', 'slack', 'wrinkled'), S h [N/m] (2 × 2) and h W [J/m²]. Slack where the major principal
+    Green strain e1 ≤ 0; taut where the material's smaller principal stress is ≥ 0; wrinkled
+    otherwise: uniaxial S1 along e1's direction at the free width (Neo-Hookean c2 = c1^(−1/2):
+    S1 = μ (1 − c1^(−3/2)), W = μ/2 (c1 + 2/√c1 − 3); St Venant–Kirchhoff by Poisson: S1 = E e1,
+    W = E e1²/2)."""
+    C = F2.T @ F2
+    e, N = np.linalg.eigh(0.5 * (C - np.eye(2)))  # ascending: e2, e1
+    e1, n1 = e[1], N[:, 1]
+    S, W = _material(material, C)
+    if e1 <= 0:
+        return "slack", np.zeros((2, 2)), 0.0
+    if np.linalg.eigvalsh(S)[0] >= 0:
+        return "taut", S, W
+    h, c1 = material.thickness, 1 + 2 * e1
+    if isinstance(material, pl.NeoHookeanMembrane):
+        s1, W = material.mu * h * (1 - c1**-1.5), 0.5 * material.mu * h * (c1 + 2 / np.sqrt(c1) - 3)
+    else:
+        s1, W = material.E * h * e1, 0.5 * material.E * h * e1**2
+    return "wrinkled", s1 * np.outer(n1, n1), W
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+@pytest.mark.parametrize("kind", sorted(MATERIALS))
+def test_a_homogeneous_deformation_meets_tension_field_theory(kind, case, backend):
+    """A sheet deformed by F2 in its plane and then rotated in space: each membrane's Cauchy
+    resultant t = R F S Fᵀ Rᵀ / det F and energy A0 h W are tension-field theory's (in the state the
+    case names) with wrinkling, and the material's own without (different wherever the sheet is not
+    taut). float64: round-off (1e-9 of the largest resultant)."""
+    F2, state = np.array(CASES[case][0]), CASES[case][1]
+    X, F = _sheet()
+    R = _rotation()
+    x = X.copy()
+    x[:, :2] = X[:, :2] @ F2.T
+    x = x @ R.T
+    got = {}
+    for wrinkling in (True, False):
+        material = MATERIALS[kind](wrinkling)
+        b = pl.ModelBuilder()
+        b.add_mesh(X, np.zeros((0, 4), int))
+        b.add_membrane(F, material)
+        m = b.finalize("float64", backend=backend)
+        s = m.state()
+        s.set_displacements(x - X)
+        r = got[wrinkling] = m.membrane_results(s)
+        if wrinkling:
+            theory, S, W = _tension_field(material, F2)
+            assert theory == state
+        else:
+            S, W = _material(material, F2.T @ F2)
+        t3 = np.zeros((3, 3))
+        t3[:2, :2] = F2 @ S @ F2.T / np.linalg.det(F2)
+        t = R @ t3 @ R.T
+        want = np.array([t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[1, 2], t[0, 2]])
+        scale = np.abs(_material(material, F2.T @ F2)[0]).max()
+        np.testing.assert_allclose(r["tension"], np.tile(want, (len(F), 1)), rtol=0, atol=1e-9 * scale)
+        np.testing.assert_allclose(r["energy"], W / len(F), rtol=1e-9, atol=1e-12 * scale)
+    differ = np.abs(got[True]["tension"] - got[False]["tension"]).max()
+    assert (differ > 1e-3 * np.abs(got[False]["tension"]).max()) == (state != "taut")
+
+
+def _free_sheet(wrinkling, n=8):
+    b = pl.ModelBuilder()
+    X, F = _sheet(n)
+    b.add_mesh(X, np.zeros((0, 4), int))
+    b.add_membrane(F, MATERIALS["neo-hookean"](wrinkling))
+    return b, X
+
+
+def test_the_stable_step_counts_a_wrinkling_sheet_as_taut():
+    """About the flat reference state a compressive perturbation of a wrinkling sheet meets no
+    stiffness; the stable step is the taut sheet's all the same (the stiffness a stretched sheet
+    has), and so is the default step."""
+    models = [_free_sheet(w)[0].finalize("float64") for w in (True, False)]
+    assert models[0].stable_step() == models[1].stable_step()
+    assert pl.Solver(models[0]).dt == pl.Solver(models[1]).dt
+
+
+@pytest.mark.parametrize("wrinkling", [True, False])
+def test_an_unstable_step_on_membranes_alone_is_caught_as_a_jump(wrinkling, backend):
+    """Membranes have no J to go negative: a sheet stepped at 3 × its stable step (allowed), from a
+    bump of 1 µm, beats in a growing sawtooth that is stopped when a node moves more than the
+    sheet's size (its diagonal, √2 m) in one step, long before any displacement reaches 100 sizes,
+    naming the node and the step; where the sheet carries compression the message says that it
+    might wrinkle."""
+    b, X = _free_sheet(wrinkling)
+    m = b.finalize("float64", backend=backend)
+    sim = pl.Simulation(m, dt=3 * m.stable_step(), allow_unstable=True, check_every=1)
+    u = np.zeros_like(X)
+    u[:, 2] = 1e-6 * np.sin(7 * X[:, 0]) * np.cos(5 * X[:, 1])
+    u[:, 0] = 1e-6 * np.cos(3 * X[:, 1])
+    sim.state.set_displacements(u)
+    with pytest.raises(pl.InstabilityError) as err:
+        sim.run(until=100 * sim.dt)
+    e = err.value
+    assert e.quantity == "step displacement" and abs(e.value) > np.sqrt(2) and e.node is not None
+    assert f"node {e.node} moved" in str(e) and "in one step" in str(e)
+    assert np.abs(sim.displacements).max() < 100 * np.sqrt(2)
+    assert ("wrinkling=True" in str(e)) == (not wrinkling)
