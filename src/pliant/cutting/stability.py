@@ -22,11 +22,22 @@ __all__ = ["highest_frequency", "stable_step"]
 DENSE_DOFS = 60
 
 
+def taut(model):
+    """The model itself, or where its membranes wrinkle the same model with none wrinkling: a
+    wrinkling membrane's stiffness never exceeds the taut one's, and about a flat or compressed
+    state its compressive perturbations meet none, so differences there would underestimate the
+    stiffness it has once stretched (docs/engine.md, "Wrinkling")."""
+    if any(m.wrinkling for _, m in model._builder._membranes):
+        return model.rebuilt(np.dtype(model.dtype).name, taut=True)
+    return model
+
+
 def highest_frequency(model, state, rel_tol: float = 1e-3) -> float:
-    """ω_max [rad/s] of the linearized model about ``state`` (free DOFs; lumped masses); 0 with no
-    free DOF, NaN where the forces are not finite."""
+    """ω_max [rad/s] of the linearized model about ``state`` (free DOFs; lumped masses), its
+    membranes taut (``taut``); 0 with no free DOF, NaN where the forces are not finite."""
     from scipy.sparse.linalg import LinearOperator, eigsh
 
+    model = taut(model)
     free = ~model.constrained.ravel()
     m = np.repeat(model.mass, 3)[free]
     if not np.all(m > 0):

@@ -483,6 +483,7 @@ class Model:
         if self._stable_step is None:
             from ..cutting.stability import stable_step
 
+            # (taut: stability.taut, built once here rather than again by stable_step)
             wrinkles = any(m.wrinkling for _, m in self._builder._membranes)
             exact = self if self.dtype == np.float64 and not wrinkles else self.rebuilt("float64", taut=True)
             self._stable_step = stable_step(exact, exact.state())
