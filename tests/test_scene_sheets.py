@@ -342,6 +342,7 @@ def test_a_scene_of_a_sheet_alone_hangs_from_its_rim(tmp_path):
     "text, key, words",
     [
         ('title = "nothing"\n', "", "a body of tets ([mesh]) or a sheet ([[sheet]])"),
+        ("sheet = []\n", "", "a body of tets ([mesh]) or a sheet ([[sheet]])"),
         (
             DRUM + '[[material]]\ntype = "neo-hookean"\nE = 1e3\nnu = 0.3\ndensity = 1e3\n',
             "material",

@@ -146,7 +146,7 @@ def _check_bodies_given(ctx: Ctx, data: dict) -> None:
         if "material" not in data:
             raise ctx.error("", "missing key 'material' (the [[material]] of the [mesh]'s tets)")
         return
-    if "sheet" not in data:
+    if not data.get("sheet"):  # (no sheets in an empty list either)
         raise ctx.error(
             "", "missing key 'mesh': a scene needs a body of tets ([mesh]) or a sheet ([[sheet]])"
         )
