@@ -438,11 +438,16 @@ def _add_load(ctx: Ctx, b: ModelBuilder, ld: dict, p: str, X, T, scene: Scene) -
                 f"a '{ld['type']}' load needs '{key}' {unit} and 'nodes' (the boundary "
                 "triangles whose three nodes are all selected)",
             )
-        faces = select_faces(ctx, ld["nodes"], f"{p}.nodes", X, T, scene.node_sets)
-        if ld["type"] == "pressure":
-            b.add_pressure(faces, float(ld["value"]), curve)
-        else:
-            b.add_traction(faces, vector(ctx, ld["traction"], f"{p}.traction"), curve)
+        # The tets' boundary triangles and the sheets' (membranes apart from the tets, as wound).
+        sheets = b.membrane_faces()[b.free_membranes()]
+        faces, on_sheets = select_faces(ctx, ld["nodes"], f"{p}.nodes", X, T, scene.node_sets, sheets)
+        for F, solid in ((faces, True), (on_sheets, False)):
+            if not len(F):
+                continue
+            if ld["type"] == "pressure":  # a solid's faces point out of it; a sheet's as wound
+                b.add_pressure(F, float(ld["value"]), curve, orient=solid)
+            else:
+                b.add_traction(F, vector(ctx, ld["traction"], f"{p}.traction"), curve)
     else:
         raise ctx.error(
             f"{p}.type",

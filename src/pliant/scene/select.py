@@ -136,18 +136,25 @@ def select_elements(
 
 
 def select_faces(
-    ctx: Ctx, spec, path: str, nodes: np.ndarray, tets: np.ndarray, sets: dict[str, np.ndarray] | None = None
-) -> np.ndarray:
+    ctx: Ctx,
+    spec,
+    path: str,
+    nodes: np.ndarray,
+    tets: np.ndarray,
+    sets: dict[str, np.ndarray] | None = None,
+    sheets: np.ndarray | None = None,
+):
     """The boundary triangles (F, 3) whose three nodes ``spec`` selects (select_nodes); none is an
-    error naming the key (pressure and traction loads, membranes)."""
+    error naming the key (pressure and traction loads, membranes). With ``sheets`` (K, 3), the
+    triangles of the sheets apart from the tets: also those of them it selects, returned second."""
     ids = select_nodes(ctx, spec, path, nodes, tets, sets)
     B, _ = boundary_faces(tets)
     faces = B[np.all(np.isin(B, ids), axis=1)]
-    if len(faces) == 0:
-        raise ctx.error(
-            path, f"the {ids.size} selected nodes hold no whole boundary triangle: select a surface patch"
-        )
-    return faces
+    on_sheets = np.zeros((0, 3), np.int64) if sheets is None else sheets[np.all(np.isin(sheets, ids), axis=1)]
+    if len(faces) + len(on_sheets) == 0:
+        where = "boundary or sheet triangle" if sheets is not None and len(sheets) else "boundary triangle"
+        raise ctx.error(path, f"the {ids.size} selected nodes hold no whole {where}: select a surface patch")
+    return faces if sheets is None else (faces, on_sheets)
 
 
 def closest_node(X: np.ndarray, point) -> tuple[int, float]:
