@@ -180,3 +180,88 @@ def test_a_sheet_through_a_solid_at_the_start_is_refused_by_name():
     centre = len(X) + int(np.argmin(np.linalg.norm(S, axis=1)))
     with pytest.raises(pl.InputError, match=f"node {centre} of body 1 starts 0.005 m inside body 0, deeper"):
         b.finalize("float64")
+
+
+def test_a_sheet_meets_a_rigid_tool_with_its_face(backend):
+    """A sheet of membranes alone (h = 2 mm) dropped onto a rigid table rests with its nodes, its
+    mid-surface, h/2 above it (its face on the table, as in soft contact: to 1e-9 m, the kinematic
+    contact's round-off in float64), the table carrying its weight (1e-6); a block wrapped in a
+    capsule of the same membranes rests on its own nodes (a membrane on a solid's surface has the
+    solid's face: no offset)."""
+    h = 2e-3
+    mat = pl.NeoHookeanMembrane(mu=1e4, thickness=h, density=1000.0)
+    xs = np.linspace(-0.05, 0.05, 6)
+    X = np.array([[x, y, 0.01] for x in xs for y in xs])
+    idx = lambda i, j: i * 6 + j  # noqa: E731
+    F = np.array(
+        [
+            t
+            for i in range(5)
+            for j in range(5)
+            for t in (
+                [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)],
+                [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)],
+            )
+        ]
+    )
+    b = pl.ModelBuilder()
+    b.add_mesh(X, np.zeros((0, 4), int))
+    b.add_membrane(F, mat)
+    b.add_tool(pl.contact.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
+    b.set_gravity((0, 0, -9.81))
+    b.damping = 40.0
+    m = b.finalize("float64", backend=backend)
+    sim = pl.Simulation(m)
+    sim.run(until=0.5)
+    np.testing.assert_allclose(sim.state.positions[:, 2], h / 2, atol=1e-9)
+    weight = 1000.0 * h * 0.1 * 0.1 * 9.81
+    np.testing.assert_allclose(-sim.tool_force(0)[0][2], weight, rtol=1e-6)
+    from pliant.mesh import grid_tets
+    from pliant.mesh.topology import boundary_faces
+
+    Xb, Tb = grid_tets(np.linspace(-0.01, 0.01, 3), np.linspace(-0.01, 0.01, 3), np.linspace(0.001, 0.021, 3))
+    b = pl.ModelBuilder()
+    b.add_mesh(Xb, Tb)
+    b.set_material(pl.NeoHookean(E=1e4, nu=0.3), density=1000.0)
+    b.add_membrane(boundary_faces(Tb)[0], mat)
+    b.add_tool(pl.contact.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
+    b.set_gravity((0, 0, -9.81))
+    b.damping = 40.0
+    sim = pl.Simulation(b.finalize("float64", backend=backend))
+    sim.run(until=0.5)
+    assert abs(sim.state.positions[:, 2].min()) < 1e-9
+
+
+def test_a_grasp_reaches_a_sheet_by_its_face(backend):
+    """Jaws (a sphere of radius 1 cm) closing 1.6 mm above a sheet's mid-surface with a reach of
+    1 mm: a sheet 2 mm thick has its face 0.6 mm from them, so its nodes under them are held (the
+    reach counts from its face), and lifted with them; a sheet 1 mm thick, its face 1.1 mm away,
+    is not held."""
+    held = {}
+    for h in (2e-3, 1e-3):
+        xs = np.linspace(-0.02, 0.02, 9)
+        X = np.array([[x, y, 0.0] for x in xs for y in xs])
+        idx = lambda i, j: i * 9 + j  # noqa: E731
+        F = np.array(
+            [
+                t
+                for i in range(8)
+                for j in range(8)
+                for t in (
+                    [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)],
+                    [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)],
+                )
+            ]
+        )
+        b = pl.ModelBuilder()
+        b.add_mesh(X, np.zeros((0, 4), int))
+        b.add_membrane(F, pl.NeoHookeanMembrane(mu=1e4, thickness=h, density=1000.0))
+        jaws = pl.contact.Sphere(radius=0.01).at(0.0, (0, 0, 0.0116)).at(0.2, (0, 0, 0.0216))
+        b.add_tool(jaws.grasp(0.0, reach=1e-3))
+        b.damping = 20.0
+        sim = pl.Simulation(b.finalize("float64", backend=backend))
+        sim.run(until=0.2)
+        held[h] = sorted(sim.state.held)
+        if held[h]:
+            assert sim.state.positions[held[h], 2].min() > 0.009  # lifted 1 cm with the jaws
+    assert held[2e-3] == [idx(4, 4)] and held[1e-3] == []

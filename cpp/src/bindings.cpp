@@ -220,7 +220,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
                std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads,
                std::vector<index_t> mem_nodes, std::vector<int> mem_kind, std::vector<double> mem_params,
-               std::vector<double> soft_sheet_h) {
+               std::vector<double> contact_skin, std::vector<double> soft_sheet_h) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -246,6 +246,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.gravity_curve = gravity_curve;
                 in.contact_nodes = std::move(contact_nodes);
                 in.contact_masks = std::move(contact_masks);
+                in.contact_skin = std::move(contact_skin);
                 in.press_nodes = std::move(press_nodes);
                 in.press_value = std::move(press_value);
                 in.press_curve = std::move(press_curve);
@@ -298,7 +299,7 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "tool_reach"_a, "soft_nodes"_a, "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a,
             "soft_mu"_a, "soft_skin"_a, "smoothing"_a, "threads"_a, "mem_nodes"_a = std::vector<index_t>{},
             "mem_kind"_a = std::vector<int>{}, "mem_params"_a = std::vector<double>{},
-            "soft_sheet_h"_a = std::vector<double>{})
+            "contact_skin"_a = std::vector<double>{}, "soft_sheet_h"_a = std::vector<double>{})
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })

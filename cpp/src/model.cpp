@@ -406,6 +406,13 @@ template <class T>
 void Model<T>::build_contact_and_tables(const ModelInput& in) {
     X.assign(in.X, in.X + 3 * static_cast<std::size_t>(n_nodes));
     contact_nodes = in.contact_nodes;
+    contact_skin = in.contact_skin.empty() ? std::vector<double>(contact_nodes.size(), 0.0) : in.contact_skin;
+    if (contact_skin.size() != contact_nodes.size())
+        throw std::invalid_argument("contact_skin: expected one value per contact node");
+    for (const double s : contact_skin)
+        if (!(s >= 0.0 && std::isfinite(s)))
+            throw std::invalid_argument("contact_skin: expected finite values >= 0 [m]");
+    if (contact_skin.empty()) contact_skin.push_back(0.0);  // (an address for the device copy)
     contact_bits.assign(contact_nodes.size(), 0);
     for (std::size_t i = 0; i < contact_nodes.size(); ++i) {
         contact_bits[i] = node_bits(in.contact_masks.empty() ? ~index_t(0) : in.contact_masks[i]);

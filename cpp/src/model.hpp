@@ -50,6 +50,8 @@ struct ModelInput {
     std::vector<index_t> contact_nodes;  // surface nodes that take part in contact
     std::vector<index_t> contact_masks;  // per contact node: bit k set if tool k (< kMaskedTools)
                                          // may touch it
+    std::vector<double> contact_skin;    // per contact node: [m] kept from the tools' surfaces (a
+                                         // sheet's half thickness); empty: 0
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys;       // 8 per keyframe: t, position (3), quaternion (4)
     std::vector<double> tool_grid;       // signed-distance grids [m]
@@ -126,6 +128,7 @@ struct Model {
     std::vector<double> X;  // reference positions [m], AoS (N, 3)
     std::vector<index_t> contact_nodes;
     std::vector<index_t> contact_bits;  // per contact node: bits 0–2 free DOFs, bit 3 + k tool k
+    std::vector<double> contact_skin;   // per contact node: [m] kept from the tools' surfaces
     std::vector<RigidTool> tools;
     std::vector<double> tool_keys, tool_grid, tool_grips;
     // Soft contact (ModelInput's, plus each surface node's free-DOF bits, each triangle's mean

@@ -235,16 +235,17 @@ PLIANT_HD double tool_sdf(const RigidTool& tl, const double y[3], const double* 
     }
 }
 
-/// The contact part of contact_node: x1 (the node at t + Δt) moved out of every tool it
-/// penetrates, with friction against the tool's motion from x0; tool_out[i]: the last tool touched.
+/// The contact part of contact_node: x1 (the node at t + Δt) moved out of every tool it comes
+/// nearer than skin [m] to (a sheet's half thickness: its face meets the tool, not its mid-surface),
+/// with friction against the tool's motion from x0; tool_out[i]: the last tool touched.
 PLIANT_HD void contact_tools(index_t i, const index_t* node_bits, const RigidTool* tools, int n_tools,
-                             const Pose* pose0, const Pose* pose1, const double* grid, const double x0[3],
-                             double x1[3], index_t* tool_out) {
+                             const Pose* pose0, const Pose* pose1, const double* grid, double skin,
+                             const double x0[3], double x1[3], index_t* tool_out) {
     for (int k = 0; k < n_tools; ++k) {
         if (k < kMaskedTools && !((node_bits[i] >> (3 + k)) & 1)) continue;
         double y[3], nt[3], nw[3];
         to_tool(pose1[k], x1, y);
-        const double phi = tool_sdf(tools[k], y, grid, nt);
+        const double phi = tool_sdf(tools[k], y, grid, nt) - skin;
         if (!(phi < 0.0)) continue;
         rotate(pose1[k], nt, nw);
         double dn = -phi;
@@ -273,17 +274,17 @@ PLIANT_HD void contact_tools(index_t i, const index_t* node_bits, const RigidToo
 }
 
 /// Grasp of contact node i by a tool closing during this step: the first such tool (allowed on
-/// the node) whose surface is within its reach of x⁺ [m] holds it from now on at its tool-frame
-/// position (grip_tool, grip_at). Returns the tool, or −1.
+/// the node) whose surface is within its reach (plus the node's skin [m]) of x⁺ [m] holds it from
+/// now on at its tool-frame position (grip_tool, grip_at). Returns the tool, or −1.
 PLIANT_HD index_t try_grasp(index_t i, const index_t* node_bits, const RigidTool* tools, int n_tools,
-                            const Pose* pose1, const index_t* closed, const double* grid, const double x1[3],
-                            index_t* grip_tool, double* grip_at) {
+                            const Pose* pose1, const index_t* closed, const double* grid, double skin,
+                            const double x1[3], index_t* grip_tool, double* grip_at) {
     for (int k = 0; k < n_tools; ++k) {
         if (closed[k] != kGripClosedAfter) continue;
         if (k < kMaskedTools && !((node_bits[i] >> (3 + k)) & 1)) continue;
         double y[3], nt[3];
         to_tool(pose1[k], x1, y);
-        if (!(tool_sdf(tools[k], y, grid, nt) <= tools[k].reach)) continue;
+        if (!(tool_sdf(tools[k], y, grid, nt) <= tools[k].reach + skin)) continue;
         grip_tool[i] = k;
         for (int d = 0; d < 3; ++d) grip_at[3 * i + d] = y[d];
         return k;
@@ -292,7 +293,8 @@ PLIANT_HD index_t try_grasp(index_t i, const index_t* node_bits, const RigidTool
 }
 
 /// Contact kernel, one surface node per lane: for each tool in turn, a node x⁺ = X + u⁺ with
-/// φ(x⁺) < 0 is moved out along the normal by δ_n = −φ n, then friction acts on its tangential
+/// φ(x⁺) < s (its skin: 0, or a sheet's half thickness) is moved out along the normal by
+/// δ_n = (s − φ) n, then friction acts on its tangential
 /// motion relative to the tool over the step, d_t: stick (remove d_t) if |d_t| ≤ μs|δ_n|, else slip
 /// (remove μk|δ_n| along d_t). The force it took, m (x_corrected − x⁺)/γ1 [N], is stored per node
 /// in force_out (3) with the tool index in tool_out (−1: no contact; force_out then untouched).
@@ -302,18 +304,18 @@ PLIANT_HD index_t try_grasp(index_t i, const index_t* node_bits, const RigidTool
 /// Grasping: a node held by a closed tool (grip_tool[i] = k) moves with it, at its tool-frame
 /// position grip_at (3 per contact node), and the force that takes is the grasp force; a tool
 /// that opens lets its nodes go; a tool that closes during the step grasps (try_grasp).
-/// Inputs: contact node i → node nodes[i], its bits, reference X [m] (3 per node, AoS,
-/// double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t and t + Δt and their
-/// grip bits (closed), du⁺ the step's increment [m] SoA. Outputs: u⁺ corrected and du⁺ plus the
-/// correction where corrected (the next step's velocity, node_update; added in double rather than
+/// Inputs: contact node i → node nodes[i], its bits and skin [m] (a sheet's half thickness: contact_tools),
+/// reference X [m] (3 per node, AoS, double), mass [kg], u and u⁺ [m] SoA (3, P), tools with their poses at t
+/// and t + Δt and their grip bits (closed), du⁺ the step's increment [m] SoA. Outputs: u⁺ corrected and du⁺
+/// plus the correction where corrected (the next step's velocity, node_update; added in double rather than
 /// taken as u⁺ − u, which would round the increment again), force_out, tool_out; grip_tool,
 /// grip_at updated.
 template <class T>
-PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits, const double* X,
-                            const T* mass, const T* u, index_t P, const RigidTool* tools, int n_tools,
-                            const Pose* pose0, const Pose* pose1, const index_t* closed, const double* grid,
-                            double g1, T* u_next, T* du_next, double* force_out, index_t* tool_out,
-                            index_t* grip_tool, double* grip_at) {
+PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node_bits, const double* skin,
+                            const double* X, const T* mass, const T* u, index_t P, const RigidTool* tools,
+                            int n_tools, const Pose* pose0, const Pose* pose1, const index_t* closed,
+                            const double* grid, double g1, T* u_next, T* du_next, double* force_out,
+                            index_t* tool_out, index_t* grip_tool, double* grip_at) {
     const index_t n = nodes[i];
     double x0[3], x1[3], xs[3];
     for (int d = 0; d < 3; ++d) {
@@ -328,9 +330,9 @@ PLIANT_HD void contact_node(index_t i, const index_t* nodes, const index_t* node
         tool_out[i] = held;
     } else {
         if (held >= 0) grip_tool[i] = -1;  // the tool opened: released
-        contact_tools(i, node_bits, tools, n_tools, pose0, pose1, grid, x0, x1, tool_out);
+        contact_tools(i, node_bits, tools, n_tools, pose0, pose1, grid, skin[i], x0, x1, tool_out);
         const index_t g =
-            try_grasp(i, node_bits, tools, n_tools, pose1, closed, grid, x1, grip_tool, grip_at);
+            try_grasp(i, node_bits, tools, n_tools, pose1, closed, grid, skin[i], x1, grip_tool, grip_at);
         if (g >= 0 && tool_out[i] < 0) tool_out[i] = g;
     }
     if (tool_out[i] < 0) return;  // force_out is only meaningful where tool_out >= 0

@@ -76,7 +76,7 @@ struct ModelBuffers {
     DeviceBuffer<T, Dev> edge_w, elem_grad, elem_vol, mass, inv_mass, relax_mass, relax_inv_mass, free_mask,
         patterns, cval, pedges, pvalue, ptraction, node_vol;
     DeviceBuffer<LoadCurve, Dev> curves;
-    DeviceBuffer<double, Dev> tt, tv, X, grid, stri_h, ssheet_h;
+    DeviceBuffer<double, Dev> tt, tv, X, grid, stri_h, ssheet_h, cskin;
 
     ModelBuffers() = default;
     ModelBuffers(Dev& d, const Model<T>& m) {
@@ -88,7 +88,8 @@ struct ModelBuffers {
         inc_idx = I(m.inc_index), inc_slot = I(m.inc_slot), pcurve = I(m.pattern_curve),
         co = I(m.cons_offsets);
         cdof = I(m.cons_dof), ccurve = I(m.cons_curve), cnodes = I(m.contact_nodes);
-        cbits = I(m.contact_bits), pf_off = I(m.pface_offsets), pf_idx = I(m.pface_index);
+        cbits = I(m.contact_bits), cskin = D(m.contact_skin), pf_off = I(m.pface_offsets),
+        pf_idx = I(m.pface_index);
         pnodes = I(m.press_nodes), pslot = I(m.press_slot);
         elem_grad = R(m.elem_grad), elem_vol = R(m.elem_vol), mass = R(m.mass), inv_mass = R(m.inv_mass);
         relax_mass = R(m.relax_mass), relax_inv_mass = R(m.relax_inv_mass), free_mask = R(m.free_mask);

@@ -86,6 +86,7 @@ struct DeviceView {
     const index_t *co, *cdof, *ccurve, *pattern_curve, *cnodes, *cbits;
     const LoadCurve* curves;
     const double *tt, *tv, *X, *grid;
+    const double* cskin;  // per contact node: [m] kept from the tools' surfaces (Model::contact_skin)
     const RigidTool* tools;
     const double *keys, *grips;  // keyframes, grasping tools' close/open times
     T *u[3], *du[3], *q, *f_elem, *J, *elem_p, *node_p, *f_node[2], *cnext, *pf;

@@ -173,6 +173,7 @@ void Engine<T, Dev>::refresh_view() {
     v.node_volume = mb_.node_vol.data(), v.cval = mb_.cval.data(), v.inc_slot = mb_.inc_slot.data();
     v.co = mb_.co.data(), v.cdof = mb_.cdof.data(), v.ccurve = mb_.ccurve.data();
     v.pattern_curve = mb_.pcurve.data(), v.cnodes = mb_.cnodes.data(), v.cbits = mb_.cbits.data();
+    v.cskin = mb_.cskin.data();
     v.curves = mb_.curves.data(), v.tt = mb_.tt.data(), v.tv = mb_.tv.data(), v.X = mb_.X.data();
     v.grid = mb_.grid.data(), v.tools = d_tools_.data(), v.keys = d_keys_.data(), v.grips = d_grips_.data();
     for (int k = 0; k < 3; ++k) v.u[k] = u_[k].data(), v.du[k] = du_[k].data();

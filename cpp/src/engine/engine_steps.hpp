@@ -336,8 +336,8 @@ void Engine<T, Dev>::contact_pass(const Phase& ph, bool relaxing) {
     T* un = v.u[ph.next];
     T* dun = v.du[ph.next];
     dev_.each(v.n_contact, [=] PLIANT_KERNEL(index_t i) {
-        contact_node(i, v.cnodes, v.cbits, v.X, mass, uc, v.P, v.tools, v.n_tools, v.pose0, v.pose1, v.closed,
-                     v.grid, double(v.sc->it.g1), un, dun, v.cforce, v.ctool, v.gtool, v.gat);
+        contact_node(i, v.cnodes, v.cbits, v.cskin, v.X, mass, uc, v.P, v.tools, v.n_tools, v.pose0, v.pose1,
+                     v.closed, v.grid, double(v.sc->it.g1), un, dun, v.cforce, v.ctool, v.gtool, v.gat);
     });
     dev_.each(v.chunks, [=] PLIANT_KERNEL(index_t c) {
         const int w = 6 * v.n_tools;

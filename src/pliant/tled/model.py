@@ -357,6 +357,12 @@ class Model:
             cn, masks = np.zeros(0, np.int64), np.zeros(0, np.int64)
         self.contact_nodes = cn
         cn_order = np.argsort(node_rank[cn], kind="stable")
+        # A sheet apart from the tets meets a tool with its face, half its thickness from its nodes.
+        skin = np.zeros(X.shape[0])
+        if len(mem_F) and len(cn):
+            apart = sheets_apart(mem_F, T, X.shape[0])[0]
+            half = np.array([mem_mat[k].thickness for k in apart]) / 2
+            np.maximum.at(skin, mem_F[apart].ravel(), np.repeat(half, 3))
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
         soft = dict(no_surface(), pairs=[], labels=None)
@@ -414,6 +420,7 @@ class Model:
                 gravity_curve=gcurve,
                 # engine order: sequential access
                 contact_nodes=[int(node_rank[n]) for n in cn[cn_order]],
+                contact_skin=skin[cn[cn_order]].tolist(),
                 contact_masks=[int(m) for m in masks[cn_order]],
                 tool_kind=[int(t.kind) for t in self.tools],
                 tool_params=[p for t in self.tools for p in t.params()],
