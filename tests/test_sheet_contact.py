@@ -182,6 +182,18 @@ def test_a_sheet_through_a_solid_at_the_start_is_refused_by_name():
         b.finalize("float64")
 
 
+def _sheet_alone(size, cells, material, z=0.0):
+    """A builder with a square sheet of membranes alone, size [m] a side, cells × cells squares
+    (pliant.scene.sheets.rectangle), centred over the origin at height z [m]."""
+    from pliant.scene.sheets import rectangle
+
+    V, F = rectangle(size, size, cells, cells)
+    b = pl.ModelBuilder()
+    b.add_mesh(V + [0.0, 0.0, z], np.zeros((0, 4), int))
+    b.add_membrane(F, material)
+    return b
+
+
 def test_a_sheet_meets_a_rigid_tool_with_its_face(backend):
     """A sheet of membranes alone (h = 2 mm) dropped onto a rigid table rests with its nodes, its
     mid-surface, h/2 above it (its face on the table, as in soft contact: to 1e-9 m, the kinematic
@@ -190,23 +202,7 @@ def test_a_sheet_meets_a_rigid_tool_with_its_face(backend):
     solid's face: no offset)."""
     h = 2e-3
     mat = pl.NeoHookeanMembrane(mu=1e4, thickness=h, density=1000.0)
-    xs = np.linspace(-0.05, 0.05, 6)
-    X = np.array([[x, y, 0.01] for x in xs for y in xs])
-    idx = lambda i, j: i * 6 + j  # noqa: E731
-    F = np.array(
-        [
-            t
-            for i in range(5)
-            for j in range(5)
-            for t in (
-                [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)],
-                [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)],
-            )
-        ]
-    )
-    b = pl.ModelBuilder()
-    b.add_mesh(X, np.zeros((0, 4), int))
-    b.add_membrane(F, mat)
+    b = _sheet_alone(0.1, 5, mat, z=0.01)
     b.add_tool(pl.contact.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
     b.set_gravity((0, 0, -9.81))
     b.damping = 40.0
@@ -239,23 +235,7 @@ def test_a_grasp_reaches_a_sheet_by_its_face(backend):
     is not held."""
     held = {}
     for h in (2e-3, 1e-3):
-        xs = np.linspace(-0.02, 0.02, 9)
-        X = np.array([[x, y, 0.0] for x in xs for y in xs])
-        idx = lambda i, j: i * 9 + j  # noqa: E731
-        F = np.array(
-            [
-                t
-                for i in range(8)
-                for j in range(8)
-                for t in (
-                    [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)],
-                    [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)],
-                )
-            ]
-        )
-        b = pl.ModelBuilder()
-        b.add_mesh(X, np.zeros((0, 4), int))
-        b.add_membrane(F, pl.NeoHookeanMembrane(mu=1e4, thickness=h, density=1000.0))
+        b = _sheet_alone(0.04, 8, pl.NeoHookeanMembrane(mu=1e4, thickness=h, density=1000.0))
         jaws = pl.contact.Sphere(radius=0.01).at(0.0, (0, 0, 0.0116)).at(0.2, (0, 0, 0.0216))
         b.add_tool(jaws.grasp(0.0, reach=1e-3))
         b.damping = 20.0
@@ -264,4 +244,4 @@ def test_a_grasp_reaches_a_sheet_by_its_face(backend):
         held[h] = sorted(sim.state.held)
         if held[h]:
             assert sim.state.positions[held[h], 2].min() > 0.009  # lifted 1 cm with the jaws
-    assert held[2e-3] == [idx(4, 4)] and held[1e-3] == []
+    assert held[2e-3] == [40] and held[1e-3] == []  # the centre node of 9 × 9
