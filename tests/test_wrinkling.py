@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 import pliant as pl
-from pliant.scene.sheets import rectangle
 
 MATERIALS = {
     "neo-hookean": lambda w: pl.NeoHookeanMembrane(mu=2e3, thickness=1e-3, density=1100.0, wrinkling=w),
@@ -29,7 +28,19 @@ CASES = {
 
 def _sheet(n=2):
     """A 1 m square sheet in the plane z = 0, n × n squares of two triangles each."""
-    return rectangle(1.0, 1.0, n, n)
+    xs = np.linspace(0, 1, n + 1)
+    X = np.array([[x, y, 0.0] for x in xs for y in xs])
+    idx = lambda i, j: i * (n + 1) + j  # noqa: E731
+    F = [
+        t
+        for i in range(n)
+        for j in range(n)
+        for t in (
+            [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)],
+            [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)],
+        )
+    ]
+    return X, np.array(F)
 
 
 def _rotation():
