@@ -17,7 +17,7 @@ tissue, a free capsule), each a triangle surface or a rectangle with a membrane 
     wrinkling = true            # default: it carries no compression (false: it does)
 
 A sheet has no bending stiffness: under compression a real one buckles into wrinkles at almost no
-load, so by default a sheet wrinkles (tension-field theory, docs/engine.md "Membranes"): it carries
+load, so by default a sheet wrinkles (tension-field theory, docs/engine.md "Wrinkling"): it carries
 tension only, where a sheet that carries compression stiffens as it crumples until its step is
 unstable (a drape on a ball). A scene may be sheets alone (no [mesh]).
 
