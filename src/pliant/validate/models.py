@@ -461,3 +461,46 @@ def membrane_sheet(kind: str, stretch: float, n: int = 6) -> tuple[float, float]
     side = X[:, 1] == 1
     width = 1.0 + float(sim.displacements[side, 1].mean())
     return width, float(model.internal_forces(sim.state)[right, 0].sum())
+
+
+def membrane_balloon(kind: str, pressure: float, subdivisions: int = 3) -> float:
+    """A spherical balloon of membranes alone (an icosphere of radius 5 cm, its triangles wound
+    outward; 642 nodes at 3 subdivisions), h = 1 mm, "neo-hookean" (μ = 10 kPa) or
+    "st-venant-kirchhoff" (E = 30 kPa, ν = 0.3), inflated by an internal pressure [Pa] (a follower
+    pressure against its outward normals) and relaxed. Returns its mean radius [m]."""
+    import trimesh
+
+    from .. import NeoHookeanMembrane, StVKMembrane
+
+    ball = trimesh.creation.icosphere(subdivisions=subdivisions, radius=0.05)
+    F = np.asarray(ball.faces, np.int64)
+    material = (
+        NeoHookeanMembrane(1e4, 1e-3, 1e3) if kind == "neo-hookean" else StVKMembrane(3e4, 0.3, 1e-3, 1e3)
+    )
+    b = ModelBuilder()
+    b.add_mesh(np.asarray(ball.vertices), np.zeros((0, 4), np.int64), source=f"membrane balloon ({kind})")
+    b.add_membrane(F, material)
+    b.add_pressure(F, -pressure, orient=False)
+    sim = Simulation(b.finalize("float64"))
+    sim.relax(tol=1e-9, increments=4)
+    x = sim.state.positions
+    return float(np.linalg.norm(x - x.mean(axis=0), axis=1).mean())
+
+
+def wrinkled_shear(gamma: float) -> float:
+    """A sheet of membranes alone that wrinkles (plane-stress St Venant–Kirchhoff, E = 3 kPa,
+    ν = 0.3, h = 1 mm) in simple shear x += γ y: the Cauchy shear resultant t_xy [N/m] of its
+    membranes (their mean; homogeneous)."""
+    from .. import StVKMembrane
+    from ..scene.sheets import rectangle
+
+    V, F = rectangle(1.0, 1.0, 4, 4)
+    b = ModelBuilder()
+    b.add_mesh(V, np.zeros((0, 4), np.int64), source="wrinkling sheet")
+    b.add_membrane(F, StVKMembrane(3e3, 0.3, 1e-3, 1e3, wrinkling=True))
+    model = b.finalize("float64")
+    s = model.state()
+    u = np.zeros_like(V)
+    u[:, 0] = gamma * V[:, 1]
+    s.set_displacements(u)
+    return float(model.membrane_results(s)["tension"][:, 3].mean())
