@@ -312,7 +312,7 @@ def test_a_scene_of_a_sheet_alone_drapes_a_ball(tmp_path):
     measured 7e-5) and no node of it is nearer the ball's centre than its radius and half the
     drape's thickness (its face on the ball; 1e-6: the contact's round-off in float32). (On a
     frictionless ball the drape that carries compression crumpled, stiffened and blew up at
-    0.3–0.4 s; docs/engine.md, "Wrinkling".)"""
+    0.25–0.43 s; docs/engine.md, "Wrinkling".)"""
     from typer.testing import CliRunner
 
     from pliant.cli import app
