@@ -28,8 +28,7 @@ enum class RunStatus : int { Ok = 0, NonFinite = 1, Inverted = 2, BlowUp = 3, Ju
 
 /// Outcome of a run: `where` is the builder's element (Inverted; also a NaN J) or the engine's
 /// node (NonFinite, BlowUp, Jump), `value` the offending quantity (J, a displacement or, for a
-/// Jump, one step's displacement [m]), `t` the
-/// time [s] at which it was found.
+/// Jump, one step's displacement [m]), `t` the time [s] at which it was found.
 struct RunReport {
     long steps = 0;
     double t = 0.0;
