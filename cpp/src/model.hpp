@@ -160,7 +160,8 @@ struct Model {
                 mem_index.data(),
                 mem_nodes.data(),
                 mem_kind.data(),
-                mem_geom.data()};
+                mem_geom.data(),
+                nullptr};  // (the engine's corner forces: measures need none)
     }
     ElementData<T> elements() const { return {elem_nodes.data(), elem_grad.data(), elem_vol.data()}; }
     /// Node data with the physical masses, or with the dynamic-relaxation masses if `relax`.

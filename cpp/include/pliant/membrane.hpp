@@ -44,7 +44,9 @@ constexpr int kMembraneModuli = 9;
 constexpr int kMembraneParams = 5;
 
 /// Node → membrane corners (CSR over nodes: offsets N + 1, index holds 3 m + corner), and per
-/// membrane its nodes (3), kind and kMembraneValues values. count == 0: no membranes.
+/// membrane its nodes (3), kind and kMembraneValues values; corner_f: each corner's internal force
+/// [N] (9 per membrane, corner c's at 9 m + 3 c: membrane_corner_forces, gathered by
+/// membrane_force). count == 0: no membranes.
 template <class T>
 struct MembraneData {
     index_t count;
@@ -53,6 +55,7 @@ struct MembraneData {
     const index_t* nodes;
     const index_t* kind;
     const T* geom;
+    T* corner_f;
 };
 
 /// Green strain E_ij [1] (11, 22, 12) from reference tangents G1, G2 and displacement differences
@@ -208,25 +211,34 @@ PLIANT_HD T membrane_energy(MembraneKind kind, const T* q, const T d1[3], const 
     return T(0.5) * q[9] * tr * tr + q[10] * (m11 * m11 + m22 * m22 + T(2) * m12 * m21);
 }
 
-/// Internal force [N] of node n's membrane corners, added to f (3): for each corner a of membrane
-/// m, A0 S^ij g_i ∂N_a/∂ξj (see the header), the corners in the order the model lists them.
-/// Inputs: membrane data, u [m] SoA (3, P). Output: f [N] (3), added to.
+/// Membrane m's internal force [N] at each of its corners a, A0 S^ij g_i ∂N_a/∂ξj (see the header),
+/// its stress computed once for the three. Inputs: membrane data, u [m] SoA (3, P). Output:
+/// md.corner_f[9 m + 3 a + d].
 template <class T>
-PLIANT_HD void membrane_force(index_t n, const MembraneData<T>& md, const T* u, index_t P, T f[3]) {
+PLIANT_HD void membrane_corner_forces(index_t m, const MembraneData<T>& md, const T* u, index_t P) {
+    const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
+    T d1[3], d2[3], g1[3], g2[3];
+    membrane_tangents(m, md, u, P, d1, d2, g1, g2);
+    T S[3];
+    membrane_stress(static_cast<MembraneKind>(md.kind[m]), q, g1, g2, d1, d2, S);
+    // w_i = S^ij ∂N_a/∂ξj: corner 0 (−1, −1), 1 (1, 0), 2 (0, 1).
+    const T w[3][2] = {{-(S[0] + S[2]), -(S[2] + S[1])}, {S[0], S[2]}, {S[2], S[1]}};
+    T* out = md.corner_f + 9 * static_cast<std::size_t>(m);
+    PLIANT_UNROLL
+    for (int a = 0; a < 3; ++a)
+        for (int d = 0; d < 3; ++d) out[3 * a + d] = w[a][0] * g1[d] + w[a][1] * g2[d];
+}
+
+/// Internal force [N] of node n's membrane corners (membrane_corner_forces, computed before this
+/// pass), added to f (3) in the order the model lists them (a fixed order: the same bits on every
+/// device and thread count). Output: f [N] (3), added to.
+template <class T>
+PLIANT_HD void membrane_force(index_t n, const MembraneData<T>& md, T f[3]) {
     const index_t end = md.offsets[n + 1];
     for (index_t k = md.offsets[n]; k < end; ++k) {
-        const index_t m = md.index[k] / 3;
-        const int corner = static_cast<int>(md.index[k] - 3 * m);
-        const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
-        T d1[3], d2[3], g1[3], g2[3];
-        membrane_tangents(m, md, u, P, d1, d2, g1, g2);
-        T S[3];
-        membrane_stress(static_cast<MembraneKind>(md.kind[m]), q, g1, g2, d1, d2, S);
-        // w_i = S^ij ∂N_a/∂ξj: corner 0 (−1, −1), 1 (1, 0), 2 (0, 1).
-        const T w1 = corner == 0 ? -(S[0] + S[2]) : corner == 1 ? S[0] : S[2];
-        const T w2 = corner == 0 ? -(S[2] + S[1]) : corner == 1 ? S[2] : S[1];
+        const T* c = md.corner_f + 3 * static_cast<std::size_t>(md.index[k]);  // 9 m + 3 corner
         PLIANT_UNROLL
-        for (int d = 0; d < 3; ++d) f[d] += w1 * g1[d] + w2 * g2[d];
+        for (int d = 0; d < 3; ++d) f[d] += c[d];
     }
 }
 

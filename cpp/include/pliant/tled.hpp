@@ -421,7 +421,8 @@ PLIANT_HD void gather_forces(index_t n, const NodeData<T>& nd, const T* f_elem, 
 }
 
 /// Kernel 2, one node per lane: gather the element forces of node n in a fixed order (no atomics,
-/// bitwise reproducible), add its membrane corners' forces (membrane_force), then u⁺ = u + du⁺,
+/// bitwise reproducible), add its membrane corners' forces (membrane_force, computed by the
+/// membrane pass before it), then u⁺ = u + du⁺,
 /// du⁺ = (γ2 − 1) du + γ1 M⁻¹(r − f) (central differences: u⁺ = γ1 M⁻¹(r − f) + γ2 u + γ3 u⁻ with
 /// du = u − u⁻), r = load patterns + follower pressure and surface traction at u. du is the last
 /// step's increment as computed, before u was rounded to T (plus the correction where a contact moved
@@ -436,7 +437,7 @@ PLIANT_HD void node_update(index_t n, const NodeData<T>& nd, const T* f_elem, co
                            T* f_node_out) {
     T f[3];
     gather_forces(n, nd, f_elem, f);
-    if (nd.mem.count) membrane_force(n, nd.mem, u, P, f);
+    if (nd.mem.count) membrane_force(n, nd.mem, f);
     const T w = it.g1 * nd.inv_mass[n];
     // Every load before the first store: the stores could alias them as far as the compiler knows,
     // and it would load them again after each.

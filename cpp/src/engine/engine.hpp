@@ -263,6 +263,7 @@ private:
     DeviceBuffer<std::int64_t, Dev> spart_, sshare_, sacc_, spair_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<T, Dev> d_mem_geom_;  // the membranes' values, their moduli scaled (scale_materials)
+    DeviceBuffer<T, Dev> mem_f_;       // the membranes' corner forces [N] (membrane_corner_forces)
     double material_scale_ = 1.0;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceBuffer<T, Dev> anp_gamma_;

@@ -16,6 +16,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     for (auto& f : f_node_) f = DeviceBuffer<T, Dev>(dev_, P3);
     q_ = DeviceBuffer<T, Dev>(dev_, m.visco_slots() * 6 * static_cast<std::size_t>(m.visco_terms));
     f_elem_ = DeviceBuffer<T, Dev>(dev_, 12 * S + kForcePad);
+    mem_f_ = DeviceBuffer<T, Dev>(dev_, 9 * m.mem_kind.size());
     J_ = DeviceBuffer<T, Dev>(dev_, S);
     elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);
     node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
@@ -166,7 +167,7 @@ void Engine<T, Dev>::refresh_view() {
                mb_.pslot.data(),
                mb_.ptraction.data(),
                {static_cast<index_t>(m.mem_kind.size()), mb_.mem_off.data(), mb_.mem_idx.data(),
-                mb_.mem_nodes.data(), mb_.mem_kind.data(), d_mem_geom_.data()}};
+                mb_.mem_nodes.data(), mb_.mem_kind.data(), d_mem_geom_.data(), mem_f_.data()}};
     v.relax_nodes = v.nodes;
     v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
     v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();

@@ -293,8 +293,9 @@ void Engine<T, Dev>::launch_damping(const Span& sp, const T* u, const T* du, T b
     });
 }
 
-/// Kernel 2: per node, gather the element forces, central-difference update (u_next), then the
-/// node's kinematic constraints; f_node_out (may be null) receives the internal forces.
+/// Kernel 2: per node, gather the element forces (and the membranes' corner forces, computed first
+/// per membrane), central-difference update (u_next), then the node's kinematic constraints;
+/// f_node_out (may be null) receives the internal forces.
 template <class T, class Dev>
 void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     const DeviceView<T> v = v_;
@@ -303,6 +304,8 @@ void Engine<T, Dev>::node_pass(const Phase& ph, bool relaxing, T* f_node_out) {
     const T* duc = v.du[ph.cur];
     T* un = v.u[ph.next];
     T* dun = v.du[ph.next];
+    if (nd.mem.count)  // each membrane's corner forces, once (not once per corner)
+        dev_.each(nd.mem.count, [=] PLIANT_KERNEL(index_t m) { membrane_corner_forces(m, nd.mem, uc, v.P); });
     dev_.each(v.n_nodes, [=] PLIANT_KERNEL(index_t n) {
         if (v.prefetch && n + kPrefetchAhead < v.n_nodes)
             prefetch_incidences(n + kPrefetchAhead, nd, v.f_elem);
