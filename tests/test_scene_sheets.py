@@ -399,13 +399,13 @@ def test_a_balloon_inflates_as_its_closed_form(tmp_path):
     642 nodes meets λ R to 1e-3 (measured −5.1e-4 and −4.6e-4: the facets' discretization error); the
     Neo-Hookean error falls as h² with the mesh (−2.0e-3, −5.1e-4, −1.3e-4 on 162, 642, 2,562
     nodes: ratios 4 ± 0.5)."""
-    from scipy.optimize import brentq
+    from pliant.validate.references import balloon_limit_pressure, balloon_stretch
 
     R, h, mu, E, nu = 0.05, 1e-3, 1e4, 3e4, 0.3
-    p_nh = 0.6 * 2 * mu * h / R * (7 ** (-1 / 6) - 7 ** (-7 / 6))  # 0.6 of the limit, at λ = 7^(1/6)
-    lam_nh = brentq(lambda lam: 2 * mu * h / R * (1 / lam - lam**-7) - p_nh, 1.0, 7 ** (1 / 6))
+    p_nh = 0.6 * balloon_limit_pressure(mu, h, R)
+    lam_nh = balloon_stretch(p_nh, h, R, mu=mu)
     p_svk = 200.0
-    lam_svk = brentq(lambda lam: E * h * (lam**2 - 1) / ((1 - nu) * lam * R) - p_svk, 1.0, 2.0)
+    lam_svk = balloon_stretch(p_svk, h, R, E=E, nu=nu)
     nh, svk = f'type = "neo-hookean"\nmu = {mu}', f'type = "st-venant-kirchhoff"\nE = {E}\nnu = {nu}'
     errors = [_balloon(tmp_path, s, nh, p_nh).mean() / (lam_nh * R) - 1 for s in (2, 3, 4)]
     assert abs(errors[1]) < 1e-3 and 3.5 < errors[0] / errors[1] < 4.5 and 3.5 < errors[1] / errors[2] < 4.5

@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 import pliant as pl
+from pliant.validate.references import membrane_stress_2d as _material
+from pliant.validate.references import tension_field as _tension_field
 
 MATERIALS = {
     "neo-hookean": lambda w: pl.NeoHookeanMembrane(mu=2e3, thickness=1e-3, density=1100.0, wrinkling=w),
@@ -49,45 +51,6 @@ def _rotation():
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     a = np.radians(40.0)
     return np.eye(3) + np.sin(a) * K + (1 - np.cos(a)) * K @ K
-
-
-def _material(material, C):
-    """The material's own 2nd Piola–Kirchhoff resultant S h [N/m] (2 × 2) and energy per reference
-    area h W [J/m²] at C (2 × 2), compression carried: Neo-Hookean S = μ h (I − C⁻¹/det C),
-    W h = μ h/2 (tr C + 1/det C − 3); St Venant–Kirchhoff S = h (λ' tr E I + 2 μ E),
-    W h = h (λ'/2 tr² E + μ E:E)."""
-    h = material.thickness
-    if isinstance(material, pl.NeoHookeanMembrane):
-        mu, J2 = material.mu, np.linalg.det(C)
-        return mu * h * (np.eye(2) - np.linalg.inv(C) / J2), 0.5 * mu * h * (np.trace(C) + 1 / J2 - 3)
-    Y, nu = material.E, material.nu
-    lam, mu = Y * nu / (1 - nu**2), Y / (2 * (1 + nu))
-    E = 0.5 * (C - np.eye(2))
-    S = h * (lam * np.trace(E) * np.eye(2) + 2 * mu * E)
-    return S, h * (0.5 * lam * np.trace(E) ** 2 + mu * np.sum(E * E))
-
-
-def _tension_field(material, F2):
-    """Tension-field theory in Cartesian components for the in-plane gradient F2 (2 × 2): the state
-    ('taut', 'slack', 'wrinkled'), S h [N/m] (2 × 2) and h W [J/m²]. Slack where the major principal
-    Green strain e1 ≤ 0; taut where the material's smaller principal stress is ≥ 0; wrinkled
-    otherwise: uniaxial S1 along e1's direction at the free width (Neo-Hookean c2 = c1^(−1/2):
-    S1 = μ (1 − c1^(−3/2)), W = μ/2 (c1 + 2/√c1 − 3); St Venant–Kirchhoff by Poisson: S1 = E e1,
-    W = E e1²/2)."""
-    C = F2.T @ F2
-    e, N = np.linalg.eigh(0.5 * (C - np.eye(2)))  # ascending: e2, e1
-    e1, n1 = e[1], N[:, 1]
-    S, W = _material(material, C)
-    if e1 <= 0:
-        return "slack", np.zeros((2, 2)), 0.0
-    if np.linalg.eigvalsh(S)[0] >= 0:
-        return "taut", S, W
-    h, c1 = material.thickness, 1 + 2 * e1
-    if isinstance(material, pl.NeoHookeanMembrane):
-        s1, W = material.mu * h * (1 - c1**-1.5), 0.5 * material.mu * h * (c1 + 2 / np.sqrt(c1) - 3)
-    else:
-        s1, W = material.E * h * e1, 0.5 * material.E * h * e1**2
-    return "wrinkled", s1 * np.outer(n1, n1), W
 
 
 @pytest.mark.parametrize("case", sorted(CASES))

@@ -13,6 +13,9 @@ from ..materials import LinearElastic
 from ..tled import Simulation
 from . import models
 from .references import (
+    balloon_limit_pressure,
+    balloon_stretch,
+    tension_field,
     UNIAXIAL,
     hertz_force,
     lame_volumetric_strain,
@@ -446,16 +449,12 @@ def membranes(quick: bool) -> tuple[list[Check], dict]:
 
 
 def _balloons() -> list[Check]:
-    """A spherical balloon (R = 5 cm, h = 1 mm) inflated by p: equibiaxial stretch λ with
-    p = 2 μ h/R (λ⁻¹ − λ⁻⁷) (incompressible Neo-Hookean, μ = 10 kPa, at 0.6 of its limit pressure,
-    on the stable branch) or p = E h (λ² − 1)/((1 − ν) λ R) (St Venant–Kirchhoff, 30 kPa, ν = 0.3,
-    p = 200 Pa): the mean radius of 642 nodes against λ R."""
-    from scipy.optimize import brentq
-
-    R, h, mu, E, nu = 0.05, 1e-3, 1e4, 3e4, 0.3
-    p_nh = 0.6 * 2 * mu * h / R * (7 ** (-1 / 6) - 7 ** (-7 / 6))  # the limit at λ = 7^(1/6)
-    lam_nh = brentq(lambda lam: 2 * mu * h / R * (1 / lam - lam**-7) - p_nh, 1.0, 7 ** (1 / 6))
-    lam_svk = brentq(lambda lam: E * h * (lam**2 - 1) / ((1 - nu) * lam * R) - 200.0, 1.0, 2.0)
+    """A spherical balloon (R = 5 cm, h = 1 mm) inflated by p against the stretch of the spherical
+    membrane (references.balloon_stretch): incompressible Neo-Hookean, μ = 10 kPa, at 0.6 of its
+    limit pressure (on the stable branch), and St Venant–Kirchhoff, 30 kPa, ν = 0.3, at 200 Pa: the
+    mean radius of 642 nodes against λ R."""
+    R, h = 0.05, 1e-3
+    p_nh = 0.6 * balloon_limit_pressure(1e4, h, R)
     why = "the facets' discretization error, falling as h² (5.1e-4 and 4.6e-4 at 642 nodes)"
     return [
         Check(
@@ -467,19 +466,22 @@ def _balloons() -> list[Check]:
             why,
             1e-3,
         )
-        for kind, p, lam in (("neo-hookean", p_nh, lam_nh), ("st-venant-kirchhoff", 200.0, lam_svk))
+        for kind, p, lam in (
+            ("neo-hookean", p_nh, balloon_stretch(p_nh, h, R, mu=1e4)),
+            ("st-venant-kirchhoff", 200.0, balloon_stretch(200.0, h, R, E=3e4, nu=0.3)),
+        )
     ]
 
 
 def _wrinkled_shear() -> Check:
     """A sheet that wrinkles in simple shear γ = 0.2 (St Venant–Kirchhoff, E = 3 kPa, ν = 0.3,
-    h = 1 mm) carries tension along its major principal direction alone (tension-field theory,
-    Roddeman et al. 1987): S = E h e1 n1 ⊗ n1 from the Green strain's major eigenpair, and the
-    Cauchy resultant t = F S Fᵀ / det F; its shear component."""
-    gamma, E, h = 0.2, 3e3, 1e-3
+    h = 1 mm) carries tension along its major principal direction alone (references.tension_field):
+    the shear component of its Cauchy resultant t = F S Fᵀ / det F."""
+    from ..materials.membrane import StVKMembrane
+
+    gamma = 0.2
     Fg = np.array([[1.0, gamma], [0.0, 1.0]])
-    e, n = np.linalg.eigh(0.5 * (Fg.T @ Fg - np.eye(2)))
-    S = E * h * e[1] * np.outer(n[:, 1], n[:, 1])
+    S = tension_field(StVKMembrane(3e3, 0.3, 1e-3, 1e3, wrinkling=True), Fg)[1]
     t = Fg @ S @ Fg.T / np.linalg.det(Fg)
     return Check(
         "membranes",

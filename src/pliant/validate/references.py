@@ -174,3 +174,70 @@ def elastica_tip(alpha):
     transverse = quad(lambda x: math.sin(theta(x)), 0.0, 1.0, epsabs=1e-12)[0]
     shortening = 1.0 - quad(lambda x: math.cos(theta(x)), 0.0, 1.0, epsabs=1e-12)[0]
     return transverse, shortening, theta(1.0)
+
+
+def membrane_stress_2d(material, C):
+    """A membrane material's own 2nd Piola–Kirchhoff resultant S h [N/m] (2 × 2) and energy per
+    reference area h W [J/m²] at the in-plane C (2 × 2), compression carried (pliant's
+    NeoHookeanMembrane or StVKMembrane): Neo-Hookean S = μ h (I − C⁻¹/det C), W h = μ h/2 (tr C +
+    1/det C − 3) (Bonet et al. 2000); St Venant–Kirchhoff S = h (λ' tr E I + 2 μ E),
+    W h = h (λ'/2 tr² E + μ E:E), λ' = E ν/(1 − ν²) (plane stress)."""
+    import numpy as np
+
+    from ..materials.membrane import NeoHookeanMembrane
+
+    h = material.thickness
+    if isinstance(material, NeoHookeanMembrane):
+        mu, J2 = material.mu, np.linalg.det(C)
+        return mu * h * (np.eye(2) - np.linalg.inv(C) / J2), 0.5 * mu * h * (np.trace(C) + 1 / J2 - 3)
+    Y, nu = material.E, material.nu
+    lam, mu = Y * nu / (1 - nu**2), Y / (2 * (1 + nu))
+    E = 0.5 * (C - np.eye(2))
+    S = h * (lam * np.trace(E) * np.eye(2) + 2 * mu * E)
+    return S, h * (0.5 * lam * np.trace(E) ** 2 + mu * np.sum(E * E))
+
+
+def tension_field(material, F2):
+    """Tension-field theory (Roddeman, Drukker, Oomens & Janssen 1987; Pipkin 1986) in Cartesian
+    components for a membrane material (membrane_stress_2d) at the in-plane gradient F2 (2 × 2):
+    the state ('taut', 'slack', 'wrinkled'), S h [N/m] (2 × 2) and h W [J/m²]. Slack where the major
+    principal Green strain e1 ≤ 0; taut where the material's smaller principal stress is ≥ 0;
+    wrinkled otherwise: uniaxial S1 along e1's direction at the free width (Neo-Hookean
+    c2 = c1^(−1/2): S1 = μ (1 − c1^(−3/2)), W = μ/2 (c1 + 2/√c1 − 3); St Venant–Kirchhoff by
+    Poisson: S1 = E e1, W = E e1²/2)."""
+    import numpy as np
+
+    from ..materials.membrane import NeoHookeanMembrane
+
+    C = F2.T @ F2
+    e, N = np.linalg.eigh(0.5 * (C - np.eye(2)))  # ascending: e2, e1
+    e1, n1 = e[1], N[:, 1]
+    S, W = membrane_stress_2d(material, C)
+    if e1 <= 0:
+        return "slack", np.zeros((2, 2)), 0.0
+    if np.linalg.eigvalsh(S)[0] >= 0:
+        return "taut", S, W
+    h, c1 = material.thickness, 1 + 2 * e1
+    if isinstance(material, NeoHookeanMembrane):
+        s1, W = material.mu * h * (1 - c1**-1.5), 0.5 * material.mu * h * (c1 + 2 / np.sqrt(c1) - 3)
+    else:
+        s1, W = material.E * h * e1, 0.5 * material.E * h * e1**2
+    return "wrinkled", s1 * np.outer(n1, n1), W
+
+
+def balloon_limit_pressure(mu, h, R):
+    """The largest internal pressure [Pa] a spherical incompressible Neo-Hookean membrane (shear
+    modulus μ, thickness h, radius R) holds: p(λ) = 2 μ h/R (λ⁻¹ − λ⁻⁷) peaks at λ = 7^(1/6)."""
+    return 2 * mu * h / R * (7 ** (-1 / 6) - 7 ** (-7 / 6))
+
+
+def balloon_stretch(p, h, R, mu=None, E=None, nu=None):
+    """Equibiaxial stretch λ of a spherical membrane (thickness h, radius R [m]) under internal
+    pressure p [Pa], from Laplace's p = 2 t/r with the membrane's tension t: incompressible
+    Neo-Hookean (``mu``) p = 2 μ h/R (λ⁻¹ − λ⁻⁷), on the stable branch below the limit pressure;
+    plane-stress St Venant–Kirchhoff (``E``, ``nu``) p = E h (λ² − 1)/((1 − ν) λ R)."""
+    from scipy.optimize import brentq
+
+    if mu is not None:
+        return brentq(lambda lam: 2 * mu * h / R * (1 / lam - lam**-7) - p, 1.0, 7 ** (1 / 6))
+    return brentq(lambda lam: E * h * (lam**2 - 1) / ((1 - nu) * lam * R) - p, 1.0, 10.0)
