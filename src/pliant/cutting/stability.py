@@ -22,13 +22,15 @@ __all__ = ["highest_frequency", "stable_step"]
 DENSE_DOFS = 60
 
 
-def taut(model):
-    """The model itself, or where its membranes wrinkle the same model with none wrinkling: a
-    wrinkling membrane's stiffness never exceeds the taut one's, and about a flat or compressed
-    state its compressive perturbations meet none, so differences there would underestimate the
-    stiffness it has once stretched (docs/engine.md, "Wrinkling")."""
-    if any(m.wrinkling for _, m in model._builder._membranes):
-        return model.rebuilt(np.dtype(model.dtype).name, taut=True)
+def taut(model, dtype: str | None = None):
+    """The model itself, or (built again) the same model at ``dtype`` (default its own) with no
+    membrane wrinkling, where it differs: a wrinkling membrane's stiffness never exceeds the taut
+    one's, and about a flat or compressed state its compressive perturbations meet none, so
+    differences there would underestimate the stiffness it has once stretched (docs/engine.md,
+    "Wrinkling")."""
+    dtype = dtype or np.dtype(model.dtype).name
+    if any(m.wrinkling for _, m in model._builder._membranes) or dtype != np.dtype(model.dtype).name:
+        return model.rebuilt(dtype, taut=True)
     return model
 
 

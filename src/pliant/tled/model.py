@@ -488,11 +488,9 @@ class Model:
         perturbation meets no stiffness, so differences there would halve the stiffness that a
         stretched sheet has."""
         if self._stable_step is None:
-            from ..cutting.stability import stable_step
+            from ..cutting.stability import stable_step, taut
 
-            # (taut: stability.taut, built once here rather than again by stable_step)
-            wrinkles = any(m.wrinkling for _, m in self._builder._membranes)
-            exact = self if self.dtype == np.float64 and not wrinkles else self.rebuilt("float64", taut=True)
+            exact = taut(self, "float64")  # (stable_step's own taut() is then the model itself)
             self._stable_step = stable_step(exact, exact.state())
         return self._stable_step
 
