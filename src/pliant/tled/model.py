@@ -357,19 +357,17 @@ class Model:
             cn, masks = np.zeros(0, np.int64), np.zeros(0, np.int64)
         self.contact_nodes = cn
         cn_order = np.argsort(node_rank[cn], kind="stable")
-        # A sheet apart from the tets meets a tool with its face, half its thickness from its nodes.
+        # The sheets apart from the tets (bodies of their own in soft contact) and their thicknesses;
+        # such a sheet meets a tool with its face, half its thickness from its nodes.
+        apart = sheets_apart(mem_F, T, X.shape[0])[0] if len(mem_F) else np.zeros(0, np.int64)
+        apart_h = np.array([mem_mat[k].thickness for k in apart])
         skin = np.zeros(X.shape[0])
-        if len(mem_F) and len(cn):
-            apart = sheets_apart(mem_F, T, X.shape[0])[0]
-            half = np.array([mem_mat[k].thickness for k in apart]) / 2
-            np.maximum.at(skin, mem_F[apart].ravel(), np.repeat(half, 3))
+        np.maximum.at(skin, mem_F[apart].ravel(), np.repeat(apart_h / 2, 3))
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
         soft = dict(no_surface(), pairs=[], labels=None)
         if builder.soft_contact is not None:
-            apart = sheets_apart(mem_F, T, X.shape[0])[0]  # free sheets: bodies of their own
-            thickness = np.array([mem_mat[k].thickness for k in apart])
-            soft = engine_surface(builder.soft_contact, X, T, node_rank, held, (mem_F[apart], thickness))
+            soft = engine_surface(builder.soft_contact, X, T, node_rank, held, (mem_F[apart], apart_h))
         self.contact_pairs = soft.pop("pairs")  # soft-contact pairs of bodies (a <= b), index order
         self.bodies = soft.pop("labels")  # body of each element (user order), or None
         sheets = soft.pop("sheet_nodes", None), soft.pop("sheet_labels", None)  # bodies after the tets'
