@@ -41,7 +41,7 @@ def add_membranes(ctx: Ctx, tables: list, b: ModelBuilder, X, T, node_sets) -> N
         check_keys(ctx, m, p, MATERIAL_KEYS | {"nodes": "table"}, ("type", "thickness", "density"))
         material = membrane_material(ctx, m, p, {"nodes"}, wrinkling=False)
         faces = (
-            select_faces(ctx, m["nodes"], f"{p}.nodes", X, T, node_sets)
+            select_faces(ctx, m["nodes"], f"{p}.nodes", X, T, node_sets)[0]
             if "nodes" in m
             else boundary_faces(T)[0]
         )

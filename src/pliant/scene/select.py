@@ -143,10 +143,11 @@ def select_faces(
     tets: np.ndarray,
     sets: dict[str, np.ndarray] | None = None,
     sheets: np.ndarray | None = None,
-):
-    """The boundary triangles (F, 3) whose three nodes ``spec`` selects (select_nodes); none is an
-    error naming the key (pressure and traction loads, membranes). With ``sheets`` (K, 3), the
-    triangles of the sheets apart from the tets: also those of them it selects, returned second."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary triangles (F, 3) whose three nodes ``spec`` selects (select_nodes), and of
+    ``sheets`` (K, 3), the triangles of the sheets apart from the tets, those it selects (none
+    without); no triangle at all is an error naming the key (pressure and traction loads,
+    membranes)."""
     ids = select_nodes(ctx, spec, path, nodes, tets, sets)
     B, _ = boundary_faces(tets)
     faces = B[np.all(np.isin(B, ids), axis=1)]
@@ -154,7 +155,7 @@ def select_faces(
     if len(faces) + len(on_sheets) == 0:
         where = "boundary or sheet triangle" if sheets is not None and len(sheets) else "boundary triangle"
         raise ctx.error(path, f"the {ids.size} selected nodes hold no whole {where}: select a surface patch")
-    return faces if sheets is None else (faces, on_sheets)
+    return faces, on_sheets
 
 
 def closest_node(X: np.ndarray, point) -> tuple[int, float]:
