@@ -29,7 +29,7 @@ def taut(model, dtype: str | None = None):
     differences there would underestimate the stiffness it has once stretched (docs/engine.md,
     "Wrinkling")."""
     dtype = dtype or np.dtype(model.dtype).name
-    if any(m.wrinkling for _, m in model._builder._membranes) or dtype != np.dtype(model.dtype).name:
+    if any(m.wrinkling for m in model.membrane_materials) or dtype != np.dtype(model.dtype).name:
         return model.rebuilt(dtype, taut=True)
     return model
 

@@ -681,6 +681,11 @@ class Model:
         return _held_sum(held, np.asarray(nodes, dtype=np.int64).reshape(-1), dofs)
 
     @property
+    def membrane_materials(self) -> list:
+        """Each membrane set's material, in the order ModelBuilder.add_membrane took them."""
+        return [m for _, m in self._builder._membranes]
+
+    @property
     def supports(self) -> list[tuple[str, np.ndarray, str]]:
         """The supports (name, user node ids, DOFs), one per ModelBuilder.fix / prescribe call."""
         return list(self._builder.supports)

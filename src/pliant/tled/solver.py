@@ -267,7 +267,7 @@ class Solver:
 
     def _jump_hint(self) -> str:
         """For a jump: where membranes carry compression, that a sheet may need to wrinkle."""
-        if any(not m.wrinkling for _, m in self.model._builder._membranes):
+        if any(not m.wrinkling for m in self.model.membrane_materials):
             return (
                 "; membranes that carry compression stiffen as they crumple: a free sheet should "
                 "wrinkle (wrinkling=True, the [[sheet]] default)"
