@@ -115,10 +115,10 @@ def test_surface_membranes_cover_the_boundary_and_add_their_mass(tmp_path):
             _shells(
                 "T3",
                 [0, 1, 2],
-                '<Material Type="LinearShell">1 0.3 1 0.3<Density>1</Density>'
+                '<Material Type="LinearThickShell">1 0.3 1 0.3<Density>1</Density>'
                 "<Thickness>1</Thickness></Material>",
             ),
-            "unsupported NiftySim feature ShellElementSet Material Type=LinearShell: shells with bending",
+            "unsupported NiftySim feature ShellElementSet Material Type=LinearThickShell: thick shells",
         ),
         (
             _shells(
@@ -195,12 +195,14 @@ def test_membrane_mistakes_are_named(tmp_path, shells, match):
 
 
 def test_an_ignored_shell_set_runs_the_solid_alone(tmp_path):
-    """--ignore for a LinearShell set skips its facets with a warning; the bar runs."""
+    """--ignore for a LinearThickShell set skips its facets with a warning; the bar runs."""
     xml, _ = _bar_xml()
-    shell = '<Material Type="LinearShell">1 0.3 1 0.3<Density>1</Density><Thickness>1</Thickness></Material>'
+    shell = (
+        '<Material Type="LinearThickShell">1 0.3 1 0.3<Density>1</Density><Thickness>1</Thickness></Material>'
+    )
     p = tmp_path / "shell.xml"
     p.write_text(xml.replace("<SystemParams>", _shells("T3", [0, 1, 2], shell) + "<SystemParams>"))
-    sc = load_niftysim(p, ignore=("ShellElementSet Material Type=LinearShell",))
+    sc = load_niftysim(p, ignore=("ShellElementSet Material Type=LinearThickShell",))
     assert sc.builder.n_membranes == 0 and any("no membrane" in w for w in sc.warnings)
 
 

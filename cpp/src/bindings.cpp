@@ -220,7 +220,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                std::vector<index_t> soft_tris, std::vector<index_t> soft_pair, index_t soft_labels,
                std::vector<double> soft_mu, double soft_skin, StrainSmoothing smoothing, int threads,
                std::vector<index_t> mem_nodes, std::vector<int> mem_kind, std::vector<double> mem_params,
-               std::vector<double> contact_skin, std::vector<double> soft_sheet_h) {
+               std::vector<double> contact_skin, std::vector<double> soft_sheet_h,
+               std::vector<index_t> mem_nbrs, std::vector<double> mem_bend) {
                 ModelInput in;
                 in.X = X.data();
                 in.n_nodes = static_cast<index_t>(X.shape(0));
@@ -268,6 +269,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                 in.mem_nodes = std::move(mem_nodes);
                 in.mem_kind = std::move(mem_kind);
                 in.mem_params = std::move(mem_params);
+                in.mem_nbrs = std::move(mem_nbrs);
+                in.mem_bend = std::move(mem_bend);
                 for (std::size_t k = 0; k < tool_kind.size(); ++k) {
                     RigidTool t{};
                     t.kind = static_cast<ToolKind>(tool_kind[k]);
@@ -299,7 +302,8 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
             "tool_reach"_a, "soft_nodes"_a, "soft_label"_a, "soft_tris"_a, "soft_pair"_a, "soft_labels"_a,
             "soft_mu"_a, "soft_skin"_a, "smoothing"_a, "threads"_a, "mem_nodes"_a = std::vector<index_t>{},
             "mem_kind"_a = std::vector<int>{}, "mem_params"_a = std::vector<double>{},
-            "contact_skin"_a = std::vector<double>{}, "soft_sheet_h"_a = std::vector<double>{})
+            "contact_skin"_a = std::vector<double>{}, "soft_sheet_h"_a = std::vector<double>{},
+            "mem_nbrs"_a = std::vector<index_t>{}, "mem_bend"_a = std::vector<double>{})
         .def_prop_ro("n_nodes", [](const E& e) { return e.model.n_nodes; })
         .def_prop_ro("n_elems", [](const E& e) { return e.model.n_elems; })
         .def_prop_ro("n_blocks", [](const E& e) { return e.model.n_blocks; })
@@ -468,6 +472,8 @@ PLIANT_NB_MODULE(PLIANT_MODULE_NAME, m) {
     bind_engine<float>(m, "EngineF32", "BackendF32", "StateF32");
     bind_engine<double>(m, "EngineF64", "BackendF64", "StateF64");
     m.attr("lanes") = kLanes;
+    m.attr("free_edge") = kFreeEdge;         // ModelInput::mem_nbrs: no node across a membrane's edge
+    m.attr("clamped_edge") = kClampedEdge;   // ... or an edge whose slope is held
     m.attr("blow_up_sizes") = kBlowUpSizes;  // a displacement beyond this many body sizes: a blow-up
     // The backends use_backend accepts: one engine (engine/engine.hpp) on three devices.
     m.attr("backends") = nb::make_tuple("cpu", "cuda-emulated", "cuda");

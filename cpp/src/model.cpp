@@ -129,17 +129,28 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
     if (in.mem_nodes.size() != 3 * static_cast<std::size_t>(nm) ||
         in.mem_params.size() != kMembraneParams * static_cast<std::size_t>(nm))
         throw std::invalid_argument("membranes: expected 3 nodes and 5 parameters per membrane");
+    const bool bending = !in.mem_nbrs.empty() || !in.mem_bend.empty();
+    if (bending && (in.mem_nbrs.size() != kMembraneNbrs * static_cast<std::size_t>(nm) ||
+                    in.mem_bend.size() != 2 * static_cast<std::size_t>(nm)))
+        throw std::invalid_argument(
+            "membranes: expected 9 patch nodes and 2 bending parameters per membrane");
     mem_nodes = in.mem_nodes;
     mem_kind.assign(in.mem_kind.begin(), in.mem_kind.end());
     mem_geom.assign(static_cast<std::size_t>(kMembraneValues) * nm, T(0));
+    mem_nbrs = in.mem_nbrs;
+    mem_bend.assign(bending ? static_cast<std::size_t>(kBendValues) * nm : 0, T(0));
     mem_dt.assign(nm, 0.0);
     std::vector<index_t> count(static_cast<std::size_t>(n_nodes) + 1, 0);
     for (index_t m = 0; m < nm; ++m) {
         const double* p = &in.mem_params[kMembraneParams * static_cast<std::size_t>(m)];
         const double h = p[0], rho = p[1];
         const bool nh = in.mem_kind[m] == static_cast<int>(MembraneKind::NeoHookean);
-        const bool ok = h > 0.0 && rho > 0.0 && std::isfinite(h * rho) && p[2] > 0.0 && std::isfinite(p[2]) &&
-                        (nh || (p[3] > -1.0 && p[3] <= 0.5)) && (p[4] == 0.0 || p[4] == 1.0);
+        const double* pb = bending ? &in.mem_bend[2 * static_cast<std::size_t>(m)] : nullptr;
+        const bool bends = pb != nullptr && pb[0] != 0.0;
+        const bool ok =
+            h > 0.0 && rho > 0.0 && std::isfinite(h * rho) && p[2] > 0.0 && std::isfinite(p[2]) &&
+            (nh || (p[3] > -1.0 && p[3] <= 0.5)) && (p[4] == 0.0 || p[4] == 1.0) &&
+            (pb == nullptr || (pb[0] >= 0.0 && std::isfinite(pb[0]) && pb[1] > -1.0 && pb[1] <= 0.5));
         if (!ok || (!nh && in.mem_kind[m] != static_cast<int>(MembraneKind::StVenantKirchhoff)))
             throw std::invalid_argument("membrane " + std::to_string(m) +
                                         ": kind or parameters out of range");
@@ -169,7 +180,9 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
         q[9] = T(area * h * (nh ? mu : lam)), q[10] = T(nh ? 0.0 : area * h * mu);
         q[11] = T(p[4] == 0.0 ? 0.0 : area * h * (nh ? mu : E));  // the wrinkled state's modulus
         const double modulus = nh ? 4.0 * mu : lam + 2.0 * mu;
-        const double dt_m = alt / std::sqrt(modulus / rho);
+        double dt_m = alt / std::sqrt(modulus / rho);
+        const double w_bend = bends ? build_bending(in, m, area, alt) : 0.0;   // ω_max of bending
+        dt_m = 1.0 / std::sqrt(1.0 / (dt_m * dt_m) + 0.25 * w_bend * w_bend);  // (2 / ω)⁻² added
         mem_dt[m] = dt_m;
         if (dt_critical_elem < 0 || dt_m < dt_critical) {
             dt_critical = dt_m;
@@ -178,16 +191,27 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
         for (int a = 0; a < 3; ++a) {
             const index_t n = in.mem_nodes[3 * m + a];
             sums.mass[n] += rho * h * area / 3.0;
-            sums.stiff[n] += modulus * h * area / (alt * alt) / 3.0;  // ρ' Δt_c⁻² as an element's
+            sums.stiff[n] += rho * h * area / (dt_m * dt_m) / 3.0;  // ρ' Δt_c⁻² as an element's
             ++count[n + 1];
         }
     }
+    auto patch = [&](index_t m, int k) {  // patch node k of a bending membrane, or −1
+        return bending && in.mem_bend[2 * m] != 0.0
+                   ? in.mem_nbrs[kMembraneNbrs * static_cast<std::size_t>(m) + k]
+                   : kFreeEdge;
+    };
+    for (index_t m = 0; m < nm; ++m)
+        for (int k = 0; k < kMembraneNbrs; ++k)
+            if (patch(m, k) >= 0) ++count[patch(m, k) + 1];
     for (index_t n = 0; n < n_nodes; ++n) count[n + 1] += count[n];
     mem_offsets.assign(count.begin(), count.end());
     mem_index.assign(static_cast<std::size_t>(count[n_nodes]), 0);
     std::vector<index_t> fill(count.begin(), count.end() - 1);
     for (index_t m = 0; m < nm; ++m)
-        for (int a = 0; a < 3; ++a) mem_index[fill[in.mem_nodes[3 * m + a]]++] = 3 * m + a;
+        for (int s = 0; s < kMembraneSlots; ++s) {
+            const index_t n = s < 3 ? in.mem_nodes[3 * m + s] : patch(m, s - 3);
+            if (n >= 0) mem_index[fill[n]++] = kMembraneSlots * m + s;
+        }
 }
 
 /// Lumped and relaxation masses; nodal volumes for T4ANP (which needs decoupled, elastic groups).

@@ -71,6 +71,12 @@ struct ModelInput {
     std::vector<index_t> mem_nodes;
     std::vector<int> mem_kind;
     std::vector<double> mem_params;  // kMembraneParams per membrane: h, ρ, p1, p2, wrinkles (0/1)
+    // Bending (membrane_bending_forces; both empty where no membrane bends): per membrane its
+    // kMembraneNbrs patch nodes (membrane.hpp, kMembraneSlots: the node across each edge e, opposite
+    // corner e, or kFreeEdge, kClampedEdge; then two across each neighbour's other edges, or −1)
+    // and its bending modulus E_b [Pa] and Poisson's ratio ν_b (E_b = 0: it does not bend).
+    std::vector<index_t> mem_nbrs;
+    std::vector<double> mem_bend;
     // Contact between deformable surfaces (soft_contact.hpp): its surface nodes (engine nodes) with
     // their body labels, its triangles (3 surface-node indices each, outward), the pair table
     // (labels × labels, pair index or −1), μs and μk per pair, the Verlet skin [m].
@@ -107,11 +113,12 @@ struct Model {
     int visco_terms = 0;             // max Prony terms of any group: the State's q holds 6 each
     std::vector<T> node_volume;      // Σ V0 of the elements of each node [m³], (P,), T4ANP only
     std::vector<index_t> inc_slot;   // T4ANP only: each incidence's element slot b·kLanes + l
-    // Membranes (membrane.hpp): node → corner CSR (3 m + corner), nodes, kinds, kMembraneValues each;
-    // per membrane its altitude over its wave speed [s] (host, reports); the membrane that limits
+    // Membranes (membrane.hpp): node → force slot CSR (kMembraneSlots m + slot), nodes, kinds,
+    // kMembraneValues each; where any bends, their patch nodes (kMembraneNbrs each) and
+    // kBendValues each; per membrane its critical step [s] (host, reports); the membrane that limits
     // dt_critical, or −1 (an element does).
-    std::vector<index_t> mem_offsets, mem_index, mem_nodes, mem_kind;
-    std::vector<T> mem_geom;
+    std::vector<index_t> mem_offsets, mem_index, mem_nodes, mem_kind, mem_nbrs;
+    std::vector<T> mem_geom, mem_bend;
     std::vector<double> mem_dt;
     index_t dt_critical_membrane = -1;
     // Edge-smoothed strain (smoothing.hpp): per edge its elements (CSR, slots ascending) and weights,
@@ -161,7 +168,9 @@ struct Model {
                 mem_nodes.data(),
                 mem_kind.data(),
                 mem_geom.data(),
-                nullptr};  // (the engine's corner forces: measures need none)
+                nullptr,  // (the engine's corner forces: measures need none)
+                mem_nbrs.empty() ? nullptr : mem_nbrs.data(),
+                mem_bend.empty() ? nullptr : mem_bend.data()};
     }
     ElementData<T> elements() const { return {elem_nodes.data(), elem_grad.data(), elem_vol.data()}; }
     /// Node data with the physical masses, or with the dynamic-relaxation masses if `relax`.
@@ -190,6 +199,7 @@ private:
     void build_groups(const ModelInput& in);
     NodeSums build_elements(const ModelInput& in);
     void build_membranes(const ModelInput& in, NodeSums& sums);
+    double build_bending(const ModelInput& in, index_t m, double area, double alt);
     void build_masses(const ModelInput& in, const NodeSums& sums);
     void build_incidence(std::vector<index_t> count);
     void build_smoothing(const ModelInput& in);

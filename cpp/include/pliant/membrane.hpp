@@ -43,10 +43,34 @@ constexpr int kMembraneModuli = 9;
 /// two (E, ν or μ, 0) and whether it wrinkles (0 or 1).
 constexpr int kMembraneParams = 5;
 
-/// Node → membrane corners (CSR over nodes: offsets N + 1, index holds 3 m + corner), and per
-/// membrane its nodes (3), kind and kMembraneValues values; corner_f: each corner's internal force
-/// [N] (9 per membrane, corner c's at 9 m + 3 c: membrane_corner_forces, gathered by
-/// membrane_force). count == 0: no membranes.
+/// Force slots per membrane in MembraneData::corner_f: its three corners, then (a bending
+/// membrane's patch, membrane_bending_forces) the node across each edge e (3 + e) and the two
+/// nodes across the other edges of that neighbour (6 + 2 e: across its edge opposite corner
+/// (e + 1) % 3, 7 + 2 e: opposite corner (e + 2) % 3).
+constexpr int kMembraneSlots = 12;
+/// Patch nodes per membrane in MembraneData::nbrs (the slots after its corners).
+constexpr int kMembraneNbrs = kMembraneSlots - 3;
+
+/// Values per membrane in MembraneData::bend (membrane_bending_forces): the patch coefficients
+/// B[c][p] [1] (at c kMembraneSlots + p) of its curvature vectors H_c = H0_c + Σ_p B[c][p] u_p (c =
+/// 11, 22, 12 in convected components; p its slots), H0_c [m] (3 each, at kBendH0: the reference
+/// positions' and clamped edges' part), the reference curvature κ0_c = N·H0_c [m] (at
+/// kBendKappa0) and the bending moduli A0 D ν, A0 D (1 − ν)/2 [N·m³] (at kBendModuli; both 0:
+/// the membrane does not bend).
+constexpr int kBendH0 = 3 * kMembraneSlots;
+constexpr int kBendKappa0 = kBendH0 + 9;
+constexpr int kBendModuli = kBendKappa0 + 3;
+constexpr int kBendValues = kBendModuli + 2;
+/// A node across a membrane's edge: none (a free edge) or a clamped edge (MembraneData::nbrs).
+constexpr index_t kFreeEdge = -1, kClampedEdge = -2;
+
+/// Node → membrane force slots (CSR over nodes: offsets N + 1, index holds kMembraneSlots m +
+/// slot), and per membrane its nodes (3), kind and kMembraneValues values; corner_f: each slot's
+/// internal force [N] (3 kMembraneSlots per membrane, slot s's at 3 (kMembraneSlots m + s):
+/// membrane_corner_forces, gathered by membrane_force); nbrs and bend (null where no membrane
+/// bends): per membrane its kMembraneNbrs patch nodes (kMembraneSlots; the nodes across its
+/// edges kFreeEdge or kClampedEdge where there are none, the others −1) and kBendValues values. count == 0:
+/// no membranes.
 template <class T>
 struct MembraneData {
     index_t count;
@@ -56,7 +80,37 @@ struct MembraneData {
     const index_t* kind;
     const T* geom;
     T* corner_f;
+    const index_t* nbrs;
+    const T* bend;
 };
+
+/// Plane-stress St Venant–Kirchhoff resultant in convected components, S^ij = λ (G^kl E_kl) G^ij +
+/// 2 μ G^ik E_kl G^lj, from the inverse metric G^11, G^22, G^12 and a symmetric strain E (11, 22,
+/// 12); the membrane's stress (λ = A0 h λ', μ = A0 h μ) and the shell's moments (E the curvature
+/// change, λ = A0 D ν, μ = A0 D (1 − ν)/2: Kirchhoff plate bending, Timoshenko & Woinowsky-Krieger,
+/// Theory of Plates and Shells, 2nd ed., §10). Output: S (11, 22, 12).
+template <class T>
+PLIANT_HD void svk_resultant(T Gi11, T Gi22, T Gi12, T lam, T mu, const T E[3], T S[3]) {
+    const T E11 = E[0], E22 = E[1], E12 = E[2];
+    const T trE = Gi11 * E11 + Gi22 * E22 + T(2) * Gi12 * E12;
+    // M = G⁻¹ E (mixed), then M G⁻¹.
+    const T m11 = Gi11 * E11 + Gi12 * E12, m12 = Gi11 * E12 + Gi12 * E22;
+    const T m21 = Gi12 * E11 + Gi22 * E12, m22 = Gi12 * E12 + Gi22 * E22;
+    const T two_mu = T(2) * mu;
+    S[0] = lam * trE * Gi11 + two_mu * (m11 * Gi11 + m12 * Gi12);
+    S[1] = lam * trE * Gi22 + two_mu * (m21 * Gi12 + m22 * Gi22);
+    S[2] = lam * trE * Gi12 + two_mu * (m11 * Gi12 + m12 * Gi22);
+}
+
+/// The energy whose derivative svk_resultant is: λ/2 tr(M)² + μ tr(M²), M = G⁻¹E the mixed strain.
+template <class T>
+PLIANT_HD T svk_energy(T Gi11, T Gi22, T Gi12, T lam, T mu, const T E[3]) {
+    const T E11 = E[0], E22 = E[1], E12 = E[2];
+    const T m11 = Gi11 * E11 + Gi12 * E12, m12 = Gi11 * E12 + Gi12 * E22;
+    const T m21 = Gi12 * E11 + Gi22 * E12, m22 = Gi12 * E12 + Gi22 * E22;
+    const T tr = m11 + m22;
+    return T(0.5) * lam * tr * tr + mu * (m11 * m11 + m22 * m22 + T(2) * m12 * m21);
+}
 
 /// Green strain E_ij [1] (11, 22, 12) from reference tangents G1, G2 and displacement differences
 /// d1, d2 [m], formed from the differences so that small strains keep their digits in float32.
@@ -130,7 +184,6 @@ PLIANT_HD void membrane_stress(MembraneKind kind, const T* q, const T g1[3], con
             return;
         }
     }
-    const T E11 = E[0], E22 = E[1], E12 = E[2];
     if (kind == MembraneKind::NeoHookean) {
         // det g / det G from the metrics; g^ij = cofactor / det g.
         T G11 = T(0), G22 = T(0), G12 = T(0), g11 = T(0), g22 = T(0), g12 = T(0);
@@ -146,16 +199,7 @@ PLIANT_HD void membrane_stress(MembraneKind kind, const T* q, const T g1[3], con
         S[2] = q[9] * (Gi12 + r * g12);
         return;
     }
-    // Plane-stress St Venant–Kirchhoff in convected components: S^ij = λ' (G^kl E_kl) G^ij +
-    // 2 μ G^ik E_kl G^lj.
-    const T trE = Gi11 * E11 + Gi22 * E22 + T(2) * Gi12 * E12;
-    // M = G⁻¹ E (mixed), then M G⁻¹.
-    const T m11 = Gi11 * E11 + Gi12 * E12, m12 = Gi11 * E12 + Gi12 * E22;
-    const T m21 = Gi12 * E11 + Gi22 * E12, m22 = Gi12 * E12 + Gi22 * E22;
-    const T lam = q[9], two_mu = T(2) * q[10];
-    S[0] = lam * trE * Gi11 + two_mu * (m11 * Gi11 + m12 * Gi12);
-    S[1] = lam * trE * Gi22 + two_mu * (m21 * Gi12 + m22 * Gi22);
-    S[2] = lam * trE * Gi12 + two_mu * (m11 * Gi12 + m12 * Gi22);
+    svk_resultant(Gi11, Gi22, Gi12, q[9], q[10], E, S);  // plane-stress St Venant–Kirchhoff
 }
 
 /// Membrane m's displacement differences d1 = u1 − u0, d2 = u2 − u0 [m] and current tangents
@@ -202,18 +246,128 @@ PLIANT_HD T membrane_energy(MembraneKind kind, const T* q, const T d1[3], const 
             return T(0.5) * q[11] * rm1 * rm1 * (r + T(2)) / r;
         }
     }
+    if (kind != MembraneKind::NeoHookean) return svk_energy(Gi11, Gi22, Gi12, q[9], q[10], E);
     const T E11 = E[0], E22 = E[1], E12 = E[2];
     const T m11 = Gi11 * E11 + Gi12 * E12, m12 = Gi11 * E12 + Gi12 * E22;
     const T m21 = Gi12 * E11 + Gi22 * E12, m22 = Gi12 * E12 + Gi22 * E22;
     const T tr = m11 + m22, det = m11 * m22 - m12 * m21;
-    if (kind == MembraneKind::NeoHookean)
-        return T(2) * q[9] * (tr * tr - det + T(2) * tr * det) / (T(1) + T(2) * tr + T(4) * det);
-    return T(0.5) * q[9] * tr * tr + q[10] * (m11 * m11 + m22 * m22 + T(2) * m12 * m21);
+    return T(2) * q[9] * (tr * tr - det + T(2) * tr * det) / (T(1) + T(2) * tr + T(4) * det);
+}
+
+/// Rotation-free bending (the Basic Shell Triangle: Oñate & Zárate 2000, IJNME 47:557; Flores &
+/// Oñate 2005, CMAME 194:907, whose form NiftySim's LinearShell element takes). The curvature of a
+/// triangle is its mean second derivative, by the divergence theorem over the triangle in its
+/// convected coordinates: H_αβ = ⟨∂²x/∂ξα∂ξβ⟩ = −2 Σ_e ∂N_e/∂ξβ (∂x/∂ξα|_e − ∂x/∂ξα|_own), edge e
+/// opposite corner e, where the gradient at an edge is the mean of the two triangles' that share it
+/// (the neighbour unfolded into the triangle's plane), the triangle's own at a free edge and the
+/// reference one at a clamped edge; inside the sheet (a node across every edge) the second
+/// derivatives of the quadratic through the patch's six nodes instead (Flores & Oñate 2001, CMAME
+/// 190:5899, the enhanced triangle: exact for any quadratic shape on any mesh, where the mean
+/// gradients are only on regular ones). The model stores it as H_c = H0_c + Σ_p B[c][p] u_p
+/// (kBendValues; Model::build_bending). κ_c = t·H_c with t = g1 × g2 / |g1 × g2| the current normal; the
+/// moments are Kirchhoff's, M^ij = ∂W/∂κ_ij of W = A0 (D ν/2 tr(K)² + D (1 − ν)/2 tr(K²)), K = κ − κ0 mixed
+/// with G⁻¹ (svk_resultant), so a curved reference shape is unstressed. The forces are the exact gradient of
+/// that energy: the patch's nodes receive Σ_c w_c B[c][p] t (w = M^11, M^22, 2 M^12) and the corners the
+/// normal's variation, ∂N_a/∂ξ1 g2 × v + ∂N_a/∂ξ2 v × g1 with v = (I − t t) Σ_c w_c H_c / |g1 × g2|. Inputs:
+/// the membrane's data, its tangents g1, g2 [m], u [m] SoA (3, P). Output: out [N], its kMembraneSlots slots
+/// (3 each), added to (corners) and written (the nodes across).
+template <class T>
+PLIANT_HD void membrane_bending_forces(index_t m, const MembraneData<T>& md, const T* u, index_t P,
+                                       const T g1[3], const T g2[3], T* out) {
+    const T* b = md.bend + static_cast<std::size_t>(kBendValues) * m;
+    index_t node[kMembraneSlots];
+    for (int k = 0; k < kMembraneSlots; ++k)
+        node[k] = k < 3 ? md.nodes[3 * m + k] : md.nbrs[static_cast<std::size_t>(kMembraneNbrs) * m + k - 3];
+    T H[3][3];
+    PLIANT_UNROLL
+    for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) H[c][d] = b[kBendH0 + 3 * c + d];
+    for (int p = 0; p < kMembraneSlots; ++p) {
+        if (node[p] < 0) continue;  // no node in that slot (a free or clamped edge)
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) {
+            const T up = u[d * P + node[p]];
+            PLIANT_UNROLL
+            for (int c = 0; c < 3; ++c) H[c][d] += b[kMembraneSlots * c + p] * up;
+        }
+    }
+    const T n[3] = {g1[1] * g2[2] - g1[2] * g2[1], g1[2] * g2[0] - g1[0] * g2[2],
+                    g1[0] * g2[1] - g1[1] * g2[0]};
+    const T inv_n = T(1) / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    const T t[3] = {n[0] * inv_n, n[1] * inv_n, n[2] * inv_n};
+    T K[3];
+    PLIANT_UNROLL
+    for (int c = 0; c < 3; ++c) K[c] = t[0] * H[c][0] + t[1] * H[c][1] + t[2] * H[c][2] - b[kBendKappa0 + c];
+    const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
+    T M[3];
+    svk_resultant(q[6], q[7], q[8], b[kBendModuli], b[kBendModuli + 1], K, M);
+    const T w[3] = {M[0], M[1], T(2) * M[2]};
+    for (int p = 0; p < kMembraneSlots; ++p) {
+        const T s = w[0] * b[p] + w[1] * b[kMembraneSlots + p] + w[2] * b[2 * kMembraneSlots + p];
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) {
+            if (p < 3)
+                out[3 * p + d] += s * t[d];
+            else
+                out[3 * p + d] = s * t[d];
+        }
+    }
+    T h[3], v[3];
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) h[d] = w[0] * H[0][d] + w[1] * H[1][d] + w[2] * H[2][d];
+    const T th = t[0] * h[0] + t[1] * h[1] + t[2] * h[2];
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) v[d] = (h[d] - th * t[d]) * inv_n;
+    const T a1[3] = {g2[1] * v[2] - g2[2] * v[1], g2[2] * v[0] - g2[0] * v[2], g2[0] * v[1] - g2[1] * v[0]};
+    const T a2[3] = {v[1] * g1[2] - v[2] * g1[1], v[2] * g1[0] - v[0] * g1[2], v[0] * g1[1] - v[1] * g1[0]};
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) {  // ∂N/∂ξ: corner 0 (−1, −1), 1 (1, 0), 2 (0, 1)
+        out[d] -= a1[d] + a2[d];
+        out[3 + d] += a1[d];
+        out[6 + d] += a2[d];
+    }
+}
+
+/// Whether membrane m bends (its bending moduli are not both 0).
+template <class T>
+PLIANT_HD bool membrane_bends(index_t m, const MembraneData<T>& md) {
+    if (md.bend == nullptr) return false;
+    const T* b = md.bend + static_cast<std::size_t>(kBendValues) * m + kBendModuli;
+    return b[0] != T(0) || b[1] != T(0);
+}
+
+/// Bending energy A0 W [J] of membrane m (membrane_bending_forces' W; 0 where it does not bend).
+/// u [m] SoA (3, P).
+template <class T>
+PLIANT_HD T membrane_bending_energy(index_t m, const MembraneData<T>& md, const T* u, index_t P) {
+    if (!membrane_bends(m, md)) return T(0);
+    T d1[3], d2[3], g1[3], g2[3];
+    membrane_tangents(m, md, u, P, d1, d2, g1, g2);
+    const T* b = md.bend + static_cast<std::size_t>(kBendValues) * m;
+    T H[3][3];
+    for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) H[c][d] = b[kBendH0 + 3 * c + d];
+    for (int p = 0; p < kMembraneSlots; ++p) {
+        const index_t np =
+            p < 3 ? md.nodes[3 * m + p] : md.nbrs[static_cast<std::size_t>(kMembraneNbrs) * m + p - 3];
+        if (np < 0) continue;
+        for (int d = 0; d < 3; ++d)
+            for (int c = 0; c < 3; ++c) H[c][d] += b[kMembraneSlots * c + p] * u[d * P + np];
+    }
+    const T n[3] = {g1[1] * g2[2] - g1[2] * g2[1], g1[2] * g2[0] - g1[0] * g2[2],
+                    g1[0] * g2[1] - g1[1] * g2[0]};
+    const T inv_n = T(1) / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    T K[3];
+    for (int c = 0; c < 3; ++c)
+        K[c] = (n[0] * H[c][0] + n[1] * H[c][1] + n[2] * H[c][2]) * inv_n - b[kBendKappa0 + c];
+    const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
+    return svk_energy(q[6], q[7], q[8], b[kBendModuli], b[kBendModuli + 1], K);
 }
 
 /// Membrane m's internal force [N] at each of its corners a, A0 S^ij g_i ∂N_a/∂ξj (see the header),
-/// its stress computed once for the three. Inputs: membrane data, u [m] SoA (3, P). Output:
-/// md.corner_f[9 m + 3 a + d].
+/// its stress computed once for the three, and where it bends its bending forces on its corners
+/// and the nodes across its edges (membrane_bending_forces). Inputs: membrane data, u [m] SoA (3,
+/// P). Output: md.corner_f[3 (kMembraneSlots m + slot) + d].
 template <class T>
 PLIANT_HD void membrane_corner_forces(index_t m, const MembraneData<T>& md, const T* u, index_t P) {
     const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
@@ -223,10 +377,11 @@ PLIANT_HD void membrane_corner_forces(index_t m, const MembraneData<T>& md, cons
     membrane_stress(static_cast<MembraneKind>(md.kind[m]), q, g1, g2, d1, d2, S);
     // w_i = S^ij ∂N_a/∂ξj: corner 0 (−1, −1), 1 (1, 0), 2 (0, 1).
     const T w[3][2] = {{-(S[0] + S[2]), -(S[2] + S[1])}, {S[0], S[2]}, {S[2], S[1]}};
-    T* out = md.corner_f + 9 * static_cast<std::size_t>(m);
+    T* out = md.corner_f + 3 * kMembraneSlots * static_cast<std::size_t>(m);
     PLIANT_UNROLL
     for (int a = 0; a < 3; ++a)
         for (int d = 0; d < 3; ++d) out[3 * a + d] = w[a][0] * g1[d] + w[a][1] * g2[d];
+    if (membrane_bends(m, md)) membrane_bending_forces(m, md, u, P, g1, g2, out);
 }
 
 /// Internal force [N] of node n's membrane corners (membrane_corner_forces, computed before this
@@ -236,7 +391,7 @@ template <class T>
 PLIANT_HD void membrane_force(index_t n, const MembraneData<T>& md, T f[3]) {
     const index_t end = md.offsets[n + 1];
     for (index_t k = md.offsets[n]; k < end; ++k) {
-        const T* c = md.corner_f + 3 * static_cast<std::size_t>(md.index[k]);  // 9 m + 3 corner
+        const T* c = md.corner_f + 3 * static_cast<std::size_t>(md.index[k]);  // 3 (6 m + slot)
         PLIANT_UNROLL
         for (int d = 0; d < 3; ++d) f[d] += c[d];
     }
@@ -247,8 +402,8 @@ constexpr int kMembraneMeasures = 8;
 
 /// Output measures of membrane m (not on the stepping path): its area stretch J_s = √(det g / det G),
 /// its Cauchy stress resultant t = J_s⁻¹ S^ij g_i ⊗ g_j [N/m] (the force per current length of a
-/// cut through it) and its strain energy A0 h W [J] (membrane_energy): out[0] = J_s, out[1..6] = t
-/// as xx, yy, zz, xy, yz, xz, out[7] the energy. u [m] SoA (3, P).
+/// cut through it) and its strain energy A0 h W [J] (membrane_energy, and its bending energy): out[0] = J_s,
+/// out[1..6] = t as xx, yy, zz, xy, yz, xz, out[7] the energy. u [m] SoA (3, P).
 template <class T>
 PLIANT_HD void membrane_measures(index_t m, const MembraneData<T>& md, const T* u, index_t P,
                                  T out[kMembraneMeasures]) {
@@ -272,7 +427,8 @@ PLIANT_HD void membrane_measures(index_t m, const MembraneData<T>& md, const T* 
         out[1 + k] =
             w * (S[0] * g1[i] * g1[j] + S[1] * g2[i] * g2[j] + S[2] * (g1[i] * g2[j] + g2[i] * g1[j]));
     }
-    out[7] = membrane_energy(static_cast<MembraneKind>(md.kind[m]), q, d1, d2);
+    out[7] = membrane_energy(static_cast<MembraneKind>(md.kind[m]), q, d1, d2) +
+             membrane_bending_energy(m, md, u, P);
 }
 
 }  // namespace pliant

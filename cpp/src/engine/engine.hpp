@@ -263,7 +263,8 @@ private:
     DeviceBuffer<std::int64_t, Dev> spart_, sshare_, sacc_, spair_;
     DeviceBuffer<MaterialParams<T>, Dev> d_mats_;
     DeviceBuffer<T, Dev> d_mem_geom_;  // the membranes' values, their moduli scaled (scale_materials)
-    DeviceBuffer<T, Dev> mem_f_;       // the membranes' corner forces [N] (membrane_corner_forces)
+    DeviceBuffer<T, Dev> d_mem_bend_;  // the membranes' bending values, their moduli scaled
+    DeviceBuffer<T, Dev> mem_f_;       // the membranes' slot forces [N] (membrane_corner_forces)
     double material_scale_ = 1.0;
     DeviceBuffer<Prony<T>, Dev> d_prony_;
     DeviceBuffer<T, Dev> anp_gamma_;

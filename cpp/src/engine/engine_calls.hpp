@@ -16,7 +16,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     for (auto& f : f_node_) f = DeviceBuffer<T, Dev>(dev_, P3);
     q_ = DeviceBuffer<T, Dev>(dev_, m.visco_slots() * 6 * static_cast<std::size_t>(m.visco_terms));
     f_elem_ = DeviceBuffer<T, Dev>(dev_, 12 * S + kForcePad);
-    mem_f_ = DeviceBuffer<T, Dev>(dev_, 9 * m.mem_kind.size());
+    mem_f_ = DeviceBuffer<T, Dev>(dev_, 3 * kMembraneSlots * m.mem_kind.size());
     J_ = DeviceBuffer<T, Dev>(dev_, S);
     elem_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? S : 0);
     node_p_ = DeviceBuffer<T, Dev>(dev_, m.anp ? static_cast<std::size_t>(m.n_pad) : 0);
@@ -79,6 +79,7 @@ Engine<T, Dev>::Engine(const Model<T>& m, A&&... dev_args)
     anp_gamma_.upload(gamma.data(), ng);
     d_mats_ = DeviceBuffer<MaterialParams<T>, Dev>(dev_, ng);
     d_mem_geom_ = DeviceBuffer<T, Dev>(dev_, m.mem_geom.size());
+    d_mem_bend_ = DeviceBuffer<T, Dev>(dev_, m.mem_bend.size());
     upload_materials();
     ensure_history(1);
     refresh_view();
@@ -167,7 +168,9 @@ void Engine<T, Dev>::refresh_view() {
                mb_.pslot.data(),
                mb_.ptraction.data(),
                {static_cast<index_t>(m.mem_kind.size()), mb_.mem_off.data(), mb_.mem_idx.data(),
-                mb_.mem_nodes.data(), mb_.mem_kind.data(), d_mem_geom_.data(), mem_f_.data()}};
+                mb_.mem_nodes.data(), mb_.mem_kind.data(), d_mem_geom_.data(), mem_f_.data(),
+                m.mem_nbrs.empty() ? nullptr : mb_.mem_nbrs.data(),
+                m.mem_bend.empty() ? nullptr : d_mem_bend_.data()}};
     v.relax_nodes = v.nodes;
     v.relax_nodes.inv_mass = mb_.relax_inv_mass.data();
     v.mass = mb_.mass.data(), v.relax_mass = mb_.relax_mass.data(), v.free_mask = mb_.free_mask.data();
@@ -525,6 +528,11 @@ void Engine<T, Dev>::upload_materials() {
         for (int k = 0; k < kMembraneValues - kMembraneModuli; ++k)
             geom[i + k] = T(double(geom[i + k]) * material_scale_);
     d_mem_geom_.upload(geom.data(), geom.size());
+    std::vector<T> bend = m_.mem_bend;
+    for (std::size_t i = kBendModuli; i < bend.size(); i += kBendValues)
+        for (int k = 0; k < kBendValues - kBendModuli; ++k)
+            bend[i + k] = T(double(bend[i + k]) * material_scale_);
+    d_mem_bend_.upload(bend.data(), bend.size());
 }
 
 }  // namespace pliant

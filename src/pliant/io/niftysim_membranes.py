@@ -5,9 +5,11 @@ their <ShellElementSet>s, each a set of them (listed, Size="all", or Size consec
 the one listed) with a <Material>: "Linear" (E ν; pliant's StVKMembrane, NiftySim's geometrically
 linear membrane at small displacement) or "NeoHookean" (μ; NeoHookeanMembrane, the same
 incompressible membrane), with <Density> and <Thickness>; "LinearShell" (E ν E_b ν_b, NiftySim's
-rotation-free shell triangle: a linear membrane that also bends with E_b, ν_b) without bending
-(E_b = 0, as most of NiftySim's shell test models) is the same membrane, StVKMembrane. Shells with
-bending stiffness (LinearShell with E_b ≠ 0, "LinearThickShell") are refused by name.
+rotation-free shell triangle: a linear membrane that also bends with E_b, ν_b) is StVKMembrane with
+``bending=E_b, bending_nu=ν_b`` (without bending, E_b = 0, as most of NiftySim's shell test models,
+a plain membrane), its set's <ClampedNodes> (listed, or NumNodes consecutive ones from the one
+listed) clamping the boundary edges between them. "LinearThickShell" (transverse shear) is refused
+by name.
 A <SubModel>'s membranes are merged into the model first (niftysim_submodels.py), their sets
 marked with where they came from (ORIGIN), for the messages."""
 
@@ -66,7 +68,9 @@ def add_membranes(root, b: ModelBuilder, T: np.ndarray, f: str, unsupported, war
             from .niftysim import _named
 
             with _named(f, key):
-                b.add_membrane(faces[members], material)
+                b.add_membrane(
+                    faces[members], material, _clamped(es, b.n_nodes, f, key) if material.bends else None
+                )
             mtype = es.find("Material").get("Type")
             if mtype == "Linear":  # not LinearShell: its forces have A h
                 warnings.append(_linear_note(f, key, b.nodes, faces[members], material.thickness))
@@ -177,10 +181,10 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     if m is None:
         raise NiftySimError("<ShellElementSet> without <Material>", f, key)
     mtype = m.get("Type")
-    if mtype == "LinearThickShell" or (mtype == "LinearShell" and _shell_bends(m, f, key)):
+    if mtype == "LinearThickShell":
         unsupported(
             f"ShellElementSet Material Type={mtype}",
-            "shells with bending stiffness (NiftySim's rotation-free shell triangles) are not implemented; "
+            "thick shells (transverse shear) are not implemented (LinearShell's thin shells are); "
             "skipping the set leaves its facets without a membrane",
         )
         warnings.append(f"{f}: {key}: its shell elements skipped (no membrane)")
@@ -188,7 +192,7 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     if mtype not in ("Linear", "NeoHookean", "LinearShell"):
         raise NiftySimError(
             f"<Material Type={mtype!r}> in a shell element set: expected Linear, NeoHookean (membranes), "
-            "LinearShell (without bending: a membrane) or LinearThickShell (not implemented)",
+            "LinearShell (thin shells) or LinearThickShell (not implemented)",
             f,
             f"{key}/Material",
         )
@@ -207,9 +211,42 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
         raise NiftySimError(
             f"{mtype} takes {want} parameter(s) ({names}); got {vals.size}", f, f"{key}/Material"
         )
-    if es.find("ClampedNodes") is not None:
+    bends = mtype == "LinearShell" and _shell_bends(m, f, key)
+    if es.find("ClampedNodes") is not None and not bends:
         warnings.append(f"{f}: {key}: <ClampedNodes> ignored: a membrane has no bending to clamp")
     with _named(f, f"{key}/Material"):
+        if mtype == "LinearShell" and bends:
+            return StVKMembrane(
+                vals[0], vals[1], sheet["Thickness"], sheet["Density"], bending=vals[2], bending_nu=vals[3]
+            )
         if mtype in ("Linear", "LinearShell"):
             return StVKMembrane(vals[0], vals[1], sheet["Thickness"], sheet["Density"])
         return NeoHookeanMembrane(vals[0], sheet["Thickness"], sheet["Density"])
+
+
+def _clamped(es, n_nodes: int, f: str, key: str) -> np.ndarray:
+    """The nodes a shell set's <ClampedNodes> list (each its nodes, or NumNodes consecutive ones
+    from the one listed: tledModel::GetClampedShellNodes)."""
+    from .niftysim import NiftySimError, _numbers
+
+    out = [np.zeros(0, np.int64)]
+    for k, el in enumerate(es.findall("ClampedNodes")):
+        where = f"{key}/ClampedNodes[{k}]"
+        v = _numbers(el, f, where, np.int64)
+        if v.size == 1 and el.get("NumNodes") is not None:
+            try:
+                count = int(el.get("NumNodes"))
+            except ValueError:
+                count = 0
+            if count <= 0:
+                raise NiftySimError(
+                    f'<ClampedNodes NumNodes="{el.get("NumNodes")[:20]}">: expected a count > 0', f, where
+                )
+            v = np.arange(v[0], v[0] + count)
+        bad = v[(v < 0) | (v >= n_nodes)]
+        if bad.size:
+            raise NiftySimError(
+                f"clamped node {int(bad[0])} out of range; the model has nodes 0..{n_nodes - 1}", f, where
+            )
+        out.append(v)
+    return np.unique(np.concatenate(out))

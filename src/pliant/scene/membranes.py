@@ -9,9 +9,13 @@ boundary triangles whose three nodes are all selected (``nodes``; the whole boun
     density = 1100.0            # [kg/m^3]
     nodes = { box = [[-1, -1, 0.01], [1, 1, 1]] }
     wrinkling = false           # true: carries no compression (tension-field theory)
+    bending = false             # true: a plate of its own E, nu; a number: its bending E [Pa]
+    bending_nu = 0.3            # Poisson's ratio of its bending (default the material's)
 
 A membrane on a solid carries compression by default (the solid holds it flat, as NiftySim's do);
-a [[sheet]] apart from the tets wrinkles by default (pliant.scene.sheets).
+a [[sheet]] apart from the tets wrinkles by default (pliant.scene.sheets). A sheet that bends
+(rotation-free shell triangles: pliant.StVKMembrane's ``bending``) has its boundary edges clamped
+where both their nodes are held in all three directions (a [[fix]] of all DOFs).
 """
 
 from __future__ import annotations
@@ -58,6 +62,8 @@ MATERIAL_KEYS = {
     "thickness": "number",
     "density": "number",
     "wrinkling": "bool",
+    "bending": "bool|number",
+    "bending_nu": "number",
 }
 
 
@@ -70,12 +76,17 @@ def membrane_material(ctx: Ctx, m: dict, p: str, other: set[str], wrinkling: boo
             f"{p}.type", f"unknown membrane {m['type']!r}; expected one of {', '.join(MEMBRANES)}"
         )
     cls, params = MEMBRANES[m["type"]]
-    given = set(m) - {"type", "thickness", "density", "wrinkling"} - other
+    given = set(m) - {"type", "thickness", "density", "wrinkling", "bending", "bending_nu"} - other
     if given != set(params):
         raise ctx.error(
             p, f"{m['type']} takes ({', '.join(params)}); got ({', '.join(sorted(given)) or 'nothing'})"
         )
     with ctx.under(p):
         return cls(
-            *[m[k] for k in params], m["thickness"], m["density"], wrinkling=m.get("wrinkling", wrinkling)
+            *[m[k] for k in params],
+            m["thickness"],
+            m["density"],
+            wrinkling=m.get("wrinkling", wrinkling),
+            bending=m.get("bending", False),
+            bending_nu=m.get("bending_nu"),
         )

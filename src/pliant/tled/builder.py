@@ -108,6 +108,7 @@ class ModelBuilder:
         self._pressures: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []
         self._tractions: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []  # add_traction
         self._membranes: list[tuple[np.ndarray, MembraneMaterial]] = []  # add_membrane
+        self._membrane_clamps: list[np.ndarray | None] = []  # add_membrane's clamped, per call
         self._gravity: tuple[np.ndarray, LoadCurve] | None = None
         self._node_gravity: list[tuple[np.ndarray, np.ndarray, LoadCurve]] = []  # add_gravity
         self.tools: list = []  # rigid tools (pliant.contact)
@@ -355,13 +356,16 @@ class ModelBuilder:
             )
         self._tractions.append((F, t, curve or Constant()))
 
-    def add_membrane(self, faces, material: MembraneMaterial):
+    def add_membrane(self, faces, material: MembraneMaterial, clamped=None):
         """Membrane triangles ``faces`` (F, 3) (user node ids) of ``material``
         (pliant.StVKMembrane or pliant.NeoHookeanMembrane, with its thickness and density): each a
         Total Lagrangian constant-strain triangle that carries in-plane stress only, on the mesh's
         surface (a capsule, a wall) or anywhere between its nodes. Its mass ρ h A0 / 3 adds to each
         corner's, its wave speed may lower the critical time step (docs/engine.md, "Membranes").
-        The winding does not matter."""
+        The winding does not matter. Where the material bends (``bending``): ``clamped`` (node ids)
+        clamps the boundary edges of these triangles whose two nodes it lists (their slope held,
+        NiftySim's <ClampedNodes>); default (None): the edges whose nodes are held in all three
+        directions when the model is finalized."""
         if not isinstance(material, MembraneMaterial):
             raise MaterialError(
                 f"add_membrane: material {shown(material)}; expected pliant.StVKMembrane or "
@@ -390,7 +394,10 @@ class ModelBuilder:
                 f"add_membrane: {material!r} on triangles of up to {area.max():.3g} m^2: its mass "
                 "or stiffness overflows; expected SI units (m, kg/m^3, Pa)"
             )
+        if clamped is not None:
+            clamped = self._node_ids(np.asarray(clamped).ravel(), "add_membrane clamped")
         self._membranes.append((F, material))
+        self._membrane_clamps.append(clamped)
 
     @property
     def n_membranes(self) -> int:
@@ -468,7 +475,7 @@ class ModelBuilder:
         b = copy.copy(self)
         b.sets, b._forces, b._pressures = list(self.sets), list(self._forces), list(self._pressures)
         b._node_gravity, b._tractions = list(self._node_gravity), list(self._tractions)
-        b._membranes = list(self._membranes)
+        b._membranes, b._membrane_clamps = list(self._membranes), list(self._membrane_clamps)
         b._cons, b.tools, b.tool_nodes = dict(self._cons), list(self.tools), list(self.tool_nodes)
         b.supports = list(self.supports)
         return b

@@ -50,6 +50,34 @@ def _membrane_mass(n_nodes: int, X: np.ndarray, F: np.ndarray, materials: list) 
     return np.bincount(F.ravel(), np.repeat(rho_h * area / 3.0, 3), minlength=n_nodes)
 
 
+def _bending_input(
+    builder, mem_F: np.ndarray, mem_mat: list, held: np.ndarray, node_rank: np.ndarray
+) -> dict:
+    """The engine's bending input (ModelInput::mem_nbrs, mem_bend) where any membrane bends: the
+    nodes across each membrane's edges (engine numbering; a boundary edge is clamped whose nodes
+    add_membrane's ``clamped`` lists, or by default are held in all three directions) and each
+    membrane's E_b, ν_b."""
+    if not any(m.bends for m in mem_mat):
+        return {}
+    from .patches import across_edges, clamp_edges, patch_nodes
+
+    nbrs = across_edges(mem_F)
+    start = 0
+    for (F, _), clamped in zip(builder._membranes, builder._membrane_clamps):
+        mask = held.all(axis=1)
+        if clamped is not None:
+            mask = np.zeros(held.shape[0], bool)
+            mask[clamped] = True
+        clamp_edges(nbrs[start : start + len(F)], F, mask)
+        start += len(F)
+    nbrs = patch_nodes(mem_F, nbrs)
+    ranked = np.where(nbrs >= 0, node_rank[np.maximum(nbrs, 0)], nbrs)
+    return {
+        "mem_nbrs": [int(v) for v in ranked.ravel()],
+        "mem_bend": [v for m in mem_mat for v in (m.bending_E, m.bending_nu)],
+    }
+
+
 def _membrane_altitudes(X: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Smallest altitude [m] of each membrane triangle F (K, 3) over positions X: 2 A / longest edge."""
     area, longest = triangle_measures(X, F)
@@ -444,6 +472,7 @@ class Model:
                 mem_params=[
                     v for m in mem_mat for v in (m.thickness, m.density, *m.params, float(m.wrinkling))
                 ],
+                **_bending_input(builder, mem_F, mem_mat, held, node_rank),
                 threads=int(threads if threads else _auto_threads(M)),
             )
         except ValueError as e:  # the engine's own checks, in words a user can act on
