@@ -22,8 +22,9 @@ namespace pliant {
 
 namespace {
 
-/// The largest stencil of an edge: its two nodes, the two opposite, two across each triangle.
-constexpr int kStencil = 8;
+/// The largest stencil of an edge: its two nodes and the two opposite, two across each triangle
+/// (eight); a free edge's: its triangle, two across it and two across each of those (nine).
+constexpr int kStencil = 9;
 
 struct Vec {
     double v[3];
@@ -103,6 +104,48 @@ bool quadratic_gradient(int n, const double s[kStencil][2], double grad[2][kSten
 /// Corner a's shape gradient ∂N_a/∂ξ in a triangle's convected coordinates.
 constexpr double kDN[3][2] = {{-1.0, -1.0}, {1.0, 0.0}, {0.0, 1.0}};
 
+/// An edge's stencil in a chart about the edge: s = ((Y − o)·t, (Y − o)·m) / l, o its midpoint,
+/// t along it, m across it in the plane of the triangle a point was unfolded into, l its length.
+/// A node met twice (a vertex of few triangles: across one triangle's edge and across its
+/// neighbour's) is one point at the mean of its unfoldings, and none of the first four again: the
+/// same stencil from both triangles of an edge.
+struct Stencil {
+    const index_t* slot_node;
+    Vec o, t;
+    double l;
+    double s[kStencil][2];
+    int slot[kStencil], count[kStencil], n = 0;
+
+    Stencil(const index_t* nodes, const Vec& a, const Vec& b) : slot_node(nodes) {
+        t = sub(b, a);
+        l = std::sqrt(dot(t, t));
+        t = {{t[0] / l, t[1] / l, t[2] / l}};
+        o = axpy(0.5, sub(b, a), a);
+    }
+    void add(int sl, const Vec& Y, const Vec& across) {
+        const double s0 = dot(sub(Y, o), t) / l, s1 = dot(sub(Y, o), across) / l;
+        for (int q = 0; q < n; ++q)
+            if (slot_node[slot[q]] == slot_node[sl]) {
+                if (q < 4) return;
+                s[q][0] = (s[q][0] * count[q] + s0) / (count[q] + 1);
+                s[q][1] = (s[q][1] * count[q] + s1) / (count[q] + 1);
+                ++count[q];
+                return;
+            }
+        if (n < kStencil) s[n][0] = s0, s[n][1] = s1, slot[n] = sl, count[n++] = 1;
+    }
+    /// The least-squares quadratic's gradient at the midpoint as ∂x/∂ξα of a triangle with
+    /// tangents G lying in the chart across m (coefficients added to mid); false where it fails.
+    bool fit(const Vec* G, const Vec& m, double mid[2][kMembraneSlots]) const {
+        double grad[2][kStencil];
+        if (!quadratic_gradient(n, s, grad)) return false;
+        const double J[2][2] = {{dot(G[0], t) / l, dot(G[0], m) / l}, {dot(G[1], t) / l, dot(G[1], m) / l}};
+        for (int a = 0; a < 2; ++a)
+            for (int p = 0; p < n; ++p) mid[a][slot[p]] += grad[0][p] * J[a][0] + grad[1][p] * J[a][1];
+        return true;
+    }
+};
+
 /// The gradient ∂x/∂ξα at the midpoint of a membrane's edge e (opposite corner e, with a node
 /// across it) as coefficients on the patch's slots, mid[α][slot] (the file's header): the
 /// least-squares quadratic over the edge's stencil, unfolded into a chart about the edge (axes
@@ -113,60 +156,68 @@ bool edge_gradient(const ModelInput& in, int e, const index_t* slot_node, const 
     const int i = (e + 1) % 3, j = (e + 2) % 3;
     const Vec Xi = node_at(in, slot_node[i]), Xj = node_at(in, slot_node[j]), Xe = node_at(in, slot_node[e]);
     const Vec Xk = node_at(in, slot_node[3 + e]);
-    Vec t = sub(Xj, Xi);
-    const double l = std::sqrt(dot(t, t));
-    t = {{t[0] / l, t[1] / l, t[2] / l}};
-    const Vec o = axpy(0.5, sub(Xj, Xi), Xi);  // the edge's midpoint
+    Stencil st(slot_node, Xi, Xj);
     Vec mT, mN;  // across the edge in each triangle's plane: the own away from e, the other toward k
-    if (!toward(Xi, t, Xe, mT) || !toward(Xi, t, Xk, mN)) return false;
+    if (!toward(Xi, st.t, Xe, mT) || !toward(Xi, st.t, Xk, mN)) return false;
     mT = {{-mT[0], -mT[1], -mT[2]}};
-    double s[kStencil][2];
-    int slot[kStencil], count[kStencil], n = 0;
-    // A node met twice (a vertex of few triangles: across one triangle's edge and across its
-    // neighbour's) is one point, at the mean of its two unfoldings, and none of the edge's own
-    // four again: the same stencil from both triangles of the edge.
-    auto add = [&](int sl, const Vec& Y, const Vec& across) {
-        const double s0 = dot(sub(Y, o), t) / l, s1 = dot(sub(Y, o), across) / l;
-        for (int q = 0; q < n; ++q)
-            if (slot_node[slot[q]] == slot_node[sl]) {
-                if (q < 4) return;
-                s[q][0] = (s[q][0] * count[q] + s0) / (count[q] + 1);
-                s[q][1] = (s[q][1] * count[q] + s1) / (count[q] + 1);
-                ++count[q];
-                return;
-            }
-        s[n][0] = s0, s[n][1] = s1, slot[n] = sl, count[n++] = 1;
-    };
-    add(i, Xi, mT), add(j, Xj, mT), add(e, Xe, mT), add(3 + e, Xk, mN);
+    st.add(i, Xi, mT), st.add(j, Xj, mT), st.add(e, Xe, mT), st.add(3 + e, Xk, mN);
     Vec Y;
     // The own triangle's other across nodes (unfolded into its plane), then the other's.
-    if (slot_node[3 + i] >= 0 && unfold(Xj, Xe, Xi, node_at(in, slot_node[3 + i]), Y)) add(3 + i, Y, mT);
-    if (slot_node[3 + j] >= 0 && unfold(Xe, Xi, Xj, node_at(in, slot_node[3 + j]), Y)) add(3 + j, Y, mT);
+    if (slot_node[3 + i] >= 0 && unfold(Xj, Xe, Xi, node_at(in, slot_node[3 + i]), Y)) st.add(3 + i, Y, mT);
+    if (slot_node[3 + j] >= 0 && unfold(Xe, Xi, Xj, node_at(in, slot_node[3 + j]), Y)) st.add(3 + j, Y, mT);
     if (slot_node[6 + 2 * e] >= 0 && unfold(Xj, Xk, Xi, node_at(in, slot_node[6 + 2 * e]), Y))
-        add(6 + 2 * e, Y, mN);
+        st.add(6 + 2 * e, Y, mN);
     if (slot_node[7 + 2 * e] >= 0 && unfold(Xk, Xi, Xj, node_at(in, slot_node[7 + 2 * e]), Y))
-        add(7 + 2 * e, Y, mN);
-    // ∂s_q/∂ξα: the own tangents in the chart (the own triangle lies in it).
-    const double J[2][2] = {{dot(G[0], t) / l, dot(G[0], mT) / l}, {dot(G[1], t) / l, dot(G[1], mT) / l}};
-    double grad[2][kStencil];
-    if (quadratic_gradient(n, s, grad)) {
-        for (int a = 0; a < 2; ++a)
-            for (int p = 0; p < n; ++p) mid[a][slot[p]] += grad[0][p] * J[a][0] + grad[1][p] * J[a][1];
-        return true;
-    }
+        st.add(7 + 2 * e, Y, mN);
+    if (st.fit(G, mT, mid)) return true;
     // The four nodes' gradient: the linear map taking the edge (s_j − s_i) to x_j − x_i and the
     // segment between the opposite nodes (s_k − s_e) to x_k − x_e.
-    const double a0 = s[1][0] - s[0][0], a1 = s[1][1] - s[0][1];
-    const double c0 = s[3][0] - s[2][0], c1 = s[3][1] - s[2][1];
+    const double a0 = st.s[1][0] - st.s[0][0], a1 = st.s[1][1] - st.s[0][1];
+    const double c0 = st.s[3][0] - st.s[2][0], c1 = st.s[3][1] - st.s[2][1];
     const double dd = a0 * c1 - a1 * c0;
     if (!(std::fabs(dd) > 0.0)) return false;
     const double r0[2] = {c1 / dd, -c0 / dd}, r1[2] = {-a1 / dd, a0 / dd};  // rows of [a c]⁻¹
+    const double J[2][2] = {{dot(G[0], st.t) / st.l, dot(G[0], mT) / st.l},
+                            {dot(G[1], st.t) / st.l, dot(G[1], mT) / st.l}};
     for (int a = 0; a < 2; ++a)
         for (int q = 0; q < 2; ++q) {
             mid[a][j] += r0[q] * J[a][q], mid[a][i] -= r0[q] * J[a][q];
             mid[a][3 + e] += r1[q] * J[a][q], mid[a][e] -= r1[q] * J[a][q];
         }
     return true;
+}
+
+/// The gradient at the midpoint of a free edge e (no node across it) from its own side: the
+/// least-squares quadratic over the triangle, its other neighbours' nodes and theirs (unfolded
+/// into its plane), so that a boundary triangle's curvature is exact for quadratic shapes too and
+/// the edge's moment-free condition is left to the energy (a natural boundary condition). False
+/// where fewer than six points or no unique quadratic (the triangle's own gradient then).
+bool free_edge_gradient(const ModelInput& in, int e, const index_t* slot_node, const Vec* G,
+                        double mid[2][kMembraneSlots]) {
+    const int i = (e + 1) % 3, j = (e + 2) % 3;
+    const Vec X[3] = {node_at(in, slot_node[0]), node_at(in, slot_node[1]), node_at(in, slot_node[2])};
+    Stencil st(slot_node, X[i], X[j]);
+    Vec mT;
+    if (!toward(X[i], st.t, X[e], mT)) return false;
+    mT = {{-mT[0], -mT[1], -mT[2]}};
+    st.add(i, X[i], mT), st.add(j, X[j], mT), st.add(e, X[e], mT);
+    for (int f : {i, j}) {  // the own edge opposite corner f, its node across, and theirs
+        const int a = (f + 1) % 3, b = (f + 2) % 3;
+        if (slot_node[3 + f] < 0) continue;
+        const Vec Xk = node_at(in, slot_node[3 + f]);
+        Vec Y, Z;
+        if (!unfold(X[a], X[b], X[f], Xk, Y)) continue;
+        st.add(3 + f, Y, mT);
+        // Across the neighbour's edges opposite corners a and b: unfolded into its plane, then
+        // with it into the triangle's.
+        if (slot_node[6 + 2 * f] >= 0 && unfold(X[b], Xk, X[a], node_at(in, slot_node[6 + 2 * f]), Z) &&
+            unfold(X[a], X[b], X[f], Z, Y))
+            st.add(6 + 2 * f, Y, mT);
+        if (slot_node[7 + 2 * f] >= 0 && unfold(Xk, X[a], X[b], node_at(in, slot_node[7 + 2 * f]), Z) &&
+            unfold(X[a], X[b], X[f], Z, Y))
+            st.add(7 + 2 * f, Y, mT);
+    }
+    return st.fit(G, mT, mid);
 }
 
 }  // namespace
@@ -197,12 +248,12 @@ double Model<T>::build_bending(const ModelInput& in, index_t m, double area, dou
     for (int e = 0; e < 3; ++e) {
         const index_t k = nb[e];
         double mid[2][kMembraneSlots] = {};  // ∂x/∂ξα at the edge, coefficients on the slots
-        if (k == kFreeEdge) continue;        // the own gradient: no term
-        if (k == kClampedEdge) {             // the reference tangents
+        if (k == kFreeEdge && !free_edge_gradient(in, e, slot_node, G, mid)) continue;  // the own: no term
+        if (k == kClampedEdge) {  // the reference tangents
             for (int a = 0; a < 2; ++a)
                 for (int be = 0; be < 2; ++be)
                     for (int d = 0; d < 3; ++d) Hc[a][be][d] += -2.0 * kDN[e][be] * G[a][d];
-        } else if (!edge_gradient(in, e, slot_node, G, mid)) {
+        } else if (k >= 0 && !edge_gradient(in, e, slot_node, G, mid)) {
             throw std::invalid_argument("membrane " + std::to_string(m) + ": its neighbour across edge " +
                                         std::to_string(e) + " is degenerate (zero area)");
         }

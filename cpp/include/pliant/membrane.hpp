@@ -1,8 +1,9 @@
 // pliant — membrane triangles: Total Lagrangian constant-strain triangles that carry in-plane
-// stress only, laid on a solid's surface (an organ's capsule, a vessel's wall) or between its
-// nodes. Header-only, host and device. A membrane's force on a node is computed by that node's
-// thread in the node pass (membrane_force), as the follower pressure is (pressure_force): no
-// scatter, the same bits on every device and thread count.
+// stress (and, where they bend, Kirchhoff moments: rotation-free shell triangles), laid on a
+// solid's surface (an organ's capsule, a vessel's wall), between its nodes or as sheets of their
+// own. Header-only, host and device. Each membrane's forces on its slots are computed once per
+// step (membrane_corner_forces) and each node gathers its slots' in a fixed order in the node pass
+// (membrane_force): no scatter, the same bits on every device and thread count.
 //
 // Convected coordinates (Bonet & Wood, Nonlinear Continuum Mechanics for FEA, 2nd ed., §5.6 for
 // the membrane kinematics; Bonet, Wood, Mahaney & Heywood 2000, CMAME 190:579, for the
@@ -254,23 +255,22 @@ PLIANT_HD T membrane_energy(MembraneKind kind, const T* q, const T d1[3], const 
     return T(2) * q[9] * (tr * tr - det + T(2) * tr * det) / (T(1) + T(2) * tr + T(4) * det);
 }
 
-/// Rotation-free bending (the Basic Shell Triangle: Oñate & Zárate 2000, IJNME 47:557; Flores &
-/// Oñate 2005, CMAME 194:907, whose form NiftySim's LinearShell element takes). The curvature of a
-/// triangle is its mean second derivative, by the divergence theorem over the triangle in its
-/// convected coordinates: H_αβ = ⟨∂²x/∂ξα∂ξβ⟩ = −2 Σ_e ∂N_e/∂ξβ (∂x/∂ξα|_e − ∂x/∂ξα|_own), edge e
-/// opposite corner e, where the gradient at an edge is the mean of the two triangles' that share it
-/// (the neighbour unfolded into the triangle's plane), the triangle's own at a free edge and the
-/// reference one at a clamped edge; inside the sheet (a node across every edge) the second
-/// derivatives of the quadratic through the patch's six nodes instead (Flores & Oñate 2001, CMAME
-/// 190:5899, the enhanced triangle: exact for any quadratic shape on any mesh, where the mean
-/// gradients are only on regular ones). The model stores it as H_c = H0_c + Σ_p B[c][p] u_p
-/// (kBendValues; Model::build_bending). κ_c = t·H_c with t = g1 × g2 / |g1 × g2| the current normal; the
-/// moments are Kirchhoff's, M^ij = ∂W/∂κ_ij of W = A0 (D ν/2 tr(K)² + D (1 − ν)/2 tr(K²)), K = κ − κ0 mixed
-/// with G⁻¹ (svk_resultant), so a curved reference shape is unstressed. The forces are the exact gradient of
-/// that energy: the patch's nodes receive Σ_c w_c B[c][p] t (w = M^11, M^22, 2 M^12) and the corners the
-/// normal's variation, ∂N_a/∂ξ1 g2 × v + ∂N_a/∂ξ2 v × g1 with v = (I − t t) Σ_c w_c H_c / |g1 × g2|. Inputs:
-/// the membrane's data, its tangents g1, g2 [m], u [m] SoA (3, P). Output: out [N], its kMembraneSlots slots
-/// (3 each), added to (corners) and written (the nodes across).
+/// Rotation-free bending (the Basic Shell Triangle: Oñate & Zárate 2000, IJNME 47:557; NiftySim's
+/// LinearShell element takes Flores & Oñate 2005's form of it). The curvature of a triangle is its
+/// mean second derivative, by the divergence theorem over the triangle in its convected
+/// coordinates: H_αβ = ⟨∂²x/∂ξα∂ξβ⟩ = −2 Σ_e ∂N_e/∂ξβ (∂x/∂ξα|_e − ∂x/∂ξα|_own), edge e opposite
+/// corner e, with one gradient at each edge shared by its two triangles (so that a constant moment
+/// gives no force inside the sheet: the patch test) and exact for quadratic shapes on any mesh (a
+/// least-squares quadratic over the edge's stencil; the triangle's own at a free edge, the reference
+/// one at a clamped edge: cpp/src/model_bending.cpp). The model stores it as H_c = H0_c + Σ_p
+/// B[c][p] u_p (kBendValues). κ_c = t·H_c with t = g1 × g2 / |g1 × g2| the current normal; the
+/// moments are Kirchhoff's, M^ij = ∂W/∂κ_ij of W = A0 (D ν/2 tr(K)² + D (1 − ν)/2 tr(K²)), K = κ −
+/// κ0 mixed with G⁻¹ (svk_resultant), so a curved reference shape is unstressed. The forces are the
+/// exact gradient of that energy: the patch's nodes receive Σ_c w_c B[c][p] t (w = M^11, M^22,
+/// 2 M^12) and the corners the normal's variation, ∂N_a/∂ξ1 g2 × v + ∂N_a/∂ξ2 v × g1 with v = (I −
+/// t t) Σ_c w_c H_c / |g1 × g2|. Inputs: the membrane's data, its tangents g1, g2 [m], u [m] SoA
+/// (3, P). Output: out [N], its kMembraneSlots slots (3 each), added to (corners) and written (the
+/// patch's other nodes).
 template <class T>
 PLIANT_HD void membrane_bending_forces(index_t m, const MembraneData<T>& md, const T* u, index_t P,
                                        const T g1[3], const T g2[3], T* out) {
@@ -282,11 +282,13 @@ PLIANT_HD void membrane_bending_forces(index_t m, const MembraneData<T>& md, con
     PLIANT_UNROLL
     for (int c = 0; c < 3; ++c)
         for (int d = 0; d < 3; ++d) H[c][d] = b[kBendH0 + 3 * c + d];
-    for (int p = 0; p < kMembraneSlots; ++p) {
+    // From the displacements relative to corner 0 (Σ_p B[c][p] = 0: a translation moves nothing),
+    // so that a sheet carried far keeps its curvature's digits.
+    for (int p = 1; p < kMembraneSlots; ++p) {
         if (node[p] < 0) continue;  // no node in that slot (a free or clamped edge)
         PLIANT_UNROLL
         for (int d = 0; d < 3; ++d) {
-            const T up = u[d * P + node[p]];
+            const T up = u[d * P + node[p]] - u[d * P + node[0]];
             PLIANT_UNROLL
             for (int c = 0; c < 3; ++c) H[c][d] += b[kMembraneSlots * c + p] * up;
         }
@@ -302,8 +304,12 @@ PLIANT_HD void membrane_bending_forces(index_t m, const MembraneData<T>& md, con
     T M[3];
     svk_resultant(q[6], q[7], q[8], b[kBendModuli], b[kBendModuli + 1], K, M);
     const T w[3] = {M[0], M[1], T(2) * M[2]};
-    for (int p = 0; p < kMembraneSlots; ++p) {
-        const T s = w[0] * b[p] + w[1] * b[kMembraneSlots + p] + w[2] * b[2 * kMembraneSlots + p];
+    T s0 = T(0);  // corner 0 takes the others' sum, negated (H reads u_p − u_0)
+    for (int p = 1; p < kMembraneSlots; ++p) {
+        const T s = node[p] < 0
+                        ? T(0)
+                        : w[0] * b[p] + w[1] * b[kMembraneSlots + p] + w[2] * b[2 * kMembraneSlots + p];
+        s0 -= s;
         PLIANT_UNROLL
         for (int d = 0; d < 3; ++d) {
             if (p < 3)
@@ -312,6 +318,8 @@ PLIANT_HD void membrane_bending_forces(index_t m, const MembraneData<T>& md, con
                 out[3 * p + d] = s * t[d];
         }
     }
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) out[d] += s0 * t[d];
     T h[3], v[3];
     PLIANT_UNROLL
     for (int d = 0; d < 3; ++d) h[d] = w[0] * H[0][d] + w[1] * H[1][d] + w[2] * H[2][d];
@@ -347,12 +355,14 @@ PLIANT_HD T membrane_bending_energy(index_t m, const MembraneData<T>& md, const 
     T H[3][3];
     for (int c = 0; c < 3; ++c)
         for (int d = 0; d < 3; ++d) H[c][d] = b[kBendH0 + 3 * c + d];
-    for (int p = 0; p < kMembraneSlots; ++p) {
+    for (int p = 1; p < kMembraneSlots; ++p) {  // relative to corner 0 (membrane_bending_forces)
         const index_t np =
             p < 3 ? md.nodes[3 * m + p] : md.nbrs[static_cast<std::size_t>(kMembraneNbrs) * m + p - 3];
         if (np < 0) continue;
+        const index_t n0 = md.nodes[3 * m];
         for (int d = 0; d < 3; ++d)
-            for (int c = 0; c < 3; ++c) H[c][d] += b[kMembraneSlots * c + p] * u[d * P + np];
+            for (int c = 0; c < 3; ++c)
+                H[c][d] += b[kMembraneSlots * c + p] * (u[d * P + np] - u[d * P + n0]);
     }
     const T n[3] = {g1[1] * g2[2] - g1[2] * g2[1], g1[2] * g2[0] - g1[0] * g2[2],
                     g1[0] * g2[1] - g1[1] * g2[0]};
