@@ -180,9 +180,9 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
         q[9] = T(area * h * (nh ? mu : lam)), q[10] = T(nh ? 0.0 : area * h * mu);
         q[11] = T(p[4] == 0.0 ? 0.0 : area * h * (nh ? mu : E));  // the wrinkled state's modulus
         const double modulus = nh ? 4.0 * mu : lam + 2.0 * mu;
-        double dt_m = alt / std::sqrt(modulus / rho);
-        const double w_bend = bends ? build_bending(in, m, area, alt) : 0.0;   // ω_max of bending
-        dt_m = 1.0 / std::sqrt(1.0 / (dt_m * dt_m) + 0.25 * w_bend * w_bend);  // (2 / ω)⁻² added
+        const double dt_plane = alt / std::sqrt(modulus / rho);                     // in-plane waves
+        const double w_bend = bends ? build_bending(in, m, area, alt, sums) : 0.0;  // ω_max of bending
+        const double dt_m = 1.0 / std::sqrt(1.0 / (dt_plane * dt_plane) + 0.25 * w_bend * w_bend);
         mem_dt[m] = dt_m;
         if (dt_critical_elem < 0 || dt_m < dt_critical) {
             dt_critical = dt_m;
@@ -191,7 +191,7 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
         for (int a = 0; a < 3; ++a) {
             const index_t n = in.mem_nodes[3 * m + a];
             sums.mass[n] += rho * h * area / 3.0;
-            sums.stiff[n] += rho * h * area / (dt_m * dt_m) / 3.0;  // ρ' Δt_c⁻² as an element's
+            sums.stiff[n] += rho * h * area / (dt_plane * dt_plane) / 3.0;  // ρ' Δt_c⁻², an element's
             ++count[n + 1];
         }
     }

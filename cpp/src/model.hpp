@@ -199,7 +199,7 @@ private:
     void build_groups(const ModelInput& in);
     NodeSums build_elements(const ModelInput& in);
     void build_membranes(const ModelInput& in, NodeSums& sums);
-    double build_bending(const ModelInput& in, index_t m, double area, double alt);
+    double build_bending(const ModelInput& in, index_t m, double area, double alt, NodeSums& sums);
     void build_masses(const ModelInput& in, const NodeSums& sums);
     void build_incidence(std::vector<index_t> count);
     void build_smoothing(const ModelInput& in);

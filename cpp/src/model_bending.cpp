@@ -220,6 +220,30 @@ bool free_edge_gradient(const ModelInput& in, int e, const index_t* slot_node, c
     return st.fit(G, mT, mid);
 }
 
+/// Each patch node's share of the bending's relaxation stiffness [N/m]: a quarter of its row sum
+/// in the stiffness's bound |K_pq| ≤ A0 D (1 + |ν|) n_p n_q (Gershgorin), n_p the norm of the
+/// physical curvature a unit normal move of node p gives (n_p² = tr((G⁻¹ B_p)²), B_p its
+/// coefficients in convected components), as an element's M Δt_c⁻² is a quarter of ω² M.
+/// ``scale``: A0 D (1 + |ν|) [N·m³]. Adds to stiff (per node).
+template <class T>
+void add_relaxation_stiffness(const T* b, const Vec* G, const index_t* slot_node, double scale,
+                              std::vector<double>& stiff) {
+    const double g11 = dot(G[0], G[0]), g22 = dot(G[1], G[1]), g12 = dot(G[0], G[1]);
+    const double det = g11 * g22 - g12 * g12;
+    const double i11 = g22 / det, i22 = g11 / det, i12 = -g12 / det;
+    double norm[kMembraneSlots], sum = 0.0;
+    for (int p = 0; p < kMembraneSlots; ++p) {
+        const double k11 = double(b[p]), k22 = double(b[kMembraneSlots + p]),
+                     k12 = double(b[2 * kMembraneSlots + p]);
+        const double m11 = i11 * k11 + i12 * k12, m12 = i11 * k12 + i12 * k22;  // G⁻¹ B_p
+        const double m21 = i12 * k11 + i22 * k12, m22 = i12 * k12 + i22 * k22;
+        norm[p] = slot_node[p] < 0 ? 0.0 : std::sqrt(std::max(m11 * m11 + 2.0 * m12 * m21 + m22 * m22, 0.0));
+        sum += norm[p];
+    }
+    for (int p = 0; p < kMembraneSlots; ++p)
+        if (slot_node[p] >= 0) stiff[slot_node[p]] += 0.25 * scale * norm[p] * sum;
+}
+
 }  // namespace
 
 /// Membrane m's bending values (membrane_bending_forces, kBendValues; the file's header for the
@@ -231,7 +255,7 @@ bool free_edge_gradient(const ModelInput& in, int e, const index_t* slot_node, c
 /// sheets of regular and jittered triangles where bending sets the step (h / alt 2.4), the
 /// factor is 2.9–3.0 (docs/engine.md, "Bending").
 template <class T>
-double Model<T>::build_bending(const ModelInput& in, index_t m, double area, double alt) {
+double Model<T>::build_bending(const ModelInput& in, index_t m, double area, double alt, NodeSums& sums) {
     const index_t* c = &in.mem_nodes[3 * static_cast<std::size_t>(m)];
     const index_t* nb = &in.mem_nbrs[static_cast<std::size_t>(kMembraneNbrs) * m];
     index_t slot_node[kMembraneSlots];
@@ -292,10 +316,11 @@ double Model<T>::build_bending(const ModelInput& in, index_t m, double area, dou
     const double h = p[0], nu = pb[1];
     const double D = pb[0] * h * h * h / (12.0 * (1.0 - nu * nu));
     b[kBendModuli] = T(area * D * nu), b[kBendModuli + 1] = T(area * D * 0.5 * (1.0 - nu));
+    add_relaxation_stiffness(b, G, slot_node, area * D * (1.0 + std::fabs(nu)), sums.stiff);
     return 4.0 * std::sqrt(D / (p[1] * h)) / (alt * alt);
 }
 
-template double Model<float>::build_bending(const ModelInput&, index_t, double, double);
-template double Model<double>::build_bending(const ModelInput&, index_t, double, double);
+template double Model<float>::build_bending(const ModelInput&, index_t, double, double, NodeSums&);
+template double Model<double>::build_bending(const ModelInput&, index_t, double, double, NodeSums&);
 
 }  // namespace pliant

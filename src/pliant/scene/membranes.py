@@ -69,7 +69,9 @@ MATERIAL_KEYS = {
 
 def membrane_material(ctx: Ctx, m: dict, p: str, other: set[str], wrinkling: bool):
     """The membrane material of table ``m`` (``p``, its key; its keys checked): ``type`` and that
-    type's parameters, thickness [m], density [kg/m³] and ``wrinkling`` (default ``wrinkling``);
+    type's parameters, thickness [m], density [kg/m³], ``bending`` and ``bending_nu``, and
+    ``wrinkling`` (default ``wrinkling`` where it does not bend, else false: a sheet that bends
+    buckles at a load of its own);
     ``other``: the table's keys that are not the material's."""
     if m["type"] not in MEMBRANES:
         raise ctx.error(
@@ -86,7 +88,7 @@ def membrane_material(ctx: Ctx, m: dict, p: str, other: set[str], wrinkling: boo
             *[m[k] for k in params],
             m["thickness"],
             m["density"],
-            wrinkling=m.get("wrinkling", wrinkling),
+            wrinkling=m.get("wrinkling", wrinkling and m.get("bending", False) is False),
             bending=m.get("bending", False),
             bending_nu=m.get("bending_nu"),
         )

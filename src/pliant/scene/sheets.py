@@ -14,7 +14,7 @@ tissue, a free capsule), each a triangle surface or a rectangle with a membrane 
     mu = 2e4                    # [Pa]
     thickness = 1e-4            # [m]
     density = 1100.0            # [kg/m^3]
-    wrinkling = true            # default: it carries no compression (false: it does)
+    wrinkling = true            # default without bending: it carries no compression
     bending = false             # true: it also bends, a plate of its E, nu (a number: bending E)
     bending_nu = 0.3            # Poisson's ratio of its bending (default the material's)
 
@@ -22,8 +22,9 @@ A sheet without bending stiffness (the default) buckles under compression into w
 no load, so by default a sheet wrinkles (tension-field theory, docs/engine.md "Wrinkling"): it
 carries tension only, where a sheet that carries compression stiffens as it crumples until its step
 is unstable (a drape on a ball). With ``bending`` it is a thin plate (rotation-free shell triangles,
-docs/engine.md "Bending"), its edges held in all three directions clamped. A scene may be sheets
-alone (no [mesh]).
+docs/engine.md "Bending"), its edges held in all three directions clamped, and it does not wrinkle
+unless told to (its bending carries compression until it buckles). A scene may be sheets alone (no
+[mesh]).
 
 Each sheet's nodes form the node set of its name, and those on its open edges "<name>.rim"
 (constraints: ``nodes = { set = "drape.rim" }``). With a [contact] table a sheet touches the other
