@@ -336,7 +336,9 @@ def _niftysim_strip(tmp_path, clamped: bool) -> Path:
     tip = np.flatnonzero(f)
     nodes = "\n".join(" ".join(f"{v:.17g}" for v in x) for x in X)
     tris = "\n".join(" ".join(str(v) for v in t) for t in F)
-    clamp = f"<ClampedNodes>{' '.join(map(str, root))}</ClampedNodes>" if clamped else ""
+    held, loaded = " ".join(map(str, root)), " ".join(map(str, tip))
+    forces = " ".join(f"{v:.17g}" for v in f[tip])
+    clamp = f"<ClampedNodes>{held}</ClampedNodes>" if clamped else ""
     xml = f"""<Model>
   <Nodes NumNodes="{len(X)}" DOF="3">{nodes}</Nodes>
   <Elements NumEls="0" Type="T4" />
@@ -345,9 +347,9 @@ def _niftysim_strip(tmp_path, clamped: bool) -> Path:
     <Material Type="LinearShell">1e6 0 2e6 0<Density>1000</Density><Thickness>1e-3</Thickness></Material>
     {clamp}
   </ShellElementSet>
-  <Constraint DOF="all" Type="Fix" NumNodes="{len(root)}"><Nodes>{" ".join(map(str, root))}</Nodes></Constraint>
+  <Constraint DOF="all" Type="Fix" NumNodes="{len(root)}"><Nodes>{held}</Nodes></Constraint>
   <Constraint DOF="2" Type="Force" NumNodes="{len(tip)}" LoadShape="STEP">
-    <Nodes>{" ".join(map(str, tip))}</Nodes><Magnitudes Type="DIFFORM">{" ".join(f"{v:.17g}" for v in f[tip])}</Magnitudes>
+    <Nodes>{loaded}</Nodes><Magnitudes Type="DIFFORM">{forces}</Magnitudes>
   </Constraint>
   <SystemParams><TimeStep>1e-5</TimeStep><TotalTime>1</TotalTime><DampingCoeff>0</DampingCoeff>
     <Density>1000</Density></SystemParams>
