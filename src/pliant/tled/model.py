@@ -64,7 +64,7 @@ def _bending_input(
     nbrs = across_edges(mem_F)
     start = 0
     for (F, _), clamped in zip(builder._membranes, builder._membrane_clamps):
-        mask = held.all(axis=1)
+        mask: np.ndarray = np.asarray(held.all(axis=1))
         if clamped is not None:
             mask = np.zeros(held.shape[0], bool)
             mask[clamped] = True
