@@ -605,7 +605,8 @@ std::size_t Model<T>::bytes() const {
            b(node_volume) + b(free_mask) + b(pface_offsets) + b(pface_index) + b(press_nodes) +
            b(press_slot) + b(press_edges) + b(press_value) + b(press_traction) + b(load_patterns) +
            b(cons_dof) + b(cons_value) + b(cons_curve) + b(cons_offsets) + b(edge_off) + b(edge_slot) +
-           b(edge_group) + b(elem_edges) + b(edge_w);
+           b(edge_group) + b(elem_edges) + b(edge_w) + b(mem_offsets) + b(mem_index) + b(mem_nodes) +
+           b(mem_kind) + b(mem_nbrs) + b(mem_geom) + b(mem_bend);
 }
 
 template struct Model<float>;
