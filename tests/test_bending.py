@@ -218,6 +218,45 @@ def test_a_cantilever_strip_bends_as_euler_bernoulli(backend):
     assert tip == pytest.approx(exact, rel=5e-3)
 
 
+def test_a_batch_of_strips_bends_as_each_alone():
+    """Two bodies in one Batch (pliant.tled.batch; a batch needs tets: each body a fixed 1 cm cube
+    of 6 tets beside the cantilever strip), the second's clamp listed by add_membrane's
+    ``clamped``: each strip relaxes to the strip's deflection alone (1e-9 of it: the same forces,
+    summed in another order)."""
+    from pliant.mesh import grid_tets
+    from pliant.tled.batch import Batch
+
+    P = 1e-5
+    alone, X, root = _strip(10, 2, P=P)
+    s = alone.state()
+    pl.Solver(alone).relax(s, tol=1e-10, max_steps=200_000)
+    bodies = []
+    for clamped in (None, root):
+        Xc, Tc = grid_tets(*[np.linspace(0.0, 0.01, 2)] * 3)
+        Xc = Xc - [0.02, 0.0, 0.0]
+        b = pl.ModelBuilder()
+        b.add_mesh(Xc, Tc)
+        b.set_material(pl.NeoHookean(E=1e4, nu=0.3), density=1000.0)
+        b.fix(np.arange(len(Xc)))
+        Xs, F = _sheet(10, 2, L, W)
+        b.add_mesh(Xs, np.zeros((0, 4), int))
+        n0 = len(Xc)
+        mat = pl.StVKMembrane(E=E, nu=0.0, thickness=H, density=1000.0, bending=True)
+        b.add_membrane(F + n0, mat, clamped=None if clamped is None else clamped + n0)
+        b.fix(root + n0)
+        f = _tip_line_load(Xs, P)
+        for n in np.flatnonzero(f):
+            b.add_force([int(n + n0)], [0.0, 0.0, float(f[n])])
+        bodies.append(b)
+    batch = Batch(bodies, dtype="float64")
+    sb = batch.model.state()
+    pl.Solver(batch.model).relax(sb, tol=1e-10, max_steps=200_000)
+    both = batch.stack(sb.displacements)
+    scale = np.abs(s.displacements).max()
+    for k in range(2):
+        np.testing.assert_allclose(both[k][len(Xc) :], s.displacements, atol=1e-9 * scale)
+
+
 def test_the_cantilever_converges_at_second_order():
     """The strip's tip deflection on 10 × 2, 20 × 4 and 40 × 8 regular meshes: errors against
     Euler–Bernoulli fall at an observed order between 1.5 and 2.5 (second order expected of a

@@ -106,6 +106,7 @@ def merge_builders(builders: list[ModelBuilder]) -> tuple[ModelBuilder, np.ndarr
         out._pressures += [(F + n0, p, c) for F, p, c in b._pressures]
         out._tractions += [(F + n0, t, c) for F, t, c in b._tractions]
         out._membranes += [(F + n0, m) for F, m in b._membranes]
+        out._membrane_clamps += [None if c is None else c + n0 for c in b._membrane_clamps]
         out._node_gravity += [(ids + n0, g, c) for ids, g, c in b._node_gravity]
     out.tool_nodes = [
         None if s is None else np.concatenate([b.tool_nodes[t] + n0 for b, n0 in zip(builders, node_off)])
