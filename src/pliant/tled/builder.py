@@ -361,8 +361,9 @@ class ModelBuilder:
         (pliant.StVKMembrane or pliant.NeoHookeanMembrane, with its thickness and density): each a
         Total Lagrangian constant-strain triangle that carries in-plane stress (and bending moments
         where the material says ``bending``: docs/engine.md, "Bending"), on the mesh's surface (a
-        capsule, a wall), anywhere between its nodes or as a sheet of its own. Its mass ρ h A0 / 3 adds to each
-        corner's, its wave speed may lower the critical time step (docs/engine.md, "Membranes").
+        capsule, a wall), anywhere between its nodes or as a sheet of its own. Its mass ρ h A0 / 3
+        adds to each corner's, its wave speed may lower the critical time step (docs/engine.md,
+        "Membranes").
         The winding does not matter. Where the material bends (``bending``): ``clamped`` (node ids)
         clamps the boundary edges of these triangles whose two nodes it lists (their slope held,
         NiftySim's <ClampedNodes>); default (None): the edges whose nodes are held in all three
