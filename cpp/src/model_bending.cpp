@@ -134,12 +134,16 @@ struct Stencil {
             }
         if (n < kStencil) s[n][0] = s0, s[n][1] = s1, slot[n] = sl, count[n++] = 1;
     }
+    /// ∂s_q/∂ξα [1] of a triangle with tangents G [m] lying in the chart across m: J[α][q].
+    void jacobian(const Vec* G, const Vec& m, double J[2][2]) const {
+        for (int a = 0; a < 2; ++a) J[a][0] = dot(G[a], t) / l, J[a][1] = dot(G[a], m) / l;
+    }
     /// The least-squares quadratic's gradient at the midpoint as ∂x/∂ξα of a triangle with
     /// tangents G lying in the chart across m (coefficients added to mid); false where it fails.
     bool fit(const Vec* G, const Vec& m, double mid[2][kMembraneSlots]) const {
-        double grad[2][kStencil];
+        double grad[2][kStencil], J[2][2];
         if (!quadratic_gradient(n, s, grad)) return false;
-        const double J[2][2] = {{dot(G[0], t) / l, dot(G[0], m) / l}, {dot(G[1], t) / l, dot(G[1], m) / l}};
+        jacobian(G, m, J);
         for (int a = 0; a < 2; ++a)
             for (int p = 0; p < n; ++p) mid[a][slot[p]] += grad[0][p] * J[a][0] + grad[1][p] * J[a][1];
         return true;
@@ -177,8 +181,8 @@ bool edge_gradient(const ModelInput& in, int e, const index_t* slot_node, const 
     const double dd = a0 * c1 - a1 * c0;
     if (!(std::fabs(dd) > 0.0)) return false;
     const double r0[2] = {c1 / dd, -c0 / dd}, r1[2] = {-a1 / dd, a0 / dd};  // rows of [a c]⁻¹
-    const double J[2][2] = {{dot(G[0], st.t) / st.l, dot(G[0], mT) / st.l},
-                            {dot(G[1], st.t) / st.l, dot(G[1], mT) / st.l}};
+    double J[2][2];
+    st.jacobian(G, mT, J);
     for (int a = 0; a < 2; ++a)
         for (int q = 0; q < 2; ++q) {
             mid[a][j] += r0[q] * J[a][q], mid[a][i] -= r0[q] * J[a][q];

@@ -255,6 +255,40 @@ PLIANT_HD T membrane_energy(MembraneKind kind, const T* q, const T d1[3], const 
     return T(2) * q[9] * (tr * tr - det + T(2) * tr * det) / (T(1) + T(2) * tr + T(4) * det);
 }
 
+/// Membrane m's patch nodes (kMembraneSlots: its corners, then MembraneData::nbrs, −1 where none),
+/// curvature vectors H_c = H0_c + Σ_p B[c][p] (u_p − u_0) [m] (3 × 3: c = 11, 22, 12; read relative
+/// to corner 0, Σ_p B[c][p] = 0, so that a translation moves nothing and a sheet carried far keeps
+/// its curvature's digits), its current unit normal t = g1 × g2 / |g1 × g2|, 1 / |g1 × g2| [1/m²]
+/// and its curvature change K_c = t·H_c − κ0_c [m] (membrane_bending_forces). Inputs: the membrane's
+/// data, u [m] SoA (3, P), its tangents g1, g2 [m].
+template <class T>
+PLIANT_HD void membrane_curvature(index_t m, const MembraneData<T>& md, const T* u, index_t P, const T g1[3],
+                                  const T g2[3], index_t node[kMembraneSlots], T H[3][3], T t[3], T& inv_n,
+                                  T K[3]) {
+    const T* b = md.bend + static_cast<std::size_t>(kBendValues) * m;
+    for (int k = 0; k < kMembraneSlots; ++k)
+        node[k] = k < 3 ? md.nodes[3 * m + k] : md.nbrs[static_cast<std::size_t>(kMembraneNbrs) * m + k - 3];
+    PLIANT_UNROLL
+    for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) H[c][d] = b[kBendH0 + 3 * c + d];
+    for (int p = 1; p < kMembraneSlots; ++p) {
+        if (node[p] < 0) continue;  // no node in that slot (a free or clamped edge)
+        PLIANT_UNROLL
+        for (int d = 0; d < 3; ++d) {
+            const T up = u[d * P + node[p]] - u[d * P + node[0]];
+            PLIANT_UNROLL
+            for (int c = 0; c < 3; ++c) H[c][d] += b[kMembraneSlots * c + p] * up;
+        }
+    }
+    const T n[3] = {g1[1] * g2[2] - g1[2] * g2[1], g1[2] * g2[0] - g1[0] * g2[2],
+                    g1[0] * g2[1] - g1[1] * g2[0]};
+    inv_n = T(1) / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    PLIANT_UNROLL
+    for (int d = 0; d < 3; ++d) t[d] = n[d] * inv_n;
+    PLIANT_UNROLL
+    for (int c = 0; c < 3; ++c) K[c] = t[0] * H[c][0] + t[1] * H[c][1] + t[2] * H[c][2] - b[kBendKappa0 + c];
+}
+
 /// Rotation-free bending (the Basic Shell Triangle: Oñate & Zárate 2000, IJNME 47:557; NiftySim's
 /// LinearShell element takes Flores & Oñate 2005's form of it). The curvature of a triangle is its
 /// mean second derivative, by the divergence theorem over the triangle in its convected
@@ -276,30 +310,8 @@ PLIANT_HD void membrane_bending_forces(index_t m, const MembraneData<T>& md, con
                                        const T g1[3], const T g2[3], T* out) {
     const T* b = md.bend + static_cast<std::size_t>(kBendValues) * m;
     index_t node[kMembraneSlots];
-    for (int k = 0; k < kMembraneSlots; ++k)
-        node[k] = k < 3 ? md.nodes[3 * m + k] : md.nbrs[static_cast<std::size_t>(kMembraneNbrs) * m + k - 3];
-    T H[3][3];
-    PLIANT_UNROLL
-    for (int c = 0; c < 3; ++c)
-        for (int d = 0; d < 3; ++d) H[c][d] = b[kBendH0 + 3 * c + d];
-    // From the displacements relative to corner 0 (Σ_p B[c][p] = 0: a translation moves nothing),
-    // so that a sheet carried far keeps its curvature's digits.
-    for (int p = 1; p < kMembraneSlots; ++p) {
-        if (node[p] < 0) continue;  // no node in that slot (a free or clamped edge)
-        PLIANT_UNROLL
-        for (int d = 0; d < 3; ++d) {
-            const T up = u[d * P + node[p]] - u[d * P + node[0]];
-            PLIANT_UNROLL
-            for (int c = 0; c < 3; ++c) H[c][d] += b[kMembraneSlots * c + p] * up;
-        }
-    }
-    const T n[3] = {g1[1] * g2[2] - g1[2] * g2[1], g1[2] * g2[0] - g1[0] * g2[2],
-                    g1[0] * g2[1] - g1[1] * g2[0]};
-    const T inv_n = T(1) / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    const T t[3] = {n[0] * inv_n, n[1] * inv_n, n[2] * inv_n};
-    T K[3];
-    PLIANT_UNROLL
-    for (int c = 0; c < 3; ++c) K[c] = t[0] * H[c][0] + t[1] * H[c][1] + t[2] * H[c][2] - b[kBendKappa0 + c];
+    T H[3][3], t[3], inv_n, K[3];
+    membrane_curvature(m, md, u, P, g1, g2, node, H, t, inv_n, K);
     const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
     T M[3];
     svk_resultant(q[6], q[7], q[8], b[kBendModuli], b[kBendModuli + 1], K, M);
@@ -352,24 +364,9 @@ PLIANT_HD T membrane_bending_energy(index_t m, const MembraneData<T>& md, const 
     T d1[3], d2[3], g1[3], g2[3];
     membrane_tangents(m, md, u, P, d1, d2, g1, g2);
     const T* b = md.bend + static_cast<std::size_t>(kBendValues) * m;
-    T H[3][3];
-    for (int c = 0; c < 3; ++c)
-        for (int d = 0; d < 3; ++d) H[c][d] = b[kBendH0 + 3 * c + d];
-    for (int p = 1; p < kMembraneSlots; ++p) {  // relative to corner 0 (membrane_bending_forces)
-        const index_t np =
-            p < 3 ? md.nodes[3 * m + p] : md.nbrs[static_cast<std::size_t>(kMembraneNbrs) * m + p - 3];
-        if (np < 0) continue;
-        const index_t n0 = md.nodes[3 * m];
-        for (int d = 0; d < 3; ++d)
-            for (int c = 0; c < 3; ++c)
-                H[c][d] += b[kMembraneSlots * c + p] * (u[d * P + np] - u[d * P + n0]);
-    }
-    const T n[3] = {g1[1] * g2[2] - g1[2] * g2[1], g1[2] * g2[0] - g1[0] * g2[2],
-                    g1[0] * g2[1] - g1[1] * g2[0]};
-    const T inv_n = T(1) / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    T K[3];
-    for (int c = 0; c < 3; ++c)
-        K[c] = (n[0] * H[c][0] + n[1] * H[c][1] + n[2] * H[c][2]) * inv_n - b[kBendKappa0 + c];
+    index_t node[kMembraneSlots];
+    T H[3][3], t[3], inv_n, K[3];
+    membrane_curvature(m, md, u, P, g1, g2, node, H, t, inv_n, K);
     const T* q = md.geom + static_cast<std::size_t>(kMembraneValues) * m;
     return svk_energy(q[6], q[7], q[8], b[kBendModuli], b[kBendModuli + 1], K);
 }
