@@ -166,13 +166,6 @@ def _params(m, f: str, key: str) -> np.ndarray:
     return _numbers(m, f, f"{key}/Material") if ep is None else elastic_params(ep, f, f"{key}/Material")
 
 
-def _shell_bends(m, f: str, key: str) -> bool:
-    """Whether a LinearShell <Material> (E ν E_b ν_b) has bending stiffness: its third number is not
-    0 (other counts of numbers: the material's own check names them)."""
-    vals = _params(m, f, key)
-    return vals.size == 4 and vals[2] != 0.0
-
-
 def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     """The membrane material of a <ShellElementSet>, or None where an unsupported one is ignored."""
     from .niftysim import NiftySimError, _scalar, _named
@@ -211,7 +204,7 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
         raise NiftySimError(
             f"{mtype} takes {want} parameter(s) ({names}); got {vals.size}", f, f"{key}/Material"
         )
-    bends = mtype == "LinearShell" and _shell_bends(m, f, key)
+    bends = mtype == "LinearShell" and vals[2] != 0.0  # E_b
     if es.find("ClampedNodes") is not None and not bends:
         warnings.append(f"{f}: {key}: <ClampedNodes> ignored: a membrane has no bending to clamp")
     with _named(f, f"{key}/Material"):

@@ -84,11 +84,12 @@ def membrane_material(ctx: Ctx, m: dict, p: str, other: set[str], wrinkling: boo
             p, f"{m['type']} takes ({', '.join(params)}); got ({', '.join(sorted(given)) or 'nothing'})"
         )
     with ctx.under(p):
-        return cls(
+        material = cls(
             *[m[k] for k in params],
             m["thickness"],
             m["density"],
-            wrinkling=m.get("wrinkling", wrinkling and m.get("bending", False) is False),
+            wrinkling=m.get("wrinkling", wrinkling),
             bending=m.get("bending", False),
             bending_nu=m.get("bending_nu"),
         )
+    return material.taut() if material.bends and "wrinkling" not in m else material
