@@ -1,8 +1,9 @@
 """Bending sheets against shell and large-deflection references (docs/engine.md, "Bending"): prints
-the tip of a cantilever strip against the elastica, a tube pinched by two line loads against the
-ring, the Scordelis–Lo roof against 0.3024 m and the pinched cylinder with end diaphragms against
-1.8248e-5 m (Flügge's series, as in MacNeal & Harder 1985), each on a sequence of meshes, with
-their errors. The models are tests/test_shells.py's. Not a test; the finest meshes take minutes.
+the tip of a cantilever strip (pliant.validate's) against the elastica, a tube pinched by two line
+loads against the ring, the Scordelis–Lo roof against 0.3024 m and the pinched cylinder with end
+diaphragms against 1.8248e-5 m (Flügge's series, as in MacNeal & Harder 1985), each on a sequence
+of meshes, with their errors. The other models are tests/test_shells.py's. Not a test; the finest
+meshes take minutes.
 
     python benchmarks/shells.py            # all four
     python benchmarks/shells.py --quick    # the meshes the tests use
@@ -18,16 +19,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_shells import (  # noqa: E402  (the tests' models)
-    _strip_tip,
-    elastica_tip,
-    linear_solve,
-    pinched_ring,
-    scordelis_lo,
-    tube,
-)
+from test_shells import linear_solve, pinched_ring, scordelis_lo, tube  # noqa: E402  (the tests' models)
 
 import pliant as pl  # noqa: E402
+from pliant.validate.models import bending_strip_tip  # noqa: E402
+from pliant.validate.references import elastica_tip  # noqa: E402
 
 
 def pinched_cylinder(nx: int, nphi: int) -> float:
@@ -57,10 +53,10 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="only the meshes the tests use")
     quick = ap.parse_args().quick
     print("cantilever strip, alpha = P L^2 / EI = 10: tip deflection over the elastica's")
-    ref = elastica_tip(10.0)[1]
+    ref = elastica_tip(10.0)[0]
     for n in (10, 20, 40) if quick else (10, 20, 40, 80):
         t = time.perf_counter()
-        row(f"{n} x {n // 5}", _strip_tip(n, n // 5, 10.0)[1] / ref, t)
+        row(f"{n} x {n // 5}", bending_strip_tip(10.0, n, n // 5)[0] / ref, t)
     print("tube pinched by line loads: diameter change over the ring's")
     for n in (16, 32, 64, 128, 256):
         t = time.perf_counter()

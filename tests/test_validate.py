@@ -28,6 +28,7 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
         "hexahedra split",
         "NiftySim H8 (user guide §3.1)",
         "cantilever bending",
+        "bending sheets",
         "Lamé sphere (T4ANP)",
         "damped decay",
     }

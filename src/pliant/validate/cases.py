@@ -339,6 +339,34 @@ def elastica(quick: bool) -> tuple[list[Check], dict]:
     return rows, {}
 
 
+def bending_sheets(quick: bool) -> tuple[list[Check], dict]:
+    """A strip of bending membranes (docs/engine.md, "Bending"; 20 × 4 cells, ν = 0: a beam of the
+    sheet's thickness) under a dead tip load: at α = PL²/(EI) = 0.01 against P L³/(3 E I), and at
+    α = 10 (the tip turned 82°) against the elastica."""
+    why = "the mesh's discretization error, falling at second order (0.19 % on 20 × 4)"
+    small = models.bending_strip_tip(0.01)[0]
+    rows = [Check("bending sheets", "tip deflection / L, α = 0.01", small, 0.01 / 3, "1", why, 5e-3)]
+    deflection, shortening = models.bending_strip_tip(10.0)
+    ref_d, ref_s, rotation = elastica_tip(10.0)
+    why = (
+        "the mesh's discretization error at large rotation (0.45 % and 0.71 % on 20 × 4, 0.13 % and "
+        "0.19 % on 40 × 8)"
+    )
+    rows.append(
+        Check(
+            "bending sheets",
+            f"tip deflection / L, α = 10 (tip rotation {rotation:.2f} rad)",
+            deflection,
+            ref_d,
+            "1",
+            why,
+            0.01,
+        )
+    )
+    rows.append(Check("bending sheets", "tip shortening / L, α = 10", shortening, ref_s, "1", why, 0.015))
+    return rows, {}
+
+
 def hertz(quick: bool) -> tuple[list[Check], dict]:
     """Rigid sphere pressed into a thick block (196,608 tets; full run only): force against Hertz
     at δ/R = 0.25, 0.5, 1 %, the fitted exponent against 1.5, and the supports' reaction against
@@ -499,6 +527,7 @@ CASES = {
     "patch": patch_and_shear,
     "hexahedra": hexahedra,
     "membranes": membranes,
+    "bending_sheets": bending_sheets,
     "cantilever": cantilever,
     "lame": lame_sphere,
     "damping": damping,

@@ -504,3 +504,35 @@ def wrinkled_shear(gamma: float) -> float:
     u[:, 0] = gamma * V[:, 1]
     s.set_displacements(u)
     return float(model.membrane_results(s)["tension"][:, 3].mean())
+
+
+def bending_strip_tip(alpha: float, nx: int = 20, ny: int = 4) -> tuple[float, float]:
+    """A strip of bending membranes alone (10 × 2 cm, 1 mm thick, StVKMembrane E = 1 MPa, ν = 0 and
+    bending: a beam; nx × ny squares, each cut in two along alternating diagonals), its edge x = 0
+    held and so clamped, bent by a dead load P = α E I / L² along +z spread along its tip edge,
+    relaxed (float64, residual 1e-8 of the load): (tip deflection / L, tip shortening / L) of the tip
+    edge's nodes, averaged."""
+    from .. import StVKMembrane
+
+    L, W, h, E = 0.1, 0.02, 1e-3, 1e6
+    P = alpha * E * W * h**3 / 12 / L**2
+    x, y = np.meshgrid(np.linspace(0, L, nx + 1), np.linspace(0, W, ny + 1), indexing="ij")
+    X = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    node = lambda i, j: i * (ny + 1) + j  # noqa: E731
+    F = []
+    for i in range(nx):
+        for j in range(ny):
+            a, b, c, d = node(i, j), node(i + 1, j), node(i + 1, j + 1), node(i, j + 1)
+            F += [[a, b, c], [a, c, d]] if (i + j) % 2 else [[a, b, d], [b, c, d]]
+    b = ModelBuilder()
+    b.add_mesh(X, np.zeros((0, 4), np.int64), source="bending strip")
+    b.add_membrane(np.array(F), StVKMembrane(E=E, nu=0.0, thickness=h, density=1000.0, bending=True))
+    b.fix(np.flatnonzero(X[:, 0] == 0))
+    tip = np.flatnonzero(X[:, 0] == L)
+    share = np.where((X[tip, 1] == 0) | (X[tip, 1] == W), 0.5, 1.0) / ny  # a uniform line load
+    for n, s in zip(tip, share):
+        b.add_force([int(n)], [0.0, 0.0, P * s])
+    sim = Simulation(b.finalize("float64"))
+    sim.relax(tol=1e-8, max_steps=2_000_000)
+    u = sim.displacements[tip]
+    return float(u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
