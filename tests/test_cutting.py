@@ -329,6 +329,32 @@ def test_pressure_faces_follow_their_elements_through_a_cut():
     assert np.any(F >= m.n_nodes)  # some faces moved to split nodes
 
 
+def test_a_bending_skin_keeps_its_clamps_through_a_cut():
+    """A bending membrane skin on the bar's side, clamped along a line of nodes that the cut splits:
+    the faces follow their elements and the copies of the listed nodes are clamped too (as a copy
+    keeps its parent's constraints), so that each piece's skin keeps its clamp; the cut model
+    builds and its skin is still unstressed at rest."""
+    X, T = box_tets(SIZE, CELLS)
+    faces, _ = boundary_faces(T)
+    side = faces[np.all(X[faces][:, :, 0] < 1e-9, axis=1)]
+    z = 0.05  # a node layer: the cut splits its nodes
+    line = np.flatnonzero((X[:, 0] < 1e-9) & np.isclose(X[:, 2], z))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=1e4, nu=0.4), density=1000.0)
+    b.add_membrane(side, pl.StVKMembrane(E=1e5, nu=0.3, thickness=1e-4, density=1000.0, bending=True), line)
+    m = b.finalize("float64")
+    res = cut(
+        m.state(), np.array([[[-1, -1, z], [1, -1, z], [1, 1, z]], [[-1, -1, z], [1, 1, z], [-1, 1, z]]])
+    )
+    assert res.changed
+    (clamped,) = res.model._builder._membrane_clamps
+    parent = res.model._builder.nodes[m.n_nodes :]
+    copies = m.n_nodes + np.flatnonzero(np.isclose(parent[:, 0], 0) & np.isclose(parent[:, 2], z))
+    assert len(copies) == len(line) and set(copies) | set(line) == set(clamped.tolist())
+    assert np.abs(res.model.internal_forces(res.model.state())).max() < 1e-12
+
+
 @pytest.mark.parametrize("dtype", ["float32", "float64"])
 def test_the_stable_step_after_a_cut_is_the_exact_one_of_a_lone_element(dtype):
     """The stable-step estimate (Lanczos on the engine's forces) against the closed-form

@@ -486,9 +486,9 @@ class ModelBuilder:
         """A builder of the same model after node splitting (pliant.cutting): ``tets`` (M, 4) the
         elements over the old nodes and the new ones, ``parent`` (K,) the node each new node
         (numbered n_nodes, n_nodes + 1, …) copies. A copy keeps its parent's constraints, supports
-        (their reactions) and node-set memberships (tools' and add_gravity's nodes); point forces
-        stay on the parent (their total is unchanged); each pressure, traction or membrane face
-        moves to the copies its element now uses."""
+        (their reactions) and node-set memberships (tools', add_gravity's and add_membrane's
+        clamped nodes); point forces stay on the parent (their total is unchanged); each pressure,
+        traction or membrane face moves to the copies its element now uses."""
         parent = np.asarray(parent, np.int64)
         tets = np.asarray(tets, np.int64)
         b = self.snapshot()
@@ -511,6 +511,7 @@ class ModelBuilder:
         b.tool_nodes = [None if s is None else grown(s) for s in self.tool_nodes]
         b.supports = [(name, grown(s), dofs) for name, s, dofs in self.supports]  # copies hold too
         b._node_gravity = [(grown(s), g, c) for s, g, c in self._node_gravity]
+        b._membrane_clamps = [None if s is None else grown(s) for s in self._membrane_clamps]
         if self._pressures or self._tractions or self._membranes:
             from ..cutting.split import LOCAL_FACES
 
