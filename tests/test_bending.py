@@ -471,3 +471,27 @@ def test_a_scenes_bending_keys_are_checked(tmp_path, pliant_cli):
         r = pliant_cli("run", tmp_path / "bad.toml", "-o", tmp_path / "bad", "--no-progress")
         assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
         assert "bending" in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize("bending", [True, False])
+def test_a_sheets_jump_says_what_to_try(bending):
+    """A sheet that carries compression and jumps (here stepped at 1.6 times its stable step,
+    allow_unstable) is told what to try: a bending one to wrinkle or halve dt (a bending drape
+    over a ball snaps element by element at the automatic step: docs/engine.md, "Bending"), a
+    plain one to wrinkle; with ``wrinkling`` the hint is not given."""
+    X, F = _sheet(10, 10, 0.1, 0.1, 0.2)
+    for wrinkling in (False, True):
+        b = pl.ModelBuilder()
+        b.add_mesh(X, np.zeros((0, 4), int))
+        mat = pl.StVKMembrane(
+            E=1e6, nu=0.3, thickness=1e-3, density=1000.0, bending=bending, wrinkling=wrinkling
+        )
+        b.add_membrane(F, mat)
+        b.fix(np.flatnonzero(X[:, 0] == 0))
+        b.set_gravity()
+        model = b.finalize("float64")
+        sim = pl.Simulation(model, dt=1.6 * model.stable_step(), allow_unstable=True)
+        with pytest.raises(pl.InstabilityError, match="unstable at") as err:
+            sim.run(until=0.5)
+        hint = "halve dt" if bending else "a free sheet should wrinkle"
+        assert (hint in str(err.value)) != wrinkling, str(err.value)

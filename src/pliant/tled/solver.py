@@ -266,8 +266,16 @@ class Solver:
         return self._relaxed
 
     def _jump_hint(self) -> str:
-        """For a jump: where membranes carry compression, that a sheet may need to wrinkle."""
-        if any(not m.wrinkling for m in self.model.membrane_materials):
+        """For a jump: where membranes carry compression, that a sheet may need to wrinkle (a
+        bending sheet compressed at a scale its cells cannot fold snaps element by element:
+        docs/engine.md, "Bending")."""
+        compressed = [m for m in self.model.membrane_materials if not m.wrinkling]
+        if any(m.bends for m in compressed):
+            return (
+                "; a bending sheet compressed at a scale its cells cannot fold (a drape) snaps "
+                "element by element: let it wrinkle (wrinkling = true) or halve dt"
+            )
+        if compressed:
             return (
                 "; membranes that carry compression stiffen as they crumple: a free sheet should "
                 "wrinkle (wrinkling=True, the [[sheet]] default)"
