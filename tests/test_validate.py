@@ -25,6 +25,7 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
         "uniaxial stress",
         "patch test",
         "simple shear",
+        "rigid rotation",
         "hexahedra split",
         "NiftySim H8 (user guide §3.1)",
         "cantilever bending",

@@ -536,3 +536,24 @@ def bending_strip_tip(alpha: float, nx: int = 20, ny: int = 4) -> tuple[float, f
     sim.relax(tol=1e-8, max_steps=2_000_000)
     u = sim.displacements[tip]
     return float(u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
+
+
+def deformed_cube(material, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A jittered 1 m cube of 3 × 3 × 3 cells (162 tets, float64, unconstrained) given the
+    homogeneous deformation x = F X (no solve): its internal forces [N] (N, 3) and its elements'
+    Cauchy stresses [Pa] (M, 6) as xx, yy, zz, xy, yz, xz."""
+    X, T = mesh.box_tets((1.0, 1.0, 1.0), (3, 3, 3), jitter=0.25, seed=1)
+    b = ModelBuilder()
+    b.add_mesh(X, T, source="deformed cube")
+    b.set_material(material, density=1000.0)
+    model = b.finalize("float64")
+    state = model.state()
+    state.set_displacements(X @ (np.asarray(F, float) - np.eye(3)).T)
+    return model.internal_forces(state), model.element_results(state)["cauchy"]
+
+
+def rotation(axis, angle: float) -> np.ndarray:
+    """The rotation [1] (3, 3) by ``angle`` [rad] about ``axis`` (3,) (Rodrigues' formula)."""
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
