@@ -703,11 +703,30 @@ class Model:
     def reactions(self, state: "State", nodes, dofs: str = "xyz", t: float | None = None) -> np.ndarray:
         """Total force [N], (3,), the supports exert on the body at ``nodes`` (user node ids) along
         ``dofs`` (the others 0): Σ (f − r) over them, internal forces less the external loads (a
-        bar hanging under gravity: its weight, upward, at its fixed top). Exact at equilibrium and at
-        fixed supports; on nodes a prescribed displacement moves, their own inertia m a and mass
-        damping are not counted (docs/scenes.md, "Reactions")."""
-        held = self.internal_forces(state) - self.external_forces(state, t)
+        bar hanging under gravity: its weight, upward, at its fixed top), plus, on the DOFs a
+        prescribed displacement moves, their own inertia and mass damping (``_moved_inertia``:
+        after a dynamic run; docs/scenes.md, "Reactions")."""
+        held = self.internal_forces(state) - self.external_forces(state, t) + self._moved_inertia(state, t)
         return _held_sum(held, np.asarray(nodes, dtype=np.int64).reshape(-1), dofs)
+
+    def _moved_inertia(self, state: "State", t: float | None = None) -> np.ndarray:
+        """m (a + α v) [N] (N, 3) on each DOF a prescribed displacement d c(t) moves, as the last
+        solver's central differences drive it at the state's time t: a = d (c(t + Δt) − 2 c(t) +
+        c(t − Δt)) / Δt², v = d (c(t + Δt) − c(t − Δt)) / (2 Δt), α its mass damping (the step's
+        M a + α M v + f − r = the support's force); zeros where that solver last relaxed (an
+        equilibrium: the DOFs hold still) or none has run."""
+        out = np.zeros((self.n_nodes, 3))
+        solver = self._solver() if self._solver else None
+        if solver is None or solver._stepped_dt is None:
+            return out
+        when = state.time if t is None else float(t)
+        dt, alpha = float(solver._stepped_dt), float(solver.damping)
+        for (n, d), (value, curve) in self._builder._cons.items():
+            if value != 0.0 and curve.end_time > when - dt:  # else held still since t − Δt
+                c = curve(np.array([when - dt, when, when + dt]))
+                a = (c[2] - 2.0 * c[1] + c[0]) / dt**2 + alpha * (c[2] - c[0]) / (2.0 * dt)
+                out[n, d] = self.mass[n] * value * a
+        return out
 
     @property
     def membrane_materials(self) -> list:
@@ -721,10 +740,11 @@ class Model:
 
     def support_reactions(self, state: "State", t: float | None = None) -> dict[str, np.ndarray]:
         """Each support's reaction [N], (3,), by its name (``reactions`` over its nodes and DOFs):
-        internal less external forces on its held DOFs, less the soft-contact force on them at the
+        internal less external forces on its held DOFs (plus the inertia of those a prescribed
+        displacement moves, after a dynamic run), less the soft-contact force on them at the
         last step of the solver that last ran this model (a body resting on a held surface: the
         support carries it through the contact)."""
-        held = self.internal_forces(state) - self.external_forces(state, t)
+        held = self.internal_forces(state) - self.external_forces(state, t) + self._moved_inertia(state, t)
         solver = self._solver() if self._solver and self.contact_pairs else None
         if solver is not None:
             report = solver.contact_report()

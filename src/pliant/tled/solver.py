@@ -164,6 +164,9 @@ class Solver:
         self._histories = [ToolHistory(t.name) for t in model.tools]
         self._pairs = [PairHistory(p) for p in model.contact_pairs]
         self._relaxed: list | None = None
+        # The last run's or step's Δt [s], None before one or after a relaxation (Model.reactions:
+        # the inertia of the DOFs prescribed displacements move).
+        self._stepped_dt: float | None = None
         self.tools = [copy.copy(t) for t in model.tools]  # trajectories: set_tool_pose edits them
         for t in self.tools:
             t.keys = [np.array(k, copy=True) for k in t.keys]
@@ -356,7 +359,7 @@ class Solver:
             raise TimeStepError(f"dt = {dt:.4g} s exceeds the stable time step {self._limit:.4g} s")
         rep = self._backend.step(state_in._s, state_out._s, dt, self.damping)
         self._ran()
-        self._relaxed = None
+        self._relaxed, self._stepped_dt = None, dt
         if rep["status"]:
             self._raise(rep)
 
@@ -371,7 +374,7 @@ class Solver:
         t0 = state.time
         rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every, self.size)
         self._ran()
-        self._relaxed = None
+        self._relaxed, self._stepped_dt = None, self.dt
         self._record_tools(t0, int(rep["steps"]))
         if rep["status"]:
             self._raise(rep)
@@ -469,6 +472,7 @@ class Solver:
                 state._s, float(t), self.dt, float(tol), int(max_steps), int(check_every), self.size
             )
             self._ran()
+            self._stepped_dt = None
             steps += int(rep["steps"])
             if rep["status"]:
                 self._raise(rep)
