@@ -721,11 +721,14 @@ class Model:
             return out
         when = state.time if t is None else float(t)
         dt, alpha = float(solver._stepped_dt), float(solver.damping)
+        factor: dict = {}  # each curve's a + α v per unit of displacement, computed once
         for (n, d), (value, curve) in self._builder._cons.items():
-            if value != 0.0 and curve.end_time > when - dt:  # else held still since t − Δt
+            if value == 0.0 or not curve.end_time > when - dt:  # held still since t − Δt
+                continue
+            if curve not in factor:
                 c = curve(np.array([when - dt, when, when + dt]))
-                a = (c[2] - 2.0 * c[1] + c[0]) / dt**2 + alpha * (c[2] - c[0]) / (2.0 * dt)
-                out[n, d] = self.mass[n] * value * a
+                factor[curve] = (c[2] - 2.0 * c[1] + c[0]) / dt**2 + alpha * (c[2] - c[0]) / (2.0 * dt)
+            out[n, d] = self.mass[n] * value * factor[curve]
         return out
 
     @property
