@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_shells import linear_solve, pinched_ring, scordelis_lo, tube  # noqa: E402  (the tests' models)
+from test_bending import linear_solve  # noqa: E402  (the tests' models)
+from test_shells import pinched_ring, scordelis_lo, tube  # noqa: E402
 
 import pliant as pl  # noqa: E402
 from pliant.validate.models import bending_strip_tip  # noqa: E402

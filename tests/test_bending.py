@@ -12,10 +12,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spl
 from scipy.spatial import Delaunay
 
 import pliant as pl
-from pliant.tled.patches import across_edges
+from pliant.tled.patches import across_edges, patch_nodes
 
 
 def _sheet(nx, ny, lx, ly, jitter=0.0, seed=2):
@@ -185,23 +187,71 @@ def _strip(nx, ny, jitter=0.0, backend="cpu", P=0.0):
 
 def _linear_tip_deflection(nx, ny, jitter, P):
     """The strip's tip deflection [m] under a tip load P [N], from the linear system of its
-    out-of-plane stiffness (central differences of the internal forces over 1 nm: at small
-    deflection the in-plane and out-of-plane motions decouple, and the membrane's force, cubic in
-    the deflection and 1e5 times stiffer than the bending, stays at 1e-8 of it)."""
-    model, X, root = _strip(nx, ny, jitter)
+    out-of-plane stiffness (linear_solve, in-plane motion held: at small deflection the in-plane
+    and out-of-plane motions decouple, and the membrane's force, cubic in the deflection and 1e5
+    times stiffer than the bending, stays at 1e-8 of it)."""
+    X, F = _sheet(nx, ny, L, W, jitter)
+    held = np.zeros(X.shape, bool)
+    held[:, :2] = True
+    held[np.isclose(X[:, 0], 0.0)] = True
+    forces = np.zeros(X.shape)
+    forces[:, 2] = _tip_line_load(X, P)
+    mat = pl.StVKMembrane(E=E, nu=0.0, thickness=H, density=1000.0, bending=True)
+    return linear_solve(X, F, mat, held, forces)[np.isclose(X[:, 0], L), 2].mean()
+
+
+def linear_solve(X, F, material, held, forces, h=1e-9):
+    """Displacements [m] (N, 3) of a sheet (nodes X (N, 3) [m], triangles F (K, 3)) under nodal
+    forces [N] (N, 3), its DOFs held where ``held`` (N, 3) is True, from the linear system of its
+    stiffness at the reference shape: central differences of the internal forces over h [m],
+    perturbing at once the nodes that no node's forces couple (a greedy colouring of the square of
+    the graph of nodes sharing a membrane's patch, membrane.hpp's kMembraneSlots), so that each
+    response belongs to one perturbed node."""
+    N = len(X)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, np.zeros((0, 4), int))
+    b.add_membrane(F, material)
+    for d, name in enumerate("xyz"):
+        if held[:, d].any():
+            b.fix(np.flatnonzero(held[:, d]), name)
+    model = b.finalize("float64")
+    patch = np.c_[F, patch_nodes(F, across_edges(F))]
+    pairs = [(patch[:, i], patch[:, j]) for i in range(12) for j in range(12)]
+    rows = np.concatenate([p[(p >= 0) & (q >= 0)] for p, q in pairs])
+    cols = np.concatenate([q[(p >= 0) & (q >= 0)] for p, q in pairs])
+    couple = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(N, N))
+    near = (couple @ couple).tocsr()
+    colour = np.full(N, -1)
+    for i in range(N):
+        taken = set(colour[near.indices[near.indptr[i] : near.indptr[i + 1]]].tolist())
+        colour[i] = next(c for c in range(N) if c not in taken)
+    free = np.flatnonzero(~held.ravel())
+    dof = np.full(3 * N, -1)
+    dof[free] = np.arange(len(free))
     s = model.state()
-    free = np.setdiff1d(np.arange(len(X)), root)
-    K = np.zeros((len(free), len(free)))
-    eps = 1e-9
-    for k, i in enumerate(free):
-        for sign in (1.0, -1.0):
-            u = np.zeros_like(X)
-            u[i, 2] = sign * eps
-            s.set_displacements(u)
-            K[:, k] += sign * model.internal_forces(s)[free, 2] / (2 * eps)
-    w = np.zeros(len(X))
-    w[free] = np.linalg.solve(K, _tip_line_load(X, P)[free])
-    return w[np.isclose(X[:, 0], L)].mean()
+    R, C, V = [], [], []
+    for c in range(colour.max() + 1):
+        nodes = np.flatnonzero(colour == c)
+        owner = np.full(N, -1)
+        for i in nodes:
+            owner[couple.indices[couple.indptr[i] : couple.indptr[i + 1]]] = i
+        j = np.flatnonzero(owner >= 0)
+        for d in range(3):
+            r = np.zeros((N, 3))
+            for sign in (1.0, -1.0):
+                u = np.zeros((N, 3))
+                u[nodes, d] = sign * h
+                s.set_displacements(u)
+                r += sign * model.internal_forces(s) / (2 * h)
+            for e in range(3):
+                rr, cc = dof[3 * j + e], dof[3 * owner[j] + d]
+                ok = (rr >= 0) & (cc >= 0)
+                R.append(rr[ok]), C.append(cc[ok]), V.append(r[j[ok], e])
+    n = len(free)
+    K = sp.csc_matrix((np.concatenate(V), (np.concatenate(R), np.concatenate(C))), shape=(n, n))
+    u = np.zeros(3 * N)
+    u[free] = spl.spsolve(K, forces.ravel()[free])
+    return u.reshape(N, 3)
 
 
 def test_a_cantilever_strip_bends_as_euler_bernoulli(backend):
@@ -315,20 +365,14 @@ def _plate_center(n, jitter, clamped):
     X, F = _sheet(n, n, a, a, jitter)
     mat = pl.StVKMembrane(E=E, nu=nu, thickness=H, density=1000.0, bending=True)
     edge = np.flatnonzero(np.isclose(X[:, 0] % a, 0.0) | np.isclose(X[:, 1] % a, 0.0))
-    model = _model(X, F, mat, fixed=edge, dofs="xyz" if clamped else "z")
-    s = model.state()
-    free = np.setdiff1d(np.arange(len(X)), edge)
-    K = np.zeros((len(free), len(free)))
-    for k, i in enumerate(free):
-        for sign in (1.0, -1.0):
-            u = np.zeros_like(X)
-            u[i, 2] = sign * 1e-9
-            s.set_displacements(u)
-            K[:, k] += sign * model.internal_forces(s)[free, 2] / 2e-9
-    f = np.zeros(len(X))
-    np.add.at(f, F.ravel(), np.repeat(_areas(X, F) * q / 3, 3))
-    w = np.zeros(len(X))
-    w[free] = np.linalg.solve(K, f[free])
+    held = np.zeros(X.shape, bool)
+    held[:, :2] = True  # in-plane motion decouples at small deflection (_linear_tip_deflection)
+    held[edge, 2] = True
+    if not clamped:  # an edge held in all three directions is clamped (add_membrane)
+        held[edge, :2] = False
+    forces = np.zeros(X.shape)
+    np.add.at(forces[:, 2], F.ravel(), np.repeat(_areas(X, F) * q / 3, 3))
+    w = linear_solve(X, F, mat, held, forces)[:, 2]
     center = np.argmin(np.linalg.norm(X[:, :2] - a / 2, axis=1))
     return w[center] * mat.bending_stiffness / (q * a**4)
 

@@ -2,7 +2,8 @@
 large rotations (a cantilever strip against the elastica, solved here by another method), a curved
 reference shape (a tube pinched by two line loads against the ring's closed form) and a shell
 benchmark (the Scordelis–Lo roof against MacNeal & Harder's value). The linear cases solve the
-sheet's stiffness, assembled by central differences of the engine's internal forces;
+sheet's stiffness, assembled by central differences of the engine's internal forces
+(test_bending.linear_solve);
 benchmarks/shells.py prints the finer meshes and the pinched cylinder (docs/engine.md, "Bending")."""
 
 from __future__ import annotations
@@ -11,12 +12,10 @@ import math
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
-import scipy.sparse.linalg as spl
 from scipy.spatial import Delaunay
+from test_bending import linear_solve
 
 import pliant as pl
-from pliant.tled.patches import across_edges, patch_nodes
 from pliant.validate.models import bending_strip_tip
 from pliant.validate.references import elastica_tip
 
@@ -39,60 +38,6 @@ def test_the_large_deflection_converges_to_the_elastica():
     orders = np.log2(err[:-1] / err[1:])
     assert np.all(orders > 1.5), (err, orders)
     assert np.all(err[-1] < 3e-3), err
-
-
-def linear_solve(X, F, material, held, forces, h=1e-9):
-    """Displacements [m] (N, 3) of a sheet (nodes X (N, 3) [m], triangles F (K, 3)) under nodal
-    forces [N] (N, 3), its DOFs held where ``held`` (N, 3) is True, from the linear system of its
-    stiffness at the reference shape: central differences of the internal forces over h [m],
-    perturbing at once the nodes that no node's forces couple (a greedy colouring of the square of
-    the graph of nodes sharing a membrane's patch, membrane.hpp's kMembraneSlots), so that each
-    response belongs to one perturbed node."""
-    N = len(X)
-    b = pl.ModelBuilder()
-    b.add_mesh(X, np.zeros((0, 4), int))
-    b.add_membrane(F, material)
-    for d, name in enumerate("xyz"):
-        if held[:, d].any():
-            b.fix(np.flatnonzero(held[:, d]), name)
-    model = b.finalize("float64")
-    patch = np.c_[F, patch_nodes(F, across_edges(F))]
-    pairs = [(patch[:, i], patch[:, j]) for i in range(12) for j in range(12)]
-    rows = np.concatenate([p[(p >= 0) & (q >= 0)] for p, q in pairs])
-    cols = np.concatenate([q[(p >= 0) & (q >= 0)] for p, q in pairs])
-    couple = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(N, N))
-    near = (couple @ couple).tocsr()
-    colour = np.full(N, -1)
-    for i in range(N):
-        taken = set(colour[near.indices[near.indptr[i] : near.indptr[i + 1]]].tolist())
-        colour[i] = next(c for c in range(N) if c not in taken)
-    free = np.flatnonzero(~held.ravel())
-    dof = np.full(3 * N, -1)
-    dof[free] = np.arange(len(free))
-    s = model.state()
-    R, C, V = [], [], []
-    for c in range(colour.max() + 1):
-        nodes = np.flatnonzero(colour == c)
-        owner = np.full(N, -1)
-        for i in nodes:
-            owner[couple.indices[couple.indptr[i] : couple.indptr[i + 1]]] = i
-        j = np.flatnonzero(owner >= 0)
-        for d in range(3):
-            r = np.zeros((N, 3))
-            for sign in (1.0, -1.0):
-                u = np.zeros((N, 3))
-                u[nodes, d] = sign * h
-                s.set_displacements(u)
-                r += sign * model.internal_forces(s) / (2 * h)
-            for e in range(3):
-                rr, cc = dof[3 * j + e], dof[3 * owner[j] + d]
-                ok = (rr >= 0) & (cc >= 0)
-                R.append(rr[ok]), C.append(cc[ok]), V.append(r[j[ok], e])
-    n = len(free)
-    K = sp.csc_matrix((np.concatenate(V), (np.concatenate(R), np.concatenate(C))), shape=(n, n))
-    u = np.zeros(3 * N)
-    u[free] = spl.spsolve(K, forces.ravel()[free])
-    return u.reshape(N, 3)
 
 
 def outward(X, F):
