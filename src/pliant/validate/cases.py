@@ -246,9 +246,8 @@ def rigid_rotation(quick: bool) -> tuple[list[Check], dict]:
     J = stretch[0] * stretch[1] * stretch[2]
     rows, largest = [], 0.0
     for name, (material, W, _) in UNIAXIAL.items():
-        forces, _ = models.deformed_cube(material, R)
+        (forces, _), (_, sigma) = models.deformed_cube(material, (R, R @ np.diag(stretch)))
         largest = max(largest, float(np.abs(forces).max()) / MU)
-        _, sigma = models.deformed_cube(material, R @ np.diag(stretch))
         s = R @ np.diag([stretch[i] * nominal(W, stretch, i) / J for i in range(3)]) @ R.T
         ref = np.array([s[0, 0], s[1, 1], s[2, 2], s[0, 1], s[1, 2], s[0, 2]])
         rows.append(

@@ -538,18 +538,22 @@ def bending_strip_tip(alpha: float, nx: int = 20, ny: int = 4) -> tuple[float, f
     return float(u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
 
 
-def deformed_cube(material, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A jittered 1 m cube of 3 × 3 × 3 cells (162 tets, float64, unconstrained) given the
-    homogeneous deformation x = F X (no solve): its internal forces [N] (N, 3) and its elements'
-    Cauchy stresses [Pa] (M, 6) as xx, yy, zz, xy, yz, xz."""
+def deformed_cube(material, deformations) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A jittered 1 m cube of 3 × 3 × 3 cells (162 tets, float64, unconstrained), built once and
+    given each homogeneous deformation x = F X of ``deformations`` (each (3, 3); no solve): for each,
+    its internal forces [N] (N, 3) and its elements' Cauchy stresses [Pa] (M, 6) as xx, yy, zz, xy,
+    yz, xz."""
     X, T = mesh.box_tets((1.0, 1.0, 1.0), (3, 3, 3), jitter=0.25, seed=1)
     b = ModelBuilder()
     b.add_mesh(X, T, source="deformed cube")
     b.set_material(material, density=1000.0)
     model = b.finalize("float64")
     state = model.state()
-    state.set_displacements(X @ (np.asarray(F, float) - np.eye(3)).T)
-    return model.internal_forces(state), model.element_results(state)["cauchy"]
+    out = []
+    for F in deformations:
+        state.set_displacements(X @ (np.asarray(F, float) - np.eye(3)).T)
+        out.append((model.internal_forces(state), model.element_results(state)["cauchy"]))
+    return out
 
 
 def rotation(axis, angle: float) -> np.ndarray:
