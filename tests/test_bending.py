@@ -7,6 +7,7 @@ strip against Euler–Bernoulli (statics on every backend, its convergence, its 
 frequency), square plates under pressure against Navier's series and Timoshenko's clamped plate,
 the critical step against the Lanczos stable step, NiftySim's LinearShell and scenes."""
 
+import json
 import math
 from pathlib import Path
 
@@ -170,13 +171,13 @@ def _tip_line_load(X, total):
     return total * w / W
 
 
-def _strip(nx, ny, jitter=0.0, backend="cpu", P=0.0):
-    """The strip's model (ν = 0: a beam) with a tip load P [N] (``_tip_line_load``), its root
-    (x = 0) held and so clamped; its nodes X and root."""
+def _strip(nx, ny, jitter=0.0, backend="cpu", P=0.0, E_m=E):
+    """The strip's model (ν = 0: a beam; in-plane modulus ``E_m`` [Pa], bending modulus E) with a
+    tip load P [N] (``_tip_line_load``), its root (x = 0) held and so clamped; its nodes X and root."""
     X, F = _sheet(nx, ny, L, W, jitter)
     b = pl.ModelBuilder()
     b.add_mesh(X, np.zeros((0, 4), int))
-    b.add_membrane(F, pl.StVKMembrane(E=E, nu=0.0, thickness=H, density=1000.0, bending=True))
+    b.add_membrane(F, pl.StVKMembrane(E=E_m, nu=0.0, thickness=H, density=1000.0, bending=E))
     root = np.flatnonzero(np.isclose(X[:, 0], 0.0))
     b.fix(root)
     f = _tip_line_load(X, P)
@@ -408,13 +409,13 @@ def test_the_critical_step_stays_below_the_stable_step(thickness):
     assert 0.5 * model.stable_step() < model.dt_critical <= model.stable_step()
 
 
-def _niftysim_strip(tmp_path, clamped: bool) -> Path:
-    """A NiftySim model of the strip (10 × 2 cells, 1 mm LinearShell, E = 1 MPa, ν = 0, its bending
-    E_b = 2 MPa, ν_b = 0), its root fixed and listed as <ClampedNodes> (or not), a 1e-5 N load at
-    its tip in z."""
+def _niftysim_strip(tmp_path, clamped: bool, E_m: float = 1e6, P: float = 1e-5, damping: float = 0.0) -> Path:
+    """A NiftySim model of the strip (10 × 2 cells, 1 mm LinearShell, E = ``E_m`` [Pa], ν = 0, its
+    bending E_b = 2 MPa, ν_b = 0), its root fixed and listed as <ClampedNodes> (or not), a load P [N]
+    at its tip in z, mass damping ``damping`` [1/s]."""
     X, F = _sheet(10, 2, L, W)
     root = np.flatnonzero(np.isclose(X[:, 0], 0.0))
-    f = _tip_line_load(X, 1e-5)
+    f = _tip_line_load(X, P)
     tip = np.flatnonzero(f)
     nodes = "\n".join(" ".join(f"{v:.17g}" for v in x) for x in X)
     tris = "\n".join(" ".join(str(v) for v in t) for t in F)
@@ -426,14 +427,14 @@ def _niftysim_strip(tmp_path, clamped: bool) -> Path:
   <Elements NumEls="0" Type="T4" />
   <ShellElements NumEls="{len(F)}" Type="T3">{tris}</ShellElements>
   <ShellElementSet Size="all">
-    <Material Type="LinearShell">1e6 0 2e6 0<Density>1000</Density><Thickness>1e-3</Thickness></Material>
+    <Material Type="LinearShell">{E_m:g} 0 2e6 0<Density>1000</Density><Thickness>1e-3</Thickness></Material>
     {clamp}
   </ShellElementSet>
   <Constraint DOF="all" Type="Fix" NumNodes="{len(root)}"><Nodes>{held}</Nodes></Constraint>
   <Constraint DOF="2" Type="Force" NumNodes="{len(tip)}" LoadShape="STEP">
     <Nodes>{loaded}</Nodes><Magnitudes Type="DIFFORM">{forces}</Magnitudes>
   </Constraint>
-  <SystemParams><TimeStep>1e-5</TimeStep><TotalTime>1</TotalTime><DampingCoeff>0</DampingCoeff>
+  <SystemParams><TimeStep>1e-5</TimeStep><TotalTime>1</TotalTime><DampingCoeff>{damping:g}</DampingCoeff>
     <Density>1000</Density></SystemParams>
 </Model>"""
     p = tmp_path / ("clamped.xml" if clamped else "hinged.xml")
@@ -461,6 +462,64 @@ def test_niftysims_linear_shell_bends_with_its_own_modulus_and_clamps(tmp_path):
     exact = 1e-5 * L**3 / (3 * 2e6 * W * H**3 / 12)
     assert deflections[True] == pytest.approx(exact, rel=2e-2)
     assert deflections[False] > 10 * deflections[True]
+
+
+def test_a_sheet_that_only_bends_deflects_as_the_beam_at_small_slopes(tmp_path):
+    """NiftySim's LinearShell "0 0 E_b ν_b" (in-plane E = 0: a sheet that only bends) runs. At a
+    small tip load (α = P L² / (E_b I) = 3e-4) its strip, damped near critically for its first
+    mode (ω1 = 3.516 √(E_b I / (ρ A)) / L² = 4.5 rad/s, α = 9/s) for 10 s, deflects P L³ / (3 E_b I)
+    (to 2 %, the 10 × 2 mesh's error with stretching, measured 0.8 %; nothing holds the sheet in its
+    plane, and its in-plane drift, second order in the slope, adds about 2 % at α = 0.01 and 0.02 %
+    at 1e-3, measured on 20 × 4). Relaxing it cannot converge (no unique rest shape in its plane),
+    and the error says why, naming a loose node."""
+    from pliant.io.niftysim import load_niftysim
+
+    P = 1e-7
+    sc = load_niftysim(_niftysim_strip(tmp_path, True, E_m=0.0, P=P, damping=9.0))
+    assert any("only bends" in w for w in sc.warnings)
+    model = sc.builder.finalize("float64")
+    s = model.state()
+    solver = pl.Solver(model)
+    solver.run(s, steps=round(10.0 / solver.dt))
+    X = model.reference_positions
+    exact = P * L**3 / (3 * 2e6 * W * H**3 / 12)
+    assert s.displacements[np.isclose(X[:, 0], L), 2].mean() == pytest.approx(exact, rel=2e-2)
+    with pytest.raises(pl.ConvergenceError, match="lies on a sheet that only bends"):
+        pl.Solver(model).relax(model.state(), tol=1e-9, max_steps=20_000)
+
+
+def test_a_sheet_that_only_bends_folds_up_under_large_slopes_and_says_why():
+    """The strip of 20 × 4 cells that only bends, its tip loaded at α = 1 (a slope of about 0.5)
+    without damping: nothing holds it in its plane, it shrinks there and folds up (measured: at
+    0.35 s; at α = 0.1 at 1.4 s), and the instability's error names a node nothing holds; the same
+    strip with E = E_b sways and stays below its elastica's tip deflection (0.30 L at α = 1) twice
+    over (its dynamic overshoot of a suddenly applied load)."""
+    P = E * W * H**3 / 12 / L**2
+    model, X, _ = _strip(20, 4, P=P, E_m=0.0)
+    with pytest.raises(pl.InstabilityError, match="node [0-9]+ lies on a sheet that only bends"):
+        pl.Solver(model).run(model.state(), until=1.0)
+    model = _strip(20, 4, P=P)[0]
+    s = model.state()
+    pl.Solver(model).run(s, until=1.0)
+    assert np.abs(s.displacements).max() < 2 * 0.30 * L
+
+
+def test_a_sheet_that_only_bends_is_at_rest_unloaded_and_needs_bending_without_stretching():
+    """NiftySim's membrane_static_shell_1x1.xml (two LinearShell triangles "0 0 5000 0.3", no load,
+    no tets) stays exactly at rest (a sheet at its reference shape carries no force); an in-plane
+    modulus 0 without a bending modulus is refused, naming the material."""
+    X = np.array([[0.0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]])
+    mat = pl.StVKMembrane(E=0.0, nu=0.0, thickness=1.0, density=10.0, bending=5000.0, bending_nu=0.3)
+    b = pl.ModelBuilder()
+    b.add_mesh(X, np.zeros((0, 4), int))
+    b.add_membrane([[0, 2, 1], [2, 3, 1]], mat)
+    model = b.finalize("float64")
+    s = model.state()
+    pl.Solver(model).run(s, steps=100)
+    assert not np.any(s.displacements)
+    for cls, kwargs in ((pl.StVKMembrane, dict(E=0.0, nu=0.3)), (pl.NeoHookeanMembrane, dict(mu=0.0))):
+        with pytest.raises(pl.MaterialError, match="= 0; expected .* or 0 with a bending modulus"):
+            cls(**kwargs, thickness=1.0, density=10.0, bending=True)
 
 
 PLATE = """
@@ -504,6 +563,23 @@ def test_a_scenes_sheet_that_bends_sags_as_a_cantilever(tmp_path, pliant_cli):
     tip = np.isclose(X[:, 0], L)
     exact = 1000.0 * 9.81 * H * W * L**4 / (8 * 1e9 * W * H**3 / 12)
     assert -u[tip, 2].mean() == pytest.approx(exact, rel=1e-2)
+
+
+def test_a_static_scene_that_stops_short_exits_1_after_writing_its_files(tmp_path, pliant_cli):
+    """The scene's strip made a sheet that only bends (E = 0, bending = 1 GPa): relaxed, it has no
+    unique rest shape in its plane, so `pliant run` stops short of its tolerance: exit 1 with the
+    relaxation's error (naming a node nothing holds in its plane, and where the results are), no
+    traceback, every file written and summary.json saying ``converged: false``."""
+    (tmp_path / "only.toml").write_text(
+        PLATE.replace("E = 1e9", "E = 0.0").replace("bending = true", "bending = 1e9")
+    )
+    out = tmp_path / "out"
+    r = pliant_cli("run", tmp_path / "only.toml", "-o", out, "--no-progress")
+    assert r.returncode == 1 and "Traceback" not in r.stderr, r.stdout + r.stderr
+    assert "lies on a sheet that only bends" in r.stderr and str(out) in r.stderr, r.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["converged"] is False and summary["error"]
+    assert {"result.pvd", "frame_00001.vtu", "result.png"} <= {p.name for p in out.iterdir()}
 
 
 def test_a_scenes_bending_keys_are_checked(tmp_path, pliant_cli):

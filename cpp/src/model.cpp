@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <limits>
 
 namespace pliant {
 
@@ -121,7 +122,8 @@ typename Model<T>::NodeSums Model<T>::build_elements(const ModelInput& in) {
 /// Membrane triangles (membrane.hpp): reference tangents, inverse metric and moduli times the
 /// reference area; each corner's lumped mass ρ h A0 / 3 and relaxation stiffness; each membrane's
 /// critical step, its smallest altitude over the plane-stress wave speed √(M / ρ), M = E / (1 − ν²)
-/// (St Venant–Kirchhoff) or 4 μ (incompressible Neo-Hookean: E = 3 μ, ν = ½), which may lower
+/// (St Venant–Kirchhoff) or 4 μ (incompressible Neo-Hookean: E = 3 μ, ν = ½; M = 0 on a sheet that
+/// only bends: bending alone sets its step), which may lower
 /// dt_critical; the node → corner incidence (ordered by membrane: a fixed summation order).
 template <class T>
 void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
@@ -148,8 +150,8 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
         const double* pb = bending ? &in.mem_bend[2 * static_cast<std::size_t>(m)] : nullptr;
         const bool bends = pb != nullptr && pb[0] != 0.0;
         const bool ok =
-            h > 0.0 && rho > 0.0 && std::isfinite(h * rho) && p[2] > 0.0 && std::isfinite(p[2]) &&
-            (nh || (p[3] > -1.0 && p[3] <= 0.5)) && (p[4] == 0.0 || p[4] == 1.0) &&
+            h > 0.0 && rho > 0.0 && std::isfinite(h * rho) && (p[2] > 0.0 || (p[2] == 0.0 && bends)) &&
+            std::isfinite(p[2]) && (nh || (p[3] > -1.0 && p[3] <= 0.5)) && (p[4] == 0.0 || p[4] == 1.0) &&
             (pb == nullptr || (pb[0] >= 0.0 && std::isfinite(pb[0]) && pb[1] > -1.0 && pb[1] <= 0.5));
         if (!ok || (!nh && in.mem_kind[m] != static_cast<int>(MembraneKind::StVenantKirchhoff)))
             throw std::invalid_argument("membrane " + std::to_string(m) +
@@ -180,8 +182,9 @@ void Model<T>::build_membranes(const ModelInput& in, NodeSums& sums) {
         q[9] = T(area * h * (nh ? mu : lam)), q[10] = T(nh ? 0.0 : area * h * mu);
         q[11] = T(p[4] == 0.0 ? 0.0 : area * h * (nh ? mu : E));  // the wrinkled state's modulus
         const double modulus = nh ? 4.0 * mu : lam + 2.0 * mu;
-        const double dt_plane = alt / std::sqrt(modulus / rho);                     // in-plane waves
-        const double w_bend = bends ? build_bending(in, m, area, alt, sums) : 0.0;  // ω_max of bending
+        const double dt_plane = modulus > 0.0 ? alt / std::sqrt(modulus / rho)            // in-plane waves
+                                              : std::numeric_limits<double>::infinity();  // only bends
+        const double w_bend = bends ? build_bending(in, m, area, alt, sums) : 0.0;        // ω_max of bending
         const double dt_m = 1.0 / std::sqrt(1.0 / (dt_plane * dt_plane) + 0.25 * w_bend * w_bend);
         mem_dt[m] = dt_m;
         if (dt_critical_elem < 0 || dt_m < dt_critical) {

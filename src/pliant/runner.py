@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
-from .errors import InputError, InstabilityError, PliantWarning
+from .errors import ConvergenceError, InputError, InstabilityError, PliantWarning
 from .io import ResultWriter, atomic_write_text, check_output_dir
 from .io.results import INDEX, SURFACE_INDEX, is_frame_file
 from .job import Scene
@@ -246,7 +246,8 @@ def run_scene(
     """Run ``scene`` and write OUTDIR/result.pvd, frame_*.vtu, summary.json and result.png
     (``out_dir=None``: no files, the summary alone). ``inspect(model, solver, state) -> dict``, when
     given, adds its entries to the summary once the run has ended (a sweep's outputs).
-    Returns the summary. Raises InstabilityError (after writing what it has) when the run fails;
+    Returns the summary. Raises InstabilityError (after writing what it has) when the run fails,
+    ConvergenceError (after writing the results) when a quasi-static solve stops short of its tol;
     on KeyboardInterrupt the summary says ``interrupted`` and the frames so far are kept."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
@@ -346,10 +347,8 @@ def run_scene(
                 state, at_time=scene.duration, tol=scene.tol, increments=scene.increments, strict=False
             )
             summary.update(relax_steps=info.steps, residual=info.residual, converged=info.converged)
-            if not info.converged:
-                summary["warnings"].append(
-                    f"quasi-static solve stopped at residual {info.residual:.3g} (tolerance {scene.tol:g})"
-                )
+            if not info.converged:  # raised once the results are written (the end of run_scene)
+                summary["error"] = f"quasi-static solve: {solver._unconverged(info, scene.tol)}"
             keep_frame()
         else:
             every = _frame_steps(scene, solver.dt, total)
@@ -484,4 +483,7 @@ def run_scene(
             if not writer.frames:  # interrupted before frame 0 was on disk: no index either
                 summary["files"].remove(INDEX)
             atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
+    if summary.get("converged") is False:
+        where = "" if out is None else f" (its results are in {out})"
+        raise ConvergenceError(summary["error"] + where)
     return summary

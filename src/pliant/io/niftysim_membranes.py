@@ -7,8 +7,9 @@ linear membrane at small displacement) or "NeoHookean" (μ; NeoHookeanMembrane, 
 incompressible membrane), with <Density> and <Thickness>; "LinearShell" (E ν E_b ν_b, NiftySim's
 rotation-free shell triangle: a linear membrane that also bends with E_b, ν_b) is StVKMembrane with
 ``bending=E_b, bending_nu=ν_b`` (without bending, E_b = 0, as most of NiftySim's shell test models,
-a plain membrane), its set's <ClampedNodes> (listed, or NumNodes consecutive ones from the one
-listed) clamping the boundary edges between them. "LinearThickShell" (transverse shear) is refused
+a plain membrane; with E = 0 a sheet that only bends, as membrane_static_shell_1x1.xml), its set's
+<ClampedNodes> (listed, or NumNodes consecutive ones from the one listed) clamping the boundary
+edges between them. "LinearThickShell" (transverse shear) is refused
 by name.
 A <SubModel>'s membranes are merged into the model first (niftysim_submodels.py), their sets
 marked with where they came from (ORIGIN), for the messages."""
@@ -207,6 +208,11 @@ def _material(es, f: str, key: str, unsupported, warnings: list[str]):
     bends = mtype == "LinearShell" and vals[2] != 0.0  # E_b
     if es.find("ClampedNodes") is not None and not bends:
         warnings.append(f"{f}: {key}: <ClampedNodes> ignored: a membrane has no bending to clamp")
+    if bends and vals[0] == 0.0:
+        warnings.append(
+            f"{f}: {key}: LinearShell with E = 0 only bends: nothing holds the sheet in its plane "
+            '(loaded across, it drifts there at second order in its slope; docs/engine.md, "Bending")'
+        )
     with _named(f, f"{key}/Material"):
         if mtype == "LinearShell" and bends:
             return StVKMembrane(

@@ -15,7 +15,9 @@ NeoHookeanMembrane     μ (I − C33 C⁻¹), C33 = 1 / det C: incompressible   
 thickness, D = E_b h³ / (12 (1 − ν_b²)), on rotation-free shell triangles (the Basic Shell Triangle
 of Oñate & Zárate 2000, NiftySim's LinearShell; ``membrane.hpp``, ``membrane_bending_forces``):
 ``True`` bends with the material's own E and ν (E = 3 μ, ν = ½ incompressible), a number is the
-bending modulus E_b [Pa], ``bending_nu`` ν_b (default the material's). The reference shape is
+bending modulus E_b [Pa], ``bending_nu`` ν_b (default the material's); with a bending modulus the
+in-plane modulus (E, mu) may be 0: a sheet that only bends, as NiftySim's LinearShell "0 0 E_b ν_b"
+(nothing then resists stretching in its plane: load it across, at small slopes). The reference shape is
 unstressed; an edge of the sheet whose two nodes are held in all three directions is clamped (its
 slope held), any other boundary edge is free to turn (a hinge, or a free edge).
 
@@ -47,6 +49,21 @@ def _finite_positive(cls: str, name: str, value, unit: str) -> float:
     if not math.isfinite(v) or v <= 0.0:
         raise MaterialError(f"{cls}: {name} = {shown(value)}; expected a finite value > 0 [{unit}]")
     return v
+
+
+def _modulus(cls: str, name: str, value, unit: str, bending) -> float:
+    """An in-plane modulus: > 0, or 0 for a sheet that only bends (``bending`` a modulus E_b > 0,
+    as NiftySim's LinearShell "0 0 E_b ν_b")."""
+    v = as_real(value)
+    only_bends = not isinstance(bending, (bool, np.bool_)) and isinstance(bending, (int, float, np.number))
+    if v == 0.0 and only_bends and math.isfinite(as_real(bending)) and as_real(bending) > 0.0:
+        return 0.0
+    if v == 0.0:
+        raise MaterialError(
+            f"{cls}: {name} = 0; expected a finite value > 0 [{unit}], or 0 with a bending modulus "
+            "(bending = E_b > 0 [Pa]) for a sheet that only bends"
+        )
+    return _finite_positive(cls, name, value, unit)
 
 
 class MembraneMaterial:
@@ -145,14 +162,14 @@ class MembraneMaterial:
 class StVKMembrane(MembraneMaterial):
     """Plane-stress St Venant–Kirchhoff membrane: S = λ' tr(E) I + 2 μ E in the membrane's plane,
     λ' = E ν/(1 − ν²) the plane-stress Lamé constant, μ = E/(2(1 + ν)) (Bonet & Wood, 2nd ed., §6.6
-    for plane stress; E the in-plane Green strain). Young's modulus ``E`` [Pa], Poisson's ratio
-    ``nu`` (−1 < ν ≤ 0.5), ``thickness`` [m], ``density`` [kg/m³]; ``wrinkling``: carries no
-    compression; ``bending``, ``bending_nu``: resists bending (the module's docstring)."""
+    for plane stress; E the in-plane Green strain). Young's modulus ``E`` [Pa] (0: only bends),
+    Poisson's ratio ``nu`` (−1 < ν ≤ 0.5), ``thickness`` [m], ``density`` [kg/m³]; ``wrinkling``:
+    carries no compression; ``bending``, ``bending_nu``: resists bending (the module's docstring)."""
 
     kind = _core.MembraneKind.StVenantKirchhoff
 
     def __init__(self, E, nu, thickness, density, wrinkling: bool = False, bending=False, bending_nu=None):
-        self.E = _finite_positive("StVKMembrane", "E", E, "Pa")
+        self.E = _modulus("StVKMembrane", "E", E, "Pa", bending)
         self.nu = as_real(nu)
         if not math.isfinite(self.nu) or not -1.0 < self.nu <= 0.5:
             raise MaterialError(f"StVKMembrane: nu = {shown(nu)}; expected -1 < nu <= 0.5")
@@ -181,14 +198,14 @@ class StVKMembrane(MembraneMaterial):
 class NeoHookeanMembrane(MembraneMaterial):
     """Incompressible Neo-Hookean membrane: W = μ/2 (tr C + 1/det C − 3) per reference volume,
     C the in-plane right Cauchy–Green tensor, the thickness stretch λ3 = 1/√det C; S = μ (I − C⁻¹/det C)
-    (Bonet, Wood, Mahaney & Heywood 2000, CMAME 190:579, eq. 18). Shear modulus ``mu`` [Pa],
-    ``thickness`` [m], ``density`` [kg/m³]; ``wrinkling``: carries no compression; ``bending``,
-    ``bending_nu``: resists bending (the module's docstring)."""
+    (Bonet, Wood, Mahaney & Heywood 2000, CMAME 190:579, eq. 18). Shear modulus ``mu`` [Pa] (0: only
+    bends), ``thickness`` [m], ``density`` [kg/m³]; ``wrinkling``: carries no compression;
+    ``bending``, ``bending_nu``: resists bending (the module's docstring)."""
 
     kind = _core.MembraneKind.NeoHookean
 
     def __init__(self, mu, thickness, density, wrinkling: bool = False, bending=False, bending_nu=None):
-        self.mu = _finite_positive("NeoHookeanMembrane", "mu", mu, "Pa")
+        self.mu = _modulus("NeoHookeanMembrane", "mu", mu, "Pa", bending)
         self._set_sheet(thickness, density, wrinkling, bending, bending_nu)
 
     @property

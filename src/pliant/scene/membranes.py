@@ -15,7 +15,8 @@ boundary triangles whose three nodes are all selected (``nodes``; the whole boun
 A membrane on a solid carries compression by default (the solid holds it flat, as NiftySim's do);
 a [[sheet]] apart from the tets wrinkles by default (pliant.scene.sheets). A sheet that bends
 (rotation-free shell triangles: pliant.StVKMembrane's ``bending``) has its boundary edges clamped
-where both their nodes are held in all three directions (a [[fix]] of all DOFs).
+where both their nodes are held in all three directions (a [[fix]] of all DOFs). With a bending
+modulus (a number), E or mu may be 0: a sheet that only bends (docs/engine.md, "Bending").
 """
 
 from __future__ import annotations

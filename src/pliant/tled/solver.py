@@ -268,11 +268,24 @@ class Solver:
         )
         return self._relaxed
 
+    def _loose_hint(self) -> str:
+        """For an instability: a sheet that only bends and nothing holds in its plane, or ""."""
+        loose = _loose_sheet_node(self.model)
+        if loose is None:
+            return ""
+        return (
+            f"; node {loose} lies on a sheet that only bends (in-plane modulus 0) and nothing else "
+            "holds it in its plane: loaded across, such a sheet shrinks in its plane at second order "
+            "in its slope, and folds up under large slopes; give it an in-plane modulus"
+        )
+
     def _jump_hint(self) -> str:
-        """For a jump: where membranes carry compression, that a sheet may need to wrinkle (a
-        bending sheet compressed at a scale its cells cannot fold snaps element by element:
-        docs/engine.md, "Bending")."""
+        """For a jump: a sheet that only bends (_loose_hint); where membranes carry compression,
+        that a sheet may need to wrinkle (a bending sheet compressed at a scale its cells cannot
+        fold snaps element by element: docs/engine.md, "Bending")."""
         compressed = [m for m in self.model.membrane_materials if not m.wrinkling]
+        if self._loose_hint():
+            return self._loose_hint()
         if any(m.bends for m in compressed):
             return (
                 "; a bending sheet compressed at a scale its cells cannot fold (a drape) snaps "
@@ -317,7 +330,7 @@ class Solver:
         if status == RunStatus.NonFinite:
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: non-finite displacement at node {node}"
-                f" (value {v}); dt = {self.dt:.3g} s",
+                f" (value {v}); dt = {self.dt:.3g} s{self._loose_hint()}",
                 t,
                 "displacement",
                 v,
@@ -335,7 +348,8 @@ class Solver:
             )
         raise InstabilityError(
             f"unstable at t = {t:.6g} s: displacement {v:.3g} m at node {node} exceeds "
-            f"{_core.blow_up_sizes:g} x the body size (energy blow-up); dt = {self.dt:.3g} s",
+            f"{_core.blow_up_sizes:g} x the body size (energy blow-up); dt = {self.dt:.3g} s"
+            f"{self._loose_hint()}",
             t,
             "displacement",
             v,
@@ -481,20 +495,49 @@ class Solver:
             h = np.asarray(self._backend.tool_history())[0]
             self._relaxed = [(h[k, :3].copy(), h[k, 3:].copy()) for k in range(len(self.model.tools))]
         if strict and not info.converged:
-            if self.model.dtype == np.float32 and info.residual < 1e-3:
-                hint = "the float32 round-off floor: use float64 for tighter tolerances"
-            else:
-                hint = (
-                    "if the residual stays large, the material may stiffen beyond the "
-                    "small-strain modulus that sets the time step (lower the solver's dt or "
-                    "safety) or the load may need more increments"
-                )
-            raise ConvergenceError(
-                f"dynamic relaxation reached residual {info.residual:.3g} after {info.steps} steps; "
-                f"tolerance {tol:g}. It stops early when the residual no longer falls ({hint}); "
-                "else raise max_steps or tol"
-            )
+            raise ConvergenceError(self._unconverged(info, tol))
         return info
+
+    def _unconverged(self, info: RelaxInfo, tol: float) -> str:
+        """What a relaxation that stopped short of ``tol`` says: where it stopped and the likely
+        reason (a sheet nothing holds in its plane, float32's round-off, or the load or step)."""
+        loose = _loose_sheet_node(self.model)
+        if loose is not None:
+            hint = (
+                f"node {loose} lies on a sheet that only bends (in-plane modulus 0) and nothing else "
+                "holds it in its plane, so the sheet has no unique rest shape: run it dynamically "
+                "with damping, or give it an in-plane modulus"
+            )
+        elif self.model.dtype == np.float32 and info.residual < 1e-3:
+            hint = "the float32 round-off floor: use float64 for tighter tolerances"
+        else:
+            hint = (
+                "if the residual stays large, the material may stiffen beyond the "
+                "small-strain modulus that sets the time step (lower the solver's dt or "
+                "safety) or the load may need more increments"
+            )
+        return (
+            f"dynamic relaxation reached residual {info.residual:.3g} after {info.steps} steps; "
+            f"tolerance {tol:g}. It stops early when the residual no longer falls ({hint}); "
+            "else raise max_steps or tol"
+        )
+
+
+def _loose_sheet_node(model: Model) -> int | None:
+    """A node (user id) of a sheet that only bends (membranes of in-plane modulus 0) that nothing
+    else holds in its plane: on no tet and no stretching membrane, not held in all three directions;
+    None where there is none."""
+    sets = model._builder._membranes
+    only = [F.ravel() for F, m in sets if m.wave_modulus == 0.0]
+    if not only:
+        return None
+    held = np.zeros(model.n_nodes, bool)
+    held |= np.asarray(model.constrained, bool).all(axis=1)
+    held[model.tets.ravel()] = True
+    for F, m in sets:
+        held[F.ravel()] |= m.wave_modulus > 0.0
+    loose = np.setdiff1d(np.concatenate(only), np.flatnonzero(held))
+    return int(loose[0]) if loose.size else None
 
 
 class Simulation:
