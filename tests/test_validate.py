@@ -30,6 +30,7 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
         "NiftySim H8 (user guide §3.1)",
         "cantilever bending",
         "bending sheets",
+        "finite torsion (Rivlin)",
         "Lamé sphere (T4ANP)",
         "damped decay",
     }
@@ -39,7 +40,7 @@ def test_quick_validation_passes_and_reports(tmp_path, monkeypatch):
     assert data["left_out"] == ["elastica", "hertz", "hertz_soft"]
     assert "Left out of the quick run (the full run has them): elastica, hertz, hertz_soft." in report
     assert "elastica: full run only (not in --quick)" in r.output and "0/0" not in r.output
-    for png in ("uniaxial.png", "cantilever.png"):
+    for png in ("uniaxial.png", "cantilever.png", "torsion.png"):
         assert (tmp_path / png).stat().st_size > 5000 and f"]({png})" in report
     peers = {p["peer"].split()[0]: p for p in data["peers"]}
     assert peers["pliant"]["ran"] and 0.4 < peers["pliant"]["ratio"] < 1.0  # locked linear tets

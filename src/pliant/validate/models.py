@@ -10,11 +10,12 @@ from pathlib import Path
 import numpy as np
 
 from .. import mesh
-from ..tled import ModelBuilder, Ramp, Simulation, Table
+from ..tled import ModelBuilder, Ramp, Simulation, Solver, Table
 from .references import lame_radial_displacement
 
 __all__ = [
     "cube_with_symmetry_bcs",
+    "twisted_cylinder",
     "tip_loaded_cantilever",
     "cantilever_tip_deflection",
     "sampled_displacement",
@@ -536,6 +537,36 @@ def bending_strip_tip(alpha: float, nx: int = 20, ny: int = 4) -> tuple[float, f
     sim.relax(tol=1e-8, max_steps=2_000_000)
     u = sim.displacements[tip]
     return float(u[:, 2].mean() / L), float(-u[:, 0].mean() / L)
+
+
+def twisted_cylinder(n: int, psi: float, mu: float = 1e4, nu: float = 0.499) -> tuple[float, float]:
+    """A solid cylinder (radius a = 1 cm, length L = 4 cm; n × n × 2n Kuhn-split cells of a square
+    mapped onto the disk, (x, y) → a (x √(1 − y²/2), y √(1 − x²/2)); Neo-Hookean μ [Pa], ν, T4ANP,
+    float64), its base fixed and its top turned rigidly by ψ L about the axis at fixed length (the
+    exact field's own end conditions), relaxed in 8 increments to 1e-6: (torque [N·m], axial force
+    [N]) the top's support exerts, from the nodal reactions at the deformed positions."""
+    from .. import NeoHookean
+
+    a, L = 0.01, 0.04
+    X, T = mesh.box_tets((2.0, 2.0, L), (n, n, 2 * n), origin=(-1.0, -1.0, 0.0))
+    x, y = X[:, 0].copy(), X[:, 1].copy()
+    X[:, 0], X[:, 1] = a * x * np.sqrt(1 - y**2 / 2), a * y * np.sqrt(1 - x**2 / 2)
+    b = ModelBuilder()
+    b.add_mesh(X, T, source="twisted cylinder")
+    b.set_material(NeoHookean(E=2 * mu * (1 + nu), nu=nu), density=1000.0)
+    b.nodal_pressure = True
+    b.fix(np.flatnonzero(X[:, 2] == 0.0))
+    top = np.flatnonzero(X[:, 2] == L)
+    c, s = math.cos(psi * L), math.sin(psi * L)
+    Xt = X[top]
+    turn = np.c_[(c - 1) * Xt[:, 0] - s * Xt[:, 1], s * Xt[:, 0] + (c - 1) * Xt[:, 1], np.zeros(len(top))]
+    b.prescribe(top, turn, curve=Ramp(1.0))
+    model = b.finalize("float64")
+    state = model.state()
+    Solver(model).relax(state, tol=1e-6, increments=8, max_steps=2_000_000)
+    f = (model.internal_forces(state) - model.external_forces(state))[top]
+    x = state.positions[top]
+    return float(np.sum(x[:, 0] * f[:, 1] - x[:, 1] * f[:, 0])), float(f[:, 2].sum())
 
 
 def deformed_cube(material, deformations) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -22,6 +22,8 @@ __all__ = [
     "lame_radial_displacement",
     "lame_volumetric_strain",
     "hertz_force",
+    "torsion_torque",
+    "torsion_axial_force",
 ]
 
 MU, K = 1.0e3, 10.0e3  # Pa; K/μ = 10 (ν ≈ 0.45), soft tissue-like
@@ -141,6 +143,20 @@ def hertz_force(delta, R, E, nu):
     """Force [N] of a rigid sphere of radius R pressed δ [m] into an elastic half-space:
     F = 4/3 E* √R δ^1.5, E* = E / (1 − ν²) (Johnson, Contact Mechanics, 1985, §4.2, eq. 4.22-4.23)."""
     return 4.0 / 3.0 * E / (1 - nu**2) * math.sqrt(R) * delta**1.5
+
+
+def torsion_torque(mu, psi, a):
+    """Torque [N·m] that twists a solid circular cylinder of incompressible Neo-Hookean material
+    (shear modulus mu [Pa], radius a [m]) by ψ [rad/m] at fixed length, each cross-section turning
+    rigidly: M = π μ ψ a⁴ / 2, exact at any twist (Rivlin 1949, Phil. Trans. R. Soc. A 242:173,
+    with C2 = 0; Ogden, Non-linear Elastic Deformations, 1984, §5.2.3)."""
+    return math.pi * mu * psi * a**4 / 2.0
+
+
+def torsion_axial_force(mu, psi, a):
+    """Axial force [N] on the ends of that twisted cylinder to hold its length: N = −π μ ψ² a⁴ / 4
+    (compressive: the Poynting effect, second order in the twist; same sources)."""
+    return -math.pi * mu * psi**2 * a**4 / 4.0
 
 
 def p_wave_speed(E, nu, rho):
