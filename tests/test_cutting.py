@@ -394,6 +394,25 @@ def test_the_stable_step_after_a_cut_is_the_exact_one_of_a_lone_element(dtype):
     pl.Simulation(m, dt=10 * m.dt_critical).run(steps=3)
 
 
+def test_forces_that_overflow_have_no_frequency_and_no_arpack_error():
+    """A float64 model whose forces overflow about a state (E = 1e307 Pa, a 1 m cube stretched 10
+    times: its stresses beyond 1.8e308) has no highest frequency (NaN) and so no stable-step bound
+    (inf), as the dense path of a few DOFs says; the iterative path (81 DOFs) raised ARPACK's error
+    -9999 (an internal error of `pliant run` on a NiftySim model with μ = 1e308, found by mutating
+    its files). The run's own checks name what follows."""
+    from pliant.cutting.stability import highest_frequency, stable_step
+
+    X, T = pl.mesh.box_tets((1.0, 1.0, 1.0), (3, 3, 3))
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(E=1e307, nu=0.3), density=1000.0)
+    m = b.finalize("float64")
+    s = m.state()
+    s.set_displacements(9 * X)
+    assert not np.all(np.isfinite(m.internal_forces(s)))
+    assert math.isnan(highest_frequency(m, s)) and stable_step(m, s) == math.inf
+
+
 @pytest.mark.parametrize("kind", ["viscoelastic", "t4anp"])
 def test_a_cut_keeps_the_element_state_and_options(kind):
     """Viscoelastic: each element's Prony state goes on unchanged through the cut (elements keep

@@ -41,6 +41,9 @@ nodes = { plane = { point = [-0.05, 0, 0], normal = [1, 0, 0] } }
 """
 
 
+FLOAT64 = ("[solver]\n", '[solver]\ndtype = "float64"\n')  # SCENE in float64
+
+
 def cli(*args, cwd=None, timeout=120):
     """Run the installed program; a hang is a failure (TimeoutExpired propagates)."""
     assert PLIANT.exists(), f"the pliant program is not installed in this environment ({PLIANT})"
@@ -187,9 +190,12 @@ def test_an_element_that_ruins_the_time_step_is_named(tmp_path):
 def test_a_density_too_small_for_any_stable_step_is_named(tmp_path):
     """density = 5e-324 kg/m^3 passes as a finite number > 0, but sqrt((lambda + 2 mu) / density)
     overflows: every element's stable step is 0 s, and the critical step with damping divided by
-    it (ZeroDivisionError, exit 3; found by tests/test_fuzz.py with PLIANT_FUZZ_EXAMPLES=1500)."""
+    it (ZeroDivisionError, exit 3; found by tests/test_fuzz.py with PLIANT_FUZZ_EXAMPLES=1500). A
+    denormal that neither float32 nor float64 holds as a normal number: refused naming it."""
     p = scene(tmp_path, SCENE.replace("density = 1000.0", "density = 5e-324"))
-    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "element 0", "wave speed", "infinite", "density")
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "element set", "density 4.94066e-324", "beyond what")
+    p = scene(tmp_path, SCENE.replace("density = 1000.0", "density = 5e-324").replace(*FLOAT64))
+    refused(cli("run", p, "-o", tmp_path / "o"), str(p), "density 4.94066e-324", "float64")
 
 
 # --- memory: a mesh larger than the machine ---------------------------------------------------
@@ -624,13 +630,26 @@ def test_usage_errors_exit_2():
     "patch, words",
     [
         (("size = [0.1, 0.02, 0.02]", "size = [1e300, 1e300, 1e300]"), ["non-finite volume"]),
-        (("E = 5e5", "E = 1e300"), ["steps"]),
-        (("density = 1000.0", "density = 1e-300"), ["steps"]),
+        # float64 holds these numbers, and the step they make is refused.
+        ([("E = 5e5", "E = 1e300"), FLOAT64], ["steps"]),
+        ([("density = 1000.0", "density = 1e-300"), FLOAT64], ["steps"]),
         # A given dt is checked against the mesh's highest frequency, whose M⁻¹K overflowed (an
         # internal error: ARPACK could not start): refused against its stable step (1e-156 s).
         (
-            ("density = 1000.0\n[solver]\n", "density = 1e-300\n[solver]\ndt = 1e-3\n"),
+            ("density = 1000.0\n[solver]\n", 'density = 1e-300\n[solver]\ndt = 1e-3\ndtype = "float64"\n'),
             ["dt = 0.001 s exceeds the stable time step"],
+        ),
+        # float32 does not hold them: refused naming the material and the range (1e-300 was 0 in
+        # the engine; 1e300 inf). μ = 1e308 with K as NiftySim gives it: 2μ overflows even float64.
+        (("E = 5e5", "E = 1e300"), ["element set", "3.45e+299 is beyond what float32 holds", "SI units"]),
+        (("density = 1000.0", "density = 1e-300"), ["density 1e-300 kg/m^3", "beyond what float32 holds"]),
+        (
+            ('type = "neo-hookean"\nE = 5e5\nnu = 0.45\n', 'type = "neo-hookean"\nmu = 1e308\nK = 3000.0\n'),
+            ["NeoHookean(mu=1e+308, lam=-inf)", "beyond what float32 holds"],
+        ),
+        (
+            [("E = 5e5\nnu = 0.45\n", "mu = 1e308\nK = 3000.0\n"), FLOAT64],
+            ["lam=-inf", "-inf is beyond what float64 holds"],
         ),
         (
             ("duration = 0.001", "duration = 0.001\nstatic = true\nincrements = 1000000000"),
@@ -642,8 +661,11 @@ def test_extreme_values_are_refused_in_one_line(tmp_path, patch, words):
     """Coordinates that overflow the geometry (an internal error before), materials and densities
     that make the stable step absurdly small (automatic or given), and a billion load increments
     (a hang)."""
-    p = scene(tmp_path, SCENE.replace(*patch))
-    assert p.read_text() != SCENE
+    text = SCENE
+    for old, new in patch if isinstance(patch, list) else [patch]:
+        assert old in text
+        text = text.replace(old, new)
+    p = scene(tmp_path, text)
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), *words)
 
 
@@ -661,7 +683,7 @@ def test_volumes_beyond_float32_are_refused_and_float64_takes_the_large_ones(tmp
         cli("run", p, "-o", tmp_path / "o"), str(p), "element 0 has volume", "float32", "dtype = 'float64'"
     )
     if size > 1:
-        p64 = scene(tmp_path, text.replace("[solver]\n", '[solver]\ndtype = "float64"\n'), name="f64.toml")
+        p64 = scene(tmp_path, text.replace(*FLOAT64), name="f64.toml")
         r = cli("run", p64, "-o", tmp_path / "o64")
         assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr[-2000:]
 

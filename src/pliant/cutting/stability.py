@@ -79,10 +79,24 @@ def highest_frequency(model, state, rel_tol: float = 1e-3) -> float:
         if not np.all(np.isfinite(K)):  # forces overflow: no frequency; the run's own check names it
             return math.nan
         return math.sqrt(max(float(np.linalg.eigvalsh((K + K.T) / 2)[-1]), 0.0)) / math.sqrt(m_ref)
-    A = LinearOperator((n, n), matvec=matvec, dtype=float)
+
+    def finite_matvec(x):
+        y = matvec(x)
+        if not np.all(np.isfinite(y)):
+            raise _Overflow
+        return y
+
+    A = LinearOperator((n, n), matvec=finite_matvec, dtype=float)
     rng = np.random.default_rng(0)  # a fixed start: the same step every time
-    lam = eigsh(A, k=1, which="LA", tol=rel_tol, v0=rng.standard_normal(n), return_eigenvectors=False)
+    try:
+        lam = eigsh(A, k=1, which="LA", tol=rel_tol, v0=rng.standard_normal(n), return_eigenvectors=False)
+    except _Overflow:  # as the dense path: no frequency; the run's own check names it
+        return math.nan
     return math.sqrt(max(float(lam[0]), 0.0)) / math.sqrt(m_ref)
+
+
+class _Overflow(Exception):
+    """The forces of a probe overflowed (highest_frequency)."""
 
 
 def stable_step(model, state) -> float:

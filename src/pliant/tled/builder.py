@@ -29,7 +29,7 @@ from ..memory import MODEL_BYTES_PER_TET, require_memory
 from ..mesh.primitives import triangle_measures
 from ..mesh.topology import conformity_problem
 from .curves import Constant, LoadCurve
-from .geometry import check_geometry
+from .geometry import check_geometry, check_material_numbers
 from .anp import ANP_STABILIZATION, anp_stabilization
 from .smoothing import strain_smoothing
 
@@ -642,6 +642,7 @@ class ModelBuilder:
         T32 = np.ascontiguousarray(self.tets.astype(np.int32))
         vol, alt = _core.tet_geometry(X, T32)
         check_geometry(self.source, X, T32, vol, alt, dtype)
+        check_material_numbers(self.source, self.sets, self._membranes, dtype)
         check_backend(backend)
         model = Model(self, owner, dtype, threads, geometry=(vol, alt))
         model._set_default_backend(backend, device)

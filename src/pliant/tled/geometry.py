@@ -1,11 +1,12 @@
-"""The element geometry checks ModelBuilder.finalize runs: finite, within the engine's number
-range, not flat, positively oriented (README, "Conventions")."""
+"""The checks ModelBuilder.finalize runs on the element geometry (finite, within the engine's number
+range, not flat, positively oriented: README, "Conventions") and on the materials' numbers (each
+one the engine's dtype holds)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DegenerateElementError, InvertedElementError, MeshError
+from ..errors import DegenerateElementError, InvertedElementError, MaterialError, MeshError
 
 # An element is flat when its volume is below this fraction of its longest edge cubed.
 FLAT = 1e-8
@@ -66,3 +67,34 @@ def check_geometry(
             f"expected positive orientation (swap two nodes), {inverted.size} inverted element(s) in all",
             e,
         )
+
+
+def check_material_numbers(source: str, sets, membranes, dtype) -> None:
+    """Raise the MaterialError that names the first element set (name, material, density) or
+    membrane set (material, with its thickness and density) holding a nonzero number that
+    ``dtype`` cannot: one that overflows it (or is not finite), or falls below its smallest normal
+    number (float32: 1.2e-38 to 3.4e38), which the engine would turn into inf, 0 or a denormal."""
+    f = np.finfo(dtype)
+    groups = [(f"element set {s.name!r}", s.material, s.density, _numbers(s.material)) for s in sets]
+    groups += [
+        (f"membrane set {k}", m, m.density, (*m.params, m.thickness, m.bending_E))
+        for k, (_, m) in enumerate(membranes)
+    ]
+    for where, material, density, values in groups:
+        for v in (*values, density):
+            size = abs(float(v))
+            if size != 0.0 and not float(f.tiny) <= size <= float(f.max):
+                raise MaterialError(
+                    f"{source}: {where}: {material!r}, density {density:g} kg/m^3: {float(v):.3g} is beyond "
+                    f"what {np.dtype(dtype).name} holds ({f.tiny:.2g} to {f.max:.2g}); expected SI "
+                    "units (Pa, kg/m^3, m, s)"
+                    + ("" if np.dtype(dtype) == np.float64 else " or dtype = 'float64'")
+                )
+
+
+def _numbers(material) -> tuple[float, ...]:
+    """A solid material's parameters, with its Prony terms' (α, τ) where it has them, and its
+    small-strain Lamé constants (derived: 2 μ of μ = 1e308 overflows)."""
+    prony = getattr(material, "prony", ())
+    terms = (v for group in prony for term in group for v in term)
+    return (*material.params, *terms, material.mu, material.lam)
