@@ -210,3 +210,22 @@ def test_a_mesh_tool_is_far_from_points_far_outside_its_grid(backend):
     sim = pl.Simulation(b.finalize("float64", backend=backend))
     sim.run(steps=50)
     assert np.all(sim.displacements == 0.0) and np.all(sim.contact_report().node_tool < 0)
+
+
+def test_a_tool_that_starts_deep_in_the_body_is_refused_by_name():
+    """A 2 cm block of 4 × 4 × 4 cells (smallest altitude 2.9 mm) and a sphere (r = 4 mm) whose
+    centre starts on its top face: its top nodes start up to 4 mm inside the sphere, beyond half an
+    altitude, and the first step's contact would push them out across their elements (before the
+    check: "element inverted; reduce dt", which no dt cures). Refused naming the tool, a node and
+    its depth; the same sphere starting 1 mm into the top (half an altitude is 1.44 mm) is pushed out
+    and runs; a sphere that closes on what it starts in at t = 0 (a grasp) is not checked."""
+    X, b = _block((0.02, 0.02, 0.02), (4, 4, 4))
+    b.add_tool(Sphere(0.004, position=(0.0, 0.0, 0.02), name="probe"))
+    with pytest.raises(pl.InputError, match=r"tool 0 \('probe'\) starts with node [0-9]+ 0.004 m inside it"):
+        b.finalize("float64")
+    for tool in (Sphere(0.004, position=(0.0, 0.0, 0.023)), Sphere(0.004, position=(0, 0, 0.02)).grasp(0.0)):
+        X, b = _block((0.02, 0.02, 0.02), (4, 4, 4))
+        b.add_tool(tool)
+        sim = pl.Simulation(b.finalize("float64"))
+        sim.run(steps=20)
+        assert np.all(np.isfinite(sim.positions))

@@ -146,6 +146,13 @@ _TET_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
         (lambda: pl.contact.Sphere(0.1, rotation=np.diag([2.0, 1.0, 1.0])), "not a rotation matrix"),
         (lambda: pl.contact.Sphere(0.1, rotation=np.diag([1.0, 1.0, -1.0])), "not a rotation matrix"),
         (lambda: pl.cutting.Blade(True), "length = True"),
+        # Its swept areas overflowed (an OverflowError, exit 3, from a scene's depth = 1e300).
+        (
+            lambda: pl.cutting.Blade(1e300),
+            "length = 1e\\+300; expected a length > 0 \\[m\\], at most 1e\\+150",
+        ),
+        (lambda: pl.cutting.Blade(0.01, depth=1e300), "depth = 1e\\+300"),
+        (lambda: pl.cutting.Blade(float("nan")), "length = nan"),
         # A mesh tool: bare numpy errors, a negative spacing accepted, a tiny one asked for 1e21 cells.
         (lambda: pl.contact.MeshTool(_TET_V * np.nan, _TET_F), "finite positions"),
         (lambda: pl.contact.MeshTool(_TET_V, _TET_F + 10), "face 0 = \\[10, 12, 11\\] indexes beyond the 4"),

@@ -367,3 +367,21 @@ class MeshTool(RigidTool):
         out = np.linalg.norm(y - yc, axis=1)
         phi = f(yc)
         return np.where(out > 0, out + np.maximum(phi, 0.0), phi)
+
+
+def deepest_start(tools, X: np.ndarray, nodes: list[np.ndarray], size: np.ndarray, skin: np.ndarray):
+    """The node that starts deepest inside a rigid tool beyond half its ``size`` [m] (its
+    elements' smallest altitude; (N,)): the first step's contact would push it out across its
+    elements and invert them. ``nodes``: per tool, the nodes it may touch; ``skin``: each node's
+    offset [m] (a sheet's half thickness, (N,)). A tool that closes at t = 0 holds what it starts
+    on and is not checked. Returns (tool index, node, depth [m]) or None."""
+    worst = None
+    for k, (tool, ids) in enumerate(zip(tools, nodes)):
+        if not len(ids) or (tool.grips and tool.grips[0] <= 0.0):
+            continue
+        depth = skin[ids] - tool.signed_distance(X[ids], 0.0)
+        over = depth - 0.5 * size[ids]
+        i = int(np.argmax(over))
+        if over[i] > 0 and (worst is None or depth[i] > worst[2]):
+            worst = (k, int(ids[i]), float(depth[i]))
+    return worst

@@ -4,8 +4,6 @@ sharp blade; it is not a contact tool."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..checks import as_real, shown
@@ -13,6 +11,8 @@ from ..contact.tools import RigidTool
 from ..errors import InputError
 
 __all__ = ["Blade"]
+
+MAX_SIZE = 1e150  # [m]: a blade's length and depth, whose squares (its swept areas) stay finite
 
 
 class Blade(RigidTool):
@@ -27,10 +27,15 @@ class Blade(RigidTool):
     def __init__(self, length: float, depth: float = 0.0, **kw):
         self.length = as_real(length)  # a bool or a string is not a length
         self.depth = as_real(depth)
-        if not (math.isfinite(self.length) and self.length > 0):
-            raise InputError(f"Blade: length = {shown(length)}; expected a length > 0 [m]")
-        if not (math.isfinite(self.depth) and self.depth >= 0):
-            raise InputError(f"Blade: depth = {shown(depth)}; expected a length >= 0 [m]")
+        # The swept triangles' areas (a length squared) must be finite: at most MAX_SIZE.
+        if not (0 < self.length <= MAX_SIZE):
+            raise InputError(
+                f"Blade: length = {shown(length)}; expected a length > 0 [m], at most {MAX_SIZE:g}"
+            )
+        if not (0 <= self.depth <= MAX_SIZE):
+            raise InputError(
+                f"Blade: depth = {shown(depth)}; expected a length >= 0 [m], at most {MAX_SIZE:g}"
+            )
         kw.setdefault("name", "blade")
         super().__init__(**kw)
 

@@ -170,6 +170,26 @@ def _check_wave_speeds(source: str, dt: np.ndarray, sets: list, owner: np.ndarra
     )
 
 
+def _check_tool_starts(source: str, tools, X, T, alt, mem_F, reach: list, skin) -> None:
+    """A rigid tool must not start deep in what it touches: a node inside it by more than half its
+    elements' smallest altitude ``alt`` [m] (tets' (M,), and membranes' of mem_F) would be pushed
+    out across them in the first step and invert them (an InputError naming the tool and node)."""
+    from ..contact.tools import deepest_start
+
+    size = np.full(X.shape[0], np.inf)
+    np.minimum.at(size, T.ravel(), np.repeat(np.asarray(alt, float), 4))
+    if len(mem_F):
+        np.minimum.at(size, mem_F.ravel(), np.repeat(_membrane_altitudes(X, mem_F), 3))
+    worst = deepest_start(tools, X, reach, size, skin)
+    if worst is not None:
+        k, node, depth = worst
+        raise InputError(
+            f"{source}: tool {k} ({tools[k].name!r}) starts with node {node} {depth:.3g} m inside it, more "
+            f"than half its elements' smallest altitude ({size[node]:.3g} m): the first step would push it "
+            "out across them; expected the tool outside the body at t = 0 (keyframes can bring it in)"
+        )
+
+
 def _check_initial_overlap(
     source: str,
     X: np.ndarray,
@@ -391,6 +411,9 @@ class Model:
         apart_h = np.array([mem_mat[k].thickness for k in apart])
         skin = np.zeros(X.shape[0])
         np.maximum.at(skin, mem_F[apart].ravel(), np.repeat(apart_h / 2, 3))
+        if self.tools:
+            reach = [cn[np.isin(cn, surface if s is None else s)] for s in builder.tool_nodes]
+            _check_tool_starts(builder.source, self.tools, X, T, geometry[1], mem_F, reach, skin)
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
         soft = dict(no_surface(), pairs=[], labels=None)
