@@ -274,18 +274,18 @@ class Solver:
         if loose is None:
             return ""
         return (
-            f"; node {loose} lies on a sheet that only bends (in-plane modulus 0) and nothing else "
-            "holds it in its plane: loaded across, such a sheet shrinks in its plane at second order "
-            "in its slope, and folds up under large slopes; give it an in-plane modulus"
+            f"; {_loose_words(loose)}: loaded across, such a sheet shrinks in its plane at second "
+            "order in its slope, and folds up under large slopes; give it an in-plane modulus"
         )
 
     def _jump_hint(self) -> str:
         """For a jump: a sheet that only bends (_loose_hint); where membranes carry compression,
         that a sheet may need to wrinkle (a bending sheet compressed at a scale its cells cannot
         fold snaps element by element: docs/engine.md, "Bending")."""
+        loose = self._loose_hint()
+        if loose:
+            return loose
         compressed = [m for m in self.model.membrane_materials if not m.wrinkling]
-        if self._loose_hint():
-            return self._loose_hint()
         if any(m.bends for m in compressed):
             return (
                 "; a bending sheet compressed at a scale its cells cannot fold (a drape) snaps "
@@ -504,8 +504,7 @@ class Solver:
         loose = _loose_sheet_node(self.model)
         if loose is not None:
             hint = (
-                f"node {loose} lies on a sheet that only bends (in-plane modulus 0) and nothing else "
-                "holds it in its plane, so the sheet has no unique rest shape: run it dynamically "
+                f"{_loose_words(loose)}, so the sheet has no unique rest shape: run it dynamically "
                 "with damping, or give it an in-plane modulus"
             )
         elif self.model.dtype == np.float32 and info.residual < 1e-3:
@@ -521,6 +520,14 @@ class Solver:
             f"tolerance {tol:g}. It stops early when the residual no longer falls ({hint}); "
             "else raise max_steps or tol"
         )
+
+
+def _loose_words(node: int) -> str:
+    """The errors' words for a node _loose_sheet_node found."""
+    return (
+        f"node {node} lies on a sheet that only bends (in-plane modulus 0) and nothing else holds it "
+        "in its plane"
+    )
 
 
 def _loose_sheet_node(model: Model) -> int | None:
