@@ -695,3 +695,25 @@ def test_ball_balls_dynamics_do_not_depend_on_the_step(tmp_path):
     largest = np.linalg.norm(u[0], axis=1).max()
     assert largest > 0.2  # the caps' 0.2 m and the balls' own motion
     assert np.linalg.norm(u[0] - u[1], axis=1).max() < 2e-4 * largest
+
+
+def test_a_repeated_element_read_once_is_its_first_with_a_warning(tmp_path):
+    """NiftySim's tledModel reads an element it expects once through XMLNode::getChildNode: the
+    first of its name. A model with two <TimeStep> (1e-4 s first, then 2e-4 s) and two <Density>
+    in its SystemParams runs at the first step (pliant took the last), and each repeat is named in
+    a warning; repeated elements that NiftySim reads each of (two <Constraint>) give none."""
+    X, T, left, right, xml = _cube_xml()
+    twice = xml.replace("<TimeStep>1e-4</TimeStep>", "<TimeStep>1e-4</TimeStep><TimeStep>2e-4</TimeStep>")
+    twice = twice.replace(
+        "<DampingCoeff>20</DampingCoeff>", "<DampingCoeff>20</DampingCoeff><DampingCoeff>5</DampingCoeff>"
+    )
+    assert twice.count("<TimeStep>") == 2 and twice.count("<DampingCoeff>") == 2
+    p = tmp_path / "twice.xml"
+    p.write_text(twice)
+    sc = load_niftysim(p)
+    assert sc.dt == 1e-4 and sc.builder.damping == 20.0
+    said = [w for w in sc.warnings if "the first is read" in w]
+    assert len(said) == 2 and "<SystemParams> holds 2 <TimeStep>" in said[0] + said[1], said
+    assert xml.count("<Constraint") >= 2
+    p.write_text(xml)
+    assert not [w for w in load_niftysim(p).warnings if "the first is read" in w]

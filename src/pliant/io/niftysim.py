@@ -27,28 +27,11 @@ import numpy as np
 
 from ..errors import FileError, InputError
 from .files import file_problem
+from .niftysim_structure import KNOWN_TOP, warn_repeated
 from ..mesh.primitives import orient_positive
 from ..materials import ArrudaBoyce, NeoHookean, Polynomial, StVenantKirchhoff, TransverselyIsotropic
 from ..job import Scene
 from ..tled import Constant, Hilly, ModelBuilder, Ramp, SmoothRamp, Step
-
-_KNOWN_TOP = {
-    "Nodes",
-    "Elements",
-    "ElementSet",
-    "Constraint",
-    "SystemParams",
-    "SubMesh",
-    "Output",
-    "ContactPlate",
-    "ContactCylinder",
-    "ContactUSProbe",
-    "ContactSurface",
-    "MSHMesh",
-    "VTKMesh",
-    "ShellElements",
-    "ShellElementSet",
-}
 
 
 # NiftySim user guide v2.4, App. A.1: material code → (pliant class, parameters in file order).
@@ -228,11 +211,12 @@ def load_niftysim(path, ignore: tuple[str, ...] = (), overrides: dict | None = N
             f"unsupported NiftySim feature {name}: {why}; pass --ignore {name} to skip it knowingly", f, name
         )
 
+    warn_repeated(root, f, warnings)
     # The model's membranes or its sub-models' (which the merge below reads unless skipped).
     skip_membranes = "ShellElements" in ignore and root.find(".//ShellElements") is not None
     root = _flatten(root, f, not skip_membranes)
     for child in root:
-        if child.tag not in _KNOWN_TOP:
+        if child.tag not in KNOWN_TOP:
             unsupported(child.tag, "not implemented in pliant")
     if skip_membranes:
         warnings.append(f"{f}: ignored ShellElements as asked (--ignore ShellElements): the solid runs alone")

@@ -29,12 +29,12 @@ def system_params(root, f: str, unsupported, warnings: list[str], etype: str):
     sp = root.find("SystemParams")
     if sp is None:
         raise NiftySimError("missing <SystemParams>", f)
-    params = {}
+    params: dict[str, str] = {}
     for c in sp:
         if c.tag not in SYSTEM:
             unsupported(f"SystemParams/{c.tag}", "not implemented in pliant")
             continue
-        params[c.tag] = (c.text or "").strip()
+        params.setdefault(c.tag, (c.text or "").strip())  # the first, as NiftySim reads it
     for req in ("TimeStep", "TotalTime", "DampingCoeff"):
         if req not in params:
             raise NiftySimError(f"<SystemParams> lacks <{req}>", f, f"SystemParams/{req}")
