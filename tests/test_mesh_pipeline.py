@@ -157,6 +157,24 @@ def test_bad_surfaces(tmp_path):
         pl.mesh.repair_surface(V, F)
 
 
+@pytest.mark.parametrize("edge", ["1e-6", "1e-300", "5e-324"])
+def test_an_edge_length_too_small_for_any_mesh_is_refused(tmp_path, edge):
+    """An edge length that would make more than MAX_TETS tets is refused naming the count; at
+    1e-300 m and below its square underflowed to 0 and the count divided by it (ZeroDivisionError,
+    an internal error, exit 3; found by mutating examples/organs_contact.toml's edge_length)."""
+    import trimesh
+
+    m = trimesh.creation.icosphere(subdivisions=2, radius=0.05)
+    src = tmp_path / "ball.stl"
+    m.export(src)
+    r = runner.invoke(
+        app, ["mesh", "tetrahedralize", str(src), str(tmp_path / "o.vtu"), "--edge-length", edge]
+    )
+    assert r.exit_code == 2 and "would make about" in r.output and "give a larger edge length" in r.output, (
+        r.output
+    )
+
+
 def _cubes(shift, drop_shared=False):
     """Two 2 cm cubes (trimesh's boxes: 12 faces each), the second moved by ``shift`` [m]; with
     ``drop_shared`` the second loses its faces on the first one's +x face (one interface of three

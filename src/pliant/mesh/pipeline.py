@@ -121,7 +121,9 @@ def surface_to_tets(
         import trimesh
 
         area = float(trimesh.Trimesh(V, F, process=False).area)
-        target_faces = max(MIN_FACES, int(area / (math.sqrt(3) / 4 * el * el)))
+        with np.errstate(over="ignore", divide="ignore"):  # el = 1e-300: el² is 0, the count inf
+            faces = np.float64(area) / (math.sqrt(3) / 4 * np.float64(el) ** 2)
+        target_faces = max(MIN_FACES, int(min(faces, 1e18)))  # tetrahedralize refuses what is too many
     if target_faces < len(F):
         V, F = simplify(V, F, target_faces=target_faces)
     info["simplified_faces"] = int(len(F))

@@ -91,15 +91,16 @@ def tetrahedralize(
     if not (math.isfinite(el) and el > 0):
         raise MeshError(f"tetrahedralize: edge length {el!r}; expected a finite length > 0 [m]")
     volume = abs(surface_volume(V, F))
-    expected = volume / (el**3 / (6 * math.sqrt(2)))  # regular tets of edge el
+    area = float(triangle_measures(V, F.astype(np.int64))[0].sum())
+    with np.errstate(over="ignore", divide="ignore"):  # el = 1e-300: el³ is 0, the counts inf
+        expected = float(np.float64(volume) / (np.float64(el) ** 3 / (6 * math.sqrt(2))))  # regular tets
+        faces = float(np.float64(area) / (math.sqrt(3) / 4 * np.float64(el) ** 2))  # triangles of edge el
     if expected > MAX_TETS:
         raise MeshError(
             f"tetrahedralize: edge length {el:.3g} m would make about {expected:.3g} "
             f"tets in the surface's {volume:.3g} m^3; expected at most {MAX_TETS:.0e} "
             "(give a larger edge length)"
         )
-    area = float(triangle_measures(V, F.astype(np.int64))[0].sum())
-    faces = area / (math.sqrt(3) / 4 * el**2)  # triangles of edge el that cover the surface
     if faces > MAX_TETS:
         raise MeshError(
             f"tetrahedralize: edge length {el:.3g} m would make about {faces:.3g} triangles on the "
