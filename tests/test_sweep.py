@@ -242,6 +242,11 @@ def _ishigami_free(params, run_dir):
             "power of 2",
         ),
         ('base = "nothere.toml"\n[[parameter]]\nkey = "solver.damping"\nvalues = [1.0]\n', "no such"),
+        (  # numpy's generator refused it inside (an internal error, exit 3; found by mutation)
+            'base = "base.toml"\n[design]\ntype = "lhs"\nsamples = 4\nseed = -1\n[[parameter]]\n'
+            'key = "solver.damping"\nrange = [1.0, 2.0]\n',
+            "[design.seed]: seed = -1: expected an integer >= 0",
+        ),
         ('base = "base.toml"\n[[parameter]]\nkey = "solver..damping"\nvalues = [1.0]\n', "segment"),
         (
             'base = "base.toml"\n'

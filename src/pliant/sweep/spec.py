@@ -310,7 +310,10 @@ def _design(ctx: Ctx, d: dict) -> Design:
             "design.samples",
             f"samples = {samples}: Saltelli's scheme on a Sobol' sequence needs a power of 2",
         )
-    return Design(kind, samples, d.get("seed", 0))
+    seed = d.get("seed", 0)
+    if seed < 0:
+        raise ctx.error("design.seed", f"seed = {seed}: expected an integer >= 0")
+    return Design(kind, samples, seed)
 
 
 def _parameter(ctx: Ctx, p: dict, where: str, design: Design) -> Parameter:
