@@ -261,12 +261,19 @@ def test_an_output_point_far_from_the_mesh_is_warned_of(tmp_path):
     from pliant.scene import load_scene
 
     scene = tmp_path / "cube.toml"
-    scene.write_text(CUBE.replace("corner = [1.0, 1.0, 1.0]", "corner = [1000.0, 1000.0, 1000.0]"))
+    text = CUBE.replace("corner = [1.0, 1.0, 1.0]", "corner = [1000.0, 1000.0, 1000.0]")
+    scene.write_text(text)
+    line = 1 + text.splitlines().index(next(ln for ln in text.splitlines() if "corner = [1000.0" in ln))
     with pytest.warns(
-        PliantWarning, match=r"\[output.points.corner\]: \[1000.0, 1000.0, 1000.0\] is 1.73e\+03 m"
+        PliantWarning,
+        match=rf"cube.toml:{line} \[output.points.corner\]: \[1000.0, 1000.0, 1000.0\] is 1.73e\+03 m",
     ):
         loaded = load_scene(scene)
     assert loaded.points["corner"] == int(np.argmax(loaded.builder.nodes.sum(axis=1)))
+    # Its key where the line is not found (a quoted table name): the file alone, not "cube.toml:None".
+    scene.write_text(text.replace("[output]", '["output"]'))
+    with pytest.warns(PliantWarning, match=r"cube.toml \[output.points.corner\]"):
+        load_scene(scene)
 
 
 def test_a_block_resting_on_a_held_surface_weighs_on_its_support(backend):

@@ -103,6 +103,11 @@ class Ctx:
                 return i + 1
         return None
 
+    def where(self, key: str) -> str:
+        """``file:line`` of a key path, or the file alone where its line is not found."""
+        line = self.line_of(key)
+        return self.file if line is None else f"{self.file}:{line}"
+
     def error(self, key: str, message: str) -> SceneError:
         return SceneError(message, self.file, key, self.line_of(key))
 

@@ -180,7 +180,7 @@ def nearest_node(ctx: Ctx, point, path: str, X: np.ndarray) -> int:
     if dist > 0.1 * size:
         warnings.warn(
             PliantWarning(
-                f"{ctx.file}:{ctx.line_of(path)} [{path}]: {np.asarray(point, dtype=float).tolist()} is "
+                f"{ctx.where(path)} [{path}]: {np.asarray(point, dtype=float).tolist()} is "
                 f"{dist:.3g} m from the nearest node ({node}, at {np.round(X[node], 6).tolist()}) of a mesh "
                 f"{size:.3g} m across; its displacement is that node's (SI metres expected)"
             ),
