@@ -766,3 +766,27 @@ def test_a_blade_in_a_viscoelastic_edge_smoothed_scene_is_refused_upfront(tmp_pa
     text = text.replace("damping = 5.0", 'damping = 5.0\nstrain_smoothing = "edge"')
     p = scene(tmp_path, text)
     refused(cli("run", p, "-o", tmp_path / "o"), str(p), "solver.strain_smoothing", "cannot be cut yet")
+
+
+def test_a_displacement_applied_whole_in_the_first_step_is_named_when_it_inverts(tmp_path):
+    """The bar's free end prescribed −3 cm along x with no curve (a constant: all of it in the
+    first step) crosses its 2 cm cells in that step and inverts them, whatever the step: the error
+    names the node, the displacement and what to do, where it said only "reduce dt"; ramped
+    (curve = "smooth-ramp" over 0.05 s) the same displacement runs, and an instability later than
+    the first check (the same ramp over 1 ms, inverting at 0.875 ms) gets no such hint."""
+    push = (
+        '[[constraint]]\ntype = "displacement"\ndofs = "x"\nvalue = -0.03\n'
+        "nodes = { plane = { point = [0.05, 0, 0], normal = [1, 0, 0] } }\n"
+    )
+    r = cli("run", scene(tmp_path, SCENE + push), "-o", tmp_path / "o")
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("error: ")]
+    assert r.returncode == 1 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert "is prescribed -0.03 m along x from the first step on" in lines[0], lines[0]
+    assert 'curve = "smooth-ramp"' in lines[0]
+    ramped = SCENE + push.replace("value = -0.03\n", 'value = -0.03\ncurve = "smooth-ramp"\n')
+    r = cli(
+        "run", scene(tmp_path, ramped.replace("duration = 0.001", "duration = 0.05")), "-o", tmp_path / "o2"
+    )
+    assert r.returncode == 0, r.stderr
+    r = cli("run", scene(tmp_path, ramped), "-o", tmp_path / "o3")
+    assert r.returncode == 1 and "inverted" in r.stderr and "first step" not in r.stderr, r.stderr

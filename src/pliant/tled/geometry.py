@@ -1,6 +1,6 @@
 """The checks ModelBuilder.finalize runs on the element geometry (finite, within the engine's number
-range, not flat, positively oriented: README, "Conventions") and on the materials' numbers (each
-one the engine's dtype holds)."""
+range, not flat, positively oriented: README, "Conventions"), on the materials' numbers (each one
+the engine's dtype holds) and on what the first step would move farther than an element."""
 
 from __future__ import annotations
 
@@ -98,3 +98,28 @@ def _numbers(material) -> tuple[float, ...]:
     prony = getattr(material, "prony", ())
     terms = (v for group in prony for term in group for v in term)
     return (*material.params, *terms, material.mu, material.lam)
+
+
+def node_sizes(
+    n_nodes: int, T: np.ndarray, alt: np.ndarray, mem_F: np.ndarray, mem_alt: np.ndarray
+) -> np.ndarray:
+    """Each node's smallest altitude [m] over its elements, (n_nodes,): tets T (M, 4) of smallest
+    altitudes ``alt`` (M,), membranes mem_F (K, 3) of ``mem_alt`` (K,); inf on a node in none."""
+    size = np.full(n_nodes, np.inf)
+    np.minimum.at(size, np.asarray(T).ravel(), np.repeat(np.asarray(alt, float), 4))
+    if len(mem_F):
+        np.minimum.at(size, np.asarray(mem_F).ravel(), np.repeat(np.asarray(mem_alt, float), 3))
+    return size
+
+
+def sudden_displacement(cons: dict, size: np.ndarray):
+    """The prescribed displacement (``cons``: (node, dof) → (value [m], curve)) whose curve is not 0
+    at t = 0, so that the first step moves its node by value × curve(0) (a constant curve: all of
+    it), by the most beyond half the node's smallest altitude ``size`` [m]: the node crosses its
+    elements and inverts them in that step, whatever the step. (node, dof, value, curve) or None."""
+    worst = None
+    for (n, d), (value, curve) in cons.items():
+        ratio = abs(value * float(curve(0.0))) / size[n]
+        if ratio > 0.5 and (worst is None or ratio > worst[0]):
+            worst = (ratio, n, d, value, curve)
+    return None if worst is None else worst[1:]

@@ -22,6 +22,7 @@ from .curves import Constant, LoadCurve
 from .anp import anp_stabilization
 from ..mesh.primitives import triangle_measures
 from .smoothing import strain_smoothing
+from .geometry import node_sizes, sudden_displacement
 
 if TYPE_CHECKING:
     from .state import State
@@ -170,16 +171,12 @@ def _check_wave_speeds(source: str, dt: np.ndarray, sets: list, owner: np.ndarra
     )
 
 
-def _check_tool_starts(source: str, tools, X, T, alt, mem_F, reach: list, skin) -> None:
+def _check_tool_starts(source: str, tools, X, size, reach: list, skin) -> None:
     """A rigid tool must not start deep in what it touches: a node inside it by more than half its
-    elements' smallest altitude ``alt`` [m] (tets' (M,), and membranes' of mem_F) would be pushed
-    out across them in the first step and invert them (an InputError naming the tool and node)."""
+    elements' smallest altitude ``size`` [m] (N,) would be pushed out across them in the first step
+    and invert them (an InputError naming the tool and node)."""
     from ..contact.tools import deepest_start
 
-    size = np.full(X.shape[0], np.inf)
-    np.minimum.at(size, T.ravel(), np.repeat(np.asarray(alt, float), 4))
-    if len(mem_F):
-        np.minimum.at(size, mem_F.ravel(), np.repeat(_membrane_altitudes(X, mem_F), 3))
     worst = deepest_start(tools, X, reach, size, skin)
     if worst is not None:
         k, node, depth = worst
@@ -367,6 +364,10 @@ class Model:
         patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve else np.zeros((0, N, 3))
         cons = sorted(builder._cons.items())
         self._cons_user = [(n, d) for (n, d), _ in cons]
+        size = node_sizes(N, T, geometry[1], mem_F, _membrane_altitudes(X, mem_F))
+        # A displacement the first step applies whole, beyond half an element (the errors' hint).
+        self._sudden = sudden_displacement(builder._cons, size)
+        self._node_size = size
         held = np.zeros((X.shape[0], 3), dtype=bool)  # DOFs a constraint holds (user numbering)
         if cons:
             held[tuple(np.array(self._cons_user).T)] = True
@@ -413,7 +414,7 @@ class Model:
         np.maximum.at(skin, mem_F[apart].ravel(), np.repeat(apart_h / 2, 3))
         if self.tools:
             reach = [cn[np.isin(cn, surface if s is None else s)] for s in builder.tool_nodes]
-            _check_tool_starts(builder.source, self.tools, X, T, geometry[1], mem_F, reach, skin)
+            _check_tool_starts(builder.source, self.tools, X, size, reach, skin)
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
         soft = dict(no_surface(), pairs=[], labels=None)

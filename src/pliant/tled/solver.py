@@ -298,13 +298,27 @@ class Solver:
             )
         return ""
 
+    def _sudden_hint(self, t: float) -> str:
+        """For an instability within the first check (t ≤ (check_every + 1) Δt): a prescribed
+        displacement its curve applies whole in the first step, beyond half its node's elements'
+        smallest altitude (Model._sudden), or ""."""
+        if self.model._sudden is None or t > (self.check_every + 1.5) * self.dt:
+            return ""
+        n, d, value, curve = self.model._sudden
+        return (
+            f"; node {n} is prescribed {value:.3g} m along {'xyz'[d]} from the first step on ({curve!r} is "
+            f"{float(curve(0.0)):g} at t = 0), more than half its elements' smallest altitude "
+            f"({self.model._node_size[n]:.3g} m): that step moves it across them whatever the step; "
+            'give it a ramp (pliant.SmoothRamp; curve = "smooth-ramp" in scenes)'
+        )
+
     def _raise(self, rep: dict):
         m, t, v, status = self.model, rep["t"], rep["value"], rep["status"]
         if status == RunStatus.Inverted and not math.isfinite(v):
             e = m.user_element(rep["where"])
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: non-finite deformation in element {e} (J = {v}); "
-                f"reduce dt (now {self.dt:.3g} s) or the loads",
+                f"reduce dt (now {self.dt:.3g} s) or the loads{self._sudden_hint(t)}",
                 t,
                 "J",
                 v,
@@ -320,7 +334,7 @@ class Solver:
             )
             raise InstabilityError(
                 f"unstable at t = {t:.6g} s: element {e} inverted (J = {v:.3g} <= 0); reduce dt "
-                f"(now {self.dt:.3g} s), the loads, or refine/soften around it{hint}",
+                f"(now {self.dt:.3g} s), the loads, or refine/soften around it{hint}{self._sudden_hint(t)}",
                 t,
                 "J",
                 v,
