@@ -5,45 +5,26 @@ from __future__ import annotations
 
 __all__ = ["KNOWN_TOP", "warn_repeated"]
 
-# The top-level elements pliant reads; any other is an unsupported feature, refused by name.
-KNOWN_TOP = {
-    "Nodes",
-    "Elements",
+# The top-level elements pliant reads (any other is an unsupported feature, refused by name): those
+# a file gives once, and those it may repeat, each of which is read.
+_TOP_ONCE = {"Nodes", "Elements", "SystemParams", "MSHMesh", "VTKMesh"}
+_TOP_MANY = {
     "ElementSet",
     "Constraint",
-    "SystemParams",
     "SubMesh",
     "Output",
     "ContactPlate",
     "ContactCylinder",
     "ContactUSProbe",
     "ContactSurface",
-    "MSHMesh",
-    "VTKMesh",
     "ShellElements",
     "ShellElementSet",
 }
-
+KNOWN_TOP = _TOP_ONCE | _TOP_MANY
 
 # Elements a file may repeat under one parent (each is read); any other element repeated there is
 # read once, its first, as NiftySim's tledModel reads it (XMLNode::getChildNode), with a warning.
-_REPEATED = {
-    "ElementSet",
-    "Constraint",
-    "SubMesh",
-    "Output",
-    "ContactPlate",
-    "ContactCylinder",
-    "ContactUSProbe",
-    "ContactSurface",
-    "ShellElements",
-    "ShellElementSet",
-    "SubModel",
-    "ClampedNodes",
-    "Motion",
-    "RestrictTo",
-    "Variable",
-}
+_REPEATED = _TOP_MANY | {"SubModel", "ClampedNodes", "Motion", "RestrictTo", "Variable"}
 
 
 def warn_repeated(root, f: str, warnings: list[str]) -> None:
