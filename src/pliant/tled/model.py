@@ -22,7 +22,7 @@ from .curves import Constant, LoadCurve
 from .anp import anp_stabilization
 from ..mesh.primitives import triangle_measures
 from .smoothing import strain_smoothing
-from .geometry import node_sizes, sudden_displacement
+from .geometry import node_sizes
 
 if TYPE_CHECKING:
     from .state import State
@@ -364,10 +364,8 @@ class Model:
         patterns = np.stack([pattern_of[k] for k in pattern_curve]) if pattern_curve else np.zeros((0, N, 3))
         cons = sorted(builder._cons.items())
         self._cons_user = [(n, d) for (n, d), _ in cons]
-        size = node_sizes(N, T, geometry[1], mem_F, _membrane_altitudes(X, mem_F))
-        # A displacement the first step applies whole, beyond half an element (the errors' hint).
-        self._sudden = sudden_displacement(builder._cons, size)
-        self._node_size = size
+        self._altitudes = np.asarray(geometry[1], float)  # smallest altitude [m] per element, user order
+        mem_alt = _membrane_altitudes(X, mem_F)
         held = np.zeros((X.shape[0], 3), dtype=bool)  # DOFs a constraint holds (user numbering)
         if cons:
             held[tuple(np.array(self._cons_user).T)] = True
@@ -414,6 +412,7 @@ class Model:
         np.maximum.at(skin, mem_F[apart].ravel(), np.repeat(apart_h / 2, 3))
         if self.tools:
             reach = [cn[np.isin(cn, surface if s is None else s)] for s in builder.tool_nodes]
+            size = node_sizes(N, T, self._altitudes, mem_F, mem_alt)
             _check_tool_starts(builder.source, self.tools, X, size, reach, skin)
         self._contact_engine = cn[cn_order]  # user node of each engine contact node (grasp state)
         tool_grids = [t.grid() for t in self.tools]
@@ -512,7 +511,7 @@ class Model:
         self._stable_step: float | None = None  # 2/ω_max with β, when a solver first needs it
         self._volumes = np.asarray(geometry[0], float)  # V0 [m³] per element, user order
         # smallest element (or membrane) altitude [m]
-        self.min_altitude = float(np.min(np.concatenate([geometry[1], _membrane_altitudes(X, mem_F)])))
+        self.min_altitude = float(np.min(np.concatenate([self._altitudes, mem_alt])))
         limit = int(self._engine.dt_critical_element)  # −1: no tets (membranes alone)
         self.dt_critical_element = int(elem_order[limit]) if limit >= 0 else -1
         # The membrane (add order) whose own step is dt_critical's, or −1 where an element's is.
@@ -754,6 +753,11 @@ class Model:
                 factor[curve] = (c[2] - 2.0 * c[1] + c[0]) / dt**2 + alpha * (c[2] - c[0]) / (2.0 * dt)
             out[n, d] = self.mass[n] * value * factor[curve]
         return out
+
+    def _node_sizes(self) -> np.ndarray:
+        """Each node's smallest altitude [m] over its tets and membranes, (N,) (geometry.node_sizes)."""
+        X, F = self.reference_positions, self.membrane_faces
+        return node_sizes(self.n_nodes, self.tets, self._altitudes, F, _membrane_altitudes(X, F))
 
     @property
     def membrane_materials(self) -> list:

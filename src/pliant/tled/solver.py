@@ -19,6 +19,7 @@ from .._core import RunStatus
 from ..checks import as_real, finite_number, shown
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .anp import anp_stabilization
+from .geometry import sudden_displacement
 from .model import Model
 from .state import State
 from .report import ContactReport, PairHistory, RelaxInfo, RunInfo, ToolHistory, tool_force
@@ -301,14 +302,18 @@ class Solver:
     def _sudden_hint(self, t: float) -> str:
         """For an instability within the first check (t ≤ (check_every + 1) Δt): a prescribed
         displacement its curve applies whole in the first step, beyond half its node's elements'
-        smallest altitude (Model._sudden), or ""."""
-        if self.model._sudden is None or t > (self.check_every + 1.5) * self.dt:
+        smallest altitude (geometry.sudden_displacement; looked for only then), or ""."""
+        if t > (self.check_every + 1.5) * self.dt:
             return ""
-        n, d, value, curve = self.model._sudden
+        size = self.model._node_sizes()
+        found = sudden_displacement(self.model._builder._cons, size)
+        if found is None:
+            return ""
+        n, d, value, curve = found
         return (
             f"; node {n} is prescribed {value:.3g} m along {'xyz'[d]} from the first step on ({curve!r} is "
             f"{float(curve(0.0)):g} at t = 0), more than half its elements' smallest altitude "
-            f"({self.model._node_size[n]:.3g} m): that step moves it across them whatever the step; "
+            f"({size[n]:.3g} m): that step moves it across them whatever the step; "
             'give it a ramp (pliant.SmoothRamp; curve = "smooth-ramp" in scenes)'
         )
 
