@@ -445,11 +445,13 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
                      membrane_measures(k, md, s.s.u.data(), P, &out[w * k]);
                  return to_numpy(std::move(out), {size_t(md.count), w});
              })
-        .def("internal_forces",
-             [](B& e, const S& s) {
-                 std::vector<T> f = e->internal_forces(s.s);
-                 return node_array(f, e.engine->model.n_nodes, e.engine->model.n_pad);
-             })
+        .def(
+            "internal_forces",
+            [](B& e, const S& s, bool damped) {
+                std::vector<T> f = e->internal_forces(s.s, damped);
+                return node_array(f, e.engine->model.n_nodes, e.engine->model.n_pad);
+            },
+            nb::arg("state"), nb::arg("damped") = false)
         .def("external_forces", [](B& e, const S& s, double t) {
             std::vector<T> f = e->external_forces(s.s, t);
             return node_array(f, e.engine->model.n_nodes, e.engine->model.n_pad);

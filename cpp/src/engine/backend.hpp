@@ -68,8 +68,10 @@ public:
     virtual RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps,
                             int check_every, double size) = 0;
     virtual ElementResults<T> measures(const State<T>& s) = 0;
-    /// Internal nodal forces f(u) [N], SoA (3, P).
-    virtual std::vector<T> internal_forces(const State<T>& s) = 0;
+    /// Internal nodal forces f(u) [N], SoA (3, P); damped: plus stiffness-proportional damping's
+    /// viscous forces from the state's last increment du and step Δt (what that step drove the
+    /// nodes with; none where the model has no β or the state no step).
+    virtual std::vector<T> internal_forces(const State<T>& s, bool damped) = 0;
     /// External loads [N] on the nodes at the state's displacements and the load curves at t [s]
     /// (load patterns, gravity, follower pressure and traction; not contact), SoA (3, P).
     virtual std::vector<T> external_forces(const State<T>& s, double t) = 0;

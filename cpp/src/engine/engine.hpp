@@ -162,7 +162,7 @@ public:
     RunReport relax(State<T>& s, double t_eval, double dt, double tol, long max_steps, int check_every,
                     double size) override;
     ElementResults<T> measures(const State<T>& s) override;
-    std::vector<T> internal_forces(const State<T>& s) override;
+    std::vector<T> internal_forces(const State<T>& s, bool damped) override;
     std::vector<T> external_forces(const State<T>& s, double t) override;
     std::vector<double> tool_history() override;
     std::vector<double> pair_history() override;

@@ -408,10 +408,11 @@ ElementResults<T> Engine<T, Dev>::measures(const State<T>& s) {
     return r;
 }
 
-/// f(u) [N] of the state's displacements, SoA (3, P): kernel 1 (stored viscoelastic state), then the
-/// gather of kernel 2 with no loads and a zero integrator.
+/// f(u) [N] of the state's displacements, SoA (3, P): kernel 1 (stored viscoelastic state), with
+/// damped the β damping forces of the state's du and Δt, then the gather of kernel 2 with no loads
+/// and a zero integrator.
 template <class T, class Dev>
-std::vector<T> Engine<T, Dev>::internal_forces(const State<T>& s) {
+std::vector<T> Engine<T, Dev>::internal_forces(const State<T>& s, bool damped) {
     load(s);
     const Integrator<T> zero{T(0), T(0)};
     Scalars<T> sc = dev_.read(v_.sc);
@@ -421,6 +422,7 @@ std::vector<T> Engine<T, Dev>::internal_forces(const State<T>& s) {
     const Phase ph = phase_;
     dev_.region([&] {
         forces(v_.u[ph.cur], ViscoMode::Stored, s.dt);
+        if (damped && m_.stiffness_damping > 0.0 && s.dt > 0.0) damping(ph, s.dt);
         node_pass(Phase{ph.cur, ph.cur, 3 - ph.cur - ph.prev}, false, v_.f_node[0]);
     });
     return f_node_[0].to_host();

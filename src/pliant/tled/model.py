@@ -728,9 +728,18 @@ class Model:
         ``dofs`` (the others 0): Σ (f − r) over them, internal forces less the external loads (a
         bar hanging under gravity: its weight, upward, at its fixed top), plus, on the DOFs a
         prescribed displacement moves, their own inertia and mass damping (``_moved_inertia``:
-        after a dynamic run; docs/scenes.md, "Reactions")."""
-        held = self.internal_forces(state) - self.external_forces(state, t) + self._moved_inertia(state, t)
-        return _held_sum(held, np.asarray(nodes, dtype=np.int64).reshape(-1), dofs)
+        after a dynamic run), plus the stiffness-proportional damping's viscous forces at the
+        state's last increment (docs/scenes.md, "Reactions")."""
+        return _held_sum(self._held_forces(state, t), np.asarray(nodes, dtype=np.int64).reshape(-1), dofs)
+
+    def _held_forces(self, state: "State", t: float | None) -> np.ndarray:
+        """What the step drives each node with, less its loads [N], (N, 3): f(u) + f_β(u, du/Δt)
+        − r(t) + the moved DOFs' m (a + α v) (M a + α M v + f + f_β − r = the support's force).
+        f_β: β damping's viscous forces from the state's own increment and step (zero after a
+        relaxation, whose increment is zero)."""
+        damped = self._results().internal_forces(state._s, self.stiffness_damping > 0.0)
+        f = self.to_user_nodes(np.asarray(damped, dtype=float))
+        return f - self.external_forces(state, t) + self._moved_inertia(state, t)
 
     def _moved_inertia(self, state: "State", t: float | None = None) -> np.ndarray:
         """m (a + α v) [N] (N, 3) on each DOF a prescribed displacement d c(t) moves, as the last
@@ -771,11 +780,11 @@ class Model:
 
     def support_reactions(self, state: "State", t: float | None = None) -> dict[str, np.ndarray]:
         """Each support's reaction [N], (3,), by its name (``reactions`` over its nodes and DOFs):
-        internal less external forces on its held DOFs (plus the inertia of those a prescribed
-        displacement moves, after a dynamic run), less the soft-contact force on them at the
+        internal (with β damping's) less external forces on its held DOFs (plus the inertia of those
+        a prescribed displacement moves, after a dynamic run), less the soft-contact force on them at the
         last step of the solver that last ran this model (a body resting on a held surface: the
         support carries it through the contact)."""
-        held = self.internal_forces(state) - self.external_forces(state, t) + self._moved_inertia(state, t)
+        held = self._held_forces(state, t)
         solver = self._solver() if self._solver and self.contact_pairs else None
         if solver is not None:
             report = solver.contact_report()
