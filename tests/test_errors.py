@@ -335,6 +335,56 @@ def test_conflicting_constraints_and_bad_loads():
         b.add_force([1, 2], np.ones((3, 3)))
 
 
+@pytest.mark.parametrize("dofs", [1.5, True, float("inf"), slice(1), [[0, 1]], [], "", None, 3, -1, [0, "y"]])
+def test_dofs_that_are_not_0_1_2_or_xyz_are_named(dofs):
+    """A DOF list is 0, 1, 2 or letters of 'xyz': a float, bool, slice, nested list or an empty
+    selection is refused naming it (1.5 read as DOF 1 before; inf, a slice and a nested list were
+    Python's OverflowError / TypeError)."""
+    X, T = _tet()
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    with pytest.raises(pl.InputError, match="dofs = "):
+        b.fix([1], dofs)
+    with pytest.raises(pl.InputError, match="dofs = "):
+        b.prescribe([1], 0.1, dofs)
+    b.fix([1], np.array([0, 2]))  # numpy integers are DOFs too
+    assert b.supports[-1][2] == "xz"
+
+
+@pytest.mark.parametrize(
+    "curve", [2.0, "ramp", np.array([0.0, 1.0]), (0.0, 1.0), pl.NeoHookean(E=1e3, nu=0.3)]
+)
+def test_a_curve_that_is_not_a_load_curve_is_named_by_its_call(curve):
+    """Every call that takes a load curve refuses what is not one, naming the call (a float was
+    an AttributeError at finalize, an array numpy's ambiguous truth value)."""
+    X, T = _tet()
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    calls = {
+        "prescribe": lambda: b.prescribe([1], 0.1, "x", curve=curve),
+        "add_force": lambda: b.add_force([1], [0.0, 0.0, 1.0], curve=curve),
+        "add_pressure": lambda: b.add_pressure([[1, 2, 3]], 1.0, curve=curve),
+        "add_traction": lambda: b.add_traction([[1, 2, 3]], [0.0, 0.0, 1.0], curve=curve),
+        "set_gravity": lambda: b.set_gravity(curve=curve),
+        "add_gravity": lambda: b.add_gravity((0.0, 0.0, -9.81), [1], curve=curve),
+    }
+    for who, call in calls.items():
+        with pytest.raises(pl.InputError, match=rf"{who}: curve = .*expected a load curve"):
+            call()
+
+
+@pytest.mark.parametrize("dtype", [0, "float16", "int32", (1, 2), np.array([1.5]), object()])
+def test_a_dtype_other_than_float32_or_float64_is_named(dtype):
+    """finalize(dtype) takes float32 or float64; anything else is an InputError naming it (numpy's
+    TypeError for what is no dtype at all before)."""
+    X, T = _tet()
+    b = pl.ModelBuilder()
+    b.add_mesh(X, T)
+    b.set_material(pl.NeoHookean(mu=1e3, K=1e4), density=1000)
+    with pytest.raises(pl.InputError, match="dtype = .*expected 'float32' or 'float64'"):
+        b.finalize(dtype)
+
+
 def test_bad_time_step_values():
     X, T = _two_cubes()
     b = pl.ModelBuilder()
@@ -497,6 +547,15 @@ def test_state_load_checks_the_grip_state(tmp_path, key, value):
         (lambda s: s.set_tool_pose(0, (0, 0, float("nan"))), "position"),
         (lambda s: s.solver.step(s.state, s.state.copy(), float("nan")), "dt"),
         (lambda s: s.state.set_displacements(np.zeros((3, 3))), "expected shape"),
+        # Counts are whole numbers (a dict, a tuple, inf were Python's TypeError / OverflowError).
+        (lambda s: s.relax(max_steps=(1, 0)), "max_steps = .*whole number"),
+        (lambda s: s.relax(max_steps=1.5), "max_steps = 1.5; expected a whole number"),
+        (lambda s: s.relax(increments=-float("inf")), "increments = -inf; expected a whole number"),
+        (lambda s: s.relax(increments=True), "increments = True; expected a whole number"),
+        (lambda s: s.relax(check_every={}), "check_every = .*whole number"),
+        (lambda s: s.relax(check_every=0), "check_every = 0; expected 1 to"),
+        (lambda s: pl.Simulation(s.model, check_every=1e300), "check_every = 1e\\+300; expected 1 to"),
+        (lambda s: pl.Simulation(s.model, check_every=slice(1)), "check_every = .*whole number"),
     ],
 )
 def test_simulation_calls_with_bad_arguments(call, text):

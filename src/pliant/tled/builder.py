@@ -45,11 +45,31 @@ def _dofs(dofs) -> list[int]:
             if c not in _DOFS:
                 raise InputError(f"dofs = {shown(dofs)}: unknown DOF {shown(c)}; expected letters from 'xyz'")
             out.append(_DOFS[c])
+        if not out:
+            raise InputError("dofs = '': expected at least one of the letters 'xyz'")
         return sorted(set(out))
-    out = sorted({int(d) for d in np.atleast_1d(dofs)})
-    if any(d not in (0, 1, 2) for d in out):
-        raise InputError(f"dofs = {shown(dofs)}: expected 0, 1, 2 or letters from 'xyz'")
-    return out
+    given = np.atleast_1d(np.asarray(dofs, dtype=object))
+    if given.ndim != 1 or not given.size or not all(_is_dof(d) for d in given):
+        raise InputError(f"dofs = {described(dofs)}: expected 0, 1, 2 or letters from 'xyz'")
+    return sorted({int(d) for d in given})
+
+
+def _is_dof(d) -> bool:
+    """Whether d is the integer 0, 1 or 2 (not a bool, not 1.5)."""
+    return isinstance(d, (int, np.integer)) and not isinstance(d, (bool, np.bool_)) and bool(0 <= d <= 2)
+
+
+def _curve(curve, who: str) -> LoadCurve:
+    """``curve`` as the load curve it must be (None: the constant 1); InputError naming ``who``
+    (the call) otherwise."""
+    if curve is None:
+        return Constant()
+    if not isinstance(curve, LoadCurve):
+        raise InputError(
+            f"{who}: curve = {described(curve)}; expected a load curve (pliant.Ramp, SmoothRamp, "
+            "Step, Hilly, Table) or None for a constant 1"
+        )
+    return curve
 
 
 def _check_conforming(X: np.ndarray, T: np.ndarray, src: str) -> None:
@@ -263,7 +283,7 @@ class ModelBuilder:
             )
         if not np.all(np.isfinite(val)):
             raise InputError("prescribe: displacement values must be finite")
-        curve = curve or Constant()
+        curve = _curve(curve, what)
         for i, n in enumerate(ids):
             for j, d in enumerate(ds):
                 key = (int(n), d)
@@ -290,7 +310,7 @@ class ModelBuilder:
             raise InputError(
                 f"add_force: force = {described(force)}; expected finite (3,) or ({ids.size}, 3) [N]"
             )
-        self._forces.append((ids, np.array(f), curve or Constant()))
+        self._forces.append((ids, np.array(f), _curve(curve, "add_force")))
 
     def add_pressure(self, faces, pressure, curve: LoadCurve | None = None, orient: bool = True):
         """Follower pressure [Pa] on surface triangles ``faces`` (F, 3) (user node ids), scaled by
@@ -331,7 +351,7 @@ class ModelBuilder:
                     )
                 out.append(b)
             F = np.array(out, np.int64)
-        self._pressures.append((F, p, curve or Constant()))
+        self._pressures.append((F, p, _curve(curve, "add_pressure")))
 
     def add_traction(self, faces, traction, curve: LoadCurve | None = None):
         """Surface traction t [Pa] on triangles ``faces`` (F, 3) (user node ids), scaled by
@@ -354,7 +374,7 @@ class ModelBuilder:
                 f"add_traction: traction = {described(traction)}; expected finite (3,) or "
                 f"({F.shape[0]}, 3) [Pa]"
             )
-        self._tractions.append((F, t, curve or Constant()))
+        self._tractions.append((F, t, _curve(curve, "add_traction")))
 
     def add_membrane(self, faces, material: MembraneMaterial, clamped=None):
         """Membrane triangles ``faces`` (F, 3) (user node ids) of ``material``
@@ -412,7 +432,7 @@ class ModelBuilder:
         if gv is None or gv.ravel().shape != (3,) or not np.all(np.isfinite(gv)):
             raise InputError(f"gravity = {shown(g)}; expected 3 finite components [m/s^2]")
         gv = gv.ravel()
-        self._gravity = (gv, curve or Constant())
+        self._gravity = (gv, _curve(curve, "set_gravity"))
 
     def add_gravity(self, g, nodes, curve: LoadCurve | None = None):
         """Body acceleration g [m/s²] on ``nodes`` only (user ids): m_a·g on each, m_a its lumped
@@ -424,7 +444,7 @@ class ModelBuilder:
         if gv is None or gv.ravel().shape != (3,) or not np.all(np.isfinite(gv)):
             raise InputError(f"add_gravity: g = {shown(g)}; expected 3 finite components [m/s^2]")
         gv = gv.ravel()
-        self._node_gravity.append((ids, gv, curve or Constant()))
+        self._node_gravity.append((ids, gv, _curve(curve, "add_gravity")))
 
     def add_tool(self, tool, nodes=None):
         """Add a rigid tool (pliant.contact.Plane, Sphere, Capsule, Cylinder, Box, MeshTool): the
@@ -596,9 +616,13 @@ class ModelBuilder:
         require_memory(
             self.n_elements, MODEL_BYTES_PER_TET, f"{self.source}: a model of {self.n_elements:,} tets"
         )
-        dtype = np.dtype(dtype)
+        given = dtype
+        try:
+            dtype = np.dtype(dtype)
+        except (TypeError, ValueError):
+            dtype = None
         if dtype not in (np.float32, np.float64):
-            raise InputError(f"dtype = {dtype}; expected float32 or float64")
+            raise InputError(f"dtype = {described(given)}; expected 'float32' or 'float64'")
         a = as_real(self.damping)
         if not math.isfinite(a) or a < 0:
             raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")

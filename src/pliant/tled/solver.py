@@ -32,14 +32,21 @@ MAX_STEPS = 10**9
 MAX_INCREMENTS = 10_000  # load steps of one quasi-static solve
 
 
+def _whole(value, what: str, of: str = "") -> int:
+    """``value`` as an int: an integer or a float without a fraction, not a bool; InputError naming
+    ``what`` otherwise (``of``: what it counts, for the message: " of steps")."""
+    if (
+        isinstance(value, (bool, np.bool_))
+        or not isinstance(value, (int, np.integer, float, np.floating))
+        or (isinstance(value, (float, np.floating)) and not float(value).is_integer())
+    ):
+        raise InputError(f"{what} = {shown(value)}; expected a whole number{of}")
+    return int(value)
+
+
 def _step_count(steps, what: str = "steps") -> int:
     """A step count: an integer (not a bool, not a float with a fraction) from 0 to MAX_STEPS."""
-    if (
-        isinstance(steps, (bool, np.bool_))
-        or not isinstance(steps, (int, np.integer, float))
-        or (isinstance(steps, float) and not steps.is_integer())
-    ):
-        raise InputError(f"{what} = {shown(steps)}; expected a whole number of steps")
+    _whole(steps, what, " of steps")
     if not 0 <= steps <= MAX_STEPS:
         raise InputError(f"{what} = {int(steps)}; expected 0 to {MAX_STEPS:.0e} steps in one call")
     return int(steps)
@@ -155,8 +162,8 @@ class Solver:
         self.damping = model.damping if damping is None else as_real(damping)
         if not math.isfinite(self.damping) or self.damping < 0:
             raise InputError(f"damping = {shown(damping)}; expected a finite value >= 0 [1/s]")
-        if int(check_every) < 1:
-            raise InputError(f"check_every = {shown(check_every)}; expected >= 1")
+        if not 1 <= _whole(check_every, "check_every") <= MAX_STEPS:
+            raise InputError(f"check_every = {shown(check_every)}; expected 1 to {MAX_STEPS:.0e} steps")
         self.check_every = int(check_every)
         X = model.reference_positions
         # The body's size [m] (its bounding box's diagonal): a displacement beyond blow_up_sizes of
@@ -492,13 +499,15 @@ class Solver:
         t_end = self.model.last_load_time if at_time is None else finite_number(at_time, "at_time", "s")
         if not as_real(tol) > 0:
             raise InputError(f"tol = {shown(tol)}; expected a relative residual > 0")
-        if not 1 <= int(increments) <= MAX_INCREMENTS:
+        if not 1 <= _whole(increments, "increments") <= MAX_INCREMENTS:
             raise InputError(
                 f"increments = {shown(increments)}; expected 1 to {MAX_INCREMENTS} "
                 "(each is a whole relaxation)"
             )
-        if not 1 <= int(max_steps) <= MAX_STEPS:
+        if not 1 <= _whole(max_steps, "max_steps", " of steps") <= MAX_STEPS:
             raise InputError(f"max_steps = {shown(max_steps)}; expected 1 to {MAX_STEPS:.0e}")
+        if not 1 <= _whole(check_every, "check_every") <= MAX_STEPS:
+            raise InputError(f"check_every = {shown(check_every)}; expected 1 to {MAX_STEPS:.0e} steps")
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
             rep = self._backend.relax(
