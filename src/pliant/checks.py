@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, MeshError
 
 
 def as_real(value) -> float:
@@ -68,6 +68,54 @@ def finite_vector(value, n: int, what: str, unit: str = "") -> np.ndarray:
             f"{what} = {shown(value)}; expected {n} finite numbers{f' [{unit}]' if unit else ''}"
         )
     return a
+
+
+def whole_number(value, what: str, of: str = "") -> int:
+    """``value`` as an int: an integer or a float without a fraction, not a bool; InputError naming
+    ``what`` otherwise (``of``: what it counts, for the message: " of steps")."""
+    if (
+        isinstance(value, (bool, np.bool_))
+        or not isinstance(value, (int, np.integer, float, np.floating))
+        or (isinstance(value, (float, np.floating)) and not float(value).is_integer())
+    ):
+        raise InputError(f"{what} = {shown(value)}; expected a whole number{of}")
+    return int(value)
+
+
+def mesh_arrays(
+    nodes, cells, corners: int, who: str, cell: str = "element", empty: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes [m] (N, 3), N >= 1, finite, and cells (M, corners) of node indices 0 <= i < N (integers
+    or floats without a fraction; M = 0 only where ``empty``), as float and int64 arrays; MeshError
+    naming ``who`` (the file or the call) and the culprit (the shape, the node, the ``cell`` and its
+    index) otherwise."""
+    try:
+        X, C = real_array(nodes), np.asarray(cells)
+    except (TypeError, ValueError):  # ragged cells
+        X = None
+    if X is None:
+        raise MeshError(f"{who}: nodes (N, 3) and {cell}s (M, {corners}) must be numeric arrays") from None
+    if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] == 0:
+        raise MeshError(f"{who}: nodes have shape {X.shape}; expected (N, 3) with N >= 1")
+    if not np.all(np.isfinite(X)):
+        node = int(np.argwhere(~np.isfinite(X))[0, 0])
+        raise MeshError(f"{who}: node {node} has a non-finite coordinate {X[node].tolist()}")
+    if C.size == 0 and empty:
+        return X, np.zeros((0, corners), np.int64)
+    if C.ndim != 2 or C.shape[1] != corners or C.shape[0] == 0:
+        raise MeshError(f"{who}: {cell}s have shape {C.shape}; expected (M, {corners}) with M >= 1")
+    if C.dtype.kind not in "iuf":
+        raise MeshError(f"{who}: {cell} indices of type {C.dtype}; expected integers")
+    if C.dtype.kind == "f":
+        if not np.all(np.isfinite(C)) or not np.all(np.equal(np.mod(C, 1), 0)):
+            raise MeshError(f"{who}: {cell} indices must be integers")
+    bad = np.argwhere((C < 0) | (C >= X.shape[0]))
+    if bad.size:
+        k = int(bad[0, 0])
+        raise MeshError(
+            f"{who}: {cell} {k} has node index {shown(C[k, bad[0, 1]])}; expected 0 <= index < {X.shape[0]}"
+        )
+    return X, C.astype(np.int64)
 
 
 def described(value) -> str:

@@ -8,6 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import mesh_arrays, whole_number
+from ..errors import InputError, MeshError
+
 
 @dataclass
 class Embedding:
@@ -40,11 +43,20 @@ def embed_surface(
     coordinates are least negative, extrapolating linearly."""
     from scipy.spatial import cKDTree
 
-    nodes, tets, V = np.asarray(nodes, float), np.asarray(tets), np.asarray(V, float)
+    nodes, tets = mesh_arrays(nodes, tets, 4, "embed_surface")
+    V, F = mesh_arrays(V, F, 3, "embed_surface: the surface", cell="face", empty=True)
+    if not whole_number(candidates, "candidates") >= 1:
+        raise InputError(f"embed_surface: candidates = {candidates}; expected >= 1")
     cent = nodes[tets].mean(axis=1)
     k = min(candidates, len(tets))
     _, cand = cKDTree(cent).query(V, k=k)
     cand = cand.reshape(len(V), k)
+    lost = np.nonzero(cand.max(axis=1) >= len(tets))[0]  # a distance that overflowed: no neighbour
+    if lost.size:
+        raise MeshError(
+            f"embed_surface: surface vertex {int(lost[0])} at {V[lost[0]].tolist()} is too far from the "
+            "tets to measure; expected a surface near the mesh [m]"
+        )
     best_w = np.zeros((len(V), 4))
     best_t = np.zeros(len(V), dtype=np.int64)
     best_score = np.full(len(V), -np.inf)

@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 
+from ..checks import mesh_arrays, whole_number
 from ..errors import MeshError
 from .primitives import tet_volumes, unit_scale
 from .repair import repair_surface, require_volume, simplify
@@ -29,8 +30,11 @@ def default_edge_length(V: np.ndarray, F: np.ndarray, target_tets: int = 20000) 
 
     # On the surface scaled by a power of two to a diagonal of about 1 (trimesh's tolerances are
     # absolute: its hull of a surface 1e30 across overflowed), the edge scaled back.
+    V, F = mesh_arrays(V, F, 3, "default_edge_length", cell="face")
+    if not 1 <= whole_number(target_tets, "target_tets") <= MAX_TETS:
+        raise MeshError(f"target_tets = {target_tets}; expected 1 to {MAX_TETS:.0e}")
     scale = unit_scale(V)
-    return _unit_edge(trimesh.Trimesh(np.asarray(V, float) * scale, F, process=False), target_tets) / scale
+    return _unit_edge(trimesh.Trimesh(V * scale, F, process=False), target_tets) / scale
 
 
 def _unit_edge(m, target_tets: int) -> float:
@@ -81,12 +85,13 @@ def surface_to_tets(
     joined at the rims of its openings): mesh the solid its outer sheet encloses, the openings
     closed (``shell.outer_sheet``; ``info["shell"]`` says what was kept), instead of the wall. It
     repairs the surface whatever ``repair`` says."""
-    if bodies not in BODIES:
+    if not isinstance(bodies, str) or bodies not in BODIES:
         raise MeshError(f"bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
     if keep_largest:
         bodies = "largest"
-    if not 1 <= int(target_tets) <= MAX_TETS:
+    if not 1 <= whole_number(target_tets, "target_tets") <= MAX_TETS:
         raise MeshError(f"target_tets = {target_tets}; expected 1 to {MAX_TETS:.0e}")
+    V, F = mesh_arrays(V, F, 3, "surface_to_tets", cell="face")
     info: dict = {
         "input_vertices": int(len(V)),
         "input_faces": int(len(F)),

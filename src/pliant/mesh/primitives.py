@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..checks import shown
+from ..checks import as_real, finite_vector, mesh_arrays, real_array, shown, whole_number
 from ..errors import InputError
 from ..memory import BOX_BYTES_PER_TET, require_memory
 
@@ -49,8 +49,8 @@ def triangle_measures(nodes: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
 
 def orient_positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """Return tets (M, 4) with corners 2 and 3 swapped where det[X1−X0, X2−X0, X3−X0] < 0."""
-    T = np.array(tets, dtype=np.int64)
-    neg = tet_volumes(nodes, T) < 0
+    X, T = mesh_arrays(nodes, tets, 4, "orient_positive", empty=True)
+    neg = tet_volumes(X, T) < 0
     T[neg, 2], T[neg, 3] = T[neg, 3].copy(), T[neg, 2].copy()
     return T
 
@@ -60,11 +60,12 @@ def _grid(xs, ys, zs):
     increasing coordinates each), their index by (i, j, k), and each cell's lowest corner i, j, k."""
     g = []
     for name, c in zip("xyz", (xs, ys, zs)):
-        c = np.asarray(c, float)
-        if c.ndim != 1 or c.size < 2 or not np.all(np.isfinite(c)) or np.any(np.diff(c) <= 0):
+        a = real_array(c)
+        if a is None or a.ndim != 1 or a.size < 2 or not np.all(np.isfinite(a)) or np.any(np.diff(a) <= 0):
             raise InputError(
                 f"{name}s = {shown(c)}; expected at least 2 finite, strictly increasing coordinates [m]"
             )
+        c = a
         g.append(c)
     nx, ny, nz = (c.size - 1 for c in g)
     X = np.stack(np.meshgrid(*g, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -103,13 +104,21 @@ def graded_coordinates(h: float, fine_to: float, ratio: float, length: float) ->
     """Coordinates [m] from 0 for :func:`grid_tets`: uniform spacing ``h`` up to ``fine_to``,
     then each cell ``ratio`` times the previous one until ``length`` is reached or passed (the last
     cell is kept whole). E.g. fine under a contact, coarse far from it."""
-    h, fine_to, ratio, length = (float(v) for v in (h, fine_to, ratio, length))
+    h, fine_to, ratio, length = (as_real(v) for v in (h, fine_to, ratio, length))  # NaN: not a number
     if not (
         h > 0 and fine_to >= 0 and ratio >= 1 and length > 0 and all(np.isfinite([h, fine_to, ratio, length]))
     ):
         raise InputError(
             f"graded_coordinates(h={h}, fine_to={fine_to}, ratio={ratio}, "
             f"length={length}); expected h > 0, fine_to >= 0, ratio >= 1, length > 0"
+        )
+    rest = max(length - max(fine_to, h), 0.0)  # what the growing cells cover: Σ h ratioᵏ >= rest
+    graded = rest / h if ratio == 1 else math.log1p(rest * (ratio - 1) / h) / math.log(ratio)
+    if not fine_to / h + graded <= MAX_COORDINATES:
+        raise InputError(
+            f"graded_coordinates(h={h}, fine_to={fine_to}, ratio={ratio}, length={length}) makes "
+            f"{fine_to / h + graded:.3g} coordinates; expected at most {MAX_COORDINATES:.0e} "
+            "(a larger h or ratio)"
         )
     xs = list(np.arange(0.0, fine_to + 1e-9 * h, h)) or [0.0]
     if len(xs) == 1:
@@ -120,6 +129,7 @@ def graded_coordinates(h: float, fine_to: float, ratio: float, length: float) ->
 
 
 MAX_BOX_TETS = 2e8  # ~50 GB of engine arrays: beyond any workstation
+MAX_COORDINATES = 1e6  # graded_coordinates along one axis: a grid of 1e18 cells
 
 
 def box_tets(
@@ -144,12 +154,15 @@ def box_tets(
     require_memory(
         6 * nx * ny * nz, BOX_BYTES_PER_TET, f"cells = {[nx, ny, nz]} ({6 * nx * ny * nz:.3g} tets)"
     )
-    size = np.asarray(size, float)
-    if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
-        raise InputError(f"size = {np.asarray(size).tolist()}; expected three finite lengths > 0 [m]")
-    if not (0 <= jitter < 0.5):
+    given, size = size, real_array(size)
+    if size is None or size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
+        raise InputError(f"size = {shown(given)}; expected three finite lengths > 0 [m]")
+    shift = finite_vector(origin, 3, "origin", "m")
+    if not whole_number(seed, "seed") >= 0:
+        raise InputError(f"seed = {shown(seed)}; expected an integer >= 0")
+    if not (0 <= as_real(jitter) < 0.5):
         raise InputError(
-            f"jitter = {float(jitter)}; expected 0 <= jitter < 0.5 (a fraction of a "
+            f"jitter = {shown(jitter)}; expected 0 <= jitter < 0.5 (a fraction of a "
             "cell: half a cell or more can turn elements inside out)"
         )
     lines = [np.linspace(0.0, s, n + 1) for s, n in zip(size, (nx, ny, nz))]
@@ -166,7 +179,7 @@ def box_tets(
         X0 = X.copy()
         X[interior] += rng.uniform(-1, 1, (interior.sum(), 3)) * jitter * h
         X = _untangled(X0, X, T)
-    return X + np.asarray(origin, float), T
+    return X + shift, T
 
 
 def _untangled(X0: np.ndarray, X: np.ndarray, T: np.ndarray) -> np.ndarray:

@@ -8,6 +8,8 @@ from typing import Any
 import numpy as np
 
 from .. import _core
+from ..checks import finite_number, mesh_arrays
+from ..errors import InputError
 from .primitives import TET_EDGES, tet_edge_lengths
 
 
@@ -15,8 +17,8 @@ def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
     """Per tet: ``volume`` [m³], ``radius_edge`` (circumradius / shortest edge; √6/4 ≈ 0.612 for
     the regular tet), ``min_dihedral`` and ``max_dihedral`` [degrees] (70.53 for the regular tet),
     ``min_altitude`` [m] (the length in the stable time step)."""
-    X = np.ascontiguousarray(nodes, float)
-    T = np.ascontiguousarray(tets, np.int32)
+    X, T = mesh_arrays(nodes, tets, 4, "tet_quality", empty=True)
+    X, T = np.ascontiguousarray(X), np.ascontiguousarray(T, np.int32)
     vol, alt = _core.tet_geometry(X, T)
     P = X[T]
     a, b, c = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0], P[:, 3] - P[:, 0]
@@ -53,8 +55,17 @@ def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
 
 def critical_time_steps(nodes, tets, material, density: float) -> np.ndarray:
     """Stable explicit step per element [s]: h_min / √((λ + 2μ)/ρ) (Belytschko et al. 2000, §6.3)."""
+    from ..materials import Material
+
+    if not isinstance(material, Material):
+        raise InputError(
+            f"critical_time_steps: material = {type(material).__name__}; expected a pliant material"
+        )
+    rho = finite_number(density, "critical_time_steps: density", "kg/m^3")
+    if not rho > 0:
+        raise InputError(f"critical_time_steps: density = {rho:g}; expected > 0 [kg/m^3]")
     q = tet_quality(nodes, tets)
-    c = np.sqrt((material.lam + 2.0 * material.mu) / density)
+    c = np.sqrt((material.lam + 2.0 * material.mu) / rho)
     return q["min_altitude"] / c
 
 

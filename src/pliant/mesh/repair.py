@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from ..checks import as_real, mesh_arrays, whole_number
 from ..errors import MeshError
 from .topology import unique_rows
 
@@ -97,19 +98,23 @@ def boundary_loops(F: np.ndarray) -> list[np.ndarray]:
     return loops
 
 
+# A vertex out at 1e300 m (a scan's stray point) overflows areas and volumes to inf: reported as such.
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")
 def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True) -> SurfaceReport:
     """Watertightness, holes, non-manifold edges, degenerate and duplicate faces, winding
     consistency and orientation, number of bodies, self-intersections (sampled exactly)."""
     import trimesh
 
-    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    V, F = mesh_arrays(V, F, 3, "check_surface", cell="face")
     m = trimesh.Trimesh(V, F, process=False, validate=False)
     uniq, count = edge_counts(F)
     boundary = int((count == 1).sum())
     nonman = int((count > 2).sum())
     area = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1) / 2
-    scale = float(np.ptp(V, axis=0).max()) or 1.0
-    degenerate = int((area <= 1e-12 * scale**2).sum())
+    # Degenerate: no area for its size (collinear or coincident corners), each face measured by its
+    # own longest edge (by the surface's size, a stray vertex far out made every face so).
+    longest = np.linalg.norm(V[F] - V[F[:, [1, 2, 0]]], axis=2).max(axis=1)
+    degenerate = int((~(area / longest / longest > 1e-12)).sum())
     dup = len(F) - len(unique_rows(np.sort(F, axis=1)))
     # connected pieces (by shared edges); split into meshes only when there are several
     bodies = (
@@ -183,23 +188,51 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
 THIN_WALL = 0.02
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # faces out at 1e300 m
 def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_000_000) -> int:
     """Number of pairs of faces that share no vertex and intersect (Möller 1997 interval test on
     candidate pairs from a uniform grid over face bounding boxes)."""
     tri = V[F]
     lo, hi = tri.min(axis=1), tri.max(axis=1)
-    h = float(np.median(hi - lo).max()) * 2 or 1.0
-    origin = lo.min(axis=0)
-    cl = np.floor((lo - origin) / h).astype(np.int64)
-    ch = np.floor((hi - origin) / h).astype(np.int64)
+    h = float(np.median(hi - lo)) * 2
+    h = h if 0 < h < math.inf else 1.0
+    large = ~(np.prod(np.floor(hi / h) - np.floor(lo / h) + 1, axis=1) <= LARGE_FACE_CELLS)
+    # A face over more cells than that (a stray vertex far out: a scan's spike; a box's face beside a
+    # fine sphere) is tested against every face its box meets instead of being put in each cell
+    # (a spike to 1e12 m put one face in 1e14 cells).
+    small = np.nonzero(~large)[0]
+    origin = lo[small].min(axis=0) if len(small) else np.zeros(3)
+    cl = np.floor((lo[small] - origin) / h).astype(np.int64)
+    ch = np.floor((hi[small] - origin) / h).astype(np.int64)
     cell_list, owner_list = [], []
-    for i in range(len(F)):
-        r = [np.arange(cl[i, d], ch[i, d] + 1) for d in range(3)]
+    for k, i in enumerate(small):
+        r = [np.arange(cl[k, d], ch[k, d] + 1) for d in range(3)]
         g = np.stack(np.meshgrid(*r, indexing="ij"), -1).reshape(-1, 3)
         cell_list.append(g)
         owner_list.append(np.full(len(g), i))
-    cells = np.concatenate(cell_list)
-    owners = np.concatenate(owner_list)
+    pairs = [_large_face_pairs(np.nonzero(large)[0], lo, hi, max_pairs)]
+    if cell_list:
+        pairs += _shared_cell_pairs(np.concatenate(cell_list), np.concatenate(owner_list))
+    pairs = [p for p in pairs if len(p)]
+    if not pairs:
+        return 0
+    P = unique_rows(np.sort(np.concatenate(pairs), axis=1))
+    P = P[P[:, 0] != P[:, 1]][:max_pairs]
+    share = (F[P[:, 0]][:, :, None] == F[P[:, 1]][:, None, :]).any(axis=(1, 2))
+    P = P[~share]
+    overlap = np.all((lo[P[:, 0]] <= hi[P[:, 1]]) & (lo[P[:, 1]] <= hi[P[:, 0]]), axis=1)
+    P = P[overlap]
+    return int(_tri_tri_intersect(tri[P[:, 0]], tri[P[:, 1]]).sum())
+
+
+# A face whose bounding box covers more cells of count_self_intersections' grid than this is a
+# large face, paired by its box with every face instead (_large_face_pairs).
+LARGE_FACE_CELLS = 512
+
+
+def _shared_cell_pairs(cells: np.ndarray, owners: np.ndarray) -> list[np.ndarray]:
+    """Pairs (k, 2) of the faces (``owners``) that have a grid cell (``cells``, (n, 3)) in common,
+    one array per shared cell."""
     key = (cells[:, 0] * 73856093) ^ (cells[:, 1] * 19349663) ^ (cells[:, 2] * 83492791)
     order = np.argsort(key, kind="stable")
     key, owners = key[order], owners[order]
@@ -211,15 +244,21 @@ def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_00
             o = owners[s:e]
             a, b = np.triu_indices(len(o), 1)
             pairs.append(np.stack([o[a], o[b]], 1))
-    if not pairs:
-        return 0
-    P = unique_rows(np.sort(np.concatenate(pairs), axis=1))
-    P = P[P[:, 0] != P[:, 1]][:max_pairs]
-    share = (F[P[:, 0]][:, :, None] == F[P[:, 1]][:, None, :]).any(axis=(1, 2))
-    P = P[~share]
-    overlap = np.all((lo[P[:, 0]] <= hi[P[:, 1]]) & (lo[P[:, 1]] <= hi[P[:, 0]]), axis=1)
-    P = P[overlap]
-    return int(_tri_tri_intersect(tri[P[:, 0]], tri[P[:, 1]]).sum())
+    return pairs
+
+
+def _large_face_pairs(large: np.ndarray, lo: np.ndarray, hi: np.ndarray, max_pairs: int) -> np.ndarray:
+    """Pairs (k, 2) of each large face (indices ``large``) with every other face whose bounding box
+    (``lo``, ``hi``, (F, 3)) meets its own, at most ``max_pairs`` of them."""
+    out, count = [], 0
+    for i in large:
+        meets = np.nonzero(np.all((lo <= hi[i]) & (lo[i] <= hi), axis=1))[0]
+        meets = meets[meets != i]
+        out.append(np.stack([np.full(len(meets), i), meets], 1))
+        count += len(meets)
+        if count >= max_pairs:
+            break
+    return np.concatenate(out) if out else np.zeros((0, 2), np.int64)
 
 
 def _tri_tri_intersect(A: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -316,7 +355,7 @@ def repair_surface(
 
     if keep_largest:
         bodies = "largest"
-    if bodies not in BODIES:
+    if not isinstance(bodies, str) or bodies not in BODIES:
         raise MeshError(f"repair: bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
     actions = []
     # process: merge duplicate vertices; not validate, whose fix_normals would re-wind faces
@@ -326,9 +365,9 @@ def repair_surface(
     # 1e30 across is repaired as one of 1 m (its vertices all merged, or rounded past int64, were).
     from .primitives import unit_scale
 
-    V = np.asarray(V, float)
+    V, F = mesh_arrays(V, F, 3, "repair", cell="face")
     scale = unit_scale(V)
-    m = trimesh.Trimesh(V * scale, np.asarray(F, np.int64), process=True, validate=False)
+    m = trimesh.Trimesh(V * scale, F, process=True, validate=False)
     m.update_faces(m.unique_faces() & m.nondegenerate_faces())
     m.remove_unreferenced_vertices()
     if len(m.vertices) < len(V):
@@ -538,11 +577,13 @@ def simplify(
 
     if (target_faces is None) == (ratio is None):
         raise MeshError("simplify: give exactly one of target_faces or ratio")
+    V, F = mesh_arrays(V, F, 3, "simplify", cell="face")
     if ratio is not None:
-        if not 0 < ratio <= 1:
+        if not 0 < as_real(ratio) <= 1:
             raise MeshError(f"simplify: ratio = {ratio!r}; expected 0 < ratio <= 1")
-        target_faces = int(round(ratio * len(F)))
+        target_faces = int(round(float(ratio) * len(F)))
     assert target_faces is not None  # one of the two was given
+    target_faces = whole_number(target_faces, "simplify: target_faces", " of faces")
     if target_faces < 4:
         raise MeshError(f"simplify: target of {target_faces} faces; expected >= 4")
     if target_faces >= len(F):
@@ -576,9 +617,9 @@ def subdivide_loop(V: np.ndarray, F: np.ndarray, levels: int = 1) -> tuple[np.nd
     (1 − nβ) v + β Σ neighbours, β = (5/8 − (3/8 + cos(2π/n)/4)²)/n, inside, and to
     3/4 v + 1/8 (b1 + b2) on a boundary (b1, b2 its boundary neighbours: the cubic B-spline rule, so
     boundary curves subdivide as curves). Vertices: V + E per level; faces: 4 F."""
-    if levels < 0:
+    if whole_number(levels, "subdivide: levels") < 0:
         raise MeshError(f"subdivide: levels = {levels}; expected >= 0")
-    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    V, F = mesh_arrays(V, F, 3, "subdivide", cell="face")
     faces = len(F) * 4.0 ** min(int(levels), 500)  # 4^500 ≈ 1e301: no float overflow
     if faces > MAX_FACES:
         raise MeshError(

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import real_array, shown
 from ..errors import MeshError
 from .primitives import tet_volumes
 
@@ -74,7 +75,10 @@ def split_cells(
 def split_quads(Q: np.ndarray) -> np.ndarray:
     """Triangles (2 F, 3) of quadrilaterals Q (F, 4), each cut along its diagonal through its
     smallest node as split_cells cuts the faces of cells (in their winding; two a quad, in order)."""
-    t1, t2 = _triangles(np.asarray(Q, np.int64).reshape(-1, 4))
+    a = real_array(Q)
+    if a is None or a.ndim != 2 or a.shape[1] != 4 or not np.all(a >= 0) or not np.all(np.mod(a, 1) == 0):
+        raise MeshError(f"split_quads: quads = {shown(Q)}; expected an (F, 4) array of node indices >= 0")
+    t1, t2 = _triangles(a.astype(np.int64))
     return np.stack([t1, t2], axis=1).reshape(-1, 3)
 
 

@@ -4,10 +4,12 @@ primitive surfaces. Vertices [m] (V, 3) float64, faces (F, 3) int64."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
+from ..checks import as_real, mesh_arrays, shown
 from ..errors import MeshError
 from ..io.files import file_problem
 from ..io.off import read_off
@@ -149,7 +151,7 @@ def write_surface(path, V: np.ndarray, F: np.ndarray) -> None:
 
     from ..io.files import atomic_write
 
-    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    V, F = mesh_arrays(V, F, 3, "write_surface", cell="face")
     path = check_surface_output(path)
     if path.suffix.lower() == ".glb":
         import trimesh
@@ -163,14 +165,25 @@ def write_surface(path, V: np.ndarray, F: np.ndarray) -> None:
 
 def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:
     """Closed, outward-oriented triangle surfaces [m]: sphere(radius), cylinder(radius, height; axis
-    z, centred), torus(major_radius, minor_radius; axis z). Resolution follows ``segments``."""
+    z, centred), torus(major_radius, minor_radius; axis z). Resolution follows ``segments``
+    (boxes: pliant.mesh.box_tets)."""
     import trimesh
 
+    needs = {
+        "sphere": ("radius",),
+        "cylinder": ("radius", "height"),
+        "torus": ("major_radius", "minor_radius"),
+    }
+    if not isinstance(kind, str) or kind not in needs:
+        raise MeshError(f"unknown primitive {shown(kind)}; expected sphere, cylinder or torus")
+    missing = [key for key in needs[kind] if key not in p]
+    if missing:
+        raise MeshError(f"{kind}: give {' and '.join(missing)} [m]")
     for key, low, high in (("segments", 3, 4096), ("minor_segments", 3, 4096), ("subdivisions", 0, 7)):
         if key in p and not (isinstance(p[key], (int, np.integer)) and low <= p[key] <= high):
             raise MeshError(f"{kind}: {key} = {p[key]!r}; expected an integer from {low} to {high}")
     for key in ("radius", "height", "major_radius", "minor_radius"):
-        if key in p and not (np.isfinite(p[key]) and p[key] > 0):
+        if key in p and not (math.isfinite(as_real(p[key])) and p[key] > 0):
             raise MeshError(f"{kind}: {key} = {p[key]!r}; expected a finite length > 0 [m]")
     if kind == "torus" and not p["minor_radius"] < p["major_radius"]:
         raise MeshError(
@@ -183,13 +196,11 @@ def primitive_surface(kind: str, **p) -> tuple[np.ndarray, np.ndarray]:
         m = trimesh.creation.cylinder(
             radius=p["radius"], height=p["height"], sections=int(p.get("segments", 48))
         )
-    elif kind == "torus":
+    else:
         m = trimesh.creation.torus(
             major_radius=p["major_radius"],
             minor_radius=p["minor_radius"],
             major_sections=int(p.get("segments", 48)),
             minor_sections=int(p.get("minor_segments", 24)),
         )
-    else:
-        raise MeshError(f"unknown primitive {kind!r}; expected box, sphere, cylinder or torus")
     return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)

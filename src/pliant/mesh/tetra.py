@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import mesh_arrays
 from ..errors import MeshError
 from .topology import drop_unused, unique_rows
 from . import ftetwild
@@ -79,9 +80,9 @@ def tetrahedralize(
     (fTetWild crashes on flat input)."""
     from .repair import require_volume, surface_volume
 
-    V = np.ascontiguousarray(V, dtype=np.float64)
-    F = np.ascontiguousarray(F, dtype=np.uint32)
-    if V.ndim != 2 or V.shape[1] != 3 or len(V) < 4 or F.ndim != 2 or F.shape[1] != 3 or len(F) < 4:
+    V, F = mesh_arrays(V, F, 3, "tetrahedralize", cell="face")
+    V, F = np.ascontiguousarray(V), np.ascontiguousarray(F, dtype=np.uint32)
+    if len(V) < 4 or len(F) < 4:
         raise MeshError(
             f"tetrahedralize: need a closed triangle surface, got {V.shape} vertices, {F.shape} faces"
         )

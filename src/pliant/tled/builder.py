@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _core
-from ..checks import as_real, described, real_array, shown
+from ..checks import as_real, described, mesh_arrays, real_array, shown
 from ..errors import (
     DegenerateElementError,
     InputError,
@@ -143,34 +143,8 @@ class ModelBuilder:
 
         Returns the global indices of the new elements."""
         src = source or self.source
-        try:
-            X, T = real_array(nodes), np.asarray(tets)
-        except (TypeError, ValueError):  # ragged tetrahedra
-            X = None
-        if X is None:
-            raise MeshError(f"{src}: nodes (N, 3) and tetrahedra (M, 4) must be numeric arrays") from None
-        if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] == 0:
-            raise MeshError(f"{src}: nodes have shape {X.shape}; expected (N, 3) with N >= 1")
-        if not np.all(np.isfinite(X)):
-            node = int(np.argwhere(~np.isfinite(X))[0, 0])
-            raise MeshError(f"{src}: node {node} has a non-finite coordinate {X[node].tolist()}")
-        if T.size == 0:  # nodes alone: a sheet of membranes (add_membrane)
-            T = np.zeros((0, 4), np.int64)
-        if T.ndim != 2 or T.shape[1] != 4:
-            raise MeshError(f"{src}: tetrahedra have shape {T.shape}; expected (M, 4)")
-        if not (np.issubdtype(T.dtype, np.integer) or np.issubdtype(T.dtype, np.floating)):
-            raise MeshError(f"{src}: tetrahedron indices of type {T.dtype}; expected integers")
-        if not np.issubdtype(T.dtype, np.integer):
-            if not np.all(np.isfinite(T)) or not np.all(np.equal(np.mod(T, 1), 0)):
-                raise MeshError(f"{src}: tetrahedron indices must be integers")
-            T = T.astype(np.int64)
-        bad = np.argwhere((T < 0) | (T >= X.shape[0]))
-        if bad.size:
-            k = int(bad[0, 0])
-            raise MeshError(
-                f"{src}: element {k} has node index {int(T[k, bad[0, 1]])}; "
-                f"expected 0 <= index < {X.shape[0]}"
-            )
+        # M = 0, nodes alone: a sheet of membranes (add_membrane)
+        X, T = mesh_arrays(nodes, tets, 4, src, cell="element", empty=True)
         rep = np.sort(T, axis=1)
         dup = np.nonzero(np.any(rep[:, 1:] == rep[:, :-1], axis=1))[0]
         if dup.size:

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import _core
 from .._core import RunStatus
-from ..checks import as_real, finite_number, shown
+from ..checks import as_real, finite_number, shown, whole_number
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .anp import anp_stabilization
 from .geometry import sudden_displacement
@@ -32,21 +32,9 @@ MAX_STEPS = 10**9
 MAX_INCREMENTS = 10_000  # load steps of one quasi-static solve
 
 
-def _whole(value, what: str, of: str = "") -> int:
-    """``value`` as an int: an integer or a float without a fraction, not a bool; InputError naming
-    ``what`` otherwise (``of``: what it counts, for the message: " of steps")."""
-    if (
-        isinstance(value, (bool, np.bool_))
-        or not isinstance(value, (int, np.integer, float, np.floating))
-        or (isinstance(value, (float, np.floating)) and not float(value).is_integer())
-    ):
-        raise InputError(f"{what} = {shown(value)}; expected a whole number{of}")
-    return int(value)
-
-
 def _step_count(steps, what: str = "steps") -> int:
     """A step count: an integer (not a bool, not a float with a fraction) from 0 to MAX_STEPS."""
-    _whole(steps, what, " of steps")
+    whole_number(steps, what, " of steps")
     if not 0 <= steps <= MAX_STEPS:
         raise InputError(f"{what} = {int(steps)}; expected 0 to {MAX_STEPS:.0e} steps in one call")
     return int(steps)
@@ -162,7 +150,7 @@ class Solver:
         self.damping = model.damping if damping is None else as_real(damping)
         if not math.isfinite(self.damping) or self.damping < 0:
             raise InputError(f"damping = {shown(damping)}; expected a finite value >= 0 [1/s]")
-        if not 1 <= _whole(check_every, "check_every") <= MAX_STEPS:
+        if not 1 <= whole_number(check_every, "check_every") <= MAX_STEPS:
             raise InputError(f"check_every = {shown(check_every)}; expected 1 to {MAX_STEPS:.0e} steps")
         self.check_every = int(check_every)
         X = model.reference_positions
@@ -499,14 +487,14 @@ class Solver:
         t_end = self.model.last_load_time if at_time is None else finite_number(at_time, "at_time", "s")
         if not as_real(tol) > 0:
             raise InputError(f"tol = {shown(tol)}; expected a relative residual > 0")
-        if not 1 <= _whole(increments, "increments") <= MAX_INCREMENTS:
+        if not 1 <= whole_number(increments, "increments") <= MAX_INCREMENTS:
             raise InputError(
                 f"increments = {shown(increments)}; expected 1 to {MAX_INCREMENTS} "
                 "(each is a whole relaxation)"
             )
-        if not 1 <= _whole(max_steps, "max_steps", " of steps") <= MAX_STEPS:
+        if not 1 <= whole_number(max_steps, "max_steps", " of steps") <= MAX_STEPS:
             raise InputError(f"max_steps = {shown(max_steps)}; expected 1 to {MAX_STEPS:.0e}")
-        if not 1 <= _whole(check_every, "check_every") <= MAX_STEPS:
+        if not 1 <= whole_number(check_every, "check_every") <= MAX_STEPS:
             raise InputError(f"check_every = {shown(check_every)}; expected 1 to {MAX_STEPS:.0e} steps")
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:

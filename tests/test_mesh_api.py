@@ -1,0 +1,156 @@
+"""The mesh functions' arguments (pliant.mesh): arrays that are no mesh, indices out of range,
+numbers that are no numbers are refused naming the function and the culprit, where they were
+numpy's or Python's errors (IndexError, TypeError, a 1.5 PiB allocation) before. Found by calling
+each public function with one argument replaced by a hostile value."""
+
+from __future__ import annotations
+
+import itertools
+import time
+
+import numpy as np
+import pytest
+
+import pliant as pl
+from pliant.mesh.repair import _tri_tri_intersect, count_self_intersections
+
+V, F = pl.mesh.primitive_surface("sphere", radius=0.01, subdivisions=2)
+X, T = pl.mesh.box_tets((0.02, 0.01, 0.01), (3, 2, 2))
+
+SURFACE_CALLS = {
+    "check_surface": lambda v, f: pl.mesh.check_surface(v, f),
+    "repair": lambda v, f: pl.mesh.repair_surface(v, f),
+    "simplify": lambda v, f: pl.mesh.simplify(v, f, target_faces=100),
+    "subdivide": lambda v, f: pl.mesh.subdivide_loop(v, f),
+    "default_edge_length": lambda v, f: pl.mesh.default_edge_length(v, f),
+    "surface_to_tets": lambda v, f: pl.mesh.surface_to_tets(v, f),
+    "tetrahedralize": lambda v, f: pl.mesh.tetrahedralize(v, f),
+}
+TET_CALLS = {
+    "tet_quality": lambda x, t: pl.mesh.tet_quality(x, t),
+    "orient_positive": lambda x, t: pl.mesh.orient_positive(x, t),
+    "tet_quality ": lambda x, t: pl.mesh.critical_time_steps(x, t, pl.NeoHookean(E=1e3, nu=0.3), 1000.0),
+    "embed_surface": lambda x, t: pl.mesh.embed_surface(x, t, V * 0.5, F),
+}
+
+
+def _out_of_range(f):
+    g = f.copy()
+    g[3, 1] = 10**9
+    return g
+
+
+def _stray(x):
+    y = x.copy()
+    y[2, 0] = np.nan
+    return y
+
+
+@pytest.mark.parametrize("who", SURFACE_CALLS)
+@pytest.mark.parametrize(
+    "bad, says",
+    [
+        (lambda v, f: (v, _out_of_range(f)), r"face 3 has node index 1000000000; expected 0 <= index < 162"),
+        (lambda v, f: (v, -f), r"face 0 has node index -0|face \d+ has node index -\d+"),
+        (lambda v, f: (_stray(v), f), r"node 2 has a non-finite coordinate"),
+        (lambda v, f: (v[:, :2], f), r"nodes have shape \(162, 2\)"),
+        (lambda v, f: (v, f[:, :2]), r"faces have shape \(320, 2\)"),
+        (lambda v, f: ("x", f), r"must be numeric arrays"),
+        (lambda v, f: (v, f + 0.5), r"face indices must be integers"),
+    ],
+)
+def test_surface_functions_name_a_surface_that_is_no_surface(who, bad, says):
+    v, f = bad(V, F)
+    with pytest.raises(pl.MeshError, match=says):
+        SURFACE_CALLS[who](v, f)
+
+
+@pytest.mark.parametrize("who", TET_CALLS)
+def test_tet_functions_name_an_index_out_of_range_and_a_non_finite_node(who):
+    t = T.copy()
+    t[5, 2] = len(X)
+    with pytest.raises(
+        pl.MeshError, match=rf"element 5 has node index {len(X)}; expected 0 <= index < {len(X)}"
+    ):
+        TET_CALLS[who](X, t)
+    with pytest.raises(pl.MeshError, match="node 2 has a non-finite coordinate"):
+        TET_CALLS[who](_stray(X), T)
+
+
+def _brute_force_self_intersections(v, f) -> int:
+    """Every pair of faces that share no vertex and whose bounding boxes meet (an exact filter: the
+    Möller test alone, its planes' round-off at 1e12 m, calls faces apart intersecting), through
+    the same Möller test: the reference for the grid's candidate search."""
+    tri = v[f]
+    lo, hi = tri.min(axis=1), tri.max(axis=1)
+    pairs = np.array(
+        [
+            (a, b)
+            for a, b in itertools.combinations(range(len(f)), 2)
+            if not set(f[a]) & set(f[b]) and np.all((lo[a] <= hi[b]) & (lo[b] <= hi[a]))
+        ]
+    )
+    with np.errstate(over="ignore", invalid="ignore"):
+        return int(_tri_tri_intersect(tri[pairs[:, 0]], tri[pairs[:, 1]]).sum())
+
+
+@pytest.mark.parametrize("far", [1e3, 1e12, 1e300])
+def test_a_stray_vertex_far_out_is_checked_without_filling_memory(far):
+    """A scan's stray vertex (a spike to ``far`` m from a 1 cm sphere): check_surface finds the
+    self-intersections an all-pairs search finds, at once (the grid put the spike's faces in 1e14
+    cells at 1e12 m: a 1.5 PiB allocation; at 1e300, an OverflowError), and calls only the
+    spike's needle faces degenerate (at 1e3 m every face of the sphere was, measured against the
+    surface's size)."""
+    v = V.copy()
+    v[5] = [far, 0.0, 0.0]
+    start = time.perf_counter()
+    report = pl.mesh.check_surface(v, F)
+    assert time.perf_counter() - start < 10  # measured 0.05 s; the old grid did not finish
+    assert report.self_intersections == _brute_force_self_intersections(v, F) > 0
+    spike = int(np.any(F == 5, axis=1).sum())
+    assert report.degenerate_faces <= spike
+
+
+def test_large_faces_beside_small_ones_are_paired_as_an_all_pairs_search_pairs_them():
+    """A box's twelve faces through a fine sphere (each over many cells of the grid the sphere's
+    small faces set): the same count as the all-pairs search."""
+    bv, bf = pl.mesh.primitive_surface("cylinder", radius=0.011, height=0.03, segments=6)
+    v = np.vstack([V, bv])
+    f = np.vstack([F, bf + len(V)])
+    assert count_self_intersections(v, f) == _brute_force_self_intersections(v, f) > 0
+
+
+@pytest.mark.parametrize(
+    "call, says",
+    [
+        (lambda: pl.mesh.graded_coordinates(1e-320, 0.01, 1.2, 0.05), "coordinates; expected at most 1e"),
+        (lambda: pl.mesh.graded_coordinates(1e-9, 0.0, 1.0, 1.0), "coordinates; expected at most 1e"),
+        (lambda: pl.mesh.graded_coordinates(1j, 0.01, 1.2, 0.05), "expected h > 0"),
+        (lambda: pl.mesh.grid_tets([0, 1], "x", [0, 1]), "ys = 'x'; expected at least 2 finite"),
+        (lambda: pl.mesh.box_tets(origin=(0, np.nan, 0)), "origin = .*expected 3 finite numbers"),
+        (lambda: pl.mesh.box_tets(jitter=1j), "jitter = 1j; expected 0 <= jitter < 0.5"),
+        (lambda: pl.mesh.box_tets(size=1j), "size = 1j; expected three finite lengths"),
+        (lambda: pl.mesh.box_tets(seed=-3), "seed = -3; expected an integer >= 0"),
+        (lambda: pl.mesh.box_tets(seed=1.5), "seed = 1.5; expected a whole number"),
+        (
+            lambda: pl.mesh.split_quads([[0, 1, 2]]),
+            r"split_quads: quads = \[\[0, 1, 2\]\]; expected an \(F, 4\)",
+        ),
+        (lambda: pl.mesh.split_quads([[0, 1, 2, -1]]), "expected an .* node indices >= 0"),
+        (lambda: pl.mesh.primitive_surface(np.array([1.0])), r"unknown primitive \[1.0\]"),
+        (lambda: pl.mesh.primitive_surface("sphere"), "sphere: give radius"),
+        (lambda: pl.mesh.primitive_surface("sphere", radius=np.array([1.0, 2.0])), "radius = "),
+        (lambda: pl.mesh.simplify(V, F, ratio=1j), "ratio = 1j; expected 0 < ratio <= 1"),
+        (lambda: pl.mesh.simplify(V, F, target_faces=100.5), "target_faces = 100.5; expected a whole number"),
+        (lambda: pl.mesh.subdivide_loop(V, F, levels=0.5), "levels = 0.5; expected a whole number"),
+        (lambda: pl.mesh.surface_to_tets(V, F, target_tets=7.5), "target_tets = 7.5; expected a whole"),
+        (lambda: pl.mesh.repair_surface(V, F, bodies=np.array([1])), "bodies = "),
+        (lambda: pl.mesh.critical_time_steps(X, T, "rubber", 1000.0), "material = str; expected a pliant"),
+        (lambda: pl.mesh.critical_time_steps(X, T, pl.NeoHookean(E=1e3, nu=0.3), -1.0), "density = -1"),
+        (lambda: pl.mesh.embed_surface(X, T, np.full((3, 3), 1e300), np.zeros((0, 3), int)), "too far"),
+        (lambda: pl.mesh.embed_surface(X, T, V, F, candidates=0), "candidates = 0; expected >= 1"),
+    ],
+)
+def test_mesh_arguments_that_are_no_numbers_or_too_many_are_named(call, says):
+    with pytest.raises(pl.InputError, match=says):
+        call()
