@@ -6,6 +6,7 @@ each public function with one argument replaced by a hostile value."""
 from __future__ import annotations
 
 import itertools
+import re
 import time
 
 import numpy as np
@@ -154,3 +155,33 @@ def test_large_faces_beside_small_ones_are_paired_as_an_all_pairs_search_pairs_t
 def test_mesh_arguments_that_are_no_numbers_or_too_many_are_named(call, says):
     with pytest.raises(pl.InputError, match=says):
         call()
+
+
+def test_a_stray_vertex_is_named_where_it_makes_the_surface_as_good_as_flat():
+    """Spot (shared/meshes, 2,930 vertices, about 1 m across) with one vertex moved 1 km or 1e12 m
+    out: check_surface names it as a problem; tetrahedralize, which measures flatness and volume
+    against the surface's size, says the surface encloses no volume because of it (it said "all
+    vertices lie on one plane (a flat sheet)", of a cow); repair, whose merge tolerance is relative
+    to that size too, names it. The four shared meshes and a 1 m × 1 mm needle have none."""
+    from pliant.mesh.repair import stray_vertex
+    from test_mesh_pipeline import shared
+
+    v, f = pl.mesh.read_surface(shared("spot.obj"))
+    for far in (1e3, 1e12):
+        w = v.copy()
+        w[100] = [far, 0.0, 0.0]
+        distance = re.escape(f"{far:.3g}")
+        says = rf"vertex 100 lies {distance} m from the others' median, 99 % of them within 1.\d+ m"
+        assert any(re_match(says, p) for p in pl.mesh.check_surface(w, f).problems)
+        with pytest.raises(pl.MeshError, match=rf"encloses no volume: {says}.*as good as flat"):
+            pl.mesh.tetrahedralize(w, f)
+    with pytest.raises(pl.MeshError, match=r"no valid faces left .*; vertex 100 lies 1e\+12 m"):
+        pl.mesh.repair_surface(w, f)
+    for name in ("spot.obj", "stanford-bunny.obj", "liver.obj", "kidney.obj"):
+        assert stray_vertex(pl.mesh.read_surface(shared(name))[0]) == ""
+    needle, _ = pl.mesh.primitive_surface("cylinder", radius=5e-4, height=1.0, segments=64)
+    assert stray_vertex(needle) == ""
+
+
+def re_match(pattern: str, text: str) -> bool:
+    return re.search(pattern, text) is not None

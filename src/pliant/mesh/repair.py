@@ -172,9 +172,12 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
             f"the {nonman} non-manifold edge(s) are where bodies touch: repair (and tetrahedralize) "
             "splits the surface there"
         )
+    stray = stray_vertex(V, F)
+    if stray:
+        rep.problems.append(stray)
     wall = 2.0 * volume / float(area.sum()) if watertight and volume > 0 else math.inf
     across = float(np.linalg.norm(np.ptp(V, axis=0))) if len(V) else 0.0
-    if wall < THIN_WALL * across:  # a closed surface of area A around V: walls 2V/A thick
+    if wall < THIN_WALL * across and not stray:  # a closed surface of area A around V: walls 2V/A thick
         rep.notes.append(
             f"thin-walled: walls about {wall:.2g} m thick (2 × volume / area) on a body {across:.2g} m "
             "across; an organ's capsule (two sheets around a hollow)? `pliant mesh tetrahedralize "
@@ -375,7 +378,9 @@ def repair_surface(
     if len(m.faces) < len(F):
         actions.append(f"removed {len(F) - len(m.faces)} degenerate/duplicate faces")
     if len(m.faces) == 0:
-        raise MeshError("repair: no valid faces left (every face is degenerate or a duplicate)")
+        raise MeshError(
+            f"repair: no valid faces left (every face is degenerate or a duplicate){_also(stray_vertex(V))}"
+        )
     groups = trimesh.graph.connected_components(m.face_adjacency, nodes=np.arange(len(m.faces)), min_len=1)
     big = [g for g in groups if len(g) >= 0.01 * len(m.faces)]
     if len(big) < len(groups):
@@ -533,12 +538,40 @@ def require_volume(V: np.ndarray, F: np.ndarray, closed: bool = True, who: str =
     """Refuse a surface that encloses no volume (flat: all vertices on a plane or a line; or, for a
     closed surface, a signed volume ~0, as in a sheet folded onto itself): tetrahedralizers crash
     or loop on such input. Raises MeshError ("``who``: the surface encloses no volume: why")."""
-    why = _no_volume(np.asarray(V, float), F, closed)
+    V = np.asarray(V, float)
+    why = _no_volume(V, F, closed)
     if why:
+        stray = stray_vertex(V)
+        if stray:  # what the stray point's size makes of the rest: flat, or no volume
+            why = f"{stray}, beside which the rest is as good as flat ({why})"
         raise MeshError(
-            f"{who}{': ' if who else ''}the surface encloses no volume: {why}; expected "
-            "a closed surface around a solid"
+            f"{who}{': ' if who else ''}the surface encloses no volume: {why}; expected a closed "
+            "surface around a solid"
         )
+
+
+def _also(words: str) -> str:
+    """ "; words" where there are any."""
+    return f"; {words}" if words else ""
+
+
+@np.errstate(over="ignore", invalid="ignore")
+def stray_vertex(V: np.ndarray, F: np.ndarray | None = None) -> str:
+    """Words for a vertex of V [m] (n, 3) (of those faces F use, where given) far from the others (a
+    scan's stray point: over 100 times farther from their median than 99 % of them, of 100 or
+    more) for an error ("vertex k lies ..."), or "". Such a vertex makes the surface's size, and
+    every tolerance relative to it, that of the stray point."""
+    used = np.arange(len(V)) if F is None else np.unique(F)
+    if len(used) < 100:
+        return ""
+    d = np.linalg.norm(V[used] - np.median(V[used], axis=0), axis=1)
+    bulk, far = float(np.percentile(d, 99)), int(np.argmax(d))
+    if not (bulk > 0 and d[far] > 100 * bulk):
+        return ""
+    return (
+        f"vertex {int(used[far])} lies {d[far]:.3g} m from the others' median, 99 % of them within "
+        f"{bulk:.3g} m of it (a stray vertex? remove it and its faces)"
+    )
 
 
 def _no_volume(V: np.ndarray, F: np.ndarray, closed: bool) -> str | None:
