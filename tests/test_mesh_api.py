@@ -113,10 +113,11 @@ def test_a_stray_vertex_far_out_is_checked_without_filling_memory(far):
 
 
 def test_large_faces_beside_small_ones_are_paired_as_an_all_pairs_search_pairs_them():
-    """A box's twelve faces through a fine sphere (each over many cells of the grid the sphere's
-    small faces set): the same count as the all-pairs search."""
-    bv, bf = pl.mesh.primitive_surface("cylinder", radius=0.011, height=0.03, segments=6)
-    v = np.vstack([V, bv])
+    """A 1 cm sphere through the top of a 1 m hexagonal prism (its 24 faces each over up to 4e5
+    cells of the grid the sphere's small faces set, more than there are faces: paired by box): the
+    same count as the all-pairs search."""
+    bv, bf = pl.mesh.primitive_surface("cylinder", radius=0.5, height=0.5, segments=6)
+    v = np.vstack([V + [0.0, 0.0, 0.25], bv])
     f = np.vstack([F, bf + len(V)])
     assert count_self_intersections(v, f) == _brute_force_self_intersections(v, f) > 0
 

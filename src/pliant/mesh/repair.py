@@ -199,10 +199,10 @@ def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_00
     lo, hi = tri.min(axis=1), tri.max(axis=1)
     h = float(np.median(hi - lo)) * 2
     h = h if 0 < h < math.inf else 1.0
-    large = ~(np.prod(np.floor(hi / h) - np.floor(lo / h) + 1, axis=1) <= LARGE_FACE_CELLS)
-    # A face over more cells than that (a stray vertex far out: a scan's spike; a box's face beside a
-    # fine sphere) is tested against every face its box meets instead of being put in each cell
-    # (a spike to 1e12 m put one face in 1e14 cells).
+    # A face over more cells than there are faces (a stray vertex far out: a scan's spike; a box's
+    # face beside a fine sphere) is tested against every face its box meets, the cheaper way, instead
+    # of being put in each cell (a spike to 1e12 m put one face in 1e14 cells).
+    large = ~(np.prod(np.floor(hi / h) - np.floor(lo / h) + 1, axis=1) <= max(LARGE_FACE_CELLS, len(F)))
     small = np.nonzero(~large)[0]
     origin = lo[small].min(axis=0) if len(small) else np.zeros(3)
     cl = np.floor((lo[small] - origin) / h).astype(np.int64)
@@ -228,8 +228,8 @@ def count_self_intersections(V: np.ndarray, F: np.ndarray, max_pairs: int = 2_00
     return int(_tri_tri_intersect(tri[P[:, 0]], tri[P[:, 1]]).sum())
 
 
-# A face whose bounding box covers more cells of count_self_intersections' grid than this is a
-# large face, paired by its box with every face instead (_large_face_pairs).
+# A face whose bounding box covers more cells of count_self_intersections' grid than this (and than
+# there are faces) is a large face, paired by its box with every face instead (_large_face_pairs).
 LARGE_FACE_CELLS = 512
 
 
