@@ -299,6 +299,11 @@ def test_cli_mesh_commands(tmp_path):
     assert (tmp_path / "q.png").stat().st_size > 5000
     r = runner.invoke(app, ["mesh", "simplify", str(spot), str(tmp_path / "s.obj")])
     assert r.exit_code == 2 and "exactly one" in r.output
+    # A radius–edge ratio no tet can meet (below the regular tet's √6/4) or none at all is refused
+    # before meshing (nan was taken, and the check skipped).
+    for q in ("nan", "0.5"):
+        r = runner.invoke(app, ["mesh", "tetrahedralize", str(spot), str(tmp_path / "q.vtu"), "--quality", q])
+        assert r.exit_code == 2 and f"--quality {q}: expected a finite radius–edge ratio >= 0.612" in r.output
 
 
 def test_loop_boundary_and_interior_rules():

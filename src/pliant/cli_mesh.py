@@ -172,6 +172,7 @@ def tetrahedralize_cmd(
 
     from .io import atomic_write, check_output_file
     from .mesh import read_surface, surface_to_tets, tet_quality
+    from .mesh.quality import REGULAR_RADIUS_EDGE
     from .mesh.surface import metres_hint
     from .mesh.topology import boundary_faces
 
@@ -181,6 +182,11 @@ def tetrahedralize_cmd(
             raise InputError(f"{name} {v}: expected a finite value > 0 (SI units)")
     if target_tets < 1:
         raise InputError(f"--target-tets {target_tets}: expected >= 1")
+    if quality is not None and not (np.isfinite(quality) and quality >= REGULAR_RADIUS_EDGE):
+        raise InputError(
+            f"--quality {quality}: expected a finite radius–edge ratio >= {REGULAR_RADIUS_EDGE:.3f} "
+            "(the regular tet's, the best there is)"
+        )
     V, F = read_surface(inp)
     hint = metres_hint(V, str(inp))
     if hint:

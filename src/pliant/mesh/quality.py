@@ -13,6 +13,10 @@ from ..errors import InputError
 from .primitives import TET_EDGES, tet_edge_lengths
 
 
+# The regular tet's radius–edge ratio (circumradius / shortest edge), the least any tet has.
+REGULAR_RADIUS_EDGE = float(np.sqrt(6) / 4)
+
+
 def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
     """Per tet: ``volume`` [m³], ``radius_edge`` (circumradius / shortest edge; √6/4 ≈ 0.612 for
     the regular tet), ``min_dihedral`` and ``max_dihedral`` [degrees] (70.53 for the regular tet),
@@ -125,7 +129,7 @@ def quality_histogram(path, q: dict[str, np.ndarray], dt: np.ndarray | None = No
     n = 3 if dt is not None else 2
     fig, ax = plt.subplots(1, n, figsize=(5 * n, 4))
     ax[0].hist(np.clip(q["radius_edge"], 0, 5), bins=60, color="tab:blue")
-    ax[0].axvline(np.sqrt(6) / 4, color="k", ls="--", label="regular tet")
+    ax[0].axvline(REGULAR_RADIUS_EDGE, color="k", ls="--", label="regular tet")
     ax[0].set_xlabel("radius–edge ratio (clipped at 5)")
     ax[0].legend()
     ax[1].hist(q["min_dihedral"], bins=60, alpha=0.7, label="min")
