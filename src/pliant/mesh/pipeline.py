@@ -28,11 +28,11 @@ def default_edge_length(V: np.ndarray, F: np.ndarray, target_tets: int = 20000) 
     triangles (a disc 5 nm thick and 10 cm across: fTetWild ran for hours at 0.1 mm)."""
     import trimesh
 
-    # On the surface scaled by a power of two to a diagonal of about 1 (trimesh's tolerances are
-    # absolute: its hull of a surface 1e30 across overflowed), the edge scaled back.
     V, F = mesh_arrays(V, F, 3, "default_edge_length", cell="face")
     if not 1 <= whole_number(target_tets, "target_tets") <= MAX_TETS:
         raise MeshError(f"target_tets = {target_tets}; expected 1 to {MAX_TETS:.0e}")
+    # On the surface scaled by a power of two to a diagonal of about 1 (trimesh's tolerances are
+    # absolute: its hull of a surface 1e30 across overflowed), the edge scaled back.
     scale = unit_scale(V)
     return _unit_edge(trimesh.Trimesh(V * scale, F, process=False), target_tets) / scale
 

@@ -32,6 +32,13 @@ MAX_STEPS = 10**9
 MAX_INCREMENTS = 10_000  # load steps of one quasi-static solve
 
 
+def _check_every(steps) -> int:
+    """Steps between stability checks: a whole number from 1 to MAX_STEPS."""
+    if not 1 <= whole_number(steps, "check_every") <= MAX_STEPS:
+        raise InputError(f"check_every = {shown(steps)}; expected 1 to {MAX_STEPS:.0e} steps")
+    return int(steps)
+
+
 def _step_count(steps, what: str = "steps") -> int:
     """A step count: an integer (not a bool, not a float with a fraction) from 0 to MAX_STEPS."""
     whole_number(steps, what, " of steps")
@@ -150,9 +157,7 @@ class Solver:
         self.damping = model.damping if damping is None else as_real(damping)
         if not math.isfinite(self.damping) or self.damping < 0:
             raise InputError(f"damping = {shown(damping)}; expected a finite value >= 0 [1/s]")
-        if not 1 <= whole_number(check_every, "check_every") <= MAX_STEPS:
-            raise InputError(f"check_every = {shown(check_every)}; expected 1 to {MAX_STEPS:.0e} steps")
-        self.check_every = int(check_every)
+        self.check_every = _check_every(check_every)
         X = model.reference_positions
         # The body's size [m] (its bounding box's diagonal): a displacement beyond blow_up_sizes of
         # it is a blow-up, a node moving more than it in one step a jump (the engine's check).
@@ -494,8 +499,7 @@ class Solver:
             )
         if not 1 <= whole_number(max_steps, "max_steps", " of steps") <= MAX_STEPS:
             raise InputError(f"max_steps = {shown(max_steps)}; expected 1 to {MAX_STEPS:.0e}")
-        if not 1 <= whole_number(check_every, "check_every") <= MAX_STEPS:
-            raise InputError(f"check_every = {shown(check_every)}; expected 1 to {MAX_STEPS:.0e} steps")
+        _check_every(check_every)
         steps = 0
         for t in np.linspace(state.time, t_end, int(increments) + 1)[1:]:
             rep = self._backend.relax(
