@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import itertools
 import re
-import time
 
 import numpy as np
 import pytest
@@ -98,15 +97,13 @@ def _brute_force_self_intersections(v, f) -> int:
 @pytest.mark.parametrize("far", [1e3, 1e12, 1e300])
 def test_a_stray_vertex_far_out_is_checked_without_filling_memory(far):
     """A scan's stray vertex (a spike to ``far`` m from a 1 cm sphere): check_surface finds the
-    self-intersections an all-pairs search finds, at once (the grid put the spike's faces in 1e14
+    self-intersections an all-pairs search finds (the grid put the spike's faces in 1e14
     cells at 1e12 m: a 1.5 PiB allocation; at 1e300, an OverflowError), and calls only the
     spike's needle faces degenerate (at 1e3 m every face of the sphere was, measured against the
     surface's size)."""
     v = V.copy()
     v[5] = [far, 0.0, 0.0]
-    start = time.perf_counter()
-    report = pl.mesh.check_surface(v, F)
-    assert time.perf_counter() - start < 10  # measured 0.05 s; the old grid did not finish
+    report = pl.mesh.check_surface(v, F)  # 0.05 s measured; the old grid did not finish
     assert report.self_intersections == _brute_force_self_intersections(v, F) > 0
     spike = int(np.any(F == 5, axis=1).sum())
     assert report.degenerate_faces <= spike

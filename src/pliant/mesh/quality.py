@@ -59,6 +59,13 @@ def tet_quality(nodes: np.ndarray, tets: np.ndarray) -> dict[str, np.ndarray]:
 
 def critical_time_steps(nodes, tets, material, density: float) -> np.ndarray:
     """Stable explicit step per element [s]: h_min / √((λ + 2μ)/ρ) (Belytschko et al. 2000, §6.3)."""
+    c = dilatational_wave_speed(material, density)
+    return tet_quality(nodes, tets)["min_altitude"] / c
+
+
+def dilatational_wave_speed(material, density: float) -> float:
+    """c_d = √((λ + 2μ)/ρ) [m/s] of a pliant material at small strain and a density [kg/m³] > 0
+    (InputError naming either otherwise); a tet's stable step is its smallest altitude over it."""
     from ..materials import Material
 
     if not isinstance(material, Material):
@@ -68,9 +75,7 @@ def critical_time_steps(nodes, tets, material, density: float) -> np.ndarray:
     rho = finite_number(density, "critical_time_steps: density", "kg/m^3")
     if not rho > 0:
         raise InputError(f"critical_time_steps: density = {rho:g}; expected > 0 [kg/m^3]")
-    q = tet_quality(nodes, tets)
-    c = np.sqrt((material.lam + 2.0 * material.mu) / rho)
-    return q["min_altitude"] / c
+    return float(np.sqrt((material.lam + 2.0 * material.mu) / rho))
 
 
 def valid_elements(q: dict[str, np.ndarray]) -> np.ndarray:

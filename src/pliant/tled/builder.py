@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _core
-from ..checks import as_real, described, mesh_arrays, real_array, shown
+from ..checks import as_real, described, mesh_arrays, real_array, shown, whole_number
 from ..errors import (
     DegenerateElementError,
     InputError,
@@ -49,14 +49,10 @@ def _dofs(dofs) -> list[int]:
             raise InputError("dofs = '': expected at least one of the letters 'xyz'")
         return sorted(set(out))
     given = np.atleast_1d(np.asarray(dofs, dtype=object))
-    if given.ndim != 1 or not given.size or not all(_is_dof(d) for d in given):
+    numbers = {whole_number(d, "dofs") for d in given} if given.ndim == 1 else set()
+    if not numbers or not numbers <= {0, 1, 2}:
         raise InputError(f"dofs = {described(dofs)}: expected 0, 1, 2 or letters from 'xyz'")
-    return sorted({int(d) for d in given})
-
-
-def _is_dof(d) -> bool:
-    """Whether d is the integer 0, 1 or 2 (not a bool, not 1.5)."""
-    return isinstance(d, (int, np.integer)) and not isinstance(d, (bool, np.bool_)) and bool(0 <= d <= 2)
+    return sorted(numbers)
 
 
 def _curve(curve, who: str) -> LoadCurve:

@@ -713,7 +713,12 @@ class Model:
         """Internal nodal forces f(u) [N], (N, 3), the forces the elements need at the nodes: at the
         constrained DOFs of an equilibrium state, less the loads applied there, the forces the
         supports exert on the body (a bar hanging under gravity: its weight, upward, at the top)."""
-        return self.to_user_nodes(np.asarray(self._results().internal_forces(state._s), dtype=float))
+        return self._internal_forces(state, damped=False)
+
+    def _internal_forces(self, state: "State", damped: bool) -> np.ndarray:
+        """internal_forces, with ``damped`` plus β damping's viscous forces from the state's own
+        increment and step (the engine's internal_forces(state, damped))."""
+        return self.to_user_nodes(np.asarray(self._results().internal_forces(state._s, damped), dtype=float))
 
     def external_forces(self, state: "State", t: float | None = None) -> np.ndarray:
         """External loads [N], (N, 3), at the state's displacements and the load curves at ``t`` [s]
@@ -737,8 +742,7 @@ class Model:
         − r(t) + the moved DOFs' m (a + α v) (M a + α M v + f + f_β − r = the support's force).
         f_β: β damping's viscous forces from the state's own increment and step (zero after a
         relaxation, whose increment is zero)."""
-        damped = self._results().internal_forces(state._s, self.stiffness_damping > 0.0)
-        f = self.to_user_nodes(np.asarray(damped, dtype=float))
+        f = self._internal_forces(state, damped=self.stiffness_damping > 0.0)
         return f - self.external_forces(state, t) + self._moved_inertia(state, t)
 
     def _moved_inertia(self, state: "State", t: float | None = None) -> np.ndarray:
