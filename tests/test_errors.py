@@ -422,6 +422,15 @@ def test_state_save_and_restore(tmp_path):
     older.load(tmp_path / "old.npz")
     older.run(steps=50)
     np.testing.assert_allclose(older.displacements, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    # A run clock that is not one of this state's (t_epoch not finite, step_epoch not a whole step
+    # from 0 to the state's step count) is named, not loaded.
+    for t_epoch, step_epoch in ((np.nan, 0), (0.0, 1.5), (0.0, 51), (0.0, -1), ("x", 0)):
+        with np.load(tmp_path / "s.npz") as d:
+            data = {k: d[k] for k in d.files}
+        data.update(t_epoch=t_epoch, step_epoch=step_epoch)
+        np.savez(tmp_path / "clock.npz", **data)
+        with pytest.raises(pl.InputError, match=r"clock\.npz: run clock"):
+            pl.Simulation(m).load(tmp_path / "clock.npz")
     # A folder as the file name was saved beside it (tmp_path/d -> tmp_path/d.npz)
     (tmp_path / "d").mkdir()
     with pytest.raises(pl.InputError, match="the state file is a folder"):

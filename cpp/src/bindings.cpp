@@ -110,20 +110,35 @@ void bind_engine(nb::module_& m, const char* engine_name, const char* backend_na
     using S = PyState<T>;
     nb::class_<S>(m, state_name)
         .def_prop_ro("n_nodes", [](const S& s) { return s.n_nodes; })
+        // Setting t, dt or the step count restarts the run clock there (State::restart_clock).
         .def_prop_rw(
             "t", [](const S& s) { return s.s.t; },
             [](S& s, double t) {
                 s.s.t = t;
+                s.s.restart_clock();
                 s.s.touch();
             })
         .def_prop_rw(
             "dt", [](const S& s) { return s.s.dt; },
             [](S& s, double v) {
                 s.s.dt = v;
+                s.s.restart_clock();
                 s.s.touch();
             })
         .def_prop_rw(
-            "step", [](const S& s) { return s.s.step; }, [](S& s, long v) { s.s.step = v; })
+            "step", [](const S& s) { return s.s.step; },
+            [](S& s, long v) {
+                s.s.step = v;
+                s.s.restart_clock();
+            })
+        // The run clock's epoch (t_epoch [s], step_epoch): saved and restored with the state, so
+        // that a restored run meets its curves at the times the run it continues would have.
+        .def_prop_rw(
+            "epoch", [](const S& s) { return std::make_tuple(s.s.t_epoch, s.s.step_epoch); },
+            [](S& s, std::tuple<double, long> e) {
+                s.s.t_epoch = std::get<0>(e);
+                s.s.step_epoch = std::get<1>(e);
+            })
         .def("get_u",
              [](const S& s) {
                  const index_t P = static_cast<index_t>(s.s.u.size() / 3);

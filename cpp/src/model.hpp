@@ -233,6 +233,13 @@ struct State {
     std::vector<double> grip_at;
     double t = 0.0, dt = 0.0;
     long step = 0;
+    // The run clock: while Δt stays dt, the time after step k is t_epoch + (k − step_epoch) Δt
+    // (clock_time), counted from here whichever runs the steps were split into, so that a run
+    // split in two (frames, save and restore) meets its curves and tool poses at the same times,
+    // to the bit, as one run. Restarted (restart_clock) where t, Δt or the step count are set
+    // from outside, Δt changes, or a relaxation sets the time.
+    double t_epoch = 0.0;
+    long step_epoch = 0;
     std::uint64_t version = new_version();
     explicit State(index_t n_pad, std::size_t q_size = 0, std::size_t n_contact = 0)
         : u(3 * static_cast<std::size_t>(n_pad), T(0)),
@@ -242,7 +249,12 @@ struct State {
           grip_tool(n_contact, -1),
           grip_at(3 * n_contact, 0.0) {}
     void touch() { version = new_version(); }
+    void restart_clock() { t_epoch = t, step_epoch = step; }
 };
+
+/// The time [s] k steps of dt after a clock's epoch t0: one expression wherever a time is counted
+/// (the steps' load and pose times, the state's time after a run), so that both round alike.
+PLIANT_HD double clock_time(double t0, long k, double dt) { return t0 + static_cast<double>(k) * dt; }
 
 /// u or u⁻ set from outside: the increment is u − u⁻ again.
 template <class T>

@@ -33,7 +33,8 @@ namespace pliant {
 /// back by the host at checks.
 template <class T>
 struct Scalars {
-    double t0;  // time at step 0 of this call [s]
+    double t0;  // the run clock's epoch [s] (State::t_epoch)
+    long base;  // steps from the epoch to this call's first (State::step − State::step_epoch)
     long step;  // steps taken in this call
     long row;   // tool-history row of the current step
     Integrator<T> it;
@@ -235,7 +236,7 @@ private:
     void dispatch(Visitor&& visit);
     void load(const State<T>& s);
     void store(State<T>& s);
-    void set_scalars(double t0, double dt, double alpha);
+    void set_scalars(double t0, long base, double dt, double alpha);
     void ensure_history(long rows);
     void allocate_soft(std::size_t ns, std::size_t nst);
     std::vector<double> history_columns(std::size_t begin, std::size_t width);

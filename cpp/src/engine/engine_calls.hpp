@@ -243,9 +243,10 @@ void Engine<T, Dev>::store(State<T>& s) {
 }
 
 template <class T, class Dev>
-void Engine<T, Dev>::set_scalars(double t0, double dt, double alpha) {
+void Engine<T, Dev>::set_scalars(double t0, long base, double dt, double alpha) {
     Scalars<T> s{};
     s.t0 = t0;
+    s.base = base;
     s.it = central_difference<T>(dt, alpha);
     s.alpha = alpha;
     s.soft_due = 1;  // the state may have changed since the last run: new candidate lists
@@ -265,13 +266,15 @@ void Engine<T, Dev>::ensure_history(long rows) {
 
 template <class T, class Dev>
 RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int check_every, double size) {
+    if (s.dt != dt) s.restart_clock();  // the clock counts steps of one Δt
     if (keep_velocity(s, dt)) s.touch();
     load(s);
     ensure_history(n);
-    set_scalars(s.t, dt, alpha);
+    const double t0 = s.t_epoch;
+    const long base = s.step - s.step_epoch;
+    set_scalars(t0, base, dt, alpha);
     RunReport rep;
     const long G = check_every > 0 ? check_every : 1;
-    const double t0 = s.t;
     long done = 0;
     dev_.region([&] {
         Phase ph = phase_;  // each thread keeps the same rotation
@@ -284,7 +287,10 @@ RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int 
             });
             d += k;
             // J belongs to the last step's input (t), the newest u to t + Δt; u[prev] is at t.
-            if (check(v_.u[ph.cur], v_.u[ph.prev], t0 + (d - 1) * dt, t0 + d * dt, size, rep).status) break;
+            if (check(v_.u[ph.cur], v_.u[ph.prev], clock_time(t0, base + d - 1, dt),
+                      clock_time(t0, base + d, dt), size, rep)
+                    .status)
+                break;
         }
         if (dev_.lead()) {
             done = d;
@@ -293,7 +299,7 @@ RunReport Engine<T, Dev>::run(State<T>& s, long n, double dt, double alpha, int 
     });
     dev_.forget_graphs();
     store(s);
-    s.t = t0 + done * dt;
+    s.t = clock_time(t0, base + done, dt);
     s.dt = dt;
     s.step += done;
     history_rows_ = done;
@@ -323,7 +329,7 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
     copy(v_.u[phase_.prev], v_.u[phase_.cur], u_[0].size());  // start at rest
     fill(v_.du[phase_.cur], T(0), du_[0].size());             // (no increment)
     ensure_history(1);                                        // relax keeps the last step's tool forces
-    set_scalars(t_eval, dt, 0.0);
+    set_scalars(t_eval, 0, dt, 0.0);
     RunReport rep;
     long done = 0;
     dev_.region([&] {
@@ -372,6 +378,7 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
     store(s);
     s.t = t_eval;
     s.dt = dt;
+    s.restart_clock();
     history_rows_ = 1;
     rep.steps = done;
     if (rep.status == RunStatus::Ok) rep.t = t_eval;

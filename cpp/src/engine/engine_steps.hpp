@@ -33,22 +33,23 @@ PLIANT_HD void pattern_factors_at(const DeviceView<T>& v, double t) {
         v.pf[p] = T(curve_value(v.curves[v.pattern_curve[p]], t, v.tt, v.tv));
 }
 
-/// Load-curve factors at t (load patterns, pressure) and t + Δt (prescribed displacements), tool
-/// poses at t and t + Δt, t = t0 + step · time_dt; then the step counter advances.
+/// Load-curve factors at t (load patterns, pressure) and t⁺ (prescribed displacements), tool poses
+/// at t and t⁺: t = t0 + (base + step) · time_dt and t⁺ the next step's t, on the run clock
+/// (State::t_epoch, clock_time); then the step counter advances.
 template <class T, class Dev>
 void Engine<T, Dev>::step_scalars(double time_dt, bool fixed_row) {
     const DeviceView<T> v = v_;
     dev_.serial([=] PLIANT_KERNEL() {
         Scalars<T>& s = *v.sc;
-        const double t = s.t0 + static_cast<double>(s.step) * time_dt;
-        for (int c = 0; c < v.n_curves; ++c)
-            v.cnext[c] = T(curve_value(v.curves[c], t + time_dt, v.tt, v.tv));
+        const double t = clock_time(s.t0, s.base + s.step, time_dt);
+        const double t_next = clock_time(s.t0, s.base + s.step + 1, time_dt);
+        for (int c = 0; c < v.n_curves; ++c) v.cnext[c] = T(curve_value(v.curves[c], t_next, v.tt, v.tv));
         pattern_factors_at(v, t);
         for (int k = 0; k < v.n_tools; ++k) {
             v.pose0[k] = tool_pose(v.tools[k], t, v.keys);
-            v.pose1[k] = tool_pose(v.tools[k], t + time_dt, v.keys);
+            v.pose1[k] = tool_pose(v.tools[k], t_next, v.keys);
             v.closed[k] = (tool_closed(v.tools[k], t, v.grips) ? kGripClosedBefore : 0) |
-                          (tool_closed(v.tools[k], t + time_dt, v.grips) ? kGripClosedAfter : 0);
+                          (tool_closed(v.tools[k], t_next, v.grips) ? kGripClosedAfter : 0);
         }
         s.row = fixed_row ? 0 : s.step;
         s.step += 1;

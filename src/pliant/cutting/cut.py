@@ -77,6 +77,7 @@ def _carry_state(state, model, parent: np.ndarray):
         new_at = np.where(row[:, None] >= 0, at[row], 0.0)
         s._s.set_grip(new_tool.astype(np.int32).tolist(), new_at.ravel().tolist())
     s._s.t, s._s.dt, s._s.step = state._s.t, state._s.dt, state._s.step
+    s._s.epoch = state._s.epoch  # the same run clock (a new Δt restarts it: Engine::run)
     return s
 
 

@@ -404,11 +404,10 @@ class Solver:
         steps = self.step_count(state, steps, until)
         if steps == 0:
             return RunInfo(0, state.time)
-        t0 = state.time
         rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every, self.size)
         self._ran()
         self._relaxed, self._stepped_dt = None, self.dt
-        self._record_tools(t0, int(rep["steps"]))
+        self._record_tools(state, int(rep["steps"]))
         if rep["status"]:
             self._raise(rep)
         return RunInfo(
@@ -435,8 +434,11 @@ class Solver:
             steps = max(0, math.ceil(n))
         return _step_count(steps)
 
-    def _record_tools(self, t0: float, steps: int):
-        t = t0 + self.dt * np.arange(1, steps + 1)
+    def _record_tools(self, state: State, steps: int):
+        """The last run's tool and pair forces into their histories, at the times of its steps
+        on the state's run clock (State: t_epoch + (step − step_epoch) Δt)."""
+        t_epoch, step_epoch = state._s.epoch
+        t = t_epoch + self.dt * (state.steps - steps - step_epoch + np.arange(1, steps + 1))
         keep = slice(-self.history_steps, None) if self.history_steps else slice(None)
         if self._pairs:
             hp = np.asarray(self._backend.pair_history())[:steps]

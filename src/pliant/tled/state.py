@@ -3,6 +3,7 @@ to and restored from .npz files."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -104,7 +105,7 @@ class State:
 
     def save(self, path):
         """Save to a .npz file (u, u⁻ and the last increment in user order, t, Δt, step count, the
-        model's fingerprint), atomically. ``.npz`` is appended to a name without it."""
+        run clock, the model's fingerprint), atomically. ``.npz`` is appended to a name without it."""
         from ..io.files import atomic_write, check_output_file
 
         path = check_output_file(path, "state file")  # first: "/tmp" was saved as /tmp.npz
@@ -125,6 +126,10 @@ class State:
             visco=np.asarray(self._s.get_q(), dtype=float),
             grip_tool=np.asarray(self._s.get_grip()[0]),
             grip_at=np.asarray(self._s.get_grip()[1]),
+            # the run clock (time = t_epoch + (step − step_epoch) dt): a restored run meets its
+            # curves at the times of the run it continues, to the bit
+            t_epoch=self._s.epoch[0],
+            step_epoch=self._s.epoch[1],
         )  # engine layout, same model
         atomic_write(path, lambda tmp: np.savez(tmp, **data), "state file")
 
@@ -148,6 +153,21 @@ class State:
             self._s.set_grip(held.astype(np.int32).tolist(), where.tolist())
         except (TypeError, ValueError) as e:
             raise InputError(f"{path}: {e}") from None
+
+    @staticmethod
+    def _epoch(path: Path, t_epoch, step_epoch, step: int) -> tuple[float, int]:
+        """A saved run clock (its epoch's time [s] and step): finite, a whole step from 0 to the
+        state's own step count."""
+        try:
+            t0, k0 = float(t_epoch), float(step_epoch)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"{path}: run clock: {e}") from None
+        if not (math.isfinite(t0) and k0 == round(k0) and 0 <= k0 <= step):
+            raise InputError(
+                f"{path}: run clock t_epoch = {t0}, step_epoch = {k0}; expected a finite time and a "
+                f"whole step from 0 to the state's step {step}"
+            )
+        return t0, int(k0)
 
     def load(self, path):
         """Restore from a file written by :meth:`save` of the same model. A missing, corrupt,
@@ -190,6 +210,8 @@ class State:
                 f"{path}: bad time data t = {t}, dt = {dt}, step = {step}; expected "
                 "finite t, dt >= 0 and step >= 0"
             )
+        saved_clock = "t_epoch" in data and "step_epoch" in data
+        epoch = self._epoch(path, data["t_epoch"], data["step_epoch"], step) if saved_clock else None
         u = self.model.to_engine_nodes(self._check(data["u"], f"{path}: u"))
         u_prev = self.model.to_engine_nodes(self._check(data["u_prev"], f"{path}: u_prev"))
         if "visco" in data:
@@ -204,4 +226,6 @@ class State:
         self._s.set_u_prev(u_prev)  # and the increment u − u⁻ (files saved before it was kept)
         if du is not None:
             self._s.set_du(du)
-        self._s.t, self._s.dt, self._s.step = t, dt, step
+        self._s.t, self._s.dt, self._s.step = t, dt, step  # the clock restarts here, unless saved:
+        if epoch is not None:
+            self._s.epoch = epoch
