@@ -85,6 +85,18 @@ def test_different_bodies_and_material_dicts():
         Batch.replicate(b, [{"liver": MATERIALS[0]}])
 
 
+def test_lists_that_are_not_lists_of_bodies_or_materials_are_named():
+    """Batch's builders and replicate's materials must be lists of ModelBuilders and of Materials
+    (or dicts of set names to Materials): anything else is named (a number or None was Python's
+    TypeError, a tuple of numbers an AttributeError at finalize)."""
+    for builders in (None, 3, "bodies", {"a": 1}):
+        with pytest.raises(pl.InputError, match="builders"):
+            Batch(builders)
+    for materials in (None, float("inf"), True, (0, 0, 0), [MATERIALS[0], "x"], [{"body": 3}]):
+        with pytest.raises(pl.InputError, match="materials"):
+            Batch.replicate(body(MATERIALS[0]), materials)
+
+
 @pytest.mark.parametrize(
     "change, what",
     [

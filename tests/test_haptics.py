@@ -115,13 +115,25 @@ def test_bad_arguments_name_themselves():
         HapticLoop(sim, tool=3)
     with pytest.raises(pl.InputError, match="update_period"):
         HapticLoop(sim, update_period=0.0)
-    with pytest.raises(pl.InputError, match="max_force"):
-        HapticLoop(sim, max_force=-1.0)
+    # (a string or None was Python's ValueError or TypeError)
+    for force in (-1.0, float("nan"), "x", "", None, [[]], (1, 0, 0)):
+        with pytest.raises(pl.InputError, match="max_force"):
+            HapticLoop(sim, max_force=force)
     with pytest.raises(pl.InputError, match="Simulation"):
         HapticLoop(sim.model)
     loop = HapticLoop(sim)
     with pytest.raises(pl.InputError, match="position"):
         loop.write_pose((0.0, float("nan"), 0.0))
+    # The scripted device: a servo rate from 1 Hz (below, the run's last read waited 1/rate: 1e300 s
+    # raised OverflowError, 0.001 Hz slept 1,000 s) to 1 MHz, and a log of at most 1e8 reads (a
+    # rate or a duration of 1e30 tried to allocate it: numpy's ValueError or MemoryError).
+    for rate in (0.5, 1e-300, 2e6, 2**64, float("inf"), "x"):
+        with pytest.raises(pl.InputError, match="rate"):
+            VirtualDevice(loop, lambda t: (0.0, 0.0, 0.0), rate=rate)
+    device = VirtualDevice(loop, lambda t: (0.0, 0.0, 0.0), rate=1e6)
+    for duration in (-1.0, 1e30, float("nan"), None):
+        with pytest.raises(pl.InputError, match="duration"):
+            device.run(duration)
 
 
 def test_an_error_in_the_simulation_thread_reaches_the_caller():

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .checks import finite_number, finite_vector, shown
+from .checks import as_real, finite_number, finite_vector, shown
 from .tled import Simulation
 
 __all__ = ["HapticLoop", "VirtualDevice", "DeviceLog"]
@@ -68,9 +68,9 @@ class HapticLoop:
             raise InputError(f"update_period = {shown(update_period)}; expected > 0 [s]")
         self.steps_per_update = max(1, round(period / sim.dt))
         self.realtime, self.passivity = bool(realtime), bool(passivity)
-        self.max_force = float(max_force)
+        self.max_force = as_real(max_force)  # inf (no limit) allowed; NaN for what is no number
         if not self.max_force > 0:
-            raise InputError(f"max_force = {shown(max_force)}; expected > 0 [N]")
+            raise InputError(f"max_force = {shown(max_force)}; expected a force > 0 [N] (inf: no limit)")
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -226,6 +226,10 @@ class HapticLoop:
         return self._error
 
 
+MAX_RATE = 1e6  # [Hz] a VirtualDevice's most reads a second
+MAX_READS = 1e8  # a VirtualDevice run's most reads (its log: 5.6 GB)
+
+
 class VirtualDevice:
     """A scripted haptic device for tests and demonstrations: a thread that, ``rate`` times per
     second [Hz], writes the pose ``path(t)`` [m] and reads the force, as a device's servo loop
@@ -236,13 +240,21 @@ class VirtualDevice:
     def __init__(self, loop: HapticLoop, path: Callable[[float], object], rate: float = 1000.0):
         self.loop, self.path = loop, path
         self.rate = finite_number(rate, "rate", "Hz")
-        if not self.rate > 0:
-            raise InputError(f"rate = {shown(rate)}; expected > 0 [Hz]")
+        # A servo loop's rate: at least one read a second (the run's last read waits a period), at
+        # most MAX_RATE (haptic devices serve 1–10 kHz).
+        if not 1.0 <= self.rate <= MAX_RATE:
+            raise InputError(f"rate = {shown(rate)}; expected 1 to {MAX_RATE:g} reads a second [Hz]")
 
     def run(self, duration: float) -> DeviceLog:
         """Serve the device for ``duration`` [s] of wall time (reads at k / rate, k = 0, 1, ...)."""
         duration = finite_number(duration, "duration", "s")
-        n = math.ceil(duration * self.rate)
+        reads = duration * self.rate
+        if not 0 <= reads <= MAX_READS:  # the log keeps 7 numbers a read
+            raise InputError(
+                f"duration = {shown(duration)} s; expected >= 0 and at most {MAX_READS:.0e} reads "
+                f"({MAX_READS / self.rate:.3g} s at {self.rate:g} Hz)"
+            )
+        n = math.ceil(reads)
         times, forces, energy = np.zeros(n), np.zeros((n, 3)), np.zeros(n)
         start = time.perf_counter()
         for k in range(n):

@@ -24,6 +24,7 @@ import dataclasses
 
 import numpy as np
 
+from ..checks import shown
 from ..errors import InputError
 from .builder import ModelBuilder
 from .anp import anp_stabilization
@@ -78,6 +79,28 @@ def _check_shared(builders: list[ModelBuilder]) -> None:
                 )
 
 
+def _listed(items, what: str) -> list:
+    """``items`` (a list, tuple or other iterable; not a string or a mapping) as a list; InputError
+    naming ``what`` otherwise."""
+    if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__"):
+        raise InputError(f"batch: {what} = {shown(items)}; expected a list, one entry per body")
+    return list(items)
+
+
+def _check_material(m, k: int) -> None:
+    """replicate's materials[k]: a Material, or a dict of element-set names to Materials."""
+    from ..materials import Material
+
+    if isinstance(m, Material):
+        return
+    if isinstance(m, dict) and all(isinstance(v, Material) for v in m.values()):
+        return
+    raise InputError(
+        f"batch: materials[{k}] = {shown(m)}; expected a pliant Material (every element set) "
+        "or a dict of element-set names to Materials"
+    )
+
+
 def merge_builders(builders: list[ModelBuilder]) -> tuple[ModelBuilder, np.ndarray, np.ndarray]:
     """One builder with every body of ``builders``, body after body. Returns it with the node and
     element offsets of each body, shape (B + 1,) each (body k: nodes off[k]:off[k+1])."""
@@ -122,7 +145,7 @@ class Batch:
     ``bodies`` = N. ``finalize`` options (dtype, threads, backend, device) pass through."""
 
     def __init__(self, builders: list[ModelBuilder], dtype="float32", **finalize_options):
-        merged, self.node_offsets, self.element_offsets = merge_builders(list(builders))
+        merged, self.node_offsets, self.element_offsets = merge_builders(_listed(builders, "builders"))
         self.bodies = len(self.node_offsets) - 1
         self.model = merged.finalize(dtype, **finalize_options)
 
@@ -133,9 +156,10 @@ class Batch:
         """len(materials) copies of ``builder``, copy k with ``materials[k]``: a Material (every
         element set) or a dict set name → Material (the sets it names)."""
         builders = []
-        for k, m in enumerate(materials):
+        for k, m in enumerate(_listed(materials, "materials")):
             b = copy.copy(builder)
             names = {s.name for s in builder.sets}
+            _check_material(m, k)
             if isinstance(m, dict) and set(m) - names:
                 raise InputError(
                     f"batch: materials[{k}] names element set(s) "
