@@ -198,6 +198,26 @@ def test_the_cuts_do_not_depend_on_how_the_run_is_split():
     assert np.array_equal(parts.state.displacements, whole.state.displacements)
 
 
+def test_a_run_with_blades_restored_between_cuts_cuts_as_it_would_have(tmp_path):
+    """Saved between two cuts and restored into a new simulation with the same blade, a run makes
+    the cuts the uninterrupted one makes: at the same step counts, each along what the blade swept
+    over the last `every` steps (a cutter counted from its own first run before, and cut at 25, 35,
+    45 where the uninterrupted run cut at 20, 30, 40)."""
+    whole = cut_through()
+    first = pl.Simulation(hanging_bar(), damping=0.0)
+    first.add_blade(through_blade())
+    first.run(steps=15)
+    assert not first.cutter.events  # no cut yet: the state is of the uncut model
+    first.save(tmp_path / "s.npz")
+    second = pl.Simulation(hanging_bar(), damping=0.0)
+    second.load(tmp_path / "s.npz")
+    second.add_blade(through_blade())
+    second.run(steps=whole.state.steps - 15)
+    assert [e.time for e in second.cutter.events] == [e.time for e in whole.cutter.events]
+    assert np.array_equal(second.model.tets, whole.model.tets)
+    assert np.array_equal(second.state.displacements, whole.state.displacements)
+
+
 def test_a_cut_state_saves_and_restores_to_the_same_bits(tmp_path):
     sim = cut_through()
     sim.save(tmp_path / "s.npz")

@@ -37,9 +37,6 @@ class Cutter:
     embedding: object = None
     events: list = field(default_factory=list)
     _faces: tuple = (None, None)  # (model, its interior faces): computed once per topology
-    # (step count, time [s]) of the last cut, or of the first run's start: the next cut comes
-    # `every` steps after it, counted on the state, whatever runs the steps are split into.
-    _mark: tuple | None = None
 
     def __post_init__(self):
         blades, self.blades = list(self.blades), []
@@ -71,21 +68,24 @@ class Cutter:
         return solver, state
 
     def run(self, solver, state, steps: int):
-        """Advance ``state`` by ``steps`` steps of ``solver``, cutting every :attr:`every` steps
-        of the state's count (from where the first run began), along what the blades swept since
-        the last cut. A run that ends between two cuts leaves the next one to the next run, so
-        the cuts, and the results, do not depend on how the steps are split into runs (a scene's
-        frames). Returns (solver, state): new objects once something was cut (the old ones stay
-        as they were at the cut)."""
-        if self._mark is None or self._mark[0] > state.steps:  # the first run, or another state
-            self._mark = (state.steps, state.time)
+        """Advance ``state`` by ``steps`` steps of ``solver``, cutting at every step count of the
+        state that is a multiple of :attr:`every`, along what the blades swept over the last
+        ``every`` steps (_since). A run that ends between two cuts leaves the next one to the next
+        run, so the cuts, and the results, do not depend on how the steps are split into runs (a
+        scene's frames) nor on a save and restore between cuts. Returns (solver, state): new
+        objects once something was cut (the old ones stay as they were at the cut)."""
         done = 0
         while done < steps:
-            n = min(self._mark[0] + self.every - state.steps, steps - done)
-            if n > 0:
-                solver.run(state, steps=n)
-                done += n
-            if state.steps - self._mark[0] >= self.every:
-                solver, state = self.cut_now(solver, state, self._mark[1])
-                self._mark = (state.steps, state.time)
+            n = min(self.every - state.steps % self.every, steps - done)
+            solver.run(state, steps=n)
+            done += n
+            if state.steps % self.every == 0:
+                solver, state = self.cut_now(solver, state, self._since(state))
         return solver, state
+
+    def _since(self, state) -> float:
+        """The time [s] ``every`` steps before the state's, on its run clock (State: t_epoch +
+        (step − step_epoch) Δt), or the clock's epoch if Δt was set since then (a cut's new
+        solver, a user's)."""
+        t_epoch, step_epoch = state._s.epoch
+        return t_epoch + max(state.steps - self.every - step_epoch, 0) * state.dt

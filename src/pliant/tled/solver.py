@@ -622,7 +622,7 @@ class Simulation:
 
     def run(self, steps: int | None = None, until: float | None = None) -> RunInfo:
         """Advance by ``steps`` steps or to time ``until`` [s] (Solver.run on the current state;
-        with blades, a cut every ``cutter.every`` steps of the state's count: Cutter.run)."""
+        with blades, a cut at each step count that is a multiple of ``cutter.every``: Cutter.run)."""
         if self.cutter is None or not self.cutter.blades:
             return self.solver.run(self.state, steps=steps, until=until)
         steps = self.solver.step_count(self.state, steps, until)
