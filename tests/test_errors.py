@@ -431,6 +431,11 @@ def test_state_save_and_restore(tmp_path):
         np.savez(tmp_path / "clock.npz", **data)
         with pytest.raises(pl.InputError, match=r"clock\.npz: run clock"):
             pl.Simulation(m).load(tmp_path / "clock.npz")
+    # The time a state is set to is a finite number of seconds: NaN ran into a misleading "unstable,
+    # reduce dt", inf ran on with the time stuck, a string or None were Python's errors.
+    for t in (float("nan"), float("inf"), -float("inf"), "x", None, True, [1.0]):
+        with pytest.raises(pl.InputError, match=r"State\.time = .*expected a finite time"):
+            other.state.time = t
     # A folder as the file name was saved beside it (tmp_path/d -> tmp_path/d.npz)
     (tmp_path / "d").mkdir()
     with pytest.raises(pl.InputError, match="the state file is a folder"):

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..checks import as_real, shown
 from ..errors import InputError
 
 if TYPE_CHECKING:
@@ -30,11 +31,17 @@ class State:
 
     @property
     def time(self) -> float:
+        """Time t [s]: after a run, t_epoch + (steps − step_epoch) Δt on the state's run clock, so
+        that however a run is split its steps meet their loads at the same times."""
         return float(self._s.t)
 
     @time.setter
     def time(self, t: float):
-        self._s.t = float(t)
+        """Set the time [s] (a finite number); the run clock restarts here."""
+        value = as_real(t)
+        if not math.isfinite(value):
+            raise InputError(f"State.time = {shown(t)}; expected a finite time [s]")
+        self._s.t = value
 
     @property
     def dt(self) -> float:
