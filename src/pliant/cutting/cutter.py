@@ -84,8 +84,6 @@ class Cutter:
         return solver, state
 
     def _since(self, state) -> float:
-        """The time [s] ``every`` steps before the state's, on its run clock (State: t_epoch +
-        (step − step_epoch) Δt), or the clock's epoch if Δt was set since then (a cut's new
-        solver, a user's)."""
-        t_epoch, step_epoch = state._s.epoch
-        return t_epoch + max(state.steps - self.every - step_epoch, 0) * state.dt
+        """The time [s] ``every`` steps before the state's, on its run clock (State._clock_times),
+        or the clock's epoch if Δt was set since then (a cut's new solver, a user's)."""
+        return float(state._clock_times(state.steps - self.every))

@@ -437,8 +437,7 @@ class Solver:
     def _record_tools(self, state: State, steps: int):
         """The last run's tool and pair forces into their histories, at the times of its steps
         on the state's run clock (State: t_epoch + (step − step_epoch) Δt)."""
-        t_epoch, step_epoch = state._s.epoch
-        t = t_epoch + self.dt * (state.steps - steps - step_epoch + np.arange(1, steps + 1))
+        t = state._clock_times(state.steps - steps + np.arange(1, steps + 1))
         keep = slice(-self.history_steps, None) if self.history_steps else slice(None)
         if self._pairs:
             hp = np.asarray(self._backend.pair_history())[:steps]

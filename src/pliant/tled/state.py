@@ -47,6 +47,12 @@ class State:
     def dt(self) -> float:
         return float(self._s.dt)
 
+    def _clock_times(self, steps):
+        """Times [s] of step counts ``steps`` (an int or an array) on the run clock, t_epoch +
+        (steps − step_epoch) Δt; a count before the epoch (Δt set since) gives the epoch's time."""
+        t_epoch, step_epoch = self._s.epoch
+        return t_epoch + np.maximum(np.asarray(steps) - step_epoch, 0) * self.dt
+
     @property
     def steps(self) -> int:
         return int(self._s.step)
