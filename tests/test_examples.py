@@ -45,27 +45,39 @@ def test_example_runs(path, tmp_path):
 
 
 def test_the_kidney_passes_its_push_to_the_liver():
-    """examples/organs_contact.toml at its end: the kidney, pushed down at its top, is in balance
-    (Newton's third law through it): the force its top's support exerts on it (the internal forces
-    there, Model.internal_forces) equals the contact force it exerts on the liver (the contact
-    report's pair force, summed in the engine's fixed point) plus what its damping still takes, α Σ m v
-    over its free nodes. Tolerance 3 % of the force: the kidney's remaining acceleration Σ m a
-    (0.5 s is 0.2 s after the push stops, about six damping times 1/α)."""
+    """examples/organs_contact.toml at its end: the kidney, pushed down at its top, passes the push
+    on to the liver (Newton's second and third laws on the kidney as a whole). Over its last step
+    the force its top's support exerts on it (the internal forces at the prescribed nodes,
+    Model.internal_forces, at the step's start) equals the contact force it exerts on the liver (the
+    contact report's pair force, summed in the engine's fixed point) plus what its free nodes' motion
+    takes, Σ m (a + α v), from their two increments: the step's update m (du⁺ − (γ2 − 1) du)/γ1
+    (docs/engine.md), independent of the contact code. Tolerance 1e-4 of the force: float32 forces
+    summed over ~2,000 nodes (measured 6e-8 to 5e-7 on ten meshes).
+
+    The meshes come from fTetWild, which does not give the same mesh twice (docs/mesh.md), so the
+    test holds on any of them: the kidney's remaining motion 0.2 s after the push stops is measured,
+    not assumed (Σ m a: 0.9–1.2 % of the force on ten meshes here; 7 % on one CI machine's mesh, where
+    a balance without it failed; α Σ m v another 4 %)."""
     import pliant as pl
 
     scene = load_scene(Path(__file__).parents[1] / "examples" / "organs_contact.toml")
     b = scene.builder
-    X, T, body = np.asarray(b.nodes), np.asarray(b.tets), b.bodies()
+    T, body = np.asarray(b.tets), b.bodies()
     model = b.finalize(scene.dtype)
     sim = pl.Simulation(model)
     sim.run(until=scene.duration)
+    kidney = np.unique(T[body == 1])
+    (top,) = [ids for _, ids, _ in model.supports if np.isin(ids, kidney).all()]  # its pushed top
+    free = np.setdiff1d(kidney, top)
+    support = model.internal_forces(sim.state)[top].sum(axis=0)
+    dt, alpha = sim.dt, b.damping
+    du = sim.state.velocities[free] * dt
+    sim.step()
+    du_next = sim.state.velocities[free] * dt
     pair = sim.contact_report().pairs[0]
     assert pair.bodies == (0, 1)  # the liver (the [mesh]) and the kidney (the [[body]])
     on_liver = np.asarray(pair.force)[-1]
-    kidney = np.unique(T[body == 1])
-    top = kidney[X[kidney, 2] >= 0.16]  # the scene's displacement constraint
-    free = np.setdiff1d(kidney, top)
-    support = model.internal_forces(sim.state)[top].sum(axis=0)
-    damping = b.damping * (model.mass[free, None] * sim.state.velocities[free]).sum(axis=0)
+    g1, g2 = 2 * dt**2 / (alpha * dt + 2), 4 / (alpha * dt + 2)
+    motion = (model.mass[free, None] * (du_next - (g2 - 1) * du)).sum(axis=0) / g1
     assert on_liver[2] < -0.05  # the kidney presses down on the liver [N]
-    np.testing.assert_allclose(support, on_liver + damping, atol=0.03 * np.linalg.norm(on_liver))
+    np.testing.assert_allclose(support, on_liver + motion, atol=1e-4 * np.linalg.norm(on_liver))
