@@ -617,3 +617,53 @@ def test_slow_element_warning_matches_the_quality_tool():
     assert f"element {worst} limits" in text and model.dt_critical_element == worst
     assert f"{np.median(dt) / dt[worst]:.0f}x below" in text
     assert f"{dt[worst]:.3g} s" in text
+
+
+def _builder_flag(sim, value):
+    b = pl.ModelBuilder()
+    b.add_mesh(*_two_cubes())
+    b.set_material(pl.NeoHookean(E=1e6, nu=0.3), density=1000)
+    b.nodal_pressure = value
+    return b.finalize()
+
+
+def _scene_flag(tmp_path, **flags):
+    from pliant.runner import run_scene
+    from pliant.scene import load_scene
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        '[mesh]\nprimitive = "box"\n[[material]]\ntype = "neo-hookean"\nE = 1e4\nnu = 0.3\n'
+        "density = 1000.0\n[solver]\nduration = 0.001\n"
+    )
+    return run_scene(load_scene(scene), tmp_path / "out", **flags)
+
+
+def _validation_flag(tmp_path, quick):
+    from pliant.validate import run_validation
+
+    return run_validation(tmp_path / "v", quick=quick)
+
+
+@pytest.mark.parametrize("bad", ["false", np.array([True, False]), None, 2.0])
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda s, b, tmp: pl.Simulation(s.model, allow_unstable=b), "allow_unstable"),
+        (lambda s, b, tmp: s.relax(strict=b), "strict"),
+        (lambda s, b, tmp: pl.haptics.HapticLoop(s, realtime=b), "realtime"),
+        (lambda s, b, tmp: pl.haptics.HapticLoop(s, passivity=b), "passivity"),
+        (lambda s, b, tmp: _builder_flag(s, b), "nodal_pressure"),
+        (lambda s, b, tmp: _scene_flag(tmp, progress=b), "progress"),
+        (lambda s, b, tmp: _scene_flag(tmp, allow_unstable=b), "allow_unstable"),
+        (lambda s, b, tmp: _validation_flag(tmp, b), "quick"),
+    ],
+)
+def test_flags_are_true_or_false(tmp_path, call, name, bad):
+    """A flag given a string, an array, None or 2.0 is named before anything runs: bool() made
+    "false" True (nodal_pressure = "no" switched T4ANP on, strict = "no" kept raising), and an
+    array was numpy's "truth value of an array is ambiguous", naming no argument."""
+    sim, _ = _sim(tool=True)
+    with pytest.raises(pl.InputError, match=rf"{name} = .*expected True or False"):
+        call(sim, bad, tmp_path)
+    assert sim.state.steps == 0 and not (tmp_path / "out").exists() and not (tmp_path / "v").exists()

@@ -183,3 +183,93 @@ def test_a_stray_vertex_is_named_where_it_makes_the_surface_as_good_as_flat():
 
 def re_match(pattern: str, text: str) -> bool:
     return re.search(pattern, text) is not None
+
+
+@pytest.mark.parametrize("bad", ["false", np.array([True, False]), None, 2])
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda b: pl.mesh.check_surface(V, F, self_intersections=b), "self_intersections"),
+        (lambda b: pl.mesh.repair_surface(V, F, fill_holes=b), "fill_holes"),
+        (lambda b: pl.mesh.repair_surface(V, F, keep_largest=b), "keep_largest"),
+        (lambda b: pl.mesh.simplify(V, F, target_faces=100, preserve_boundary=b), "preserve_boundary"),
+        (lambda b: pl.mesh.tetrahedralize(V, F, optimize=b), "optimize"),
+        (lambda b: pl.mesh.tetrahedralize(V, F, cache=b), "cache"),
+        (lambda b: pl.mesh.tetrahedralize(V, F, keep_all=b), "keep_all"),
+        (lambda b: pl.mesh.surface_to_tets(V, F, repair=b), "repair"),
+        (lambda b: pl.mesh.surface_to_tets(V, F, keep_largest=b), "keep_largest"),
+        (lambda b: pl.mesh.surface_to_tets(V, F, fill_shell=b), "fill_shell"),
+    ],
+)
+def test_mesh_flags_are_true_or_false(call, name, bad):
+    """A flag given a string, an array, None or 2 is named: bool() made "false" True (a repair
+    skipped, a cache bypassed the other way round), and an array raised numpy's "truth value of an
+    array is ambiguous", naming no argument."""
+    with pytest.raises(pl.InputError, match=rf"{name} = .*expected True or False"):
+        call(bad)
+
+
+@pytest.mark.parametrize(
+    "call, says",
+    [
+        (
+            lambda: pl.mesh.tetrahedralize(V, F, edge_length="0.004"),
+            r"edge length '0.004'; expected a finite",
+        ),
+        (lambda: pl.mesh.tetrahedralize(V, F, edge_length=True), "edge length True; expected a finite"),
+        (lambda: pl.mesh.tetrahedralize(V, F, edge_length=0.0), "edge length 0.0; expected a finite"),
+        (lambda: pl.mesh.tetrahedralize(V, F, edge_length_fac=2.0), "edge_length_fac = 2.0; expected"),
+        (lambda: pl.mesh.tetrahedralize(V, F, epsilon=np.nan), "epsilon = nan; expected an envelope"),
+        (lambda: pl.mesh.tetrahedralize(V, F, epsilon=1.0), "epsilon = 1.0; expected an envelope"),
+        (lambda: pl.mesh.tetrahedralize(V, F, threads=-1), "threads = -1; expected 0"),
+        (lambda: pl.mesh.tetrahedralize(V, F, threads="all"), "threads = 'all'; expected a whole"),
+        (lambda: pl.mesh.surface_to_tets(V, F, epsilon="x"), "epsilon = 'x'; expected an envelope"),
+        (lambda: pl.mesh.surface_to_tets(V, F, target_faces="x"), "target_faces = 'x'; expected a whole"),
+        (lambda: pl.mesh.surface_to_tets(V, F, target_faces=3), "target_faces = 3; expected >= 4"),
+    ],
+)
+def test_tetrahedralization_arguments_are_named(call, says):
+    """fTetWild's parameters checked before it runs: float("0.004") and float(True) made an edge
+    of a string and of 1 m, and int("all") was Python's ValueError."""
+    with pytest.raises(pl.InputError, match=says):
+        call()
+
+
+@pytest.mark.parametrize("call", ["tetrahedralize", "surface_to_tets"])
+def test_an_edge_longer_than_the_surface_is_refused_by_its_size(call):
+    """A tet edge longer than the surface's bounding-box diagonal (a length in other units than
+    the surface's: 5 for a 2 cm sphere in metres) fits no tet; fTetWild ran for minutes on it
+    (over 2 minutes at 6 diagonals, measured on this 1 cm sphere). Refused at once, naming both."""
+    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
+    with pytest.raises(pl.MeshError, match=rf"edge length 5 m is longer than .* \({diag:.3g} m\)"):
+        getattr(pl.mesh, call)(V, F, edge_length=5.0)
+
+
+def test_ftetwild_is_given_at_most_a_quarter_of_the_diagonal(monkeypatch):
+    """An edge up to the diagonal is meshed, with fTetWild's target capped at EDGE_CAP of the
+    diagonal: beyond that its mesh is no coarser (the envelope keeps the surface's detail; on the
+    sphere here 2,700-3,300 tets from 0.09 to 1.4 diagonals) and its run grows without bound.
+    The default edge of a cube for one tet (1.2 diagonals) is meshed too, at the diagonal."""
+    from pliant.mesh import ftetwild
+    from pliant.mesh.tetra import EDGE_CAP
+
+    given = []
+    real = ftetwild.run
+
+    def spy(V, F, edge_r, *rest):
+        given.append(edge_r)
+        return real(V, F, edge_r, *rest)
+
+    monkeypatch.setattr(ftetwild, "run", spy)
+    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
+    Xs, Ts = pl.mesh.tetrahedralize(V, F, edge_length=0.9 * diag, cache=False)
+    assert given == [EDGE_CAP] and pl.mesh.tet_quality(Xs, Ts)["volume"].min() > 0
+    import trimesh
+
+    cube = trimesh.creation.box(extents=(0.02, 0.02, 0.02))
+    Vc, Fc = np.asarray(cube.vertices), np.asarray(cube.faces)
+    Xc, Tc, info = pl.mesh.surface_to_tets(Vc, Fc, target_tets=1)
+    assert info["edge_length"] == pytest.approx(np.sqrt(3) * 0.02) and given[-1] == EDGE_CAP
+    # Within fTetWild's envelope: faces may move by 2e-3 of the diagonal, 6 √3 · 2e-3 = 2 % of the
+    # volume at most (measured 2e-5).
+    assert pl.mesh.tet_quality(Xc, Tc)["volume"].sum() == pytest.approx(0.02**3, rel=0.02)

@@ -337,3 +337,25 @@ def test_scene_viscoelastic_material(tmp_path):
     bad = text.replace("[[0.3, 0.1]]", "[[0.9, 0.1], [0.3, 1.0]]")
     with pytest.raises(SceneError, match="sum"):
         load_scene(_write(tmp_path, bad, "b.toml"))
+
+
+@pytest.mark.parametrize("mesh", ['file = "{shared}"', 'primitive = "sphere"\nradius = 0.01'])
+def test_an_edge_longer_than_the_body_exits_2_naming_the_key(tmp_path, mesh):
+    """edge_length = 5 for a body a few centimetres across (a length in millimetres or
+    centimetres): refused at once naming mesh.edge_length and the body's size, where fTetWild ran
+    for minutes (a 1 cm sphere: over 2 minutes at an edge of 6 diagonals)."""
+    from pathlib import Path
+
+    bunny = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "stanford-bunny.obj"
+    text = f"""[mesh]
+{mesh.format(shared=bunny)}
+edge_length = 5.0
+
+[[material]]
+type = "neo-hookean"
+E = 1e4
+nu = 0.3
+density = 1000.0
+"""
+    r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2 and "mesh.edge_length" in r.output and "bounding-box diagonal" in r.output

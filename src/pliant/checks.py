@@ -82,6 +82,19 @@ def whole_number(value, what: str, of: str = "") -> int:
     return int(value)
 
 
+def flag(value, what: str) -> bool:
+    """``value`` as a bool where it is one (a Python or numpy bool, or the integers 0 and 1);
+    InputError naming ``what`` otherwise: bool() made the string "false" True, and an array raised
+    numpy's "truth value of an array is ambiguous" naming no argument."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)) and value in (0, 1):
+        return bool(value)
+    raise InputError(f"{what} = {shown(value)}; expected True or False")
+
+
 def mesh_arrays(
     nodes, cells, corners: int, who: str, cell: str = "element", empty: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:

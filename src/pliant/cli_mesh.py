@@ -193,6 +193,8 @@ def tetrahedralize_cmd(
         err.print(f"warning: {hint} (--edge-length and the output are in the file's units)")
     if max_volume is not None:
         edge_length = (6 * np.sqrt(2) * max_volume) ** (1 / 3)  # regular tet of that volume
+        # An upper bound: one larger than the surface asks for its coarsest mesh.
+        edge_length = min(edge_length, float(np.linalg.norm(np.ptp(V, axis=0))))
     X, T, info = surface_to_tets(
         V,
         F,

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .checks import as_real, finite_number, finite_vector, shown
+from .checks import as_real, finite_number, finite_vector, flag, shown
 from .tled import Simulation
 
 __all__ = ["HapticLoop", "VirtualDevice", "DeviceLog"]
@@ -67,7 +67,7 @@ class HapticLoop:
         if not period > 0:
             raise InputError(f"update_period = {shown(update_period)}; expected > 0 [s]")
         self.steps_per_update = max(1, round(period / sim.dt))
-        self.realtime, self.passivity = bool(realtime), bool(passivity)
+        self.realtime, self.passivity = flag(realtime, "realtime"), flag(passivity, "passivity")
         self.max_force = as_real(max_force)  # inf (no limit) allowed; NaN for what is no number
         if not self.max_force > 0:
             raise InputError(f"max_force = {shown(max_force)}; expected a force > 0 [N] (inf: no limit)")

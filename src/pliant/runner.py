@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
+from .checks import flag
 from .errors import ConvergenceError, InputError, InstabilityError, PliantWarning
 from .io import ResultWriter, atomic_write_text, check_output_dir
 from .io.results import INDEX, SURFACE_INDEX, is_frame_file
@@ -252,6 +253,7 @@ def run_scene(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     # checked first, created only once the model is valid
+    progress, allow_unstable = flag(progress, "progress"), flag(allow_unstable, "allow_unstable")
     out = None if out_dir is None else check_output_dir(out_dir)
     t_build = time.perf_counter()
     with warnings.catch_warnings(record=True) as held:  # a refused build prints its error alone

@@ -8,11 +8,11 @@ import time
 
 import numpy as np
 
-from ..checks import mesh_arrays, whole_number
+from ..checks import flag, mesh_arrays, whole_number
 from ..errors import MeshError
 from .primitives import tet_volumes, unit_scale
 from .repair import repair_surface, require_volume, simplify
-from .tetra import MAX_TETS, tetrahedralize
+from .tetra import MAX_TETS, edge, envelope, tetrahedralize
 
 BODIES = ("union", "separate", "largest", "one")
 MIN_FACES = 2000  # the simplified surface keeps at least this many faces, to hold its shape
@@ -87,11 +87,18 @@ def surface_to_tets(
     repairs the surface whatever ``repair`` says."""
     if not isinstance(bodies, str) or bodies not in BODIES:
         raise MeshError(f"bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
-    if keep_largest:
+    repair = flag(repair, "surface_to_tets: repair")
+    fill_shell = flag(fill_shell, "surface_to_tets: fill_shell")
+    if flag(keep_largest, "surface_to_tets: keep_largest"):
         bodies = "largest"
     if not 1 <= whole_number(target_tets, "target_tets") <= MAX_TETS:
         raise MeshError(f"target_tets = {target_tets}; expected 1 to {MAX_TETS:.0e}")
+    if target_faces is not None and whole_number(target_faces, "surface_to_tets: target_faces") < 4:
+        raise MeshError(f"surface_to_tets: target_faces = {target_faces}; expected >= 4")
+    epsilon = None if epsilon is None else envelope(epsilon, "surface_to_tets")
     V, F = mesh_arrays(V, F, 3, "surface_to_tets", cell="face")
+    if edge_length is not None:  # against the whole surface's size (bodies="separate" meshes parts)
+        edge_length = edge(edge_length, _diagonal(V), "surface_to_tets")
     info: dict = {
         "input_vertices": int(len(V)),
         "input_faces": int(len(F)),
@@ -117,9 +124,10 @@ def surface_to_tets(
     info["bodies"] = len(parts)
     if bodies == "separate" and len(parts) > 1:
         return _separate(parts, edge_length, target_tets, epsilon, info, log)
-    el = float(edge_length) if edge_length else default_edge_length(V, F, target_tets)
-    if not el > 0:
-        raise MeshError(f"edge length {el!r}: expected > 0 [m]")
+    # A default edge can exceed the diagonal (target_tets = 1 on a cube: 1.2 diagonals), and a given
+    # one the repaired or simplified surface's: tetrahedralize would refuse what it is given.
+    el = edge_length if edge_length is not None else default_edge_length(V, F, target_tets)
+    el = min(el, _diagonal(V))
     info["edge_length"] = el
     t = time.perf_counter()
     if target_faces is None:
@@ -147,7 +155,7 @@ def surface_to_tets(
         eps = wall_envelope(eps, 2.0 * ref_vol / area, float(np.linalg.norm(np.ptp(V, axis=0))))
     tries = []  # (envelope, volume ratio) of each fTetWild run
     for attempt in range(2):
-        X, T = tetrahedralize(V, F, edge_length=el, epsilon=eps, keep_all=pieces > 1)
+        X, T = tetrahedralize(V, F, edge_length=min(el, _diagonal(V)), epsilon=eps, keep_all=pieces > 1)
         vol = float(tet_volumes(X, T).sum())
         ratio = vol / ref_vol if ref_vol else 1.0
         info["volume_ratio"] = ratio
@@ -255,8 +263,9 @@ def count_note(tets: int, volume: float, area: float, faces: int, el: float, tri
         )
     if not why:
         why.append("fTetWild refined the surface to follow it within the envelope (a larger one makes fewer)")
+    few = f"{regular:,.0f}" if regular >= 10 else f"{regular:.2g}"  # an edge near the body's size: 0.4
     return (
-        f"{tets:,} tets, {tets / regular:.0f} times the {regular:,.0f} regular tets of edge {el:.3g} m "
+        f"{tets:,} tets, {tets / regular:,.0f} times the {few} regular tets of edge {el:.3g} m "
         "that fill the volume (usually 1.5–4 times): " + "; ".join(why)
     )
 
@@ -278,18 +287,23 @@ def _bodies(V: np.ndarray, F: np.ndarray) -> tuple[list, list[float], int]:
     return bodies, filled_volumes(pieces, parent), len(pieces)
 
 
+def _diagonal(V: np.ndarray) -> float:
+    """The bounding-box diagonal [m] of points V (n, 3)."""
+    return float(np.linalg.norm(np.ptp(V, axis=0)))
+
+
 def _separate(parts, edge_length, target_tets, epsilon, info, log):
     """Each body tetrahedralized on its own (one edge length for all), concatenated."""
     V = np.concatenate([p.vertices for p in parts])
     offs = np.cumsum([0] + [len(p.vertices) for p in parts])
     F = np.concatenate([np.asarray(p.faces) + o for p, o in zip(parts, offs)])
-    el = float(edge_length) if edge_length else default_edge_length(V, F, target_tets)
+    el = edge_length if edge_length is not None else default_edge_length(V, F, target_tets)
     Xs, Ts, n = [], [], 0
     for p in parts:
         X, T, one = surface_to_tets(
             np.asarray(p.vertices),
             np.asarray(p.faces),
-            edge_length=el,
+            edge_length=min(el, _diagonal(np.asarray(p.vertices))),  # a small body: its own size
             epsilon=epsilon,
             repair=False,
             bodies="one",

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..checks import as_real, mesh_arrays, whole_number
+from ..checks import as_real, flag, mesh_arrays, whole_number
 from ..errors import MeshError
 from .topology import unique_rows
 
@@ -106,6 +106,7 @@ def check_surface(V: np.ndarray, F: np.ndarray, self_intersections: bool = True)
     import trimesh
 
     V, F = mesh_arrays(V, F, 3, "check_surface", cell="face")
+    self_intersections = flag(self_intersections, "check_surface: self_intersections")
     m = trimesh.Trimesh(V, F, process=False, validate=False)
     uniq, count = edge_counts(F)
     boundary = int((count == 1).sum())
@@ -356,7 +357,8 @@ def repair_surface(
     still not closed (e.g. non-manifold edges) or encloses no volume."""
     import trimesh
 
-    if keep_largest:
+    fill_holes = flag(fill_holes, "repair_surface: fill_holes")
+    if flag(keep_largest, "repair_surface: keep_largest"):
         bodies = "largest"
     if not isinstance(bodies, str) or bodies not in BODIES:
         raise MeshError(f"repair: bodies = {bodies!r}; expected one of {', '.join(BODIES)}")
@@ -611,6 +613,7 @@ def simplify(
     if (target_faces is None) == (ratio is None):
         raise MeshError("simplify: give exactly one of target_faces or ratio")
     V, F = mesh_arrays(V, F, 3, "simplify", cell="face")
+    preserve_boundary = flag(preserve_boundary, "simplify: preserve_boundary")
     if ratio is not None:
         if not 0 < as_real(ratio) <= 1:
             raise MeshError(f"simplify: ratio = {ratio!r}; expected 0 < ratio <= 1")

@@ -134,6 +134,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                         f"envelope = {env}; expected 0 < envelope < "
                         "0.1 (a fraction of the bounding-box diagonal)",
                     )
+                _edge_fits(ctx, key, el, V * scale)
                 X, T, info = pm.surface_to_tets(
                     V * scale,
                     F,
@@ -189,6 +190,7 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                     segments=spec.get("segments", 48),
                     minor_segments=spec.get("minor_segments", 24),
                 )
+            _edge_fits(ctx, key, el, V)
             X, T, info = pm.surface_to_tets(V, F, edge_length=el, target_tets=spec.get("target_tets", 10000))
             scene.meta["mesh_pipeline"] = info
             scene.warnings += [f"primitive {kind}: {note}" for note in info["warnings"]]
@@ -209,6 +211,18 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
 
 # Keys that only a surface file's tetrahedralization reads.
 SURFACE_KEYS = ("bodies", "envelope", "fill_shell")
+
+
+def _edge_fits(ctx: Ctx, key: str, el, V: np.ndarray) -> None:
+    """A tet edge ``el`` [m] (or None) at most the surface's bounding-box diagonal (surface_to_tets
+    refuses a longer one, naming no key)."""
+    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
+    if el is not None and el > diag:
+        raise ctx.error(
+            f"{key}.edge_length",
+            f"edge_length = {el:g} m is longer than the surface's bounding-box diagonal ({diag:.3g} m): "
+            f"no tet of that edge fits in it; expected at most {diag:.3g} m",
+        )
 
 
 def _surface_keys_only(ctx, key: str, spec: dict, surface: bool) -> None:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..checks import flag
 from .case import SceneCase
 from .design import design_runs
 from .execute import execute, records_table
@@ -65,6 +66,8 @@ def run_sweep(
 ) -> SweepResult:
     """Run (or resume) the sweep ``spec`` into ``out``: OUT/results.parquet, OUT/runs/, with
     fields OUT/dataset.h5, with ``analyze`` OUT/sensitivity.csv and .png."""
+    retry_failed, analyze = flag(retry_failed, "retry_failed"), flag(analyze, "analyze")
+    progress = flag(progress, "progress")
     runs = design_runs(spec.parameters, spec.design)
     failed = 0
     with _progress_bar(progress) as bar:

@@ -24,7 +24,7 @@ import dataclasses
 
 import numpy as np
 
-from ..checks import shown
+from ..checks import flag, shown
 from ..errors import InputError
 from .builder import ModelBuilder
 from .anp import anp_stabilization
@@ -61,7 +61,7 @@ def _check_shared(builders: list[ModelBuilder]) -> None:
         "damping": lambda b: float(b.damping),
         "stiffness_damping": lambda b: float(b.stiffness_damping),
         "nodal_pressure (T4ANP)": lambda b: (
-            bool(b.nodal_pressure),
+            flag(b.nodal_pressure, "nodal_pressure"),
             anp_stabilization(b.nodal_pressure_stabilization),
         ),
         "strain smoothing": lambda b: strain_smoothing(b.strain_smoothing),

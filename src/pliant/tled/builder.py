@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _core
-from ..checks import as_real, described, mesh_arrays, real_array, shown, whole_number
+from ..checks import as_real, described, flag, mesh_arrays, real_array, shown, whole_number
 from ..errors import (
     DegenerateElementError,
     InputError,
@@ -596,6 +596,7 @@ class ModelBuilder:
         a = as_real(self.damping)
         if not math.isfinite(a) or a < 0:
             raise InputError(f"damping = {shown(self.damping)}; expected a finite value >= 0 [1/s]")
+        flag(self.nodal_pressure, "nodal_pressure")  # bool("no") was True
         anp_stabilization(self.nodal_pressure_stabilization)  # InputError names a wrong value
         beta = as_real(self.stiffness_damping)
         if not math.isfinite(beta) or beta < 0:

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import _core
 from .._core import RunStatus
-from ..checks import as_real, finite_number, shown, whole_number
+from ..checks import as_real, finite_number, flag, shown, whole_number
 from ..errors import ConvergenceError, InputError, InstabilityError, TimeStepError
 from .anp import anp_stabilization
 from .geometry import sudden_displacement
@@ -152,7 +152,8 @@ class Solver:
         given, dt = dt, default_step(model, float(safety)) if dt is None else as_real(dt)
         if not math.isfinite(dt) or dt <= 0:
             raise TimeStepError(f"dt = {shown(given)}; expected a finite time step > 0 [s]")
-        self._limit = model.dt_critical if allow_unstable else _stable_limit(model, dt)
+        unstable = flag(allow_unstable, "allow_unstable")
+        self._limit = model.dt_critical if unstable else _stable_limit(model, dt)
         self.dt = dt
         self.damping = model.damping if damping is None else as_real(damping)
         if not math.isfinite(self.damping) or self.damping < 0:
@@ -490,6 +491,7 @@ class Solver:
         out-of-balance force falls below ``tol``; raises :class:`ConvergenceError` if the last one
         does not within ``max_steps`` (unless ``strict=False``)."""
         self._same_model(state)
+        strict = flag(strict, "strict")
         t_end = self.model.last_load_time if at_time is None else finite_number(at_time, "at_time", "s")
         if not as_real(tol) > 0:
             raise InputError(f"tol = {shown(tol)}; expected a relative residual > 0")

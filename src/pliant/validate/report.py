@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Callable
 
 from .. import __version__, _core
+from ..checks import flag
 from ..io.files import atomic_write, atomic_write_text, make_output_dir
 from .cases import CASES, Check
 from .niftysim_cross import find_niftysim, run_cross_checks
@@ -25,6 +26,7 @@ def run_validation(
     report; ``niftysim``: a NiftySim executable that runs the cross-check models afresh (else its
     stored results are used). Returns the rows; the caller decides the exit code (1 when one
     failed)."""
+    quick = flag(quick, "quick")
     if niftysim is not None:
         niftysim = find_niftysim(niftysim)  # before the other cases run
     out = make_output_dir(out)
