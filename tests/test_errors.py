@@ -645,6 +645,15 @@ def _validation_flag(tmp_path, quick):
     return run_validation(tmp_path / "v", quick=quick)
 
 
+def _sweep_flag(tmp_path, **flags):
+    from pathlib import Path
+
+    from pliant.sweep import load_sweep, run_sweep
+
+    spec = load_sweep(Path(__file__).parents[1] / "examples" / "cantilever_sweep.toml")
+    return run_sweep(spec, tmp_path / "out", **flags)
+
+
 @pytest.mark.parametrize("bad", ["false", np.array([True, False]), None, 2.0])
 @pytest.mark.parametrize(
     "call, name",
@@ -657,6 +666,9 @@ def _validation_flag(tmp_path, quick):
         (lambda s, b, tmp: _scene_flag(tmp, progress=b), "progress"),
         (lambda s, b, tmp: _scene_flag(tmp, allow_unstable=b), "allow_unstable"),
         (lambda s, b, tmp: _validation_flag(tmp, b), "quick"),
+        (lambda s, b, tmp: _sweep_flag(tmp, retry_failed=b), "retry_failed"),
+        (lambda s, b, tmp: _sweep_flag(tmp, analyze=b), "analyze"),
+        (lambda s, b, tmp: _sweep_flag(tmp, progress=b), "progress"),
     ],
 )
 def test_flags_are_true_or_false(tmp_path, call, name, bad):

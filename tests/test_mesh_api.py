@@ -273,3 +273,23 @@ def test_ftetwild_is_given_at_most_a_quarter_of_the_diagonal(monkeypatch):
     # Within fTetWild's envelope: faces may move by 2e-3 of the diagonal, 6 √3 · 2e-3 = 2 % of the
     # volume at most (measured 2e-5).
     assert pl.mesh.tet_quality(Xc, Tc)["volume"].sum() == pytest.approx(0.02**3, rel=0.02)
+
+
+def test_a_max_volume_beyond_the_surface_meshes_it_coarsest(tmp_path):
+    """`pliant mesh tetrahedralize --max-volume` is an upper bound: one larger than the surface
+    (10 m³ for a 1 cm sphere) meshes it as coarsely as its diagonal allows, where its edge was
+    refused as longer than the surface."""
+    from typer.testing import CliRunner
+
+    from pliant.cli import app
+
+    surface = tmp_path / "sphere.stl"
+    import trimesh
+
+    trimesh.Trimesh(V, F).export(surface)
+    r = CliRunner().invoke(
+        app, ["mesh", "tetrahedralize", str(surface), str(tmp_path / "o.vtu"), "--max-volume", "10"]
+    )
+    assert r.exit_code == 0, r.output
+    Xo, To = pl.io.read_volume_mesh(tmp_path / "o.vtu")[:2]
+    assert pl.mesh.tet_quality(Xo, To)["volume"].min() > 0
