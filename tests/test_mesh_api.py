@@ -221,6 +221,9 @@ def test_mesh_flags_are_true_or_false(call, name, bad):
         (lambda: pl.mesh.tetrahedralize(V, F, edge_length_fac=2.0), "edge_length_fac = 2.0; expected"),
         (lambda: pl.mesh.tetrahedralize(V, F, epsilon=np.nan), "epsilon = nan; expected an envelope"),
         (lambda: pl.mesh.tetrahedralize(V, F, epsilon=1.0), "epsilon = 1.0; expected an envelope"),
+        # fTetWild ran for over 100 s at 1e-5 on this sphere, and aborted at 0.1.
+        (lambda: pl.mesh.tetrahedralize(V, F, epsilon=1e-5), "epsilon = 1e-05; expected .* from 5e-05"),
+        (lambda: pl.mesh.surface_to_tets(V, F, epsilon=0.1), "epsilon = 0.1; expected .* to 0.05"),
         (lambda: pl.mesh.tetrahedralize(V, F, threads=-1), "threads = -1; expected 0"),
         (lambda: pl.mesh.tetrahedralize(V, F, threads="all"), "threads = 'all'; expected a whole"),
         (lambda: pl.mesh.surface_to_tets(V, F, epsilon="x"), "epsilon = 'x'; expected an envelope"),

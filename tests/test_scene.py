@@ -1,5 +1,6 @@
 """Scene files: validation errors name file, key and line; scenes drive the engine correctly."""
 
+from pathlib import Path
 import json
 import textwrap
 
@@ -344,8 +345,6 @@ def test_an_edge_longer_than_the_body_exits_2_naming_the_key(tmp_path, mesh):
     """edge_length = 5 for a body a few centimetres across (a length in millimetres or
     centimetres): refused at once naming mesh.edge_length and the body's size, where fTetWild ran
     for minutes (a 1 cm sphere: over 2 minutes at an edge of 6 diagonals)."""
-    from pathlib import Path
-
     bunny = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "stanford-bunny.obj"
     text = f"""[mesh]
 {mesh.format(shared=bunny)}
@@ -359,3 +358,21 @@ density = 1000.0
 """
     r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
     assert r.exit_code == 2 and "mesh.edge_length" in r.output and "bounding-box diagonal" in r.output
+
+
+@pytest.mark.parametrize("envelope", [1e-6, 0.08])
+def test_an_envelope_fTetWild_cannot_use_exits_2_naming_the_key(tmp_path, envelope):
+    """envelope = 1e-6 ran fTetWild for what looked like ever (over 100 s at 1e-5 on a 642-vertex
+    sphere), 0.1 made it abort; the bounds are named with the key."""
+    text = f"""[mesh]
+file = "{Path(__file__).resolve().parents[2] / "shared" / "meshes" / "stanford-bunny.obj"}"
+envelope = {envelope}
+
+[[material]]
+type = "neo-hookean"
+E = 1e4
+nu = 0.3
+density = 1000.0
+"""
+    r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2 and "mesh.envelope" in r.output and "expected 5e-05 to 0.05" in r.output

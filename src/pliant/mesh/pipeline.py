@@ -12,7 +12,7 @@ from ..checks import flag, mesh_arrays, whole_number
 from ..errors import MeshError
 from .primitives import tet_volumes, unit_scale
 from .repair import repair_surface, require_volume, simplify
-from .tetra import MAX_TETS, edge, envelope, tetrahedralize
+from .tetra import MAX_TETS, MIN_ENVELOPE, edge, envelope, tetrahedralize
 
 BODIES = ("union", "separate", "largest", "one")
 MIN_FACES = 2000  # the simplified surface keeps at least this many faces, to hold its shape
@@ -162,7 +162,7 @@ def surface_to_tets(
         tries.append((eps, ratio))
         if ref_vol is None or low is None or 0.9 * low <= vol <= 1.1 * ref_vol:
             break
-        if attempt == 1:
+        if attempt == 1 or eps / 2 < MIN_ENVELOPE:
             raise MeshError(
                 f"tetrahedralize: the tets fill {100 * ratio:.0f} % of the surface's "
                 f"volume (envelope {eps:g}); repair the surface or give a smaller "

@@ -29,6 +29,11 @@ MAX_TETS = 2e7  # beyond this fTetWild runs for hours and exhausts a workstation
 # 2,700-3,300 tets for any edge from 0.09 to 1.4 diagonals) while fTetWild's run grows without bound
 # (that sphere: 1.5 s at 0.3 diagonals, 8 s at 0.9, 25 s at 1.4, over 2 minutes at 6).
 EDGE_CAP = 0.25
+# fTetWild's envelope (relative to the diagonal) from MIN_ENVELOPE to MAX_ENVELOPE. Its run grows
+# steeply as the envelope shrinks (a 642-vertex sphere at the default edge: 6.7 s at 1e-4, 24 s at
+# 5e-5, 67 s at 3e-5, over 100 s at 1e-5), and it aborted (SIGABRT) at 0.1 and 0.2. The pipeline's
+# smallest own envelope is 2e-3 / 32 (surface_to_tets: wall_envelope, then the volume check's retry).
+MIN_ENVELOPE, MAX_ENVELOPE = 5e-5, 0.05
 
 
 def largest_component(tets: np.ndarray, keep_all: bool = False, island: float = 0.01) -> np.ndarray:
@@ -73,12 +78,13 @@ def edge(value, diag: float, who: str) -> float:
 
 
 def envelope(value, who: str) -> float:
-    """fTetWild's envelope, relative to the bounding-box diagonal: 0 < epsilon < 1."""
+    """fTetWild's envelope, relative to the bounding-box diagonal: MIN_ENVELOPE to MAX_ENVELOPE."""
     eps = as_real(value)
-    if not 0 < eps < 1:
+    if not MIN_ENVELOPE <= eps <= MAX_ENVELOPE:
         raise MeshError(
             f"{who}: epsilon = {shown(value)}; expected an envelope relative to the bounding-box "
-            "diagonal, 0 < epsilon < 1 (default 1e-3)"
+            f"diagonal from {MIN_ENVELOPE:g} to {MAX_ENVELOPE:g} (a smaller one runs fTetWild for "
+            "minutes, a larger one makes it abort)"
         )
     return eps
 

@@ -12,6 +12,7 @@ import numpy as np
 from ..errors import MeshError
 from ..io.files import file_problem
 from ..mesh.surface import SURFACE_SUFFIXES, metres_hint
+from ..mesh.tetra import MAX_ENVELOPE, MIN_ENVELOPE
 from .schema import Ctx, check_keys, vector
 
 if TYPE_CHECKING:
@@ -128,11 +129,12 @@ def load_mesh(ctx: Ctx, spec: dict, base: Path, scene: Scene, key: str = "mesh")
                         f"{key}.bodies", f"bodies = {spec['bodies']!r}; expected one of {', '.join(BODIES)}"
                     )
                 env = spec.get("envelope")
-                if env is not None and not 0 < env < 0.1:
+                if env is not None and not MIN_ENVELOPE <= env <= MAX_ENVELOPE:
                     raise ctx.error(
                         f"{key}.envelope",
-                        f"envelope = {env}; expected 0 < envelope < "
-                        "0.1 (a fraction of the bounding-box diagonal)",
+                        f"envelope = {env}; expected {MIN_ENVELOPE:g} to {MAX_ENVELOPE:g} (a fraction of "
+                        "the bounding-box diagonal: a smaller one runs fTetWild for minutes, a larger "
+                        "one makes it abort)",
                     )
                 _edge_fits(ctx, key, el, V * scale)
                 X, T, info = pm.surface_to_tets(
