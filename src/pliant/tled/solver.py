@@ -39,6 +39,21 @@ def _check_every(steps) -> int:
     return int(steps)
 
 
+def _in_relaxation(e: InstabilityError, increments: int, contact: bool) -> InstabilityError:
+    """An instability of a relaxation, its message told what a quasi-static solve can do: each
+    increment moves the prescribed displacements and loads (and the tools) by its share at once,
+    so a large share inverts elements, or pushes nodes through a body they press on (a node more
+    than a quarter of an element inside in one step is lost: docs/contact.md), whatever Δt."""
+    lost = " (and a node pushed deeper than a quarter of an element into another body is lost)"
+    words = (
+        f"; in a quasi-static solve each of the {increments} increment(s) applies its share of the "
+        "prescribed displacements, loads and tool motion at once"
+        + (lost if contact else "")
+        + ": give more increments (relax(increments=N), a scene's solver.increments)"
+    )
+    return InstabilityError(str(e) + words, e.time, e.quantity, e.value, e.element, e.node)
+
+
 def _step_count(steps, what: str = "steps") -> int:
     """A step count: an integer (not a bool, not a float with a fraction) from 0 to MAX_STEPS."""
     whole_number(steps, what, " of steps")
@@ -512,7 +527,10 @@ class Solver:
             self._stepped_dt = None
             steps += int(rep["steps"])
             if rep["status"]:
-                self._raise(rep)
+                try:
+                    self._raise(rep)
+                except InstabilityError as e:
+                    raise _in_relaxation(e, int(increments), bool(self.model.contact_pairs)) from None
         info = RelaxInfo(steps, float(rep["residual"]), rep["residual"] < tol, float(rep["damping"]))
         if self.model.tools:  # the equilibrium contact forces
             h = np.asarray(self._backend.tool_history())[0]
