@@ -340,39 +340,30 @@ def test_scene_viscoelastic_material(tmp_path):
         load_scene(_write(tmp_path, bad, "b.toml"))
 
 
-@pytest.mark.parametrize("mesh", ['file = "{shared}"', 'primitive = "sphere"\nradius = 0.01'])
+BUNNY = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "stanford-bunny.obj"
+
+
+def _mesh_scene_refused(tmp_path, mesh: str) -> str:
+    """`pliant run` of a scene with this [mesh] table (lines) and a Neo-Hookean material: exit
+    code 2; its output."""
+    text = f'[mesh]\n{mesh}\n[[material]]\ntype = "neo-hookean"\nE = 1e4\nnu = 0.3\ndensity = 1000.0\n'
+    r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2, r.output
+    return r.output
+
+
+@pytest.mark.parametrize("mesh", [f'file = "{BUNNY}"', 'primitive = "sphere"\nradius = 0.01'])
 def test_an_edge_longer_than_the_body_exits_2_naming_the_key(tmp_path, mesh):
     """edge_length = 5 for a body a few centimetres across (a length in millimetres or
     centimetres): refused at once naming mesh.edge_length and the body's size, where fTetWild ran
     for minutes (a 1 cm sphere: over 2 minutes at an edge of 6 diagonals)."""
-    bunny = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "stanford-bunny.obj"
-    text = f"""[mesh]
-{mesh.format(shared=bunny)}
-edge_length = 5.0
-
-[[material]]
-type = "neo-hookean"
-E = 1e4
-nu = 0.3
-density = 1000.0
-"""
-    r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
-    assert r.exit_code == 2 and "mesh.edge_length" in r.output and "bounding-box diagonal" in r.output
+    out = _mesh_scene_refused(tmp_path, mesh + "\nedge_length = 5.0")
+    assert "mesh.edge_length" in out and "bounding-box diagonal" in out
 
 
 @pytest.mark.parametrize("envelope", [1e-6, 0.08])
 def test_an_envelope_fTetWild_cannot_use_exits_2_naming_the_key(tmp_path, envelope):
     """envelope = 1e-6 ran fTetWild for what looked like ever (over 100 s at 1e-5 on a 642-vertex
     sphere), 0.1 made it abort; the bounds are named with the key."""
-    text = f"""[mesh]
-file = "{Path(__file__).resolve().parents[2] / "shared" / "meshes" / "stanford-bunny.obj"}"
-envelope = {envelope}
-
-[[material]]
-type = "neo-hookean"
-E = 1e4
-nu = 0.3
-density = 1000.0
-"""
-    r = runner.invoke(app, ["run", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")])
-    assert r.exit_code == 2 and "mesh.envelope" in r.output and "expected 5e-05 to 0.05" in r.output
+    out = _mesh_scene_refused(tmp_path, f'file = "{BUNNY}"\nenvelope = {envelope}')
+    assert "mesh.envelope" in out and "expected 5e-05 to 0.05" in out
