@@ -295,6 +295,8 @@ def test_bad_soft_contact_settings_name_themselves():
         b.set_soft_contact(pairs=[(0, 1.7)])
     with pytest.raises(InputError, match="self_contact = \\[True\\]"):
         b.set_soft_contact(self_contact=[True])
+    b.set_soft_contact(self_contact=np.bool_(True))  # numpy's True (a mask's entry) was refused
+    assert b.soft_contact.self_contact is True
     b.set_soft_contact(pairs=[(0, 5)])
     with pytest.raises(InputError, match="body 5 does not exist.*2 bodies"):
         b.finalize()

@@ -96,6 +96,8 @@ class SoftContact:
                 raise InputError(
                     f"soft contact pairs = {shown(pairs)}; expected pairs of body numbers [(a, b), ...]"
                 ) from None
+        if isinstance(self_contact, np.bool_):
+            self_contact = bool(self_contact)
         if not isinstance(self_contact, bool):
             try:
                 self_contact = tuple(as_index(b) for b in self_contact)
