@@ -152,7 +152,7 @@ def surface_to_tets(
     low = max(filled) if ref_vol else None
     eps = 2e-3 if epsilon is None else float(epsilon)
     if epsilon is None and ref_vol:
-        eps = wall_envelope(eps, 2.0 * ref_vol / area, float(np.linalg.norm(np.ptp(V, axis=0))))
+        eps = wall_envelope(eps, 2.0 * ref_vol / area, _diagonal(V))
     tries = []  # (envelope, volume ratio) of each fTetWild run
     for attempt in range(2):
         X, T = tetrahedralize(V, F, edge_length=min(el, _diagonal(V)), epsilon=eps, keep_all=pieces > 1)

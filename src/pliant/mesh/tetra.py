@@ -64,13 +64,14 @@ def largest_component(tets: np.ndarray, keep_all: bool = False, island: float = 
 
 def edge(value, diag: float, who: str) -> float:
     """A tet edge length [m] given by the user: a finite number > 0, at most the surface's
-    bounding-box diagonal ``diag`` [m]; MeshError naming ``who`` otherwise."""
-    el = as_real(value)
+    bounding-box diagonal ``diag`` [m]; MeshError naming ``who`` otherwise (none where "": a scene
+    names its key)."""
+    el, who = as_real(value), f"{who}: " if who else ""
     if not (math.isfinite(el) and el > 0):
-        raise MeshError(f"{who}: edge length {shown(value)}; expected a finite length > 0 [m]")
+        raise MeshError(f"{who}edge length {shown(value)}; expected a finite length > 0 [m]")
     if el > diag:
         raise MeshError(
-            f"{who}: edge length {el:.3g} m is longer than the surface's bounding-box diagonal "
+            f"{who}edge length {el:.3g} m is longer than the surface's bounding-box diagonal "
             f"({diag:.3g} m): no tet of that edge fits in it; expected at most {diag:.3g} m "
             "(a length in other units than the surface's?)"
         )

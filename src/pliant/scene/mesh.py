@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import MeshError
 from ..io.files import file_problem
 from ..mesh.surface import SURFACE_SUFFIXES, metres_hint
-from ..mesh.tetra import MAX_ENVELOPE, MIN_ENVELOPE
+from ..mesh.tetra import MAX_ENVELOPE, MIN_ENVELOPE, edge
 from .schema import Ctx, check_keys, vector
 
 if TYPE_CHECKING:
@@ -216,15 +216,14 @@ SURFACE_KEYS = ("bodies", "envelope", "fill_shell")
 
 
 def _edge_fits(ctx: Ctx, key: str, el, V: np.ndarray) -> None:
-    """A tet edge ``el`` [m] (or None) at most the surface's bounding-box diagonal (surface_to_tets
-    refuses a longer one, naming no key)."""
-    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
-    if el is not None and el > diag:
-        raise ctx.error(
-            f"{key}.edge_length",
-            f"edge_length = {el:g} m is longer than the surface's bounding-box diagonal ({diag:.3g} m): "
-            f"no tet of that edge fits in it; expected at most {diag:.3g} m",
-        )
+    """A tet edge ``el`` [m] (or None) at most the surface's bounding-box diagonal: tetra.edge's
+    check, its refusal named by the key (surface_to_tets names none)."""
+    if el is None:
+        return
+    try:
+        edge(el, float(np.linalg.norm(np.ptp(V, axis=0))), "")
+    except MeshError as e:
+        raise ctx.error(f"{key}.edge_length", str(e)) from None
 
 
 def _surface_keys_only(ctx, key: str, spec: dict, surface: bool) -> None:
