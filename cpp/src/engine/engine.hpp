@@ -39,6 +39,8 @@ struct Scalars {
     long row;   // tool-history row of the current step
     Integrator<T> it;
     double alpha;            // relax: adaptive damping [1/s]
+    double rq_now, rq_last;  // relax: the smallest Rayleigh quotient [1/s²] of this window and the last
+    long rq_steps;           // relax: steps into this window (kRelaxWindow)
     double residual;         // relax: relative out-of-balance force at the last measure
     int bad_slot, bad_node;  // check: smallest offending element slot / node (INT_MAX: none)
     int status;              // check verdict (RunStatus)
@@ -146,6 +148,13 @@ inline index_t chunk_size(index_t n) {
 inline index_t chunk_count(index_t n) { return (n + chunk_size(n) - 1) / chunk_size(n); }
 /// Nodes per chunk of the relaxation's residual sums (fixed: the same bits for any thread count).
 constexpr index_t kMeasureChunk = 1024;
+/// Relaxation: steps per window of the damping's eigenvalue estimate (relax_measure takes the
+/// smallest Rayleigh quotient of this window and the last). The fictitious masses give every
+/// element the same critical step, so a step count spans a fixed number of the highest modes'
+/// periods (about 100 here): enough to see past the jitter that contact's corrections add to one
+/// step's quotient, short enough to follow a structure that stiffens as it deforms. Measured
+/// (docs/engine.md): 300 relaxes the examples in as few steps as any of 100-1,000 or fewer.
+constexpr long kRelaxWindow = 300;
 /// Steps per replayed launch sequence (a CUDA graph) between two checks: a multiple of 6, the
 /// period of the buffer rotation (3) and of relax's force-buffer toggle (2), so that one captured
 /// graph serves every unit of a run. Longer runs between checks launch it repeatedly instead of
@@ -208,7 +217,8 @@ public:
     void scan(index_t n, const int* flag, const Count& count, const Total& total, const Emit& emit);
     Scalars<T> check(const T* u_new, const T* u_old, double t_elem, double t_node, double size,
                      RunReport& rep);
-    void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt);
+    void relax_measure(const T* u_cur, const T* u_prev, const T* f_cur, const T* f_prev, double dt,
+                       long steps);
     void copy(T* dst, const T* src, std::size_t n);
     void fill(T* dst, T value, std::size_t n);
     template <class M, Variant V, bool kKeep>

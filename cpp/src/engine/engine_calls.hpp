@@ -350,7 +350,7 @@ RunReport Engine<T, Dev>::relax(State<T>& s, double t_eval, double dt, double to
             if (d % G != 0 || d < 2) continue;
             // The measures belong to the last step's input u[prev] (f_node[1 − fc]) and the one
             // before, u[next] (f_node[fc]).
-            relax_measure(v_.u[ph.prev], v_.u[ph.next], v_.f_node[1 - fc], v_.f_node[fc], dt);
+            relax_measure(v_.u[ph.prev], v_.u[ph.next], v_.f_node[1 - fc], v_.f_node[fc], dt, k);
             // One read of the device scalars: the check's verdict and the measure's residual.
             // (No step-size check: a relaxation's pseudo-time moves as its fictitious masses let it.)
             const Scalars<T> seen = check(v_.u[ph.prev], nullptr, t_eval, t_eval, size, rep);

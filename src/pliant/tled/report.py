@@ -40,11 +40,13 @@ class ToolHistory:
 class PairHistory:
     """Per soft-contact pair of bodies (a, b), a <= b: ``time`` [s] (steps,) and ``force`` [N]
     (steps, 3), the force body a received from body b at each step run so far (self contact,
-    a == b: the sum of the forces on the nodes pressed onto the body's own surface)."""
+    a == b: the sum of the forces on the nodes pressed onto the body's own surface); ``relaxed``:
+    after ``Solver.relax``, that force at the equilibrium [N] (3,); else None."""
 
     bodies: tuple[int, int]
     time: np.ndarray = field(default_factory=lambda: np.zeros(0))
     force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    relaxed: np.ndarray | None = None
 
 
 @dataclass

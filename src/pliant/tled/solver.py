@@ -408,7 +408,8 @@ class Solver:
             raise TimeStepError(f"dt = {dt:.4g} s exceeds the stable time step {self._limit:.4g} s")
         rep = self._backend.step(state_in._s, state_out._s, dt, self.damping)
         self._ran()
-        self._relaxed, self._stepped_dt = None, dt
+        self._forget_relaxed()
+        self._stepped_dt = dt
         if rep["status"]:
             self._raise(rep)
 
@@ -422,7 +423,8 @@ class Solver:
             return RunInfo(0, state.time)
         rep = self._backend.run(state._s, steps, self.dt, self.damping, self.check_every, self.size)
         self._ran()
-        self._relaxed, self._stepped_dt = None, self.dt
+        self._forget_relaxed()
+        self._stepped_dt = self.dt
         self._record_tools(state, int(rep["steps"]))
         if rep["status"]:
             self._raise(rep)
@@ -449,6 +451,12 @@ class Solver:
                 )
             steps = max(0, math.ceil(n))
         return _step_count(steps)
+
+    def _forget_relaxed(self):
+        """A step or run leaves the last relaxation's equilibrium: no relaxed forces."""
+        self._relaxed = None
+        for P in self._pairs:
+            P.relaxed = None
 
     def _record_tools(self, state: State, steps: int):
         """The last run's tool and pair forces into their histories, at the times of its steps
@@ -535,6 +543,10 @@ class Solver:
         if self.model.tools:  # the equilibrium contact forces
             h = np.asarray(self._backend.tool_history())[0]
             self._relaxed = [(h[k, :3].copy(), h[k, 3:].copy()) for k in range(len(self.model.tools))]
+        if self._pairs:
+            hp = np.asarray(self._backend.pair_history())[0]
+            for k, P in enumerate(self._pairs):
+                P.relaxed = hp[k].copy()
         if strict and not info.converged:
             raise ConvergenceError(self._unconverged(info, tol))
         return info
