@@ -195,16 +195,18 @@ def clear_earlier_run(out: Path) -> int:
 def _pair_results(model, solver, summary: dict, out: Path | None) -> None:
     """Soft contact's pairs of bodies (Model.contact_pairs): per pair its bodies, their names (the
     scene's, else "body N"), the force [N] its first body received from the second at the last step
-    and the largest, in summary.json's ``contact_pairs``, and at every step in contact_pairs.json."""
+    (a quasi-static solve's: at the equilibrium) and the largest, in summary.json's
+    ``contact_pairs``, and at every step in contact_pairs.json."""
     contact = model._builder.soft_contact
     known = (contact.names if contact is not None else None) or {}
     summary["contact_pairs"], steps = [], []
     for pair in solver.contact_report().pairs:
         names = [known.get(b, f"body {b}") for b in pair.bodies]
-        last = pair.force[-1].tolist() if len(pair.time) else [0.0, 0.0, 0.0]
-        peak = float(np.linalg.norm(pair.force, axis=1).max()) if len(pair.time) else 0.0
+        last = pair.force[-1] if len(pair.time) else np.zeros(3)
+        last = last if pair.relaxed is None else pair.relaxed
+        peak = float(np.linalg.norm(np.vstack([pair.force, last]), axis=1).max())
         summary["contact_pairs"].append(
-            {"bodies": list(pair.bodies), "names": names, "force": last, "max_force": peak}
+            {"bodies": list(pair.bodies), "names": names, "force": last.tolist(), "max_force": peak}
         )
         steps.append(
             {
