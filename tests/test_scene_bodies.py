@@ -69,6 +69,21 @@ def test_two_bodies_rest_one_on_the_other(tmp_path):
     np.testing.assert_allclose(pair.force[-100:].mean(axis=0), [0, 0, -weight], atol=0.01 * weight)
 
 
+def test_a_static_scene_reports_the_pairs_equilibrium_force(tmp_path):
+    """The same scene solved quasi-statically (`static = true`): summary.json's pair force is the
+    equilibrium's, the base receiving the block's weight, down (1e-4 of it: relaxed to 1e-5 of the
+    force scale; measured 1.2e-5). It read [0, 0, 0], there being no step to take it from."""
+    from pliant.runner import run_scene
+
+    text = SCENE.replace("duration = 0.3", 'duration = 0.3\nstatic = true\ndtype = "float64"')
+    summary = run_scene(load_scene(_write(tmp_path, text)), tmp_path / "out", progress=False)
+    (pair,) = summary["contact_pairs"]
+    weight = 500.0 * 0.02 * 0.02 * 0.01 * 9.81
+    assert summary["converged"] and pair["names"] == ["base", "block"]
+    np.testing.assert_allclose(pair["force"], [0.0, 0.0, -weight], atol=1e-4 * weight)
+    assert pair["max_force"] == pytest.approx(weight, rel=1e-4)
+
+
 @pytest.mark.parametrize(
     "edit, key, words",
     [

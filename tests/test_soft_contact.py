@@ -203,55 +203,6 @@ def test_resting_block_presses_with_its_weight():
     np.testing.assert_allclose(f.force[-100:].mean(axis=0), [0, 0, -weight], atol=0.01 * weight)
 
 
-RESTING = """
-title = "block resting on a base"
-[mesh]
-name = "base"
-primitive = "box"
-size = [0.03, 0.03, 0.01]
-cells = [3, 3, 1]
-[[body]]
-name = "block"
-primitive = "box"
-size = [0.01, 0.01, 0.01]
-cells = [2, 2, 2]
-translate = [0.0, 0.0, 0.0101]               # its bottom 0.1 mm above the base
-[[material]]
-type = "neo-hookean"
-E = 2e4
-nu = 0.3
-density = 1000.0
-[[constraint]]
-type = "fix"
-nodes = { plane = { point = [0.0, 0.0, -0.005], normal = [0.0, 0.0, 1.0], side = "below" } }
-[[load]]
-type = "gravity"
-g = [0.0, 0.0, -9.81]
-[solver]
-static = true
-dtype = "float64"
-[contact]
-friction = 0.5
-"""
-
-
-def test_a_static_scene_reports_the_pairs_equilibrium_force(tmp_path):
-    """A block resting on a base, solved quasi-statically (`static = true`): summary.json's pair
-    force is the equilibrium's, the base receiving the block's weight, down (1e-4 of it: relaxed
-    to 1e-5 of the force scale; measured 5e-6). It read [0, 0, 0], there being no step to take
-    it from."""
-    from pliant.runner import run_scene
-    from pliant.scene import load_scene
-
-    (tmp_path / "s.toml").write_text(RESTING)
-    summary = run_scene(load_scene(tmp_path / "s.toml"), tmp_path / "out", progress=False)
-    (pair,) = summary["contact_pairs"]
-    weight = 1000.0 * 0.01**3 * G
-    assert summary["converged"] and pair["names"] == ["base", "block"]
-    np.testing.assert_allclose(pair["force"], [0.0, 0.0, -weight], atol=1e-4 * weight)
-    assert pair["max_force"] == pytest.approx(weight, rel=1e-4)
-
-
 def u_shape(self_contact=True):
     """One body: two 6 × 1 × 0.4 cm arms 4 mm apart, joined at x < 1 cm; the lower arm fixed, the
     upper one bends down under 5 g onto it (self contact of a fold). Returns the model, the
