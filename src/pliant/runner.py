@@ -202,8 +202,10 @@ def _pair_results(model, solver, summary: dict, out: Path | None) -> None:
     summary["contact_pairs"], steps = [], []
     for pair in solver.contact_report().pairs:
         names = [known.get(b, f"body {b}") for b in pair.bodies]
-        last = pair.force[-1] if len(pair.time) else np.zeros(3)
-        last = last if pair.relaxed is None else pair.relaxed
+        if pair.relaxed is not None:  # after a relaxation: the equilibrium's
+            last = pair.relaxed
+        else:
+            last = pair.force[-1] if len(pair.time) else np.zeros(3)
         peak = float(np.linalg.norm(np.vstack([pair.force, last]), axis=1).max())
         summary["contact_pairs"].append(
             {"bodies": list(pair.bodies), "names": names, "force": last.tolist(), "max_force": peak}
